@@ -1,0 +1,51 @@
+# hattr: the two commands a newcomer needs are `make demo` and `make test`.
+# Each installs the Debian packages it needs (scripts/install-deps), then builds.
+
+PRESET ?= release
+JOBS ?= $(shell nproc)
+BUILD := build/$(PRESET)
+# Warnings are errors in CI (CI=true), warnings elsewhere.
+export HATTR_WERROR := $(if $(filter true 1,$(CI)),ON,OFF)
+
+.PHONY: all deps build test demo sanitize asan tsan bench fuzz clean help
+
+all: build
+
+help:
+	@echo "make demo      install deps, build, run the main job (hattr demo)"
+	@echo "make test      install deps, build, run every test (ctest)"
+	@echo "make sanitize  the tests again under address+undefined and thread sanitizers"
+	@echo "make bench     build and run the benchmarks"
+	@echo "make fuzz      build the libFuzzer targets and fuzz the profile reader for 60 s"
+
+deps:
+	@scripts/install-deps
+
+build: deps
+	cmake --preset $(PRESET) >/dev/null
+	cmake --build --preset $(PRESET) -j $(JOBS)
+
+test: build
+	ctest --preset $(PRESET) -j $(JOBS)
+
+demo: build
+	$(BUILD)/apps/hattr/hattr demo --out demo-out
+
+asan tsan: deps
+	cmake --preset $@ >/dev/null
+	cmake --build --preset $@ -j $(JOBS)
+	ctest --preset $@ -j $(JOBS)
+
+sanitize: asan tsan
+
+bench: build
+	scripts/run-benchmarks $(BUILD)
+
+fuzz: deps
+	cmake --preset fuzz >/dev/null
+	cmake --build --preset fuzz -j $(JOBS)
+	mkdir -p build/fuzz/corpus
+	build/fuzz/fuzz/fuzz_profile_csv -max_total_time=60 -max_len=4096 build/fuzz/corpus fuzz/seeds
+
+clean:
+	rm -rf build demo-out

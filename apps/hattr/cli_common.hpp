@@ -1,0 +1,30 @@
+#pragma once
+// Shared pieces of the hattr command-line tool: exit codes, JSON summaries, output.
+
+#include <filesystem>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "hattr/core/haptic_profile.hpp"
+
+namespace hattr::cli {
+
+/// Exit codes of every hattr command.
+enum ExitCode : int { kOk = 0, kRuntimeFailure = 1, kBadInput = 2 };
+
+/// The profile summary that `profile info --json` prints. Stable keys: samples,
+/// duration_s, rate_hz, channels {name: {unit, min, max}}, metadata.
+nlohmann::json profileSummaryJson(const HapticProfile& profile);
+/// The same summary for people.
+std::string profileSummaryText(const HapticProfile& profile);
+
+/// Prints JSON (indented) to stdout.
+void printJson(const nlohmann::json& json);
+
+void registerProfileCommands(CLI::App& app);
+void registerImportCommands(CLI::App& app);
+void registerDemoCommand(CLI::App& app);
+
+}  // namespace hattr::cli

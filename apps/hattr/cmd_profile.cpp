@@ -1,0 +1,62 @@
+// hattr profile info|convert
+
+#include <iostream>
+
+#include "cli_common.hpp"
+#include "hattr/io/profile_csv.hpp"
+
+namespace hattr::cli {
+namespace {
+
+struct ProfileInfoOptions {
+  std::string file;
+  bool json = false;
+};
+
+struct ProfileConvertOptions {
+  std::string input;
+  std::string output;
+  bool force = false;
+};
+
+void runProfileInfo(const ProfileInfoOptions& opt) {
+  const HapticProfile profile = io::readProfileCsv(opt.file);
+  if (opt.json) {
+    nlohmann::json json = profileSummaryJson(profile);
+    json["file"] = opt.file;
+    printJson(json);
+  } else {
+    std::cout << "file        " << opt.file << '\n' << profileSummaryText(profile);
+  }
+}
+
+void runProfileConvert(const ProfileConvertOptions& opt) {
+  const HapticProfile profile = io::readProfileCsv(opt.input);
+  io::writeProfileCsv(profile, opt.output, opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
+  std::cout << "wrote " << opt.output << " (" << profile.size() << " samples, SI units)\n";
+}
+
+}  // namespace
+
+void registerProfileCommands(CLI::App& app) {
+  auto* profile = app.add_subcommand("profile", "Inspect and convert haptic-profile files");
+  profile->require_subcommand(1);
+
+  auto info_opt = std::make_shared<ProfileInfoOptions>();
+  auto* info = profile->add_subcommand("info", "Samples, duration, rate, channel ranges and metadata of a profile");
+  info->add_option("FILE", info_opt->file, "Haptic-profile CSV file")->required();
+  info->add_flag("--json", info_opt->json,
+                 "Print JSON: samples, pen_down_samples, duration_s, rate_hz, nominal_rate_hz, "
+                 "channels {name: {unit, min, max}}, metadata");
+  info->callback([info_opt] { runProfileInfo(*info_opt); });
+
+  auto convert_opt = std::make_shared<ProfileConvertOptions>();
+  auto* convert = profile->add_subcommand(
+      "convert", "Read a profile (mm/ms columns, missing velocity allowed) and write it in canonical SI form");
+  convert->add_option("IN", convert_opt->input, "Input profile CSV")->required();
+  convert->add_option("OUT", convert_opt->output, "Output profile CSV")->required();
+  convert->add_flag("--force", convert_opt->force, "Replace OUT if it exists");
+  convert->callback([convert_opt] { runProfileConvert(*convert_opt); });
+}
+
+}  // namespace hattr::cli

@@ -1,0 +1,30 @@
+#pragma once
+/// Unit conversions at the edges. Inside hattr everything is SI (m, s, N, kg, N/m,
+/// N·s/m, rad). Millimetres, the paper's N/mm gains, tablet units and degrees appear
+/// only in files, importers and user interfaces, and are converted here, once.
+
+#include <numbers>
+
+namespace hattr::units {
+
+inline constexpr double kMetresPerMillimetre = 1e-3;
+inline constexpr double kSecondsPerMillisecond = 1e-3;
+inline constexpr double kRadiansPerDegree = std::numbers::pi / 180.0;
+/// Standard gravity [m/s²], for gram-force conversions.
+inline constexpr double kStandardGravity_m_per_s2 = 9.80665;
+
+constexpr double millimetresToMetres(double mm) { return mm * kMetresPerMillimetre; }
+constexpr double metresToMillimetres(double m) { return m / kMetresPerMillimetre; }
+constexpr double millisecondsToSeconds(double ms) { return ms * kSecondsPerMillisecond; }
+constexpr double degreesToRadians(double deg) { return deg * kRadiansPerDegree; }
+constexpr double radiansToDegrees(double rad) { return rad / kRadiansPerDegree; }
+constexpr double gramForceToNewtons(double gf) { return gf * 1e-3 * kStandardGravity_m_per_s2; }
+
+/// A stiffness given in N/mm (the paper's unit) in N/m.
+constexpr double newtonsPerMillimetreToSi(double n_per_mm) { return n_per_mm / kMetresPerMillimetre; }
+/// A damping given in N·s/mm (the paper's unit) in N·s/m.
+constexpr double newtonSecondsPerMillimetreToSi(double ns_per_mm) {
+  return ns_per_mm / kMetresPerMillimetre;
+}
+
+}  // namespace hattr::units

@@ -1,0 +1,398 @@
+#include "hattr/io/profile_csv.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "hattr/core/error.hpp"
+#include "hattr/core/units.hpp"
+#include "text_reader_internal.hpp"
+
+namespace hattr::io {
+namespace {
+
+using detail::LineReader;
+using detail::quotedField;
+
+// ---- Column units ----------------------------------------------------------------------
+
+struct UnitScale {
+  std::string_view unit;
+  double to_si;
+};
+
+/// The units a channel's column may carry, SI first (the one the writer uses).
+std::vector<UnitScale> acceptedUnits(Channel channel) {
+  switch (channel) {
+    case Channel::kTime: return {{"s", 1.0}, {"ms", units::kSecondsPerMillisecond}};
+    case Channel::kX:
+    case Channel::kY:
+    case Channel::kZ: return {{"m", 1.0}, {"mm", units::kMetresPerMillimetre}};
+    case Channel::kVx:
+    case Channel::kVy:
+    case Channel::kVz: return {{"m_per_s", 1.0}, {"mm_per_s", units::kMetresPerMillimetre}};
+    case Channel::kAzimuth:
+    case Channel::kAltitude: return {{"rad", 1.0}, {"deg", units::kRadiansPerDegree}};
+    default: return {{channelInfo(channel).unit, 1.0}};
+  }
+}
+
+std::string unitList(Channel channel) {
+  std::string list;
+  for (const auto& u : acceptedUnits(channel)) list += (list.empty() ? "" : ", ") + std::string(u.unit);
+  return list;
+}
+
+bool isFlag(Channel channel) { return channel == Channel::kContact || channel == Channel::kPenDown; }
+
+// ---- Column row ------------------------------------------------------------------------
+
+struct Column {
+  Channel channel;
+  double to_si;
+  std::string header;
+};
+
+constexpr std::array kRequired{Channel::kTime, Channel::kX,  Channel::kY,  Channel::kZ,
+                               Channel::kFx,   Channel::kFy, Channel::kFz, Channel::kPenDown};
+
+/// Finds the stored channel a column header names: the longest channel name followed by
+/// '_' and a unit.
+Column parseColumnHeader(std::string_view header, int index, const LineReader& reader) {
+  const ChannelInfo* best = nullptr;
+  for (const auto& info : allChannels()) {
+    if (info.derived) continue;
+    if (header.size() > info.name.size() + 1 && header.starts_with(info.name) &&
+        header[info.name.size()] == '_' && (!best || info.name.size() > best->name.size())) {
+      best = &info;
+    }
+  }
+  if (!best) {
+    std::string names;
+    for (const auto& info : allChannels())
+      if (!info.derived) names += (names.empty() ? "" : ", ") + std::string(info.name);
+    throw InputError(fmt::format("{}: column {}: expected a channel name followed by _unit "
+                                 "(channels: {}), got {}",
+                                 reader.where(), index, names, quotedField(header)));
+  }
+  const std::string_view unit = header.substr(best->name.size() + 1);
+  for (const auto& accepted : acceptedUnits(best->channel)) {
+    if (accepted.unit == unit) return {best->channel, accepted.to_si, std::string(header)};
+  }
+  throw InputError(fmt::format("{}: column {} ({}): unknown unit for {}: expected one of {}, got {}",
+                               reader.where(), index, header, best->name, unitList(best->channel),
+                               quotedField(unit)));
+}
+
+std::vector<Column> parseColumnRow(std::string_view line, const LineReader& reader) {
+  std::vector<Column> columns;
+  std::set<Channel> seen;
+  int index = 0;
+  for (const auto field : detail::splitFields(line, ',')) {
+    ++index;
+    Column column = parseColumnHeader(detail::trim(field), index, reader);
+    HATTR_THROW_UNLESS(seen.insert(column.channel).second,
+                       "{}: column {} ({}): channel {} appears twice", reader.where(), index,
+                       column.header, channelInfo(column.channel).name);
+    columns.push_back(std::move(column));
+  }
+  std::string missing;
+  for (const Channel required : kRequired) {
+    if (!seen.contains(required))
+      missing += (missing.empty() ? "" : ", ") + std::string(channelInfo(required).name);
+  }
+  HATTR_THROW_UNLESS(missing.empty(), "{}: missing required column(s): {} (got {})", reader.where(),
+                     missing, quotedField(line));
+  HATTR_THROW_UNLESS(seen.contains(Channel::kAzimuth) == seen.contains(Channel::kAltitude),
+                     "{}: tilt needs both azimuth and altitude columns, got only one",
+                     reader.where());
+  return columns;
+}
+
+// ---- Sample fields ---------------------------------------------------------------------
+
+void setChannel(Sample& s, Channel channel, double v) {
+  switch (channel) {
+    case Channel::kTime: s.t_s = v; break;
+    case Channel::kX: s.p_WT.x() = v; break;
+    case Channel::kY: s.p_WT.y() = v; break;
+    case Channel::kZ: s.p_WT.z() = v; break;
+    case Channel::kVx: s.v_WT.x() = v; break;
+    case Channel::kVy: s.v_WT.y() = v; break;
+    case Channel::kVz: s.v_WT.z() = v; break;
+    case Channel::kFx: s.f_user_W.x() = v; break;
+    case Channel::kFy: s.f_user_W.y() = v; break;
+    case Channel::kFz: s.f_user_W.z() = v; break;
+    case Channel::kCmdFx: s.f_cmd_W.x() = v; break;
+    case Channel::kCmdFy: s.f_cmd_W.y() = v; break;
+    case Channel::kCmdFz: s.f_cmd_W.z() = v; break;
+    case Channel::kGuideFx: s.f_guide_W.x() = v; break;
+    case Channel::kGuideFy: s.f_guide_W.y() = v; break;
+    case Channel::kGuideFz: s.f_guide_W.z() = v; break;
+    case Channel::kContact: s.in_contact = v != 0.0; break;
+    case Channel::kPenDown: s.pen_down = v != 0.0; break;
+    case Channel::kPressure: s.pressure_raw = v; break;
+    case Channel::kAzimuth: s.tilt_azimuth_rad = v; break;
+    case Channel::kAltitude: s.tilt_altitude_rad = v; break;
+    case Channel::kSpeed:
+    case Channel::kForceMagnitude: break;  // derived, never a column
+  }
+}
+
+double parseValue(std::string_view field, const Column& column, int index, const LineReader& reader) {
+  const auto where = [&] { return fmt::format("{}: column {} ({})", reader.where(), index, column.header); };
+  const auto value = detail::parseDouble(field);
+  HATTR_THROW_UNLESS(value.has_value(), "{}: expected a number, got {}", where(), quotedField(field));
+  HATTR_THROW_UNLESS(std::isfinite(*value), "{}: expected a finite number, got {}", where(),
+                     quotedField(detail::trim(field)));
+  HATTR_THROW_UNLESS(!isFlag(column.channel) || *value == 0.0 || *value == 1.0,
+                     "{}: expected 0 or 1, got {}", where(), quotedField(detail::trim(field)));
+  return *value * column.to_si;
+}
+
+Sample parseRow(std::string_view line, const std::vector<Column>& columns, const LineReader& reader) {
+  const auto fields = detail::splitFields(line, ',');
+  HATTR_THROW_UNLESS(fields.size() == columns.size(), "{}: expected {} fields, got {}", reader.where(),
+                     columns.size(), fields.size());
+  Sample sample;
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    setChannel(sample, columns[i].channel,
+               parseValue(fields[i], columns[i], static_cast<int>(i) + 1, reader));
+  }
+  return sample;
+}
+
+// ---- Metadata --------------------------------------------------------------------------
+
+bool isValidKey(std::string_view key) {
+  return !key.empty() && std::all_of(key.begin(), key.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-';
+  });
+}
+
+// Keys that describe the format itself and are not kept as metadata.
+bool isFormatKey(std::string_view key) { return key == "format" || key == "units" || key == "frame"; }
+
+void applyMetadata(ProfileMetadata& meta, std::string_view key, std::string_view value,
+                   const LineReader& reader) {
+  if (key == "format") {
+    HATTR_THROW_UNLESS(value == kProfileFormat, "{}: format: expected \"{}\", got {}", reader.where(),
+                       kProfileFormat, quotedField(value));
+  } else if (key == "subject") {
+    meta.subject = value;
+  } else if (key == "skill") {
+    meta.skill = value;
+  } else if (key == "device") {
+    meta.device = value;
+  } else if (key == "source") {
+    meta.source = value;
+  } else if (key == "created_utc") {
+    meta.created_utc = value;
+  } else if (key == "rate_hz") {
+    const auto rate = detail::parseDouble(value);
+    HATTR_THROW_UNLESS(rate && std::isfinite(*rate) && *rate >= 0.0,
+                       "{}: rate_hz: expected a finite number >= 0, got {}", reader.where(), quotedField(value));
+    meta.nominal_rate_hz = *rate;
+  } else if (!isFormatKey(key)) {
+    meta.extra.emplace(key, value);
+  }
+}
+
+/// Parses "# key: value"; a '#' line without "key:" is a comment and is skipped.
+void parseMetadataLine(std::string_view line, ProfileMetadata& meta, std::set<std::string>& seen,
+                       const LineReader& reader) {
+  const std::string_view body = detail::trim(line.substr(1));
+  const auto colon = body.find(':');
+  if (colon == std::string_view::npos) return;
+  const std::string_view key = detail::trim(body.substr(0, colon));
+  if (!isValidKey(key)) return;
+  HATTR_THROW_UNLESS(seen.insert(std::string(key)).second, "{}: metadata key {} appears twice",
+                     reader.where(), quotedField(key));
+  applyMetadata(meta, key, detail::trim(body.substr(colon + 1)), reader);
+}
+
+// ---- Whole profile ---------------------------------------------------------------------
+
+RawChannels rawChannelsOf(const std::vector<Column>& columns) {
+  RawChannels raw;
+  for (const auto& c : columns) {
+    if (c.channel == Channel::kPressure) raw.pressure = true;
+    if (c.channel == Channel::kAzimuth) raw.tilt = true;
+  }
+  return raw;
+}
+
+bool hasColumn(const std::vector<Column>& columns, Channel channel) {
+  return std::any_of(columns.begin(), columns.end(), [&](const Column& c) { return c.channel == channel; });
+}
+
+}  // namespace
+
+HapticProfile readProfileCsv(std::istream& in, std::string_view source_name) {
+  LineReader reader(in, std::string(source_name));
+  ProfileMetadata meta;
+  std::set<std::string> seen_keys;
+  std::string line;
+
+  // Metadata lines, then the column row.
+  bool have_line = false;
+  while ((have_line = reader.next(line)) && (line.empty() || line.front() == '#')) {
+    if (!line.empty()) parseMetadataLine(line, meta, seen_keys, reader);
+  }
+  HATTR_THROW_UNLESS(have_line || reader.lineNumber() > 0,
+                     "{}: empty file: expected '# key: value' metadata lines, a column row and data",
+                     source_name);
+  HATTR_THROW_UNLESS(have_line, "{}:{}: expected a column row (t_s,x_m,...), got the end of the file",
+                     source_name, reader.lineNumber());
+  const std::vector<Column> columns = parseColumnRow(line, reader);
+
+  // Data rows.
+  HapticProfile profile(std::move(meta), rawChannelsOf(columns));
+  std::vector<Sample> samples;
+  const bool has_velocity = hasColumn(columns, Channel::kVx);
+  const bool has_contact = hasColumn(columns, Channel::kContact);
+  while (reader.next(line)) {
+    if (line.empty()) {
+      // Only trailing blank lines are allowed.
+      std::string rest;
+      while (reader.next(rest)) {
+        HATTR_THROW_UNLESS(rest.empty(), "{}: expected a data row, got a blank line before it",
+                           reader.where());
+      }
+      break;
+    }
+    Sample sample = parseRow(line, columns, reader);
+    if (!has_contact) sample.in_contact = sample.pen_down;
+    HATTR_THROW_UNLESS(samples.empty() || sample.t_s > samples.back().t_s,
+                       "{}: column 1 ({}): time must increase strictly: expected > {}, got {}",
+                       reader.where(), columns.front().header, samples.back().t_s, sample.t_s);
+    samples.push_back(sample);
+  }
+  HATTR_THROW_UNLESS(!samples.empty(), "{}: no data rows after the column row", source_name);
+  HATTR_THROW_UNLESS(hasColumn(columns, Channel::kVx) == hasColumn(columns, Channel::kVy) &&
+                         hasColumn(columns, Channel::kVx) == hasColumn(columns, Channel::kVz),
+                     "{}: velocity needs all of vx, vy, vz or none", source_name);
+  if (!has_velocity) fillVelocityByFiniteDifferences(samples);
+  profile.reserve(samples.size());
+  for (const auto& s : samples) profile.append(s);
+  return profile;
+}
+
+HapticProfile readProfileCsv(const std::filesystem::path& file) {
+  std::ifstream in = detail::openInputFile(file);
+  return readProfileCsv(in, file.string());
+}
+
+void writeProfileCsv(const HapticProfile& profile, std::ostream& out) {
+  HATTR_THROW_UNLESS(!profile.empty(), "cannot write a profile with no samples");
+  const ProfileMetadata& meta = profile.metadata();
+  const RawChannels raw = profile.rawChannels();
+
+  // Header: format, then the metadata, one "# key: value" line each.
+  fmt::memory_buffer buf;
+  const auto put = [&](std::string_view key, std::string_view value) {
+    HATTR_THROW_UNLESS(isValidKey(key), "metadata key {}: expected letters, digits, '_', '.', '-'",
+                       quotedField(key));
+    HATTR_THROW_UNLESS(value.find_first_of("\r\n") == std::string_view::npos,
+                       "metadata {}: a value cannot contain a line break", key);
+    fmt::format_to(std::back_inserter(buf), "# {}: {}\n", key, value);
+  };
+  put("format", kProfileFormat);
+  put("units", "SI; each column name ends with its unit");
+  put("frame", "W: paper plane z = 0, x right, y away from the writer, z up; f = force on the paper");
+  put("subject", meta.subject);
+  put("skill", meta.skill);
+  put("device", meta.device);
+  put("source", meta.source);
+  put("created_utc", meta.created_utc);
+  put("rate_hz", fmt::format("{}", meta.nominal_rate_hz));
+  for (const auto& [key, value] : meta.extra) {
+    HATTR_THROW_UNLESS(!isFormatKey(key) && !channelFromName(key).has_value() &&
+                           key != "subject" && key != "skill" && key != "device" && key != "source" &&
+                           key != "created_utc" && key != "rate_hz",
+                       "metadata key {} is reserved", quotedField(key));
+    put(key, value);
+  }
+
+  // Column row: every stored channel, raw ones only when present.
+  std::vector<Channel> channels;
+  for (const auto& info : allChannels()) {
+    if (!info.derived && !needsRawChannel(info.channel, raw)) channels.push_back(info.channel);
+  }
+  for (std::size_t i = 0; i < channels.size(); ++i) {
+    fmt::format_to(std::back_inserter(buf), "{}{}_{}", i ? "," : "", channelInfo(channels[i]).name,
+                   channelInfo(channels[i]).unit);
+  }
+  buf.push_back('\n');
+
+  // Data: shortest representation that reads back bit for bit.
+  for (const Sample& s : profile.samples()) {
+    for (std::size_t i = 0; i < channels.size(); ++i) {
+      if (i) buf.push_back(',');
+      fmt::format_to(std::back_inserter(buf), "{}", channelValue(s, channels[i]));
+    }
+    buf.push_back('\n');
+  }
+  out.write(buf.data(), static_cast<std::streamsize>(buf.size()));
+}
+
+void writeFileAtomically(const std::filesystem::path& file, std::string_view text, Overwrite overwrite) {
+  std::error_code ec;
+  HATTR_THROW_UNLESS(overwrite == Overwrite::kReplace || !std::filesystem::exists(file, ec),
+                     "{}: already exists; refusing to overwrite it", file.string());
+  const std::filesystem::path tmp = file.string() + fmt::format(".tmp-{}", ::getpid());
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    throw Error(fmt::format("{}: cannot create: {}", tmp.string(), std::strerror(errno)));
+  }
+  std::size_t written = 0;
+  while (written < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + written, text.size() - written);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const int err = errno;
+      ::close(fd);
+      std::filesystem::remove(tmp, ec);
+      throw Error(fmt::format("{}: write failed: {}", tmp.string(), std::strerror(err)));
+    }
+    written += static_cast<std::size_t>(n);
+  }
+  const bool synced = ::fsync(fd) == 0;
+  const int sync_errno = errno;
+  ::close(fd);
+  if (!synced) {
+    std::filesystem::remove(tmp, ec);
+    throw Error(fmt::format("{}: fsync failed: {}", tmp.string(), std::strerror(sync_errno)));
+  }
+  // Publish: link() fails if the file appeared meanwhile; rename() replaces it whole.
+  if (overwrite == Overwrite::kRefuse) {
+    const int linked = ::link(tmp.c_str(), file.c_str());
+    const int link_errno = errno;
+    std::filesystem::remove(tmp, ec);
+    HATTR_THROW_UNLESS(linked == 0 || link_errno != EEXIST, "{}: already exists; refusing to overwrite it",
+                       file.string());
+    if (linked != 0) {
+      throw Error(fmt::format("{}: cannot create: {}", file.string(), std::strerror(link_errno)));
+    }
+    return;
+  }
+  std::filesystem::rename(tmp, file);
+}
+
+void writeProfileCsv(const HapticProfile& profile, const std::filesystem::path& file, Overwrite overwrite) {
+  std::ostringstream text;
+  writeProfileCsv(profile, text);
+  writeFileAtomically(file, text.view(), overwrite);
+}
+
+}  // namespace hattr::io

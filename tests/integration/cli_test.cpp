@@ -1,0 +1,136 @@
+// Runs the hattr command-line tool as a user would and checks exit codes and messages.
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "hattr/io/profile_csv.hpp"
+#include "support/test_support.hpp"
+
+namespace hattr {
+namespace {
+
+using ::testing::HasSubstr;
+
+struct RunResult {
+  int exit_code;
+  std::string out;
+  std::string err;
+};
+
+RunResult runHattr(const test::TempDir& dir, const std::string& args) {
+  const auto out = dir / "stdout.txt";
+  const auto err = dir / "stderr.txt";
+  const std::string command = std::string(HATTR_CLI_PATH) + " " + args + " >" + out.string() + " 2>" + err.string();
+  const int status = std::system(command.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, test::readText(out), test::readText(err)};
+}
+
+constexpr const char* kGoodProfile =
+    "# subject: S1\n# skill: na\n# rate_hz: 100\n"
+    "t_s,x_m,y_m,z_m,fx_N,fy_N,fz_N,pen_down_bool\n"
+    "0,0.001,0.002,0,0,0,-1.5,1\n0.01,0.002,0.002,0,0,0,-2,1\n0.02,0.003,0.001,0,0,0,0,0\n";
+
+TEST(Cli, VersionAndHelpExitZero) {
+  test::TempDir dir;
+  const RunResult version = runHattr(dir, "--version");
+  EXPECT_EQ(version.exit_code, 0);
+  EXPECT_THAT(version.out, HasSubstr("hattr 0."));
+  for (const char* sub : {"--help", "profile --help", "profile info --help", "profile convert --help",
+                          "import --help", "import svc2004 --help", "import susig --help", "demo --help"}) {
+    const RunResult help = runHattr(dir, sub);
+    EXPECT_EQ(help.exit_code, 0) << sub;
+    EXPECT_THAT(help.out, HasSubstr("Usage")) << sub;
+  }
+}
+
+TEST(Cli, ProfileInfoJsonHasTheStableKeys) {
+  test::TempDir dir;
+  test::writeText(dir / "p.csv", kGoodProfile);
+  const RunResult r = runHattr(dir, "profile info --json " + (dir / "p.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto json = nlohmann::json::parse(r.out);
+  EXPECT_EQ(json["samples"].get<int>(), 3);
+  EXPECT_DOUBLE_EQ(json["duration_s"].get<double>(), 0.02);
+  EXPECT_NEAR(json["rate_hz"].get<double>(), 100.0, 1e-9);
+  EXPECT_DOUBLE_EQ(json["channels"]["fz"]["min"].get<double>(), -2.0);
+  EXPECT_EQ(json["channels"]["fz"]["unit"], "N");
+  EXPECT_EQ(json["metadata"]["subject"], "S1");
+  EXPECT_EQ(json["pen_down_samples"].get<int>(), 2);
+}
+
+TEST(Cli, BadInputExitsTwoWithTheLineInTheMessage) {
+  test::TempDir dir;
+  const std::string base = "t_s,x_m,y_m,z_m,fx_N,fy_N,fz_N,pen_down_bool\n0,0,0,0,0,0,0,1\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"", "empty file"},
+      {base + "0.1,0,0,0,0,0,1\n", "bad.csv:3: expected 8 fields, got 7"},
+      {base + "0.1,0,0,0,0,0,x,1\n", "bad.csv:3: column 7 (fz_N): expected a number"},
+      {base + "0.1,0,0,0,0,0,inf,1\n", "bad.csv:3: column 7 (fz_N): expected a finite number"},
+      {base + "0,0,0,0,0,0,0,1\n", "bad.csv:3: column 1 (t_s): time must increase strictly"},
+      {"t_s,x_m,y_m,z_m,fx_N,fy_N,pen_down_bool\n", "bad.csv:1: missing required column(s): fz"},
+      {"t_s,x_furlong,y_m,z_m,fx_N,fy_N,fz_N,pen_down_bool\n", "bad.csv:1: column 2 (x_furlong): unknown unit"},
+  };
+  for (const auto& [text, message] : cases) {
+    test::writeText(dir / "bad.csv", text);
+    const RunResult r = runHattr(dir, "profile info " + (dir / "bad.csv").string());
+    EXPECT_EQ(r.exit_code, 2) << message;
+    EXPECT_THAT(r.err, HasSubstr(message));
+  }
+}
+
+TEST(Cli, UsageErrorsExitTwo) {
+  test::TempDir dir;
+  EXPECT_EQ(runHattr(dir, "").exit_code, 2);
+  EXPECT_EQ(runHattr(dir, "profile info").exit_code, 2);
+  EXPECT_EQ(runHattr(dir, "frobnicate").exit_code, 2);
+  const RunResult missing = runHattr(dir, "profile info " + (dir / "none.csv").string());
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_THAT(missing.err, HasSubstr("none.csv: cannot open for reading"));
+}
+
+TEST(Cli, ConvertRefusesToOverwriteAndKeepsTheExistingFile) {
+  test::TempDir dir;
+  test::writeText(dir / "in.csv", kGoodProfile);
+  test::writeText(dir / "out.csv", "precious");
+  const RunResult r = runHattr(dir, "profile convert " + (dir / "in.csv").string() + " " + (dir / "out.csv").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("already exists; refusing to overwrite it"));
+  EXPECT_EQ(test::readText(dir / "out.csv"), "precious");
+  const RunResult forced =
+      runHattr(dir, "profile convert --force " + (dir / "in.csv").string() + " " + (dir / "out.csv").string());
+  EXPECT_EQ(forced.exit_code, 0) << forced.err;
+  EXPECT_EQ(io::readProfileCsv(dir / "out.csv").size(), 3u);
+}
+
+TEST(Cli, ImportSvc2004ThenInfoGivesDurationAndPointCount) {
+  const auto folder = test::svc2004Folder();
+  if (!folder) GTEST_SKIP() << "SVC2004 data not found at ../shared/data/svc2004-task2 beside the project";
+  test::TempDir dir;
+  const std::string out = (dir / "u1s1.csv").string();
+  const RunResult imported = runHattr(dir, "import svc2004 " + (*folder / "U1S1.TXT").string() + " -o " + out);
+  ASSERT_EQ(imported.exit_code, 0) << imported.err;
+  const RunResult info = runHattr(dir, "profile info --json " + out);
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  const auto json = nlohmann::json::parse(info.out);
+  // U1S1.TXT: 84 points from T = 31275775 ms to 31276987 ms (read off the file).
+  EXPECT_EQ(json["samples"].get<int>(), 84);
+  EXPECT_NEAR(json["duration_s"].get<double>(), 1.212, 1e-9);
+  EXPECT_EQ(json["metadata"]["source"], "import:svc2004 U1S1.TXT");
+}
+
+TEST(Cli, ImportOfAMalformedRecordingExitsTwo) {
+  test::TempDir dir;
+  test::writeText(dir / "bad.TXT", "2\n1 2 3 1 0 900 5\n");
+  const RunResult r = runHattr(dir, "import svc2004 " + (dir / "bad.TXT").string() + " -o " + (dir / "o.csv").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("bad.TXT: line 1 announces 2 points, the file has 1"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "o.csv"));
+}
+
+}  // namespace
+}  // namespace hattr

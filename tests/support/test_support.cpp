@@ -1,0 +1,85 @@
+#include "support/test_support.hpp"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+namespace hattr::test {
+
+TempDir::TempDir() {
+  std::string pattern = (std::filesystem::temp_directory_path() / "hattr-test-XXXXXX").string();
+  if (::mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
+  path_ = pattern;
+}
+
+TempDir::~TempDir() {
+  std::error_code ec;
+  std::filesystem::remove_all(path_, ec);
+}
+
+std::optional<std::filesystem::path> svc2004Folder() {
+  const char* source = std::getenv("HATTR_SOURCE_DIR");
+  const std::filesystem::path root = source ? source : ".";
+  const auto folder = root / ".." / "shared" / "data" / "svc2004-task2";
+  if (!std::filesystem::is_directory(folder)) return std::nullopt;
+  return folder;
+}
+
+void writeText(const std::filesystem::path& file, const std::string& text) {
+  std::ofstream out(file, std::ios::binary);
+  out << text;
+}
+
+std::string readText(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+HapticProfile randomProfile(std::mt19937_64& rng, std::size_t samples, RawChannels raw) {
+  ProfileMetadata meta{.subject = "S07", .skill = "na", .device = "sim://pen?mass_kg=0.045",
+                       .source = "test", .created_utc = "2026-11-21T21:00:00Z", .nominal_rate_hz = 1000.0,
+                       .extra = {{"mode", "alpha"}, {"trial", "3"}, {"note", "a: b, c"}}};
+  HapticProfile profile(meta, raw);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::uniform_int_distribution<int> scale(-12, 3);
+  // Values spread over many magnitudes, plus subnormals and signed zeros.
+  const auto value = [&]() {
+    const int pick = static_cast<int>(rng() % 20);
+    if (pick == 0) return std::numeric_limits<double>::denorm_min() * static_cast<double>(rng() % 1000);
+    if (pick == 1) return -0.0;
+    return unit(rng) * std::pow(10.0, scale(rng));
+  };
+  double t = unit(rng);
+  for (std::size_t i = 0; i < samples; ++i) {
+    Sample s;
+    t = std::nextafter(t + std::abs(unit(rng)) * 1e-3, 1e9);
+    s.t_s = t;
+    s.p_WT = Vec3(value(), value(), value());
+    s.v_WT = Vec3(value(), value(), value());
+    s.f_user_W = Vec3(value(), value(), value());
+    s.f_cmd_W = Vec3(value(), value(), value());
+    s.f_guide_W = Vec3(value(), value(), value());
+    s.in_contact = rng() % 2 == 0;
+    s.pen_down = rng() % 3 != 0;
+    if (raw.pressure) s.pressure_raw = static_cast<double>(rng() % 1024);
+    if (raw.tilt) {
+      s.tilt_azimuth_rad = value();
+      s.tilt_altitude_rad = value();
+    }
+    profile.append(s);
+  }
+  return profile;
+}
+
+std::uint64_t testSeed(std::uint64_t default_seed) {
+  const char* env = std::getenv("HATTR_TEST_SEED");
+  return env ? std::strtoull(env, nullptr, 10) : default_seed;
+}
+
+}  // namespace hattr::test

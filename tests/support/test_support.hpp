@@ -1,0 +1,44 @@
+#pragma once
+// Helpers shared by hattr's tests: temporary folders, the shared data set, seeded
+// random profiles.
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <random>
+#include <string>
+
+#include "hattr/core/haptic_profile.hpp"
+
+namespace hattr::test {
+
+/// A fresh temporary folder, removed with everything in it when the object dies.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  [[nodiscard]] const std::filesystem::path& path() const { return path_; }
+  [[nodiscard]] std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+/// The SVC2004 task 2 folder beside the project (../shared/data/svc2004-task2), or
+/// nullopt when it is absent (tests then skip with a message).
+std::optional<std::filesystem::path> svc2004Folder();
+
+/// Writes `text` to `file`.
+void writeText(const std::filesystem::path& file, const std::string& text);
+std::string readText(const std::filesystem::path& file);
+
+/// A random profile with awkward floats (tiny, huge, negative, subnormal) for round trips.
+HapticProfile randomProfile(std::mt19937_64& rng, std::size_t samples, RawChannels raw);
+
+/// The seed of a randomized test: HATTR_TEST_SEED if set, else a fixed default. Printed
+/// by the test on failure.
+std::uint64_t testSeed(std::uint64_t default_seed);
+
+}  // namespace hattr::test
