@@ -180,6 +180,15 @@ bool isValidKey(std::string_view key) {
   });
 }
 
+/// True if the text holds a control character (tab excepted): such metadata cannot be
+/// written on one line and read back unchanged, so both reader and writer refuse it.
+bool hasControlCharacter(std::string_view text) {
+  return std::any_of(text.begin(), text.end(), [](char c) {
+    const auto u = static_cast<unsigned char>(c);
+    return (u < 0x20 && c != '\t') || u == 0x7f;
+  });
+}
+
 // Keys that describe the format itself and are not kept as metadata.
 bool isFormatKey(std::string_view key) { return key == "format" || key == "units" || key == "frame"; }
 
@@ -211,6 +220,8 @@ void applyMetadata(ProfileMetadata& meta, std::string_view key, std::string_view
 /// Parses "# key: value"; a '#' line without "key:" is a comment and is skipped.
 void parseMetadataLine(std::string_view line, ProfileMetadata& meta, std::set<std::string>& seen,
                        const LineReader& reader) {
+  HATTR_THROW_UNLESS(!hasControlCharacter(line), "{}: expected printable metadata text, got a control character",
+                     reader.where());
   const std::string_view body = detail::trim(line.substr(1));
   const auto colon = body.find(':');
   if (colon == std::string_view::npos) return;
@@ -303,8 +314,8 @@ void writeProfileCsv(const HapticProfile& profile, std::ostream& out) {
   const auto put = [&](std::string_view key, std::string_view value) {
     HATTR_THROW_UNLESS(isValidKey(key), "metadata key {}: expected letters, digits, '_', '.', '-'",
                        quotedField(key));
-    HATTR_THROW_UNLESS(value.find_first_of("\r\n") == std::string_view::npos,
-                       "metadata {}: a value cannot contain a line break", key);
+    HATTR_THROW_UNLESS(!hasControlCharacter(value), "metadata {}: a value cannot contain a line break "
+                       "or another control character", key);
     fmt::format_to(std::back_inserter(buf), "# {}: {}\n", key, value);
   };
   put("format", kProfileFormat);
@@ -317,8 +328,7 @@ void writeProfileCsv(const HapticProfile& profile, std::ostream& out) {
   put("created_utc", meta.created_utc);
   put("rate_hz", fmt::format("{}", meta.nominal_rate_hz));
   for (const auto& [key, value] : meta.extra) {
-    HATTR_THROW_UNLESS(!isFormatKey(key) && !channelFromName(key).has_value() &&
-                           key != "subject" && key != "skill" && key != "device" && key != "source" &&
+    HATTR_THROW_UNLESS(!isFormatKey(key) && key != "subject" && key != "skill" && key != "device" && key != "source" &&
                            key != "created_utc" && key != "rate_hz",
                        "metadata key {} is reserved", quotedField(key));
     put(key, value);

@@ -147,7 +147,9 @@ TabletCalibration parseCalibration(std::string_view json_text, std::string_view 
     throw InputError(fmt::format("{}: not valid JSON: {}", source_name, e.what()));
   }
   HATTR_THROW_UNLESS(json.is_object(), "{}: expected a JSON object, got {}", source_name, json.type_name());
-  for (const auto& [key, value] : json.items()) {
+  for (const auto& item : json.items()) {
+    const std::string& key = item.key();
+    const nlohmann::json& value = item.value();
     if (key == "name") {
       HATTR_THROW_UNLESS(value.is_string(), "{}: key name: expected a string, got {}", source_name, value.dump());
       cal.name = value.get<std::string>();

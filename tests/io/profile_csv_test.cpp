@@ -100,6 +100,16 @@ TEST(ProfileCsv, KeepsUnknownMetadataKeysAndSkipsComments) {
   EXPECT_EQ(p.metadata().extra.size(), 2u);
 }
 
+TEST(ProfileCsv, MetadataKeysNamedLikeChannelsRoundTrip) {
+  // Found by the fuzzer: the reader accepted "# t: ..." and the writer refused to write it back.
+  const std::string text = std::string("# t: 1\n# fz: x\n") + kHeader + "0,0,0,0,0,0,0,1\n";
+  std::istringstream in(text);
+  const HapticProfile p = readProfileCsv(in, "keys.csv");
+  std::stringstream again;
+  writeProfileCsv(p, again);
+  EXPECT_EQ(readProfileCsv(again, "again.csv"), p);
+}
+
 // ---- One test per class of bad input ---------------------------------------------------
 
 TEST(ProfileCsvErrors, EmptyFile) {
@@ -174,6 +184,12 @@ TEST(ProfileCsvErrors, NewerFormatVersion) {
 TEST(ProfileCsvErrors, BadNominalRate) {
   EXPECT_EQ(readError(std::string("# rate_hz: fast\n") + kHeader + "0,0,0,0,0,0,0,1\n"),
             "bad.csv:1: rate_hz: expected a finite number >= 0, got \"fast\"");
+}
+
+TEST(ProfileCsvErrors, ControlCharacterInMetadata) {
+  // Found by the fuzzer: a carriage return inside a value could not be written back.
+  EXPECT_EQ(readError(std::string("# subject: a\rb\n") + kHeader + "0,0,0,0,0,0,0,1\n"),
+            "bad.csv:1: expected printable metadata text, got a control character");
 }
 
 TEST(ProfileCsvErrors, BlankLineInsideTheData) {
