@@ -26,5 +26,6 @@ void printJson(const nlohmann::json& json);
 void registerProfileCommands(CLI::App& app);
 void registerImportCommands(CLI::App& app);
 void registerDemoCommand(CLI::App& app);
+void registerServoCheckCommand(CLI::App& app);
 
 }  // namespace hattr::cli

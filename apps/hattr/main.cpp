@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   registerProfileCommands(app);
   registerImportCommands(app);
+  registerServoCheckCommand(app);
   registerDemoCommand(app);
 
   try {

@@ -1,0 +1,145 @@
+// hattr servo-check: runs the real-time loop with the full pipeline on a (simulated) device
+// next to a bare sleep loop measured in the same run, and reports both.
+
+#include <iostream>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "cli_common.hpp"
+#include "hattr/device/device_uri.hpp"
+#include "hattr/render/flat_paper.hpp"
+#include "hattr/servo/servo_loop.hpp"
+
+namespace hattr::cli {
+namespace {
+
+struct ServoCheckOptions {
+  double rate_hz = 1000.0;
+  double seconds = 5.0;
+  std::string device = "sim://pen";
+  std::string realtime = "try";
+  int cpu = -1;
+  double spin_us = 0.0;
+  bool json = false;
+};
+
+nlohmann::json percentilesUs(const DurationHistogram& h) {
+  const auto us = [](std::int64_t ns) { return static_cast<double>(ns) * 1e-3; };
+  return {{"p50", us(h.percentile_ns(0.50))}, {"p99", us(h.percentile_ns(0.99))},
+          {"p99_9", us(h.percentile_ns(0.999))}, {"max", us(h.max_ns())}, {"count", h.count()}};
+}
+
+servo::RealtimePolicy parsePolicy(const std::string& text) {
+  if (text == "require") return servo::RealtimePolicy::kRequire;
+  if (text == "try") return servo::RealtimePolicy::kTry;
+  return servo::RealtimePolicy::kSkip;
+}
+
+nlohmann::json reportJson(const servo::RealtimeReport& r) {
+  return {{"fifo", r.fifo}, {"memory_locked", r.memory_locked}, {"pinned", r.pinned},
+          {"timer_slack_minimal", r.timer_slack_minimal}, {"notes", r.notes}};
+}
+
+void runServoCheck(const ServoCheckOptions& opt) {
+  servo::RealtimeSettings realtime{.policy = parsePolicy(opt.realtime),
+                                   .cpu = opt.cpu,
+                                   .final_spin = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.spin_us * 1e3))};
+  const auto duration = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.seconds * 1e9));
+
+  // The platform's floor first: the same sleeps with nothing to do.
+  servo::RealtimeReport floor_report;
+  const DurationHistogram floor = servo::measureSleepFloor(opt.rate_hz, duration, realtime, &floor_report);
+
+  // Then the full pipeline: a hand writing circles on the paper through the device.
+  device::CircleHand hand(Vec3::Zero(), 0.015, 1.0, 1.0);
+  const auto device = device::openDevice(opt.device, &hand);
+  render::FlatPaper paper;
+  servo::ServoLoop loop(*device, servo::ServoConfig{.rate_hz = opt.rate_hz, .realtime = realtime});
+  loop.setWorld(&paper);
+  std::atomic<bool> done{false};
+  std::uint64_t consumed = 0;
+  std::thread consumer([&] {  // drains samples like the recorder does
+    Sample s;
+    while (!done.load(std::memory_order_acquire)) {
+      while (loop.samples().tryPop(s)) ++consumed;
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    while (loop.samples().tryPop(s)) ++consumed;
+  });
+  loop.start();
+  std::this_thread::sleep_for(duration);
+  loop.stop();
+  done = true;
+  consumer.join();
+
+  const auto& c = loop.counters();
+  const double floor_p99 = static_cast<double>(floor.percentile_ns(0.99));
+  const double loop_p99 = static_cast<double>(loop.periodError().percentile_ns(0.99));
+  nlohmann::json json = {
+      {"rate_hz", opt.rate_hz},
+      {"seconds", opt.seconds},
+      {"device", opt.device},
+      {"realtime", reportJson(loop.realtimeReport())},
+      {"floor", {{"period_error_us", percentilesUs(floor)}}},
+      {"loop",
+       {{"period_error_us", percentilesUs(loop.periodError())},
+        {"tick_compute_us", percentilesUs(loop.tickCompute())},
+        {"ticks", c.ticks.load()},
+        {"samples_consumed", consumed},
+        {"overruns", c.overruns.load()},
+        {"dropped_samples", c.dropped_samples.load()},
+        {"faults", c.faults.load()},
+        {"stalls", c.stalls.load()}}},
+      {"ratio_p99", floor_p99 > 0.0 ? loop_p99 / floor_p99 : 0.0},
+  };
+  if (opt.json) {
+    printJson(json);
+    return;
+  }
+  const auto row = [](const char* name, const nlohmann::json& p) {
+    return fmt::format("{:<22} {:>9.2f} {:>9.2f} {:>9.2f} {:>9.2f}\n", name, p["p50"].get<double>(),
+                       p["p99"].get<double>(), p["p99_9"].get<double>(), p["max"].get<double>());
+  };
+  std::cout << fmt::format("servo-check: {} Hz for {} s on {}\n", opt.rate_hz, opt.seconds, opt.device)
+            << fmt::format("real time: SCHED_FIFO {}, mlockall {}, pinned {}{}\n\n", loop.realtimeReport().fifo ? "yes" : "no",
+                           loop.realtimeReport().memory_locked ? "yes" : "no", loop.realtimeReport().pinned ? "yes" : "no",
+                           loop.realtimeReport().notes.empty() ? "" : " (" + loop.realtimeReport().notes + ")")
+            << fmt::format("{:<22} {:>9} {:>9} {:>9} {:>9}\n", "[µs]", "p50", "p99", "p99.9", "max")
+            << row("floor period error", json["floor"]["period_error_us"])
+            << row("loop period error", json["loop"]["period_error_us"])
+            << row("loop tick compute", json["loop"]["tick_compute_us"])
+            << fmt::format("\nticks {}, overruns {}, dropped samples {}, faults {}, stalls {}\nratio p99 (loop/floor) {:.2f}\n",
+                           c.ticks.load(), c.overruns.load(), c.dropped_samples.load(), c.faults.load(), c.stalls.load(),
+                           json["ratio_p99"].get<double>());
+}
+
+}  // namespace
+
+void registerServoCheckCommand(CLI::App& app) {
+  auto opt = std::make_shared<ServoCheckOptions>();
+  auto* cmd = app.add_subcommand("servo-check",
+                                 "Run the real-time servo loop (full pipeline) next to a bare sleep loop and report "
+                                 "period error, tick compute time, overruns, drops and faults");
+  cmd->add_option("--rate", opt->rate_hz, "Servo rate [Hz]")->check(CLI::Range(1.0, 10000.0))->capture_default_str();
+  cmd->add_option("--seconds", opt->seconds, "Duration of each of the two runs [s]")
+      ->check(CLI::Range(0.01, 3600.0))
+      ->capture_default_str();
+  cmd->add_option("--device", opt->device, "Device URI (see `hattr devices`)")->capture_default_str();
+  cmd->add_option("--realtime", opt->realtime, "SCHED_FIFO + mlockall: require, try or skip")
+      ->check(CLI::IsMember({"require", "try", "skip"}))
+      ->capture_default_str();
+  cmd->add_option("--cpu", opt->cpu, "Pin the servo thread to this CPU (-1: no pinning)")->capture_default_str();
+  cmd->add_option("--spin-us", opt->spin_us, "Busy-wait this long before each deadline [µs]")
+      ->check(CLI::Range(0.0, 1000.0))
+      ->capture_default_str();
+  cmd->add_flag("--json", opt->json,
+                "Print JSON: loop and floor {period_error_us {p50, p99, p99_9, max}}, loop {tick_compute_us, overruns, "
+                "dropped_samples, faults}, ratio_p99");
+  cmd->callback([opt] { runServoCheck(*opt); });
+
+  auto* devices = app.add_subcommand("devices", "List the device URIs hattr accepts and their parameters");
+  devices->callback([] { std::cout << device::deviceUriHelp(); });
+}
+
+}  // namespace hattr::cli

@@ -1,0 +1,35 @@
+#pragma once
+/// Devices are opened by URI so apps and configurations can name them:
+///   sim://pen?mass_kg=0.045&damping_N_s_per_m=1&quantum_m=2.3e-5&continuous_force_N=1.75
+/// Reserved for later: udp://host:port (remote partner), plugin:/path/lib.so (hardware).
+
+#include <map>
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "hattr/device/simulated_device.hpp"
+
+namespace hattr::device {
+
+struct DeviceUri {
+  std::string scheme;                        ///< "sim", "udp", "plugin"
+  std::string target;                        ///< "pen", "host:port", "/path/lib.so"
+  std::map<std::string, std::string> query;  ///< key=value parameters
+};
+
+/// Splits a URI; throws InputError naming what is accepted when it is malformed.
+DeviceUri parseDeviceUri(std::string_view uri);
+
+/// The simulated pen's parameters from a sim:// URI (defaults for absent keys). Unknown
+/// keys and out-of-range values throw InputError naming the key, the range and the value.
+SimulatedPenParams simulatedPenParams(const DeviceUri& uri);
+
+/// Opens the device a URI names. `hand` drives a simulated pen (may be null). Throws
+/// InputError for an unknown or malformed URI, listing what is accepted.
+std::unique_ptr<Device> openDevice(std::string_view uri, HandScript* hand);
+
+/// Help text listing the accepted URIs and sim:// keys.
+std::string deviceUriHelp();
+
+}  // namespace hattr::device

@@ -1,0 +1,88 @@
+#pragma once
+/// The simulated hand that holds the simulated pen: an impedance that pulls the pen toward
+/// a target and presses it along its axis with an intended force. Where the target comes
+/// from is a HandScript: a profile file, a simulated trainee, or the mouse in the studio.
+
+#include <cstddef>
+
+#include "hattr/core/haptic_profile.hpp"
+#include "hattr/core/pen_state.hpp"
+
+namespace hattr::device {
+
+/// What the hand wants at one instant.
+struct HandCommand {
+  Vec3 p_target_W = Vec3::Zero();   ///< where the hand pulls the tip [m]
+  Vec3 v_target_W = Vec3::Zero();   ///< the target's velocity [m/s]
+  double press_N = 0.0;             ///< intended axial force toward the tip [N] (>= 0)
+  double azimuth_rad = 0.0;         ///< pen azimuth (see docs/units_and_frames.md)
+  double altitude_rad = 1.0471975511965976;  ///< pen altitude above the paper (60°)
+  bool pen_down = false;            ///< the hand means to write
+};
+
+/// A source of hand commands. command() is called on the servo thread (through the
+/// simulated device): noexcept, no allocation.
+class HandScript {
+ public:
+  virtual ~HandScript() = default;
+  /// The command at loop time t_s; calls come with non-decreasing t_s within a run.
+  virtual HandCommand command(double t_s) noexcept = 0;
+  /// Back to the start (before a new run). Not on the servo thread.
+  virtual void rewind() noexcept {}
+};
+
+/// The hand's mechanical impedance. Defaults: a relaxed grip on a pen; see docs/realtime.md.
+struct HandImpedance {
+  double stiffness_N_per_m = 300.0;
+  double damping_N_s_per_m = 4.0;
+};
+
+/// Force the hand exerts on the pen for a command and the pen's state [N, W].
+Vec3 handForce(const HandImpedance& hand, const HandCommand& command, const Vec3& p_WT, const Vec3& v_WT) noexcept;
+
+/// A hand that holds still at a point, pressing with a constant force.
+class StillHand final : public HandScript {
+ public:
+  explicit StillHand(HandCommand command) : command_(command) {}
+  HandCommand command(double) noexcept override { return command_; }
+
+ private:
+  HandCommand command_;
+};
+
+/// A hand writing circles on the paper: centre, radius, turns per second, pressing with a
+/// constant axial force at a fixed tilt. Used by servo-check, the benchmarks and tests.
+class CircleHand final : public HandScript {
+ public:
+  CircleHand(Vec3 centre_W, double radius_m, double turns_per_s, double press_N)
+      : centre_W_(centre_W), radius_m_(radius_m), omega_(2.0 * 3.141592653589793 * turns_per_s), press_N_(press_N) {}
+  HandCommand command(double t_s) noexcept override;
+
+ private:
+  Vec3 centre_W_;
+  double radius_m_;
+  double omega_;
+  double press_N_;
+};
+
+/// Plays a recorded haptic profile as the hand's target: the position and velocity at the
+/// time (linearly interpolated), the press force that reproduces the profile's normal force
+/// at its tilt (or at `default_altitude_rad`), pen-down as recorded. Holds the last sample
+/// after the end. `start_offset_W` shifts the path.
+class ProfileHandScript final : public HandScript {
+ public:
+  explicit ProfileHandScript(const HapticProfile& profile, double default_altitude_rad = 1.0471975511965976,
+                             Vec3 start_offset_W = Vec3::Zero());
+  HandCommand command(double t_s) noexcept override;
+  void rewind() noexcept override { cursor_ = 0; }
+  [[nodiscard]] double duration_s() const noexcept;
+
+ private:
+  std::vector<Sample> samples_;
+  bool has_tilt_;
+  double default_altitude_rad_;
+  Vec3 offset_W_;
+  std::size_t cursor_ = 0;
+};
+
+}  // namespace hattr::device

@@ -1,0 +1,135 @@
+#pragma once
+/// The servo loop: per tick, read the device → world (paper) forces → guidance forces → the
+/// safety path → write the device → publish the sample (SPSC ring for the recorder, triple
+/// buffer for the GUI). One tick function, two clocks: a real-time thread at 1–10 kHz, or
+/// simulated time as fast as possible and deterministic. See docs/realtime.md.
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <thread>
+
+#include "hattr/core/histogram.hpp"
+#include "hattr/core/pen_state.hpp"
+#include "hattr/core/sample.hpp"
+#include "hattr/core/spsc_ring.hpp"
+#include "hattr/core/triple_buffer.hpp"
+#include "hattr/device/device.hpp"
+#include "hattr/servo/force_safety.hpp"
+#include "hattr/servo/realtime.hpp"
+
+namespace hattr::servo {
+
+struct ServoConfig {
+  double rate_hz = 1000.0;                                  ///< 1 to 10 kHz
+  RealtimeSettings realtime;                                ///< real-time clock only
+  std::chrono::nanoseconds stall_threshold{10'000'000};     ///< watchdog: a longer gap zeroes force
+  std::size_t sample_ring_capacity = 1u << 16;              ///< power of two
+  std::size_t command_ring_capacity = 64;                   ///< power of two
+  SafetyConfig safety;
+};
+
+/// A command posted to the servo thread through the lock-free mailbox.
+struct ServoCommand {
+  enum class Type : std::uint8_t {
+    kClearFault,            ///< clear a latched fault; forces ramp in again
+    kRestartRamp,           ///< zero and ramp in (e.g. before a trial)
+    kSetGuidanceParameter,  ///< forwarded to GuidanceController::setParameter
+  };
+  Type type = Type::kClearFault;
+  int parameter = 0;
+  double value = 0.0;
+};
+
+enum class TickStatus : std::uint8_t { kRunning, kFaulted, kStalled, kDeviceError };
+
+/// Counters readable from any thread while the loop runs.
+struct LiveCounters {
+  std::atomic<std::uint64_t> ticks{0};
+  std::atomic<std::uint64_t> overruns{0};
+  std::atomic<std::uint64_t> dropped_samples{0};
+  std::atomic<std::uint64_t> faults{0};
+  std::atomic<std::uint64_t> stalls{0};
+  std::atomic<std::uint64_t> consumer_stalls{0};
+};
+
+class ServoLoop {
+ public:
+  /// Preallocates everything (rings, buffers). Throws InputError for a bad configuration.
+  ServoLoop(device::Device& device, ServoConfig config);
+  ~ServoLoop();
+  ServoLoop(const ServoLoop&) = delete;
+  ServoLoop& operator=(const ServoLoop&) = delete;
+
+  /// The world and guidance stages (may be null). Only while the loop is not running.
+  void setWorld(WorldRenderer* world) noexcept { world_ = world; }
+  void setGuidance(GuidanceController* guidance) noexcept { guidance_ = guidance; }
+  /// A consumer the loop depends on (e.g. the recorder): it stores the t_s of the newest
+  /// sample it has taken; when that lags the loop by more than the stall threshold, the
+  /// loop zeroes the force (counted in consumer_stalls). Null: no such dependency.
+  void requireConsumer(const std::atomic<double>* consumer_time_s) noexcept { consumer_time_s_ = consumer_time_s; }
+
+  /// One tick at loop time `now` (since the loop started). Servo thread only: noexcept,
+  /// no allocation, no locks.
+  TickStatus tick(std::chrono::nanoseconds now) noexcept;
+
+  /// Simulated time: `ticks` ticks, each one period after the last, as fast as possible.
+  /// Deterministic for deterministic stages.
+  void runSimulated(std::size_t ticks) noexcept;
+  /// Simulated time so far.
+  [[nodiscard]] std::chrono::nanoseconds simulatedNow() const noexcept { return sim_now_; }
+
+  /// Real time: starts the servo thread (applies the real-time settings there; throws
+  /// hattr::Error if they are required and refused). stop() joins it.
+  void start();
+  void stop();
+  [[nodiscard]] bool running() const noexcept { return running_.load(std::memory_order_acquire); }
+  [[nodiscard]] const RealtimeReport& realtimeReport() const noexcept { return realtime_report_; }
+
+  /// Posts a command; false if the mailbox is full. From one controlling thread.
+  bool post(const ServoCommand& command) noexcept { return commands_.tryPush(command); }
+
+  /// Every sample, for one consumer (the recorder).
+  [[nodiscard]] SpscRing<Sample>& samples() noexcept { return samples_; }
+  /// The newest sample, for one display reader.
+  [[nodiscard]] TripleBuffer<Sample>& latest() noexcept { return latest_; }
+  [[nodiscard]] const LiveCounters& counters() const noexcept { return counters_; }
+  /// |period − nominal| and tick compute time. Read only while the loop is stopped.
+  [[nodiscard]] const DurationHistogram& periodError() const noexcept { return period_error_; }
+  [[nodiscard]] const DurationHistogram& tickCompute() const noexcept { return tick_compute_; }
+  [[nodiscard]] const ForceSafety& safety() const noexcept { return safety_; }
+  [[nodiscard]] std::chrono::nanoseconds period() const noexcept { return period_; }
+  [[nodiscard]] const device::Device& device() const noexcept { return device_; }
+
+  /// Zeroes clocks, counters, histograms and the ramp for a new run. Not while running.
+  void resetRun() noexcept;
+
+ private:
+  void drainCommands() noexcept;
+  void runRealtime();
+
+  device::Device& device_;
+  ServoConfig config_;
+  std::chrono::nanoseconds period_;
+  ForceSafety safety_;
+  WorldRenderer* world_ = nullptr;
+  GuidanceController* guidance_ = nullptr;
+  const std::atomic<double>* consumer_time_s_ = nullptr;
+
+  SpscRing<Sample> samples_;
+  SpscRing<ServoCommand> commands_;
+  TripleBuffer<Sample> latest_;
+  LiveCounters counters_;
+  DurationHistogram period_error_;
+  DurationHistogram tick_compute_;
+
+  std::chrono::nanoseconds last_now_{-1};
+  std::chrono::nanoseconds sim_now_{0};
+  std::atomic<bool> running_{false};
+  std::atomic<bool> stop_requested_{false};
+  std::thread thread_;
+  RealtimeReport realtime_report_;
+  std::exception_ptr start_error_;
+};
+
+}  // namespace hattr::servo

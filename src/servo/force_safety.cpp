@@ -1,0 +1,84 @@
+#include "hattr/servo/force_safety.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "hattr/core/error.hpp"
+
+namespace hattr::servo {
+
+ForceSafety::ForceSafety(const SafetyConfig& config, const device::DeviceLimits& limits)
+    : config_(config),
+      wall_min_m_(limits.workspace_min_m.array() + config.wall_margin_m),
+      wall_max_m_(limits.workspace_max_m.array() - config.wall_margin_m),
+      max_force_N_(config.max_force_N > 0.0 ? std::min(config.max_force_N, limits.peak_force_N)
+                                            : limits.continuous_force_N) {
+  const auto check = [](double value, const char* name) {
+    HATTR_THROW_UNLESS(std::isfinite(value) && value >= 0.0, "safety: {}: expected a finite number >= 0, got {}",
+                       name, value);
+  };
+  check(config.max_force_N, "max_force_N");
+  check(config.max_rate_N_per_s, "max_rate_N_per_s");
+  check(config.ramp_time_s, "ramp_time_s");
+  check(config.wall_margin_m, "wall_margin_m");
+  check(config.wall_stiffness_N_per_m, "wall_stiffness_N_per_m");
+  HATTR_THROW_UNLESS(config.max_rate_N_per_s > 0.0, "safety: max_rate_N_per_s: expected > 0, got {}",
+                     config.max_rate_N_per_s);
+}
+
+Vec3 ForceSafety::softWallForce(const Vec3& p_WT) const noexcept {
+  const Vec3 below = (wall_min_m_ - p_WT).cwiseMax(0.0);
+  const Vec3 above = (p_WT - wall_max_m_).cwiseMax(0.0);
+  return config_.wall_stiffness_N_per_m * (below - above);
+}
+
+Vec3 ForceSafety::filter(const Vec3& requested_W, const Vec3& p_WT, double dt_s) noexcept {
+  // A latched fault, or a bad number now: zero force at once (no rate limit on stopping).
+  if (fault_ == SafetyFault::kNone && !(requested_W.allFinite() && p_WT.allFinite() && std::isfinite(dt_s))) {
+    latchFault(SafetyFault::kNonFiniteForce);
+  }
+  if (fault_ != SafetyFault::kNone) {
+    last_W_.setZero();
+    return last_W_;
+  }
+  const double dt = std::max(dt_s, 0.0);
+
+  // Soft walls, then the magnitude clamp.
+  Vec3 force = requested_W + softWallForce(p_WT);
+  const double magnitude = force.norm();
+  if (magnitude > max_force_N_) {
+    force *= max_force_N_ / magnitude;
+    ++clamps_;
+  }
+
+  // Ramp in.
+  ramp_ = config_.ramp_time_s > 0.0 ? std::min(1.0, ramp_ + dt / config_.ramp_time_s) : 1.0;
+  force *= ramp_;
+
+  // Rate limit: move from the last output toward the target by at most max_rate·dt. Both
+  // lie inside the clamp ball, so the result does too.
+  const Vec3 step = force - last_W_;
+  const double max_step = config_.max_rate_N_per_s * dt;
+  const double step_norm = step.norm();
+  last_W_ += step_norm > max_step ? Vec3(step * (max_step / step_norm)) : step;
+  return last_W_;
+}
+
+void ForceSafety::latchFault(SafetyFault fault) noexcept {
+  if (fault_ == SafetyFault::kNone) ++faults_;
+  fault_ = fault;
+  ramp_ = 0.0;
+  last_W_.setZero();
+}
+
+void ForceSafety::clearFault() noexcept {
+  fault_ = SafetyFault::kNone;
+  restartRamp();
+}
+
+void ForceSafety::restartRamp() noexcept {
+  ramp_ = 0.0;
+  last_W_.setZero();
+}
+
+}  // namespace hattr::servo

@@ -1,0 +1,183 @@
+#include "hattr/servo/servo_loop.hpp"
+
+#include <cmath>
+#include <future>
+
+#include "hattr/core/error.hpp"
+
+namespace hattr::servo {
+namespace {
+
+std::chrono::nanoseconds periodFor(double rate_hz) {
+  HATTR_THROW_UNLESS(std::isfinite(rate_hz) && rate_hz >= 1.0 && rate_hz <= 10'000.0,
+                     "servo rate: expected 1 to 10000 Hz, got {}", rate_hz);
+  return std::chrono::nanoseconds(static_cast<std::int64_t>(std::llround(1e9 / rate_hz)));
+}
+
+double seconds(std::chrono::nanoseconds ns) noexcept { return static_cast<double>(ns.count()) * 1e-9; }
+
+void bump(std::atomic<std::uint64_t>& counter) noexcept { counter.fetch_add(1, std::memory_order_relaxed); }
+
+}  // namespace
+
+ServoLoop::ServoLoop(device::Device& device, ServoConfig config)
+    : device_(device),
+      config_(std::move(config)),
+      period_(periodFor(config_.rate_hz)),
+      safety_(config_.safety, device.limits()),
+      samples_(config_.sample_ring_capacity),
+      commands_(config_.command_ring_capacity) {
+  HATTR_THROW_UNLESS(config_.stall_threshold > period_,
+                     "servo stall threshold: expected more than one period ({} ns), got {} ns", period_.count(),
+                     config_.stall_threshold.count());
+}
+
+ServoLoop::~ServoLoop() { stop(); }
+
+void ServoLoop::resetRun() noexcept {
+  last_now_ = std::chrono::nanoseconds(-1);
+  sim_now_ = std::chrono::nanoseconds(0);
+  for (auto* c : {&counters_.ticks, &counters_.overruns, &counters_.dropped_samples, &counters_.faults,
+                  &counters_.stalls, &counters_.consumer_stalls}) {
+    c->store(0, std::memory_order_relaxed);
+  }
+  period_error_.clear();
+  tick_compute_.clear();
+  safety_.restartRamp();
+}
+
+void ServoLoop::drainCommands() noexcept {
+  ServoCommand command;
+  // Bounded: a flood of commands cannot stretch a tick.
+  for (int i = 0; i < 8 && commands_.tryPop(command); ++i) {
+    switch (command.type) {
+      case ServoCommand::Type::kClearFault: safety_.clearFault(); break;
+      case ServoCommand::Type::kRestartRamp: safety_.restartRamp(); break;
+      case ServoCommand::Type::kSetGuidanceParameter:
+        if (guidance_) (void)guidance_->setParameter(command.parameter, command.value);
+        break;
+    }
+  }
+}
+
+TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
+  const auto compute_start = monotonicNow();
+  TickStatus status = TickStatus::kRunning;
+
+  // Measured period; a gap beyond the threshold is a stall: zero force, ramp in again.
+  const std::chrono::nanoseconds dt = last_now_.count() < 0 ? period_ : now - last_now_;
+  const bool stalled = last_now_.count() >= 0 && dt > config_.stall_threshold;
+  if (stalled) {
+    bump(counters_.stalls);
+    status = TickStatus::kStalled;
+  }
+  last_now_ = now;
+  const double dt_s = seconds(dt);
+  drainCommands();
+
+  // Read the pen, render the paper, add guidance.
+  PenState pen;
+  if (device_.read(now, pen) != device::DeviceStatus::kOk) safety_.latchFault(SafetyFault::kDeviceError);
+  ContactForces contact;
+  if (world_) world_->render(pen, dt_s, contact);
+  const Vec3 guide = guidance_ ? guidance_->compute(pen, contact, dt_s) : Vec3(Vec3::Zero());
+
+  // A consumer the loop depends on has stopped taking samples.
+  const bool consumer_stalled =
+      consumer_time_s_ && pen.t_s - consumer_time_s_->load(std::memory_order_acquire) > seconds(config_.stall_threshold);
+  if (consumer_stalled) bump(counters_.consumer_stalls);
+
+  // Every force passes the safety path; a stall zeroes it outright.
+  Vec3 command = Vec3::Zero();
+  if (stalled || consumer_stalled) {
+    safety_.restartRamp();
+  } else {
+    command = safety_.filter(contact.f_on_pen_W + guide, pen.p_WT, dt_s);
+  }
+  if (device_.write(command) != device::DeviceStatus::kOk) safety_.latchFault(SafetyFault::kDeviceError);
+  if (safety_.fault() != SafetyFault::kNone) status = TickStatus::kFaulted;
+  counters_.faults.store(safety_.faultCount(), std::memory_order_relaxed);
+
+  // Publish the sample.
+  Sample sample;
+  sample.t_s = pen.t_s;
+  sample.p_WT = pen.p_WT;
+  sample.v_WT = pen.v_WT;
+  sample.f_user_W = contact.f_on_paper_W;
+  sample.f_cmd_W = command;
+  sample.f_guide_W = guide;
+  sample.in_contact = contact.in_contact;
+  sample.pen_down = contact.in_contact;
+  sample.pressure_raw = pen.has_pressure ? pen.pressure_raw : 0.0;
+  sample.tilt_azimuth_rad = pen.azimuth_rad;
+  sample.tilt_altitude_rad = pen.altitude_rad;
+  if (!samples_.tryPush(sample)) bump(counters_.dropped_samples);
+  latest_.write(sample);
+
+  bump(counters_.ticks);
+  tick_compute_.record((monotonicNow() - compute_start).count());
+  return status;
+}
+
+void ServoLoop::runSimulated(std::size_t ticks) noexcept {
+  for (std::size_t i = 0; i < ticks; ++i) {
+    (void)tick(sim_now_);
+    sim_now_ += period_;
+  }
+}
+
+void ServoLoop::start() {
+  HATTR_DEMAND(!running(), "start() on a running servo loop");
+  stop_requested_.store(false);
+  std::promise<void> started;
+  auto started_future = started.get_future();
+  thread_ = std::thread([this, &started] {
+    try {
+      realtime_report_ = applyRealtime(config_.realtime);
+    } catch (...) {
+      started.set_exception(std::current_exception());
+      return;
+    }
+    running_.store(true, std::memory_order_release);
+    started.set_value();
+    runRealtime();
+  });
+  try {
+    started_future.get();
+  } catch (...) {
+    thread_.join();
+    throw;
+  }
+}
+
+void ServoLoop::stop() {
+  stop_requested_.store(true, std::memory_order_release);
+  if (thread_.joinable()) thread_.join();
+  running_.store(false, std::memory_order_release);
+}
+
+// Absolute deadlines on CLOCK_MONOTONIC; a late tick is counted, never made up for.
+void ServoLoop::runRealtime() {
+  const auto start = monotonicNow();
+  auto deadline = start + period_;
+  auto last_wake = start;
+  bool first = true;
+  while (!stop_requested_.load(std::memory_order_acquire)) {
+    sleepUntil(deadline, config_.realtime.final_spin);
+    const auto wake = monotonicNow();
+    if (!first) period_error_.record(std::abs((wake - last_wake - period_).count()));
+    first = false;
+    last_wake = wake;
+    (void)tick(wake - start);
+    const auto done = monotonicNow();
+    deadline += period_;
+    if (done > deadline) {
+      bump(counters_.overruns);
+      deadline = done + period_;
+    }
+  }
+  (void)device_.write(Vec3::Zero());
+  running_.store(false, std::memory_order_release);
+}
+
+}  // namespace hattr::servo

@@ -1,0 +1,150 @@
+#include "hattr/device/simulated_device.hpp"
+
+#include <cmath>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "hattr/core/error.hpp"
+#include "hattr/device/device_uri.hpp"
+
+namespace hattr::device {
+namespace {
+
+using namespace std::chrono_literals;
+using ::testing::HasSubstr;
+
+PenState readAt(SimulatedDevice& device, double t_s) {
+  PenState pen;
+  EXPECT_EQ(device.read(std::chrono::nanoseconds(std::llround(t_s * 1e9)), pen), DeviceStatus::kOk);
+  return pen;
+}
+
+TEST(SimulatedDevice, PenHeldStillWithNoForceStaysPut) {
+  SimulatedPenParams params;
+  params.start_position_W = Vec3(0.01, 0.02, 0.005);
+  StillHand hand(HandCommand{.p_target_W = params.start_position_W});
+  SimulatedDevice device(params, &hand);
+  for (int i = 1; i <= 5000; ++i) {
+    (void)readAt(device, i * 1e-3);
+    ASSERT_EQ(device.write(Vec3::Zero()), DeviceStatus::kOk);
+  }
+  EXPECT_EQ(device.truePosition(), params.start_position_W);
+  EXPECT_EQ(device.trueVelocity(), Vec3::Zero());
+}
+
+TEST(SimulatedDevice, ConstantForceAcceleratesAsTheMassDamperModelSays) {
+  SimulatedPenParams params;
+  params.start_position_W = Vec3::Zero();
+  params.max_substep_s = 1e-5;
+  SimulatedDevice device(params, nullptr);
+  const Vec3 force(0.2, -0.1, 0.05);
+  const double m = params.mass_kg;
+  const double b = params.damping_N_s_per_m;
+  double t = 0.0;
+  for (int i = 1; i <= 500; ++i) {
+    t = i * 1e-3;
+    ASSERT_EQ(device.write(force), DeviceStatus::kOk);
+    (void)readAt(device, t);
+  }
+  // Exact solution of m·v' = F − b·v from rest.
+  const double decay = std::exp(-b * t / m);
+  const Vec3 v_exact = force / b * (1.0 - decay);
+  const Vec3 p_exact = force / b * (t - m / b * (1.0 - decay));
+  EXPECT_LT((device.trueVelocity() - v_exact).norm(), 1e-3 * v_exact.norm());
+  EXPECT_LT((device.truePosition() - p_exact).norm(), 1e-3 * p_exact.norm());
+}
+
+TEST(SimulatedDevice, ForceDropsToZeroWhenCommandsStop) {
+  SimulatedPenParams params;
+  params.start_position_W = Vec3::Zero();
+  params.damping_N_s_per_m = 0.0;
+  SimulatedDevice device(params, nullptr);
+  (void)readAt(device, 0.0);
+  ASSERT_EQ(device.write(Vec3(1.0, 0.0, 0.0)), DeviceStatus::kOk);
+  (void)readAt(device, 0.050);  // no write for 50 ms: force held only for the 10 ms timeout
+  const double v_expected = 1.0 / params.mass_kg * params.command_timeout_s;
+  EXPECT_NEAR(device.trueVelocity().x(), v_expected, 0.03 * v_expected);
+}
+
+TEST(SimulatedDevice, QuantizesReportedPositionsNotTheTrueOnes) {
+  SimulatedPenParams params;
+  params.position_quantum_m = 1e-4;
+  params.start_position_W = Vec3(0.01234, -0.00051, 0.00049);
+  SimulatedDevice device(params, nullptr);
+  const PenState pen = readAt(device, 0.0);
+  EXPECT_NEAR(pen.p_WT.x(), 0.0123, 1e-12);
+  EXPECT_NEAR(pen.p_WT.y(), -0.0005, 1e-12);
+  EXPECT_NEAR(pen.p_WT.z(), 0.0005, 1e-12);
+  EXPECT_EQ(device.truePosition(), params.start_position_W);
+}
+
+TEST(SimulatedDevice, NonFiniteCommandIsAFaultAndZeroForce) {
+  SimulatedDevice device(SimulatedPenParams{}, nullptr);
+  EXPECT_EQ(device.write(Vec3(std::nan(""), 0, 0)), DeviceStatus::kFault);
+  EXPECT_EQ(device.lastCommand(), Vec3::Zero());
+}
+
+TEST(Hand, PressesWithTheNormalShareOfItsAxialForce) {
+  const HandCommand cmd{.press_N = 2.0, .altitude_rad = std::asin(0.75), .pen_down = true};
+  const Vec3 f = handForce(HandImpedance{}, cmd, Vec3::Zero(), Vec3::Zero());
+  EXPECT_NEAR(f.z(), -1.5, 1e-12);
+  HandCommand lifted = cmd;
+  lifted.pen_down = false;
+  lifted.p_target_W = Vec3(0, 0, 0.01);
+  EXPECT_NEAR(handForce(HandImpedance{.stiffness_N_per_m = 300}, lifted, Vec3::Zero(), Vec3::Zero()).z(), 3.0, 1e-12);
+}
+
+TEST(Hand, ProfileScriptInterpolatesAndReproducesTheNormalForce) {
+  HapticProfile profile;
+  for (int i = 0; i < 3; ++i) {
+    Sample s;
+    s.t_s = 10.0 + i * 0.01;
+    s.p_WT = Vec3(i * 0.001, 0.0, 0.0);
+    s.f_user_W = Vec3(0.0, 0.0, -1.0 - i);
+    s.pen_down = true;
+    profile.append(s);
+  }
+  ProfileHandScript script(profile, std::asin(0.5));
+  const HandCommand mid = script.command(0.005);
+  EXPECT_NEAR(mid.p_target_W.x(), 0.0005, 1e-12);
+  EXPECT_NEAR(mid.press_N * 0.5, 1.5, 1e-12);  // axial · sin θ = recorded normal force
+  EXPECT_NEAR(script.command(1.0).p_target_W.x(), 0.002, 1e-12);  // holds the end
+}
+
+// ---- URIs --------------------------------------------------------------------------------
+
+std::string openError(const std::string& uri) {
+  try {
+    (void)openDevice(uri, nullptr);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(DeviceUri, OpensASimulatedPenWithParameters) {
+  const auto device = openDevice("sim://pen?mass_kg=0.1&continuous_force_N=2.5", nullptr);
+  auto* sim = dynamic_cast<SimulatedDevice*>(device.get());
+  ASSERT_NE(sim, nullptr);
+  EXPECT_EQ(sim->params().mass_kg, 0.1);
+  EXPECT_EQ(device->limits().continuous_force_N, 2.5);
+  EXPECT_EQ(device->limits().mass_kg, 0.1);
+  EXPECT_EQ(device->uri(), "sim://pen?mass_kg=0.1&continuous_force_N=2.5");
+}
+
+TEST(DeviceUri, BadUrisListWhatIsAccepted) {
+  EXPECT_THAT(openError("pen"), HasSubstr("expected scheme://target, accepted: sim://pen"));
+  EXPECT_THAT(openError("usb://phantom"), HasSubstr("unknown scheme \"usb\"; accepted: sim://pen"));
+  EXPECT_THAT(openError("udp://10.0.0.1:5000"), HasSubstr("udp devices are reserved and not available in this build"));
+  EXPECT_THAT(openError("plugin:/opt/lib.so"), HasSubstr("plugin devices are reserved"));
+  EXPECT_THAT(openError("sim://arm"), HasSubstr("the simulator offers sim://pen, got sim://arm"));
+  EXPECT_THAT(openError("sim://pen?mas_kg=1"), HasSubstr("unknown key \"mas_kg\": expected one of mass_kg"));
+  EXPECT_EQ(openError("sim://pen?mass_kg=-1"), "sim://pen: key mass_kg: expected a number in [0.001, 10], got \"-1\"");
+  EXPECT_THAT(openError("sim://pen?mass_kg"), HasSubstr("expected key=value in the query, got \"mass_kg\""));
+  EXPECT_THAT(openError("sim://pen?continuous_force_N=9&peak_force_N=8"),
+              HasSubstr("continuous_force_N (9) must not exceed peak_force_N (8)"));
+}
+
+}  // namespace
+}  // namespace hattr::device

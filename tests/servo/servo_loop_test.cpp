@@ -1,0 +1,206 @@
+#include "hattr/servo/servo_loop.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "hattr/device/simulated_device.hpp"
+#include "hattr/render/flat_paper.hpp"
+#include "support/no_allocation.hpp"
+
+namespace hattr::servo {
+namespace {
+
+using namespace std::chrono_literals;
+
+/// A guidance stage returning whatever force the test sets.
+class FixedGuidance final : public GuidanceController {
+ public:
+  Vec3 force = Vec3::Zero();
+  Vec3 compute(const PenState&, const ContactForces&, double) noexcept override { return force; }
+  bool setParameter(int parameter, double value) noexcept override {
+    if (parameter != 0) return false;
+    force.x() = value;
+    return true;
+  }
+};
+
+/// The simulated pen writing circles on flat paper: the full pipeline of this issue.
+struct Rig {
+  explicit Rig(ServoConfig config = {}, std::size_t ring = 1u << 16)
+      : hand(Vec3(0.0, 0.0, 0.0), 0.015, 1.0, 1.0),
+        device(device::SimulatedPenParams{}, &hand),
+        loop(device, withRing(config, ring)) {
+    loop.setWorld(&paper);
+    loop.setGuidance(&guidance);
+  }
+  static ServoConfig withRing(ServoConfig config, std::size_t ring) {
+    config.sample_ring_capacity = ring;
+    return config;
+  }
+  std::vector<Sample> drain() {
+    std::vector<Sample> out;
+    Sample s;
+    while (loop.samples().tryPop(s)) out.push_back(s);
+    return out;
+  }
+  device::CircleHand hand;
+  device::SimulatedDevice device;
+  render::FlatPaper paper;
+  FixedGuidance guidance;
+  ServoLoop loop;
+};
+
+TEST(ServoLoop, TickNeverAllocatesNorLocks) {
+  Rig rig;
+  rig.guidance.force = Vec3(0.1, 0.0, 0.0);
+  rig.loop.runSimulated(10);  // warm up outside the scope
+  const test::NoAllocationScope scope;
+  for (int i = 0; i < 10'000; ++i) {
+    (void)rig.loop.tick(rig.loop.simulatedNow() + i * rig.loop.period());
+  }
+  EXPECT_EQ(scope.allocations(), 0u);
+  if (test::lockHookActive()) {
+    EXPECT_EQ(scope.locks(), 0u);
+  }
+}
+
+TEST(ServoLoop, NoAllocationScopeCatchesAnAllocationAndALock) {
+  // The guard itself must be able to fail.
+  const test::NoAllocationScope scope;
+  auto* leak = new int(3);
+  EXPECT_EQ(scope.allocations(), 1u);
+  delete leak;
+  std::mutex mutex;
+  { const std::lock_guard lock(mutex); }
+  if (test::lockHookActive()) {
+    EXPECT_EQ(scope.locks(), 1u);
+  }
+}
+
+TEST(ServoLoop, SimulatedRunsAreBitForBitRepeatable) {
+  const auto run = [] {
+    Rig rig;
+    rig.loop.runSimulated(5000);
+    return rig.drain();
+  };
+  const std::vector<Sample> a = run();
+  const std::vector<Sample> b = run();
+  ASSERT_EQ(a.size(), 5000u);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(std::memcmp(&a[i], &b[i], sizeof(Sample)), 0) << "sample " << i;
+  }
+  // And the pen really wrote: it touched the paper and moved.
+  EXPECT_TRUE(a.back().in_contact);
+  EXPECT_GT((a.back().p_WT - a.front().p_WT).norm(), 0.005);
+}
+
+TEST(ServoLoop, NanForceLatchesAFaultAndTheDeviceGetsZero) {
+  Rig rig;
+  rig.loop.runSimulated(500);
+  rig.guidance.force = Vec3(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0);
+  EXPECT_EQ(rig.loop.tick(rig.loop.simulatedNow()), TickStatus::kFaulted);
+  EXPECT_EQ(rig.device.lastCommand(), Vec3::Zero());
+  // Latched: a good force afterwards still gives zero until the fault is cleared.
+  rig.guidance.force = Vec3(0.3, 0.0, 0.0);
+  rig.loop.runSimulated(100);
+  EXPECT_EQ(rig.device.lastCommand(), Vec3::Zero());
+  EXPECT_EQ(rig.loop.counters().faults.load(), 1u);
+  ASSERT_TRUE(rig.loop.post({ServoCommand::Type::kClearFault}));
+  rig.loop.runSimulated(400);
+  EXPECT_NE(rig.device.lastCommand(), Vec3::Zero());
+}
+
+TEST(ServoLoop, ForceAboveTheLimitIsClamped) {
+  Rig rig;
+  rig.guidance.force = Vec3(50.0, 0.0, 0.0);
+  rig.loop.runSimulated(1000);
+  const double limit = rig.device.limits().continuous_force_N;
+  EXPECT_NEAR(rig.device.lastCommand().norm(), limit, 1e-9);
+  EXPECT_GT(rig.loop.safety().clampCount(), 0u);
+}
+
+TEST(ServoLoop, StalledLoopTripsTheWatchdogAndZeroesForce) {
+  Rig rig;
+  rig.guidance.force = Vec3(0.5, 0.0, 0.0);
+  rig.loop.runSimulated(1000);
+  ASSERT_GT(rig.device.lastCommand().norm(), 0.4);
+  // 20 ms between ticks: beyond the 10 ms threshold.
+  EXPECT_EQ(rig.loop.tick(rig.loop.simulatedNow() + 20ms), TickStatus::kStalled);
+  EXPECT_EQ(rig.device.lastCommand(), Vec3::Zero());
+  EXPECT_EQ(rig.loop.counters().stalls.load(), 1u);
+}
+
+TEST(ServoLoop, ForcesRampInAfterStart) {
+  ServoConfig config;
+  config.safety.ramp_time_s = 0.2;
+  Rig rig(config);
+  // A hand holding the pen still above the paper: only the guidance force acts.
+  device::StillHand still(device::HandCommand{.p_target_W = rig.device.params().start_position_W});
+  rig.device.setHand(&still);
+  rig.guidance.force = Vec3(1.0, 0.0, 0.0);
+  std::vector<double> commanded;
+  for (int i = 0; i < 300; ++i) {
+    rig.loop.runSimulated(1);
+    commanded.push_back(rig.device.lastCommand().x());
+  }
+  EXPECT_NEAR(commanded[0], 1.0 * 0.001 / 0.2, 1e-12);  // 1/200 of the force on the first tick
+  EXPECT_NEAR(commanded[99], 0.5, 1e-9);                // half way at 100 ms
+  EXPECT_NEAR(commanded[299], 1.0, 1e-12);              // all of it after the ramp
+  for (std::size_t i = 1; i < commanded.size(); ++i) EXPECT_GE(commanded[i], commanded[i - 1]);
+}
+
+TEST(ServoLoop, SlowConsumerMakesTheLoopCountDropsNotBlock) {
+  Rig rig({}, 64);
+  rig.loop.runSimulated(1000);  // nobody drains
+  EXPECT_EQ(rig.loop.counters().ticks.load(), 1000u);
+  EXPECT_EQ(rig.loop.counters().dropped_samples.load(), 1000u - 64u);
+  EXPECT_EQ(rig.drain().size(), 64u);
+}
+
+TEST(ServoLoop, StoppedRequiredConsumerZeroesForce) {
+  Rig rig;
+  std::atomic<double> consumer_time{0.0};
+  rig.loop.requireConsumer(&consumer_time);
+  rig.guidance.force = Vec3(0.5, 0.0, 0.0);
+  rig.loop.runSimulated(5);
+  EXPECT_NE(rig.device.lastCommand(), Vec3::Zero());
+  rig.loop.runSimulated(20);  // consumer still at t = 0: 25 ms behind
+  EXPECT_EQ(rig.device.lastCommand(), Vec3::Zero());
+  EXPECT_GT(rig.loop.counters().consumer_stalls.load(), 0u);
+}
+
+TEST(ServoLoop, MailboxForwardsGuidanceParameters) {
+  Rig rig;
+  ASSERT_TRUE(rig.loop.post({ServoCommand::Type::kSetGuidanceParameter, 0, 0.25}));
+  rig.loop.runSimulated(1);
+  EXPECT_EQ(rig.guidance.force.x(), 0.25);
+}
+
+TEST(ServoLoop, RejectsRatesOutsideOneToTenKilohertz) {
+  device::SimulatedDevice device(device::SimulatedPenParams{}, nullptr);
+  EXPECT_THROW(ServoLoop(device, ServoConfig{.rate_hz = 20'000.0}), InputError);
+  EXPECT_THROW(ServoLoop(device, ServoConfig{.rate_hz = 0.5}), InputError);
+}
+
+TEST(ServoLoop, RealTimeThreadTicksAndStops) {
+  ServoConfig config;
+  config.realtime.policy = RealtimePolicy::kSkip;
+  Rig rig(config);
+  rig.loop.start();
+  std::this_thread::sleep_for(100ms);
+  rig.loop.stop();
+  EXPECT_FALSE(rig.loop.running());
+  EXPECT_GT(rig.loop.counters().ticks.load(), 10u);
+  EXPECT_EQ(rig.loop.tickCompute().count(), rig.loop.counters().ticks.load());
+  EXPECT_EQ(rig.device.lastCommand(), Vec3::Zero());  // zero force after stop
+}
+
+}  // namespace
+}  // namespace hattr::servo
