@@ -1,12 +1,12 @@
 // Ticks per second of the full servo pipeline in simulated time: the simulated pen held by
-// a hand writing circles, paper contact, a guidance stage, the safety path, and the sample
-// ring drained by a recorder-like consumer.
+// a hand writing circles, paper contact (512×512 grain relief, friction, texture), a
+// guidance stage, the safety path, and the sample ring drained by a recorder-like consumer.
 //   build/release/bench/bench_servo_tick
 
 #include <benchmark/benchmark.h>
 
 #include "hattr/device/simulated_device.hpp"
-#include "hattr/render/flat_paper.hpp"
+#include "hattr/render/paper_renderer.hpp"
 #include "hattr/servo/servo_loop.hpp"
 
 namespace {
@@ -25,7 +25,7 @@ class PullGuidance final : public GuidanceController {
 void BM_ServoTickFullPipeline(benchmark::State& state) {
   device::CircleHand hand(Vec3::Zero(), 0.015, 1.0, 1.0);
   device::SimulatedDevice device(device::SimulatedPenParams{}, &hand);
-  render::FlatPaper paper;
+  render::PaperRenderer paper(render::PaperParams{}, render::HeightField::paperGrain(0.16, 512, 1e-5, 5e-4, 2));
   PullGuidance guidance;
   servo::ServoLoop loop(device, servo::ServoConfig{});
   loop.setWorld(&paper);

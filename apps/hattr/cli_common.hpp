@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "hattr/core/haptic_profile.hpp"
+#include "hattr/render/world_config.hpp"
 
 namespace hattr::cli {
 
@@ -27,5 +28,12 @@ void registerProfileCommands(CLI::App& app);
 void registerImportCommands(CLI::App& app);
 void registerDemoCommand(CLI::App& app);
 void registerServoCheckCommand(CLI::App& app);
+void registerWorldCommands(CLI::App& app);
+
+/// The world configuration in `file`, or the defaults when `file` is empty.
+render::WorldConfig worldConfigOrDefault(const std::string& file);
+/// Clamps the paper to the passive bounds of the device `device_uri` at `rate_hz`; returns
+/// one line per change.
+std::vector<std::string> clampWorldToDevice(render::WorldConfig& world, const std::string& device_uri, double rate_hz);
 
 }  // namespace hattr::cli

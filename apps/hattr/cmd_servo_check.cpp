@@ -8,7 +8,7 @@
 
 #include "cli_common.hpp"
 #include "hattr/device/device_uri.hpp"
-#include "hattr/render/flat_paper.hpp"
+#include "hattr/render/paper_renderer.hpp"
 #include "hattr/servo/servo_loop.hpp"
 
 namespace hattr::cli {
@@ -18,6 +18,7 @@ struct ServoCheckOptions {
   double rate_hz = 1000.0;
   double seconds = 5.0;
   std::string device = "sim://pen";
+  std::string world;
   std::string realtime = "try";
   int cpu = -1;
   double spin_us = 0.0;
@@ -52,9 +53,12 @@ void runServoCheck(const ServoCheckOptions& opt) {
   const DurationHistogram floor = servo::measureSleepFloor(opt.rate_hz, duration, realtime, &floor_report);
 
   // Then the full pipeline: a hand writing circles on the paper through the device.
+  render::WorldConfig world = worldConfigOrDefault(opt.world);
+  const std::vector<std::string> clamps = clampWorldToDevice(world, opt.device, opt.rate_hz);
+  for (const auto& c : clamps) std::cerr << "hattr: world clamped: " << c << '\n';
+  render::PaperRenderer paper(world.paper, render::buildRelief(world.relief));
   device::CircleHand hand(Vec3::Zero(), 0.015, 1.0, 1.0);
   const auto device = device::openDevice(opt.device, &hand);
-  render::FlatPaper paper;
   servo::ServoLoop loop(*device, servo::ServoConfig{.rate_hz = opt.rate_hz, .realtime = realtime});
   loop.setWorld(&paper);
   std::atomic<bool> done{false};
@@ -80,6 +84,8 @@ void runServoCheck(const ServoCheckOptions& opt) {
       {"rate_hz", opt.rate_hz},
       {"seconds", opt.seconds},
       {"device", opt.device},
+      {"world", opt.world.empty() ? "defaults" : opt.world},
+      {"world_clamps", clamps},
       {"realtime", reportJson(loop.realtimeReport())},
       {"floor", {{"period_error_us", percentilesUs(floor)}}},
       {"loop",
@@ -126,6 +132,7 @@ void registerServoCheckCommand(CLI::App& app) {
       ->check(CLI::Range(0.01, 3600.0))
       ->capture_default_str();
   cmd->add_option("--device", opt->device, "Device URI (see `hattr devices`)")->capture_default_str();
+  cmd->add_option("--world", opt->world, "World (paper) configuration JSON (default: the built-in defaults)");
   cmd->add_option("--realtime", opt->realtime, "SCHED_FIFO + mlockall: require, try or skip")
       ->check(CLI::IsMember({"require", "try", "skip"}))
       ->capture_default_str();

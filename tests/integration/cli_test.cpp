@@ -132,5 +132,50 @@ TEST(Cli, ImportOfAMalformedRecordingExitsTwo) {
   EXPECT_FALSE(std::filesystem::exists(dir / "o.csv"));
 }
 
+TEST(Cli, ServoCheckJsonHasTheStableKeys) {
+  test::TempDir dir;
+  const RunResult r = runHattr(dir, "servo-check --rate 1000 --seconds 0.2 --realtime skip --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto json = nlohmann::json::parse(r.out);
+  for (const char* part : {"loop", "floor"}) {
+    for (const char* key : {"p50", "p99", "p99_9", "max"}) {
+      EXPECT_TRUE(json[part]["period_error_us"][key].is_number()) << part << "." << key;
+    }
+  }
+  for (const char* key : {"p50", "p99", "p99_9", "max"}) EXPECT_TRUE(json["loop"]["tick_compute_us"][key].is_number());
+  EXPECT_GT(json["loop"]["ticks"].get<int>(), 100);
+  EXPECT_EQ(json["loop"]["faults"].get<int>(), 0);
+  EXPECT_TRUE(json["loop"]["overruns"].is_number());
+  EXPECT_TRUE(json["loop"]["dropped_samples"].is_number());
+  EXPECT_TRUE(json["ratio_p99"].is_number());
+}
+
+TEST(Cli, ServoCheckRejectsABadDeviceWithExitTwo) {
+  test::TempDir dir;
+  const RunResult r = runHattr(dir, "servo-check --seconds 0.1 --realtime skip --device usb://x");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("unknown scheme \"usb\"; accepted: sim://pen"));
+  EXPECT_EQ(runHattr(dir, "servo-check --rate 20000").exit_code, 2);
+}
+
+TEST(Cli, WorldCheckReportsClampsAndRefusesBadConfigs) {
+  test::TempDir dir;
+  test::writeText(dir / "stiff.json", R"({"paper": {"stiffness_N_per_m": 4000}, "relief": {"kind": "flat"}})");
+  const RunResult ok = runHattr(dir, "world check --json " + (dir / "stiff.json").string());
+  ASSERT_EQ(ok.exit_code, 0) << ok.err;
+  const auto json = nlohmann::json::parse(ok.out);
+  ASSERT_FALSE(json["clamps"].empty());
+  EXPECT_THAT(json["clamps"][0].get<std::string>(), HasSubstr("paper stiffness 4000 N/m -> 1000 N/m"));
+
+  test::writeText(dir / "bad.json", R"({"friction": {"static": 3}})");
+  const RunResult bad = runHattr(dir, "world check " + (dir / "bad.json").string());
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_THAT(bad.err, HasSubstr("bad.json: key friction.static: expected a number in [0, 2], got 3"));
+
+  const RunResult defaults = runHattr(dir, "world defaults");
+  ASSERT_EQ(defaults.exit_code, 0);
+  EXPECT_EQ(nlohmann::json::parse(defaults.out)["writing_angle_deg"].get<double>(), 60.0);
+}
+
 }  // namespace
 }  // namespace hattr

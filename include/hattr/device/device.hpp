@@ -6,23 +6,13 @@
 #include <chrono>
 #include <string>
 
+#include "hattr/core/device_limits.hpp"
 #include "hattr/core/pen_state.hpp"
 
 namespace hattr::device {
 
-/// What a device can do, declared once. SI units.
-struct DeviceLimits {
-  int degrees_of_freedom = 3;                           ///< actuated translational DOF
-  Vec3 workspace_min_m = Vec3(-0.08, -0.06, -0.06);     ///< workspace box in W [m]
-  Vec3 workspace_max_m = Vec3(0.08, 0.06, 0.06);
-  double peak_force_N = 7.9;                            ///< short-term maximum [N]
-  double continuous_force_N = 1.75;                     ///< sustainable force [N]
-  double max_stiffness_N_per_m = 1000.0;                ///< largest stiffness rendered stably at its rate
-  double max_damping_N_s_per_m = 5.0;                   ///< largest damping rendered stably at its rate
-  double nominal_rate_hz = 1000.0;                      ///< the servo rate it is specified for
-  double mass_kg = 0.045;                               ///< apparent mass at the tip (for passivity bounds)
-  double damping_N_s_per_m = 1.0;                       ///< physical damping (for passivity bounds)
-};
+/// What a device can do (declared in core so render and guidance can use it).
+using DeviceLimits = hattr::DeviceLimits;
 
 /// What a device measures besides position and velocity.
 struct DeviceCapabilities {

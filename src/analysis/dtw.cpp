@@ -1,0 +1,401 @@
+// DTW: input checks, band radius, warping paths, the plain reference, multivariate
+// variants and the threaded cost matrix. The vectorized kernels are in dtw_simd.cpp.
+
+#include "hattr/analysis/dtw.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <mutex>
+#include <string_view>
+#include <thread>
+#include <utility>
+
+#include "dtw_internal.hpp"
+#include "hattr/core/error.hpp"
+
+namespace hattr::analysis {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// The local cost, the same arithmetic as the SIMD kernels.
+double localCost(DtwCost cost, double x, double y) {
+  const double diff = x - y;
+  return cost == DtwCost::kAbsolute ? std::abs(diff) : diff * diff;
+}
+
+// A series must be non-empty and finite; `what` names the function and the series.
+void checkSeries(std::string_view function, std::string_view what, std::span<const double> s) {
+  HATTR_THROW_UNLESS(!s.empty(), "{}: series {} is empty: expected at least 1 value, got 0",
+                     function, what);
+  const auto bad = std::find_if(s.begin(), s.end(), [](double x) { return !std::isfinite(x); });
+  HATTR_THROW_UNLESS(bad == s.end(), "{}: series {} at index {}: expected a finite number, got {}",
+                     function, what, bad - s.begin(), *bad);
+}
+
+void checkOptions(std::string_view function, const DtwOptions& options) {
+  HATTR_THROW_UNLESS(!std::isnan(options.band_fraction),
+                     "{}: band_fraction: expected a number (negative or >= 1 for no band), got NaN",
+                     function);
+  HATTR_THROW_UNLESS(!std::isnan(options.abandon_above),
+                     "{}: abandon_above: expected a number or +infinity, got NaN", function);
+}
+
+// Both multivariate series: >= 1 channel, the same channel count, equal-length channels.
+void checkChannels(std::string_view function, Channels a, Channels b) {
+  HATTR_THROW_UNLESS(!a.empty() && !b.empty(),
+                     "{}: expected at least 1 channel per series, got {} and {}", function,
+                     a.size(), b.size());
+  HATTR_THROW_UNLESS(a.size() == b.size(),
+                     "{}: expected the same number of channels in both series, got {} and {}",
+                     function, a.size(), b.size());
+  for (const auto& [series, name] : {std::pair{a, "a"}, std::pair{b, "b"}}) {
+    for (std::size_t c = 0; c < series.size(); ++c) {
+      checkSeries(function, fmt::format("{} channel {}", name, c), series[c]);
+      HATTR_THROW_UNLESS(series[c].size() == series[0].size(),
+                         "{}: series {} channel {}: expected {} values like channel 0, got {}",
+                         function, name, c, series[0].size(), series[c].size());
+    }
+  }
+}
+
+// Plain full-matrix DTW: D is (n+1) x (m+1) with a border of +inf and D[0][0] = 0.
+template <class CellCost>
+double fullMatrixDtw(std::size_t n, std::size_t m, std::size_t radius, CellCost cell_cost) {
+  const std::size_t cols = m + 1;
+  std::vector<double> d((n + 1) * cols, kInf);
+  d[0] = 0.0;
+  for (std::size_t i = 1; i <= n; ++i) {
+    for (std::size_t j = 1; j <= m; ++j) {
+      const std::size_t gap = i > j ? i - j : j - i;
+      if (radius != kNoBand && gap > radius) continue;
+      const double best =
+          std::min({d[(i - 1) * cols + j], d[i * cols + j - 1], d[(i - 1) * cols + j - 1]});
+      d[i * cols + j] = cell_cost(i - 1, j - 1) + best;
+    }
+  }
+  return d[n * cols + m];
+}
+
+// DTW with its warping path: keeps the banded cost matrix (row i holds columns
+// [lo(i), hi(i)]), abandons when a whole row exceeds `bound`, then walks back from
+// (n-1, m-1) through the smallest predecessor (ties: diagonal, then up, then left).
+template <class CellCost>
+DtwResult pathDtw(std::size_t n, std::size_t m, std::size_t radius, double bound,
+                  CellCost cell_cost) {
+  const std::size_t r = std::min(radius, std::max(n, m));
+  const auto lo = [&](std::size_t i) { return i > r ? i - r : 0; };
+  const auto hi = [&](std::size_t i) { return std::min(m - 1, i + r); };
+  std::vector<std::size_t> row_start(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) row_start[i + 1] = row_start[i] + (hi(i) - lo(i) + 1);
+  std::vector<double> cells(row_start[n]);
+  // D(i, j) with +inf outside the matrix and the band.
+  const auto at = [&](std::size_t i, std::size_t j) {
+    if (j < lo(i) || j > hi(i)) return kInf;
+    return cells[row_start[i] + (j - lo(i))];
+  };
+
+  for (std::size_t i = 0; i < n; ++i) {
+    double row_min = kInf;
+    for (std::size_t j = lo(i); j <= hi(i); ++j) {
+      double best = 0.0;
+      if (i > 0 || j > 0) {
+        const double up = i > 0 ? at(i - 1, j) : kInf;
+        const double left = j > 0 ? at(i, j - 1) : kInf;
+        const double diag = i > 0 && j > 0 ? at(i - 1, j - 1) : kInf;
+        best = std::min({up, left, diag});
+      }
+      const double value = cell_cost(i, j) + best;
+      cells[row_start[i] + (j - lo(i))] = value;
+      row_min = std::min(row_min, value);
+    }
+    if (row_min > bound) return {kInf, {}};
+  }
+  DtwResult result{at(n - 1, m - 1), {}};
+  if (result.cost > bound) return {kInf, {}};
+
+  std::size_t i = n - 1;
+  std::size_t j = m - 1;
+  result.path.push_back({i, j});
+  while (i > 0 || j > 0) {
+    const double diag = i > 0 && j > 0 ? at(i - 1, j - 1) : kInf;
+    const double up = i > 0 ? at(i - 1, j) : kInf;
+    const double left = j > 0 ? at(i, j - 1) : kInf;
+    if (diag <= up && diag <= left) {
+      --i;
+      --j;
+    } else if (up <= left) {
+      --i;
+    } else {
+      --j;
+    }
+    result.path.push_back({i, j});
+  }
+  std::reverse(result.path.begin(), result.path.end());
+  return result;
+}
+
+// The kernel problem for channels a[c], b[c] (pointers into the callers' vectors).
+struct PreparedPair {
+  std::vector<const double*> a;
+  std::vector<const double*> b;
+  detail::KernelProblem problem;
+};
+
+PreparedPair preparePair(Channels a, Channels b, const DtwOptions& options) {
+  PreparedPair prepared;
+  for (const auto& channel : a) prepared.a.push_back(channel.data());
+  for (const auto& channel : b) prepared.b.push_back(channel.data());
+  prepared.problem.a = prepared.a.data();
+  prepared.problem.b = prepared.b.data();
+  prepared.problem.count = a.size();
+  prepared.problem.n = a[0].size();
+  prepared.problem.m = b[0].size();
+  prepared.problem.radius = dtwBandRadius(a[0].size(), b[0].size(), options.band_fraction);
+  prepared.problem.cost = options.cost;
+  prepared.problem.bound = options.abandon_above;
+  return prepared;
+}
+
+// Kernel problem for one univariate pair.
+detail::KernelProblem univariateProblem(const double* const* a, const double* const* b,
+                                        std::size_t n, std::size_t m, const DtwOptions& options) {
+  detail::KernelProblem problem;
+  problem.a = a;
+  problem.b = b;
+  problem.count = 1;
+  problem.n = n;
+  problem.m = m;
+  problem.radius = dtwBandRadius(n, m, options.band_fraction);
+  problem.cost = options.cost;
+  problem.bound = options.abandon_above;
+  return problem;
+}
+
+// The batch kernel pays for whole blocks of SIMD lanes; below this many pairs, running
+// the pairs one by one is as fast.
+constexpr std::size_t kMinPairsForBatchKernel = 8;
+
+// Costs of the checked pairs (a[p], b[p]) into out[p]: the lane-batched kernel when all
+// lengths agree and there are enough pairs, else pair by pair.
+void costsOfPairs(std::span<const double* const> a, std::span<const double* const> b,
+                  std::span<const std::size_t> a_len, std::span<const std::size_t> b_len,
+                  const DtwOptions& options, double* out) {
+  const std::size_t count = a.size();
+  const bool equal_lengths =
+      std::all_of(a_len.begin(), a_len.end(), [&](std::size_t n) { return n == a_len[0]; }) &&
+      std::all_of(b_len.begin(), b_len.end(), [&](std::size_t m) { return m == b_len[0]; });
+  if (equal_lengths && count >= kMinPairsForBatchKernel) {
+    detail::KernelProblem problem = univariateProblem(a.data(), b.data(), a_len[0], b_len[0], options);
+    problem.count = count;
+    detail::batchDtw(problem, out);
+    return;
+  }
+  for (std::size_t p = 0; p < count; ++p) {
+    out[p] = detail::diagonalDtw(univariateProblem(&a[p], &b[p], a_len[p], b_len[p], options));
+  }
+}
+
+}  // namespace
+
+std::size_t dtwBandRadius(std::size_t n, std::size_t m, double band_fraction) {
+  HATTR_THROW_UNLESS(!std::isnan(band_fraction),
+                     "dtwBandRadius: band_fraction: expected a number (negative or >= 1 for no "
+                     "band), got NaN");
+  if (band_fraction < 0.0 || band_fraction >= 1.0) return kNoBand;
+  const std::size_t longer = std::max(n, m);
+  const auto from_fraction =
+      static_cast<std::size_t>(std::ceil(band_fraction * static_cast<double>(longer)));
+  const std::size_t radius = std::max(from_fraction, longer - std::min(n, m));
+  return radius >= longer ? kNoBand : radius;
+}
+
+DtwResult dtw(std::span<const double> a, std::span<const double> b, const DtwOptions& options) {
+  if (!options.want_path) return {dtwDistance(a, b, options), {}};
+  checkSeries("dtw", "a", a);
+  checkSeries("dtw", "b", b);
+  checkOptions("dtw", options);
+  return pathDtw(a.size(), b.size(), dtwBandRadius(a.size(), b.size(), options.band_fraction),
+                 options.abandon_above, [&](std::size_t i, std::size_t j) {
+                   return localCost(options.cost, a[i], b[j]);
+                 });
+}
+
+double dtwDistance(std::span<const double> a, std::span<const double> b,
+                   const DtwOptions& options) {
+  checkSeries("dtw", "a", a);
+  checkSeries("dtw", "b", b);
+  checkOptions("dtw", options);
+  const double* a_data = a.data();
+  const double* b_data = b.data();
+  return detail::diagonalDtw(univariateProblem(&a_data, &b_data, a.size(), b.size(), options));
+}
+
+double dtwReference(std::span<const double> a, std::span<const double> b,
+                    const DtwOptions& options) {
+  checkSeries("dtwReference", "a", a);
+  checkSeries("dtwReference", "b", b);
+  checkOptions("dtwReference", options);
+  return fullMatrixDtw(a.size(), b.size(), dtwBandRadius(a.size(), b.size(), options.band_fraction),
+                       [&](std::size_t i, std::size_t j) { return localCost(options.cost, a[i], b[j]); });
+}
+
+DtwResult dtwDependent(Channels a, Channels b, const DtwOptions& options) {
+  checkChannels("dtwDependent", a, b);
+  checkOptions("dtwDependent", options);
+  if (!options.want_path) {
+    const PreparedPair prepared = preparePair(a, b, options);
+    return {detail::diagonalDtw(prepared.problem), {}};
+  }
+  // Channel costs summed in channel order, as in the kernels.
+  return pathDtw(a[0].size(), b[0].size(),
+                 dtwBandRadius(a[0].size(), b[0].size(), options.band_fraction),
+                 options.abandon_above, [&](std::size_t i, std::size_t j) {
+                   double cost = localCost(options.cost, a[0][i], b[0][j]);
+                   for (std::size_t c = 1; c < a.size(); ++c) {
+                     cost += localCost(options.cost, a[c][i], b[c][j]);
+                   }
+                   return cost;
+                 });
+}
+
+double dtwDependentReference(Channels a, Channels b, const DtwOptions& options) {
+  checkChannels("dtwDependentReference", a, b);
+  checkOptions("dtwDependentReference", options);
+  return fullMatrixDtw(a[0].size(), b[0].size(),
+                       dtwBandRadius(a[0].size(), b[0].size(), options.band_fraction),
+                       [&](std::size_t i, std::size_t j) {
+                         double cost = localCost(options.cost, a[0][i], b[0][j]);
+                         for (std::size_t c = 1; c < a.size(); ++c) {
+                           cost += localCost(options.cost, a[c][i], b[c][j]);
+                         }
+                         return cost;
+                       });
+}
+
+std::vector<double> dtwIndependent(Channels a, Channels b, const DtwOptions& options) {
+  checkChannels("dtwIndependent", a, b);
+  checkOptions("dtwIndependent", options);
+  std::vector<double> costs;
+  for (std::size_t c = 0; c < a.size(); ++c) {
+    const double* a_data = a[c].data();
+    const double* b_data = b[c].data();
+    costs.push_back(detail::diagonalDtw(
+        univariateProblem(&a_data, &b_data, a[c].size(), b[c].size(), options)));
+  }
+  return costs;
+}
+
+double dtwIndependentSum(Channels a, Channels b, const DtwOptions& options) {
+  checkChannels("dtwIndependentSum", a, b);
+  checkOptions("dtwIndependentSum", options);
+  // Each channel is abandoned against what remains of the bound, loosened by a few ulps
+  // so that rounding in the subtraction never abandons a sum that would fit; the final
+  // comparison is exact.
+  double sum = 0.0;
+  for (std::size_t c = 0; c < a.size(); ++c) {
+    DtwOptions channel_options = options;
+    const double remaining = options.abandon_above - sum;
+    channel_options.abandon_above = remaining + 1e-12 * std::abs(options.abandon_above);
+    const double* a_data = a[c].data();
+    const double* b_data = b[c].data();
+    const double cost = detail::diagonalDtw(
+        univariateProblem(&a_data, &b_data, a[c].size(), b[c].size(), channel_options));
+    if (cost == kInf) return kInf;
+    sum += cost;
+  }
+  return sum > options.abandon_above ? kInf : sum;
+}
+
+std::vector<double> dtwBatch(std::span<const std::vector<double>> a,
+                             std::span<const std::vector<double>> b, const DtwOptions& options) {
+  HATTR_THROW_UNLESS(a.size() == b.size(),
+                     "dtwBatch: expected as many series in a as in b, got {} and {}", a.size(),
+                     b.size());
+  checkOptions("dtwBatch", options);
+  std::vector<const double*> a_ptr;
+  std::vector<const double*> b_ptr;
+  std::vector<std::size_t> a_len;
+  std::vector<std::size_t> b_len;
+  for (std::size_t p = 0; p < a.size(); ++p) {
+    checkSeries("dtwBatch", fmt::format("a[{}]", p), a[p]);
+    checkSeries("dtwBatch", fmt::format("b[{}]", p), b[p]);
+    a_ptr.push_back(a[p].data());
+    b_ptr.push_back(b[p].data());
+    a_len.push_back(a[p].size());
+    b_len.push_back(b[p].size());
+  }
+  std::vector<double> costs(a.size());
+  if (!a.empty()) costsOfPairs(a_ptr, b_ptr, a_len, b_len, options, costs.data());
+  return costs;
+}
+
+Eigen::MatrixXd dtwCostMatrix(std::span<const std::vector<double>> series,
+                              const DtwOptions& options, unsigned threads) {
+  HATTR_THROW_UNLESS(threads >= 1, "dtwCostMatrix: threads: expected at least 1, got {}", threads);
+  checkOptions("dtwCostMatrix", options);
+  for (std::size_t s = 0; s < series.size(); ++s) {
+    checkSeries("dtwCostMatrix", fmt::format("{}", s), series[s]);
+  }
+
+  // The pairs i < j, cut into chunks that the workers take in turn.
+  const auto count = static_cast<Eigen::Index>(series.size());
+  Eigen::MatrixXd costs = Eigen::MatrixXd::Zero(count, count);
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  for (std::size_t i = 0; i < series.size(); ++i) {
+    for (std::size_t j = i + 1; j < series.size(); ++j) pairs.emplace_back(i, j);
+  }
+  constexpr std::size_t kChunk = 64;
+  std::atomic<std::size_t> next_chunk{0};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+
+  const auto work = [&] {
+    try {
+      std::vector<const double*> a_ptr, b_ptr;
+      std::vector<std::size_t> a_len, b_len;
+      std::vector<double> out;
+      for (std::size_t first = next_chunk.fetch_add(kChunk); first < pairs.size();
+           first = next_chunk.fetch_add(kChunk)) {
+        const std::size_t last = std::min(pairs.size(), first + kChunk);
+        a_ptr.clear();
+        b_ptr.clear();
+        a_len.clear();
+        b_len.clear();
+        for (std::size_t p = first; p < last; ++p) {
+          const auto& a = series[pairs[p].first];
+          const auto& b = series[pairs[p].second];
+          a_ptr.push_back(a.data());
+          b_ptr.push_back(b.data());
+          a_len.push_back(a.size());
+          b_len.push_back(b.size());
+        }
+        out.resize(last - first);
+        costsOfPairs(a_ptr, b_ptr, a_len, b_len, options, out.data());
+        for (std::size_t p = first; p < last; ++p) {
+          const auto i = static_cast<Eigen::Index>(pairs[p].first);
+          const auto j = static_cast<Eigen::Index>(pairs[p].second);
+          costs(i, j) = out[p - first];
+          costs(j, i) = out[p - first];
+        }
+      }
+    } catch (...) {
+      const std::lock_guard lock(failure_mutex);
+      if (!failure) failure = std::current_exception();
+    }
+  };
+
+  std::vector<std::thread> workers;
+  for (unsigned t = 1; t < threads; ++t) workers.emplace_back(work);
+  work();
+  for (auto& worker : workers) worker.join();
+  if (failure) std::rethrow_exception(failure);
+  return costs;
+}
+
+std::string dtwSimdTarget() { return detail::simdTargetName(); }
+
+}  // namespace hattr::analysis

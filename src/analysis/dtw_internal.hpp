@@ -1,0 +1,37 @@
+#pragma once
+// Private interface between dtw.cpp (checks, paths, threads) and dtw_simd.cpp (the
+// Highway kernels, compiled once per instruction set and chosen at run time).
+
+#include <cstddef>
+
+#include "hattr/analysis/dtw.hpp"
+
+namespace hattr::analysis::detail {
+
+/// One DTW problem for the kernels: a[s] points to n values and b[s] to m values, all
+/// finite, n, m >= 1, s < count. For diagonalDtw the `count` entries are the channels of
+/// one pair; for batchDtw they are `count` independent univariate pairs. Cells with
+/// |i - j| > radius are excluded (radius >= |n - m|; kNoBand for none). Results above
+/// `bound` become +infinity.
+struct KernelProblem {
+  const double* const* a = nullptr;
+  const double* const* b = nullptr;
+  std::size_t count = 1;
+  std::size_t n = 0;
+  std::size_t m = 0;
+  std::size_t radius = kNoBand;
+  DtwCost cost = DtwCost::kAbsolute;
+  double bound = 0.0;
+};
+
+/// DTW cost of one (possibly multichannel) pair, vectorized over anti-diagonals.
+double diagonalDtw(const KernelProblem& problem);
+
+/// DTW costs of problem.count univariate pairs (a[p], b[p]) of equal lengths n, m, SIMD
+/// lanes = pairs. Writes out[p] for p < count.
+void batchDtw(const KernelProblem& problem, double* out);
+
+/// Name of the instruction set the kernels dispatch to.
+const char* simdTargetName();
+
+}  // namespace hattr::analysis::detail
