@@ -29,6 +29,7 @@ void registerImportCommands(CLI::App& app);
 void registerDemoCommand(CLI::App& app);
 void registerServoCheckCommand(CLI::App& app);
 void registerWorldCommands(CLI::App& app);
+void registerRecordTrainCommands(CLI::App& app);
 
 /// The world configuration in `file`, or the defaults when `file` is empty.
 render::WorldConfig worldConfigOrDefault(const std::string& file);

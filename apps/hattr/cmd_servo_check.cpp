@@ -64,7 +64,7 @@ void runServoCheck(const ServoCheckOptions& opt) {
   std::atomic<bool> done{false};
   std::uint64_t consumed = 0;
   std::thread consumer([&] {  // drains samples like the recorder does
-    Sample s;
+    TickSample s;
     while (!done.load(std::memory_order_acquire)) {
       while (loop.samples().tryPop(s)) ++consumed;
       std::this_thread::sleep_for(std::chrono::milliseconds(1));

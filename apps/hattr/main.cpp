@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   registerImportCommands(app);
   registerServoCheckCommand(app);
   registerWorldCommands(app);
+  registerRecordTrainCommands(app);
   registerDemoCommand(app);
 
   try {

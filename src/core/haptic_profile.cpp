@@ -15,6 +15,13 @@ HapticProfile::HapticProfile(ProfileMetadata metadata, RawChannels raw)
     : metadata_(std::move(metadata)), raw_(raw) {}
 
 std::string_view firstNonFiniteChannel(const Sample& sample, const RawChannels& raw) {
+  // Fast path: everything finite (the common case, once per recorded sample).
+  const bool vectors_finite = std::isfinite(sample.t_s) && sample.p_WT.allFinite() && sample.v_WT.allFinite() &&
+                              sample.f_user_W.allFinite() && sample.f_cmd_W.allFinite() && sample.f_guide_W.allFinite();
+  const bool raw_finite = (!raw.pressure || std::isfinite(sample.pressure_raw)) &&
+                          (!raw.tilt || (std::isfinite(sample.tilt_azimuth_rad) && std::isfinite(sample.tilt_altitude_rad)));
+  if (vectors_finite && raw_finite) return {};
+  // Slow path: name the first bad channel.
   for (const auto& info : allChannels()) {
     if (info.derived || needsRawChannel(info.channel, raw)) continue;
     if (!std::isfinite(channelValue(sample, info.channel))) return info.name;

@@ -9,36 +9,15 @@
 
 namespace hattr::render {
 
-double passiveStiffnessBound(const DeviceLimits& limits, double rate_hz, double damping_N_s_per_m) {
-  const double period_s = 1.0 / rate_hz;
-  const double colgate = 2.0 * (limits.damping_N_s_per_m - std::abs(damping_N_s_per_m)) / period_s;
-  const double sampled_mass = limits.mass_kg * (2.0 / period_s) * (2.0 / period_s);
-  return std::max(0.0, std::min({limits.max_stiffness_N_per_m, colgate, sampled_mass}));
-}
-
 std::vector<std::string> clampToDevice(PaperParams& params, const DeviceLimits& limits, double rate_hz) {
-  std::vector<std::string> changes;
-  const auto clamp = [&](double& value, double bound, const char* what, const char* unit, const char* why) {
-    if (value > bound) {
-      changes.push_back(fmt::format("{} {:.4g} {} -> {:.4g} {}: {}", what, value, unit, bound, unit, why));
-      value = bound;
-    }
-  };
-  // Damping first within the device's declared maximum, then stiffness within Colgate's
-  // bound for that damping; if no stiffness is left, give up damping for stiffness.
-  double& k = params.contact.stiffness_N_per_m;
-  double& c = params.contact.damping_N_s_per_m;
-  clamp(c, limits.max_damping_N_s_per_m, "paper damping", "N·s/m", "device maximum");
-  clamp(k, limits.max_stiffness_N_per_m, "paper stiffness", "N/m", "device maximum");
-  const double period_s = 1.0 / rate_hz;
-  const double damping_room = limits.damping_N_s_per_m - k * period_s / 2.0;
-  if (c >= damping_room) {
-    clamp(c, std::max(0.0, 0.8 * damping_room), "paper damping", "N·s/m",
-          "Colgate's passivity bound b > K·T/2 + B with the paper's stiffness");
+  std::vector<std::string> changes =
+      clampImpedance(params.contact.stiffness_N_per_m, params.contact.damping_N_s_per_m,
+                     {.stiffness_name = "paper stiffness", .damping_name = "paper damping"}, limits, rate_hz);
+  double no_damping = 0.0;
+  for (auto& line : clampImpedance(params.tangential_stiffness_N_per_m, no_damping,
+                                   {.stiffness_name = "friction proxy stiffness", .damping_name = "-"}, limits, rate_hz)) {
+    changes.push_back(std::move(line));
   }
-  clamp(k, passiveStiffnessBound(limits, rate_hz, c), "paper stiffness", "N/m", "Colgate's passivity bound b > K·T/2 + B");
-  clamp(params.tangential_stiffness_N_per_m, passiveStiffnessBound(limits, rate_hz, 0.0), "friction proxy stiffness",
-        "N/m", "Colgate's passivity bound b > K·T/2");
   return changes;
 }
 

@@ -36,6 +36,7 @@ ServoLoop::~ServoLoop() { stop(); }
 
 void ServoLoop::resetRun() noexcept {
   last_now_ = std::chrono::nanoseconds(-1);
+  tick_number_ = 0;
   sim_now_ = std::chrono::nanoseconds(0);
   for (auto* c : {&counters_.ticks, &counters_.overruns, &counters_.dropped_samples, &counters_.faults,
                   &counters_.stalls, &counters_.consumer_stalls}) {
@@ -111,7 +112,8 @@ TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
   sample.pressure_raw = pen.has_pressure ? pen.pressure_raw : 0.0;
   sample.tilt_azimuth_rad = pen.azimuth_rad;
   sample.tilt_altitude_rad = pen.altitude_rad;
-  if (!samples_.tryPush(sample)) bump(counters_.dropped_samples);
+  if (!samples_.tryPush(TickSample{tick_number_, sample})) bump(counters_.dropped_samples);
+  ++tick_number_;
   latest_.write(sample);
 
   bump(counters_.ticks);

@@ -2,7 +2,10 @@
 
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdlib>
+
+#include <fmt/format.h>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -165,7 +168,7 @@ TEST(Cli, WorldCheckReportsClampsAndRefusesBadConfigs) {
   ASSERT_EQ(ok.exit_code, 0) << ok.err;
   const auto json = nlohmann::json::parse(ok.out);
   ASSERT_FALSE(json["clamps"].empty());
-  EXPECT_THAT(json["clamps"][0].get<std::string>(), HasSubstr("paper stiffness 4000 N/m -> 1000 N/m"));
+  EXPECT_THAT(json["clamps"][0].get<std::string>(), HasSubstr("paper stiffness 4000 N/m -> 1000 N/m: device maximum stiffness"));
 
   test::writeText(dir / "bad.json", R"({"friction": {"static": 3}})");
   const RunResult bad = runHattr(dir, "world check " + (dir / "bad.json").string());
@@ -175,6 +178,65 @@ TEST(Cli, WorldCheckReportsClampsAndRefusesBadConfigs) {
   const RunResult defaults = runHattr(dir, "world defaults");
   ASSERT_EQ(defaults.exit_code, 0);
   EXPECT_EQ(nlohmann::json::parse(defaults.out)["writing_angle_deg"].get<double>(), 60.0);
+}
+
+/// A hand script in millimetres: a loop over 1 s, pressing 1.2 N.
+std::string handScript(double y_offset_mm = 0.0) {
+  std::string text = "# skill: loop\nt_s,x_mm,y_mm,z_mm,fx_N,fy_N,fz_N,pen_down_bool\n";
+  for (int i = 0; i <= 100; ++i) {
+    const double t = i * 0.01, a = 6.0 * t;
+    text += fmt::format("{},{},{},0,0,0,-1.2,1\n", t, 20 * std::sin(a), 10 * std::sin(2 * a) + y_offset_mm * t);
+  }
+  return text;
+}
+
+TEST(Cli, RecordThenTrainInEveryModeWritesProfilesWithGuidanceApart) {
+  test::TempDir dir;
+  test::writeText(dir / "script.csv", handScript());
+  test::writeText(dir / "drift.csv", handScript(5.0));
+  const auto path = [&](const char* name) { return (dir / name).string(); };
+  const RunResult rec = runHattr(dir, "record --hand " + path("script.csv") + " -o " + path("expert.csv") + " --world " +
+                                          path("flat.json"));
+  EXPECT_EQ(rec.exit_code, 2) << "the world file does not exist yet";
+  test::writeText(dir / "flat.json", R"({"relief": {"kind": "flat"}})");
+  const RunResult recorded = runHattr(dir, "record --hand " + path("script.csv") + " -o " + path("expert.csv") +
+                                               " --world " + path("flat.json") + " --json");
+  ASSERT_EQ(recorded.exit_code, 0) << recorded.err;
+  EXPECT_EQ(nlohmann::json::parse(recorded.out)["metadata"]["mode"], "BASIC");
+
+  for (const char* mode : {"basic", "pcontrol", "alpha"}) {
+    const std::string out = path((std::string("trial_") + mode + ".csv").c_str());
+    const RunResult r = runHattr(dir, std::string("train --mode ") + mode + " --reference " + path("expert.csv") +
+                                          " --hand " + path("drift.csv") + " --world " + path("flat.json") + " -o " + out +
+                                          " --indexing progress --json");
+    ASSERT_EQ(r.exit_code, 0) << mode << ": " << r.err;
+    const auto json = nlohmann::json::parse(r.out);
+    EXPECT_EQ(json["metadata"]["indexing"], "progress");
+    const HapticProfile trial = io::readProfileCsv(out);
+    double guide = 0.0;
+    for (const Sample& s : trial.samples()) guide = std::max(guide, s.f_guide_W.norm());
+    if (std::string(mode) == "basic") {
+      EXPECT_EQ(guide, 0.0);
+    } else {
+      EXPECT_GT(guide, 0.05) << mode;
+      EXPECT_FALSE(json["clamps"].empty()) << mode << ": the paper's gains exceed the default pen";
+    }
+  }
+}
+
+TEST(Cli, TrainRefusesBadModesAndMissingFilesWithExitTwo) {
+  test::TempDir dir;
+  test::writeText(dir / "script.csv", handScript());
+  const std::string script = (dir / "script.csv").string();
+  const RunResult bad_mode =
+      runHattr(dir, "train --mode beta --reference " + script + " --hand " + script + " -o " + (dir / "o.csv").string());
+  EXPECT_EQ(bad_mode.exit_code, 2);
+  EXPECT_THAT(bad_mode.err, HasSubstr("beta not in {basic,pcontrol,alpha}"));
+  const RunResult missing = runHattr(dir, "train --mode alpha --reference " + (dir / "none.csv").string() + " --hand " +
+                                              script + " -o " + (dir / "o.csv").string());
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_THAT(missing.err, HasSubstr("none.csv: cannot open for reading"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "o.csv"));
 }
 
 }  // namespace

@@ -133,7 +133,8 @@ TEST(PaperStability, ClampsToColgatesBoundAndReportsIt) {
   params.contact.damping_N_s_per_m = 3.0;
   const auto changes = clampToDevice(params, limits, 1000.0);
   ASSERT_FALSE(changes.empty());
-  EXPECT_THAT(changes.front(), ::testing::HasSubstr("paper stiffness 5000 N/m -> 1000 N/m: device maximum"));
+  EXPECT_THAT(changes.front(), ::testing::HasSubstr("paper stiffness 5000 N/m -> "));
+  EXPECT_THAT(changes.front(), ::testing::HasSubstr(": device maximum stiffness"));
   const double t = 1e-3;
   EXPECT_LT(params.contact.stiffness_N_per_m * t / 2 + params.contact.damping_N_s_per_m, limits.damping_N_s_per_m);
   EXPECT_LE(params.tangential_stiffness_N_per_m * t / 2, limits.damping_N_s_per_m);

@@ -26,7 +26,7 @@ EnergyTrace holdPenOnPaper(const PaperParams& paper_params, const device::Simula
   servo::ServoLoop loop(device, servo::ServoConfig{});
   loop.setWorld(&paper);
   EnergyTrace trace;
-  Sample drained;
+  TickSample drained;
   for (int tick = 0; tick < 60'000; ++tick) {
     loop.runSimulated(1);
     while (loop.samples().tryPop(drained)) {
@@ -50,7 +50,7 @@ TEST(Passivity, PenPressedOnThePaperGainsNoEnergyOver60Seconds) {
             << " J, final " << trace.final_J << " J\n";
   EXPECT_LE(trace.max_late_J, trace.max_early_J);
   EXPECT_LT(trace.final_J, 1e-12);
-  // Resting depth is about (press·sin θ)/K = 1.25 mm at the default 800 N/m.
+  // Resting depth is about (press·sin θ)/K = 1.44 mm at the default 600 N/m.
   EXPECT_LT(trace.max_late_depth_m, 2e-3);
 }
 

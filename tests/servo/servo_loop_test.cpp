@@ -45,8 +45,8 @@ struct Rig {
   }
   std::vector<Sample> drain() {
     std::vector<Sample> out;
-    Sample s;
-    while (loop.samples().tryPop(s)) out.push_back(s);
+    TickSample s;
+    while (loop.samples().tryPop(s)) out.push_back(s.sample);
     return out;
   }
   device::CircleHand hand;

@@ -2,6 +2,8 @@
 /// One servo-rate sample of a haptic profile. Fixed size and copied without allocating or
 /// throwing, so the servo loop can push it through lock-free rings. SI units, frame W (docs/units_and_frames.md).
 
+#include <cstdint>
+
 #include "hattr/core/types.hpp"
 
 namespace hattr {
@@ -23,6 +25,13 @@ struct Sample {
 }  // namespace hattr
 
 namespace hattr {
+
+/// A sample as the servo loop publishes it: with the number of the tick that made it, so a
+/// consumer can tell a lost sample (a gap in the numbers) from a late tick (a gap in time).
+struct TickSample {
+  std::uint64_t tick = 0;
+  Sample sample;
+};
 
 /// Exact equality of every field (the round-trip tests rely on it).
 inline bool operator==(const Sample& a, const Sample& b) {

@@ -13,18 +13,18 @@ inline constexpr double kRadiansPerDegree = std::numbers::pi / 180.0;
 /// Standard gravity [m/s²], for gram-force conversions.
 inline constexpr double kStandardGravity_m_per_s2 = 9.80665;
 
-constexpr double millimetresToMetres(double mm) { return mm * kMetresPerMillimetre; }
-constexpr double metresToMillimetres(double m) { return m / kMetresPerMillimetre; }
+constexpr double millimetresToMetres(double mm) { return mm / 1000.0; }
+constexpr double metresToMillimetres(double m) { return m * 1000.0; }
 constexpr double millisecondsToSeconds(double ms) { return ms * kSecondsPerMillisecond; }
 constexpr double degreesToRadians(double deg) { return deg * kRadiansPerDegree; }
 constexpr double radiansToDegrees(double rad) { return rad / kRadiansPerDegree; }
 constexpr double gramForceToNewtons(double gf) { return gf * 1e-3 * kStandardGravity_m_per_s2; }
 
-/// A stiffness given in N/mm (the paper's unit) in N/m.
-constexpr double newtonsPerMillimetreToSi(double n_per_mm) { return n_per_mm / kMetresPerMillimetre; }
+inline constexpr double kMillimetresPerMetre = 1000.0;
+
+/// A stiffness given in N/mm (the paper's unit) in N/m (0.35 N/mm -> exactly 350 N/m).
+constexpr double newtonsPerMillimetreToSi(double n_per_mm) { return n_per_mm * kMillimetresPerMetre; }
 /// A damping given in N·s/mm (the paper's unit) in N·s/m.
-constexpr double newtonSecondsPerMillimetreToSi(double ns_per_mm) {
-  return ns_per_mm / kMetresPerMillimetre;
-}
+constexpr double newtonSecondsPerMillimetreToSi(double ns_per_mm) { return ns_per_mm * kMillimetresPerMetre; }
 
 }  // namespace hattr::units

@@ -11,6 +11,7 @@
 
 #include "hattr/core/pen_state.hpp"
 #include "hattr/core/device_limits.hpp"
+#include "hattr/core/passivity.hpp"
 #include "hattr/render/flat_paper.hpp"
 #include "hattr/render/gaussian_field.hpp"
 #include "hattr/render/height_field.hpp"
@@ -29,25 +30,15 @@ struct TextureParams {
 };
 
 struct PaperParams {
-  SurfaceContactParams contact{.stiffness_N_per_m = 800.0, .damping_N_s_per_m = 0.5};
-  double tangential_stiffness_N_per_m = 800.0;  ///< stiffness of the friction proxy's spring
+  SurfaceContactParams contact{.stiffness_N_per_m = 600.0, .damping_N_s_per_m = 0.1};
+  double tangential_stiffness_N_per_m = 500.0;  ///< stiffness of the friction proxy's spring
   FrictionParams friction;
   TextureParams texture;
   double writing_angle_rad = 1.0471975511965976;  ///< θ when the device has no tilt (60°)
 };
 
-/// Largest stiffness and damping the device renders passively at its servo period T, after
-/// Colgate & Schenkel: b > K·T/2 + B, with b the device's physical damping; also K <= the
-/// device's declared maximum and K < m·(2/T)² (the sampled spring on the tip mass).
-struct StabilityBounds {
-  double max_stiffness_N_per_m;
-  double max_damping_N_s_per_m;
-};
-/// The bound on K for a given virtual damping B.
-double passiveStiffnessBound(const DeviceLimits& limits, double rate_hz, double damping_N_s_per_m);
-
-/// Clamps paper parameters to the device's passive bounds. Returns one line per change
-/// ("paper stiffness 3000 N/m -> 1000 N/m: device maximum"); empty when nothing changed.
+/// Clamps paper parameters to the device's passive bounds (hattr::clampImpedance). Returns
+/// one line per change ("paper stiffness 3000 N/m -> 1000 N/m: ..."); empty when none.
 std::vector<std::string> clampToDevice(PaperParams& params, const DeviceLimits& limits, double rate_hz);
 
 /// What the renderer did at the last tick (for tests, the studio and analysis).

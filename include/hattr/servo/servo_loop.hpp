@@ -89,8 +89,8 @@ class ServoLoop {
   /// Posts a command; false if the mailbox is full. From one controlling thread.
   bool post(const ServoCommand& command) noexcept { return commands_.tryPush(command); }
 
-  /// Every sample, for one consumer (the recorder).
-  [[nodiscard]] SpscRing<Sample>& samples() noexcept { return samples_; }
+  /// Every sample with its tick number, for one consumer (the recorder).
+  [[nodiscard]] SpscRing<TickSample>& samples() noexcept { return samples_; }
   /// The newest sample, for one display reader.
   [[nodiscard]] TripleBuffer<Sample>& latest() noexcept { return latest_; }
   [[nodiscard]] const LiveCounters& counters() const noexcept { return counters_; }
@@ -116,7 +116,7 @@ class ServoLoop {
   GuidanceController* guidance_ = nullptr;
   const std::atomic<double>* consumer_time_s_ = nullptr;
 
-  SpscRing<Sample> samples_;
+  SpscRing<TickSample> samples_;
   SpscRing<ServoCommand> commands_;
   TripleBuffer<Sample> latest_;
   LiveCounters counters_;
@@ -124,6 +124,7 @@ class ServoLoop {
   DurationHistogram tick_compute_;
 
   std::chrono::nanoseconds last_now_{-1};
+  std::uint64_t tick_number_ = 0;
   std::chrono::nanoseconds sim_now_{0};
   std::atomic<bool> running_{false};
   std::atomic<bool> stop_requested_{false};

@@ -1,0 +1,123 @@
+// hattr record | train: one trial through the whole pipeline, written as a haptic profile.
+
+#include <iostream>
+
+#include <fmt/format.h>
+
+#include "cli_common.hpp"
+#include "hattr/io/profile_csv.hpp"
+#include "hattr/session/trial.hpp"
+
+namespace hattr::cli {
+namespace {
+
+struct TrialOptions {
+  std::string device = "sim://pen";
+  std::string hand;
+  std::string output;
+  std::string world;
+  double rate_hz = 1000.0;
+  std::string clock = "sim";
+  std::string subject;
+  std::string skill;
+  double tail_s = 0.3;
+  bool force = false;
+  bool json = false;
+  // train only
+  std::string mode = "basic";
+  std::string reference;
+  std::string indexing = "time";
+  double speed = 1.0;
+  int trial = 0;
+};
+
+void addCommonOptions(CLI::App& cmd, TrialOptions& opt) {
+  cmd.add_option("--device", opt.device, "Device URI (see `hattr devices`)")->capture_default_str();
+  cmd.add_option("--hand", opt.hand, "Hand script: a profile the simulated hand writes (position, force, pen-down)")
+      ->required();
+  cmd.add_option("-o,--output", opt.output, "Haptic-profile CSV to write")->required();
+  cmd.add_option("--world", opt.world, "World (paper) configuration JSON (default: built-in defaults)");
+  cmd.add_option("--rate", opt.rate_hz, "Servo rate [Hz]")->check(CLI::Range(1.0, 10000.0))->capture_default_str();
+  cmd.add_option("--clock", opt.clock, "sim: simulated time (fast, deterministic); real: the real-time loop")
+      ->check(CLI::IsMember({"sim", "real"}))
+      ->capture_default_str();
+  cmd.add_option("--subject", opt.subject, "Subject recorded in the metadata");
+  cmd.add_option("--skill", opt.skill, "Skill or character recorded in the metadata");
+  cmd.add_option("--tail", opt.tail_s, "Keep recording this long after the script ends [s]")
+      ->check(CLI::Range(0.0, 10.0))
+      ->capture_default_str();
+  cmd.add_flag("--force", opt.force, "Replace the output file if it exists");
+  cmd.add_flag("--json", opt.json, "Print a JSON summary: the profile summary plus clamps, missed_samples, overruns, faults");
+}
+
+void runTrialCommand(const TrialOptions& opt, bool training) {
+  const HapticProfile script = io::readProfileCsv(opt.hand);
+  device::ProfileHandScript hand(script);
+  session::TrialEnvironment env(opt.device, worldConfigOrDefault(opt.world), opt.rate_hz);
+
+  session::TrialSetup setup;
+  setup.duration_s = hand.duration_s() + opt.tail_s;
+  setup.clock = opt.clock == "sim" ? session::Clock::kSimulated : session::Clock::kRealTime;
+  setup.metadata.subject = opt.subject.empty() ? (training ? "trainee" : "expert") : opt.subject;
+  setup.metadata.skill = opt.skill.empty() ? script.metadata().skill : opt.skill;
+  setup.metadata.extra["hand_script"] = opt.hand;
+  if (training) {
+    const HapticProfile expert = io::readProfileCsv(opt.reference);
+    setup.reference = std::make_shared<guidance::ReferenceTrajectory>(expert, opt.rate_hz);
+    setup.guidance.mode = guidance::parseMode(opt.mode);
+    setup.guidance.playback.indexing = guidance::parseIndexing(opt.indexing);
+    setup.guidance.playback.speed = opt.speed;
+    setup.metadata.extra["reference"] = opt.reference;
+    setup.metadata.extra["trial"] = fmt::format("{}", opt.trial);
+    if (setup.metadata.skill.empty()) setup.metadata.skill = expert.metadata().skill;
+  }
+  const session::TrialResult result = session::runTrial(env, setup, hand);
+  for (const auto& c : result.clamps) std::cerr << "hattr: clamped: " << c << '\n';
+  io::writeProfileCsv(result.profile, opt.output, opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
+
+  if (opt.json) {
+    nlohmann::json json = profileSummaryJson(result.profile);
+    json["file"] = opt.output;
+    json["clamps"] = result.clamps;
+    json["missed_samples"] = result.missed_samples;
+    json["overruns"] = result.overruns;
+    json["faults"] = result.faults;
+    printJson(json);
+    return;
+  }
+  std::cout << fmt::format("{} {} -> {}: {} samples, {:.3f} s, {} missed, {} overruns, {} faults\n",
+                           training ? "trained" : "recorded",
+                           training ? std::string(guidance::modeName(setup.guidance.mode)) : std::string("expert"),
+                           opt.output, result.profile.size(), result.profile.duration_s(), result.missed_samples,
+                           result.overruns, result.faults);
+}
+
+}  // namespace
+
+void registerRecordTrainCommands(CLI::App& app) {
+  auto record_opt = std::make_shared<TrialOptions>();
+  auto* record = app.add_subcommand(
+      "record", "Record a haptic profile while the (simulated) hand writes the script on the virtual paper");
+  addCommonOptions(*record, *record_opt);
+  record->callback([record_opt] { runTrialCommand(*record_opt, false); });
+
+  auto train_opt = std::make_shared<TrialOptions>();
+  auto* train = app.add_subcommand(
+      "train", "One training trial against an expert's profile in a mode (BASIC, PCONTROL, ALPHA); the output "
+               "holds the user's force and the guidance force separately");
+  addCommonOptions(*train, *train_opt);
+  train->add_option("--mode", train_opt->mode, "basic (no assistance), pcontrol (position guidance), alpha (force guidance)")
+      ->check(CLI::IsMember({"basic", "pcontrol", "alpha"}, CLI::ignore_case))
+      ->capture_default_str();
+  train->add_option("--reference", train_opt->reference, "The expert's haptic profile")->required();
+  train->add_option("--indexing", train_opt->indexing, "time (the paper's) or progress (follows the trainee along the path)")
+      ->check(CLI::IsMember({"time", "progress"}))
+      ->capture_default_str();
+  train->add_option("--speed", train_opt->speed, "Reference playback speed (time indexing)")
+      ->check(CLI::Range(0.05, 10.0))
+      ->capture_default_str();
+  train->add_option("--trial", train_opt->trial, "Trial number recorded in the metadata")->capture_default_str();
+  train->callback([train_opt] { runTrialCommand(*train_opt, true); });
+}
+
+}  // namespace hattr::cli

@@ -1,0 +1,107 @@
+#pragma once
+/// The paper's three training modes as one guidance controller on the servo thread:
+///   BASIC     no assistance;
+///   PCONTROL  PD position guidance toward the reference, in the paper plane:
+///             F = Kp·(x_ref − x) + Kd·(v_ref − v), paper defaults 0.35 N/mm and 0.17 N·s/mm;
+///   ALPHA     PD force guidance from the haptic profile, per axis:
+///             F = Kp·e + Kd·ė, e = f_expert(t) − f_user(t), paper defaults 0.5 and 0.1 s,
+///             the derivative low-pass filtered.
+/// Mode switches cross-fade the force (default 100 ms). Gains are clamped to what the device
+/// renders passively together with the paper (clampGains). See docs/training_modes.md.
+
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "hattr/core/device_limits.hpp"
+#include "hattr/core/pen_state.hpp"
+#include "hattr/core/units.hpp"
+#include "hattr/guidance/reference.hpp"
+
+namespace hattr::guidance {
+
+enum class TrainingMode : int { kBasic = 0, kPositionControl = 1, kForceControl = 2 };
+
+/// The paper's names, where users see them: "BASIC", "PCONTROL", "ALPHA".
+std::string_view modeName(TrainingMode mode);
+/// "basic", "pcontrol", "alpha" (any case); throws InputError otherwise.
+TrainingMode parseMode(std::string_view text);
+
+struct PositionGains {
+  double kp_N_per_m = units::newtonsPerMillimetreToSi(0.35);            ///< 350 N/m
+  double kd_N_s_per_m = units::newtonSecondsPerMillimetreToSi(0.17);     ///< 170 N·s/m
+};
+
+struct ForceGains {
+  double kp = 0.5;                     ///< force error gain (dimensionless)
+  double kd_s = 0.1;                   ///< force-error-rate gain [s]
+  double derivative_cutoff_hz = 20.0;  ///< first-order low-pass on ė
+};
+
+struct GuidanceConfig {
+  TrainingMode mode = TrainingMode::kBasic;
+  PositionGains position;
+  ForceGains force;
+  PlaybackConfig playback;
+  double crossfade_s = 0.1;    ///< mode switches fade over this long
+  double lift_fade_s = 0.05;   ///< ALPHA fades out over this long while the pen is off the paper
+};
+
+/// What the world renders on the same axes as the guidance (for the passivity clamp).
+struct WorldImpedance {
+  double normal_stiffness_N_per_m = 600.0;
+  double normal_damping_N_s_per_m = 0.1;
+  double tangential_stiffness_N_per_m = 500.0;
+};
+
+/// Clamps PCONTROL's Kp, Kd and ALPHA's Kp, Kd so that guidance plus world stay passive on
+/// the device (hattr::clampImpedance). ALPHA acts through the paper: its effective stiffness
+/// is Kp·K and its effective damping Kp·C + Kd·K on each axis. Returns one line per changed
+/// value, each starting with the mode's name ("PCONTROL Kd 170 N·s/m -> 0.46 N·s/m: ...").
+std::vector<std::string> clampGains(GuidanceConfig& config, const DeviceLimits& limits, double rate_hz,
+                                    const WorldImpedance& world);
+
+/// Mailbox parameters (servo::ServoCommand::kSetGuidanceParameter).
+enum GuidanceParameter : int {
+  kParameterMode = 1,          ///< value: a TrainingMode as a number; cross-fades
+  kParameterRestartTrial = 2,  ///< the trial starts at this tick
+};
+
+class TrainingGuidance final : public GuidanceController {
+ public:
+  /// `reference` may be null only for BASIC-only use. Throws InputError for bad settings.
+  TrainingGuidance(std::shared_ptr<const ReferenceTrajectory> reference, const GuidanceConfig& config);
+
+  Vec3 compute(const PenState& pen, const ContactForces& contact, double dt_s) noexcept override;
+  bool setParameter(int parameter, double value) noexcept override;
+  void reset() noexcept override;
+
+  /// The trial starts at loop time t_s (before running; or through kParameterRestartTrial).
+  void startTrial(double t_s) noexcept;
+  /// Switches mode with a cross-fade (servo thread, or before running).
+  void switchMode(TrainingMode mode) noexcept;
+
+  [[nodiscard]] TrainingMode mode() const noexcept { return mode_; }
+  [[nodiscard]] const ReferenceCue& lastCue() const noexcept { return cue_; }
+  [[nodiscard]] const GuidanceConfig& config() const noexcept { return config_; }
+
+ private:
+  Vec3 modeForce(TrainingMode mode, const PenState& pen, const Vec3& force_error) const noexcept;
+
+  std::shared_ptr<const ReferenceTrajectory> reference_;
+  GuidanceConfig config_;
+  std::unique_ptr<ReferencePlayer> player_;
+  TrainingMode mode_;
+  TrainingMode previous_mode_;
+  double fade_ = 1.0;                // weight of mode_ against previous_mode_
+  double contact_weight_ = 0.0;      // ALPHA's fade while the pen is off the paper
+  double trial_start_s_ = 0.0;
+  bool restart_pending_ = false;
+  bool have_error_ = false;
+  Vec3 last_error_ = Vec3::Zero();
+  Vec3 error_rate_ = Vec3::Zero();   // filtered ė
+  ReferenceCue cue_;
+};
+
+}  // namespace hattr::guidance

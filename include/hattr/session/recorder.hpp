@@ -1,0 +1,77 @@
+#pragma once
+/// Records a haptic profile from the servo loop's sample ring at the full servo rate, off
+/// the servo thread: on command, or from the first pen-down to a long pen-up. Counts every
+/// sample it missed (gaps in the loop's tick numbers) and every one it had to reject.
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <thread>
+
+#include "hattr/core/haptic_profile.hpp"
+#include "hattr/core/spsc_ring.hpp"
+
+namespace hattr::session {
+
+enum class RecordTrigger {
+  kCommand,  ///< between start() and stop()
+  kPenDown,  ///< armed by start(): from the first pen-down sample until the pen has been up
+             ///< for pen_up_stop_s (or stop())
+};
+
+struct RecorderConfig {
+  RecordTrigger trigger = RecordTrigger::kCommand;
+  double nominal_period_s = 1e-3;   ///< the servo period (the profile's nominal rate)
+  double pen_up_stop_s = 1.0;       ///< kPenDown: stop after the pen is up this long
+};
+
+class Recorder {
+ public:
+  /// `ring` is the loop's sample ring; the recorder is its only consumer.
+  Recorder(SpscRing<TickSample>& ring, const RecorderConfig& config, ProfileMetadata metadata, RawChannels raw = {.tilt = true});
+  ~Recorder();
+  Recorder(const Recorder&) = delete;
+  Recorder& operator=(const Recorder&) = delete;
+
+  /// Start / stop recording (kCommand), or arm / disarm (kPenDown). Any thread.
+  void start() noexcept { armed_.store(true, std::memory_order_release); }
+  void stop() noexcept { armed_.store(false, std::memory_order_release); }
+
+  /// Takes every sample waiting in the ring. Consumer thread only. Returns how many.
+  std::size_t drain();
+  /// Drains in a background thread every `poll` until stopThread() (which drains the rest).
+  void startThread(std::chrono::microseconds poll = std::chrono::microseconds(500));
+  void stopThread();
+
+  /// Loop time of the newest sample taken (for ServoLoop::requireConsumer).
+  [[nodiscard]] const std::atomic<double>& consumerTime() const noexcept { return consumer_time_s_; }
+  [[nodiscard]] std::uint64_t missed() const noexcept { return missed_; }
+  [[nodiscard]] std::uint64_t rejected() const noexcept { return rejected_; }
+  [[nodiscard]] bool recording() const noexcept { return recording_; }
+  [[nodiscard]] const HapticProfile& profile() const noexcept { return profile_; }
+  /// The recorded profile, its times starting at 0 (the loop time of its first sample is in
+  /// metadata `t_origin_s`), with `missed_samples` and `rejected_samples` in its metadata.
+  /// After stopThread(), or from the consumer thread.
+  HapticProfile takeProfile();
+
+ private:
+  void take(const TickSample& item);
+
+  SpscRing<TickSample>& ring_;
+  RecorderConfig config_;
+  HapticProfile profile_;
+  std::atomic<bool> armed_{false};
+  std::atomic<double> consumer_time_s_{0.0};
+  bool recording_ = false;
+  bool finished_ = false;       // kPenDown: stopped after a long pen-up
+  bool have_tick_ = false;
+  std::uint64_t last_tick_ = 0;
+  double pen_up_since_s_ = -1.0;
+  double t_origin_s_ = 0.0;
+  std::uint64_t missed_ = 0;
+  std::uint64_t rejected_ = 0;
+  std::atomic<bool> thread_stop_{false};
+  std::thread thread_;
+};
+
+}  // namespace hattr::session

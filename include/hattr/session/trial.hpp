@@ -1,0 +1,83 @@
+#pragma once
+/// One trial through the whole pipeline: a device (opened by URI; a simulated pen is driven
+/// by a hand script), the paper, the training mode's guidance, the safety path, the servo
+/// loop on either clock, and the recorder. The same code records an expert and runs a
+/// trainee's trial; `hattr record`, `hattr train` and the study runner call it.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "hattr/core/haptic_profile.hpp"
+#include "hattr/device/hand.hpp"
+#include "hattr/guidance/training_guidance.hpp"
+#include "hattr/render/world_config.hpp"
+#include "hattr/session/recorder.hpp"
+
+namespace hattr::session {
+
+enum class Clock { kSimulated, kRealTime };
+
+/// What stays the same from trial to trial: the device model, the paper (built once: the
+/// relief and texture take a moment), the rate. Clamps are applied on construction.
+class TrialEnvironment {
+ public:
+  /// Throws InputError for a bad URI, world or rate.
+  TrialEnvironment(std::string device_uri, render::WorldConfig world, double rate_hz = 1000.0);
+
+  [[nodiscard]] const std::string& deviceUri() const noexcept { return device_uri_; }
+  [[nodiscard]] const DeviceLimits& limits() const noexcept { return limits_; }
+  [[nodiscard]] double rate_hz() const noexcept { return rate_hz_; }
+  [[nodiscard]] const render::WorldConfig& world() const noexcept { return world_; }
+  [[nodiscard]] render::PaperRenderer& paper() noexcept { return *paper_; }
+  /// What the passivity bounds changed in the world configuration.
+  [[nodiscard]] const std::vector<std::string>& worldClamps() const noexcept { return world_clamps_; }
+  /// The world's impedance on the guidance's axes (for clampGains).
+  [[nodiscard]] guidance::WorldImpedance impedance() const noexcept;
+
+ private:
+  std::string device_uri_;
+  render::WorldConfig world_;
+  double rate_hz_;
+  DeviceLimits limits_;
+  std::vector<std::string> world_clamps_;
+  std::unique_ptr<render::PaperRenderer> paper_;
+};
+
+struct TrialSetup {
+  guidance::GuidanceConfig guidance;                            ///< mode, gains, indexing
+  std::shared_ptr<const guidance::ReferenceTrajectory> reference;  ///< null for BASIC without one
+  ProfileMetadata metadata;                                     ///< subject, skill, ...; mode etc. are added
+  double duration_s = 1.0;                                      ///< how long the trial runs (recorded)
+  /// Before the trial: the loop runs this long with the hand holding the pen 3 mm above its
+  /// first point, so the safety path's ramp-in is complete before the pen meets the paper.
+  /// Not recorded; the trial's clock starts after it. Must be at least the ramp time.
+  double settle_s = 0.3;
+  Clock clock = Clock::kSimulated;
+  RecordTrigger trigger = RecordTrigger::kCommand;
+};
+
+struct TrialResult {
+  HapticProfile profile;               ///< f_user and f_guide recorded separately
+  std::vector<std::string> clamps;     ///< every gain and world clamp applied
+  std::uint64_t ticks = 0;
+  std::uint64_t missed_samples = 0;
+  std::uint64_t overruns = 0;
+  std::uint64_t faults = 0;
+};
+
+/// Runs one trial: the settle phase, then `duration_s` recorded. A simulated pen starts 3 mm
+/// above the hand's first target. Throws InputError for bad settings; hattr::Error if the
+/// recording is empty.
+TrialResult runTrial(TrialEnvironment& environment, const TrialSetup& setup, device::HandScript& hand);
+
+/// The samples of `reference` resampled at the trial's rate, as the trainee's trial shows
+/// it (for tests and analysis): RMS distance in the plane [m] and RMS force error [N]
+/// between a trial and the reference at the same time steps.
+struct TrialErrors {
+  double position_rms_m = 0.0;
+  double force_rms_N = 0.0;
+};
+TrialErrors trialErrors(const HapticProfile& trial, const guidance::ReferenceTrajectory& reference);
+
+}  // namespace hattr::session

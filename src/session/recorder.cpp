@@ -1,0 +1,93 @@
+#include "hattr/session/recorder.hpp"
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "hattr/core/error.hpp"
+
+namespace hattr::session {
+
+Recorder::Recorder(SpscRing<TickSample>& ring, const RecorderConfig& config, ProfileMetadata metadata, RawChannels raw)
+    : ring_(ring), config_(config), profile_(std::move(metadata), raw) {
+  profile_.metadata().nominal_rate_hz = 1.0 / config.nominal_period_s;
+  profile_.reserve(static_cast<std::size_t>(60.0 / config.nominal_period_s));  // a minute without reallocating
+}
+
+Recorder::~Recorder() { stopThread(); }
+
+void Recorder::take(const TickSample& item) {
+  // Gaps in the tick numbers are samples the ring lost before we could take them (a late
+  // tick leaves a gap in time, not in the numbers).
+  const Sample& sample = item.sample;
+  if (have_tick_ && item.tick > last_tick_ + 1) missed_ += item.tick - last_tick_ - 1;
+  have_tick_ = true;
+  last_tick_ = item.tick;
+  consumer_time_s_.store(sample.t_s, std::memory_order_release);
+
+  // Start and stop.
+  const bool armed = armed_.load(std::memory_order_acquire);
+  if (config_.trigger == RecordTrigger::kCommand) {
+    recording_ = armed;
+  } else if (!armed) {
+    recording_ = false;
+  } else if (!recording_ && !finished_ && sample.pen_down) {
+    recording_ = true;
+  } else if (recording_) {
+    pen_up_since_s_ = sample.pen_down ? -1.0 : (pen_up_since_s_ < 0.0 ? sample.t_s : pen_up_since_s_);
+    const double half_tick = 0.5 * config_.nominal_period_s;  // time stamps are not exact multiples
+    if (pen_up_since_s_ >= 0.0 && sample.t_s - pen_up_since_s_ >= config_.pen_up_stop_s - half_tick) {
+      recording_ = false;
+      finished_ = true;
+    }
+  }
+  if (!recording_) return;
+
+  // Keep it, on the profile's own clock.
+  if (profile_.empty()) t_origin_s_ = sample.t_s;
+  Sample kept = sample;
+  kept.t_s -= t_origin_s_;
+  try {
+    profile_.append(kept);  // checks finiteness and increasing time
+  } catch (const InputError&) {
+    ++rejected_;
+  }
+}
+
+std::size_t Recorder::drain() {
+  std::size_t count = 0;
+  TickSample item;
+  while (ring_.tryPop(item)) {
+    take(item);
+    ++count;
+  }
+  return count;
+}
+
+void Recorder::startThread(std::chrono::microseconds poll) {
+  thread_stop_.store(false);
+  thread_ = std::thread([this, poll] {
+    while (!thread_stop_.load(std::memory_order_acquire)) {
+      drain();
+      std::this_thread::sleep_for(poll);
+    }
+    drain();
+  });
+}
+
+void Recorder::stopThread() {
+  thread_stop_.store(true, std::memory_order_release);
+  if (thread_.joinable()) thread_.join();
+}
+
+HapticProfile Recorder::takeProfile() {
+  auto& extra = profile_.metadata().extra;
+  extra["t_origin_s"] = fmt::format("{}", t_origin_s_);
+  extra["missed_samples"] = fmt::format("{}", missed_);
+  extra["rejected_samples"] = fmt::format("{}", rejected_);
+  HapticProfile out = std::move(profile_);
+  profile_ = HapticProfile(out.metadata(), out.rawChannels());
+  return out;
+}
+
+}  // namespace hattr::session

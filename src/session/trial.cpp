@@ -1,0 +1,172 @@
+#include "hattr/session/trial.hpp"
+
+#include <cmath>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "hattr/core/error.hpp"
+#include "hattr/device/device_uri.hpp"
+#include "hattr/servo/servo_loop.hpp"
+
+namespace hattr::session {
+namespace {
+
+/// The device for a trial; a simulated pen starts just above where the hand begins.
+std::unique_ptr<device::Device> openTrialDevice(const std::string& uri_text, device::HandScript& hand) {
+  const device::DeviceUri uri = device::parseDeviceUri(uri_text);
+  if (uri.scheme != "sim") return device::openDevice(uri_text, &hand);
+  device::SimulatedPenParams params = device::simulatedPenParams(uri);
+  hand.rewind();
+  params.start_position_W = hand.command(0.0).p_target_W;
+  params.start_position_W.z() = std::max(params.start_position_W.z(), 0.003);
+  hand.rewind();
+  return std::make_unique<device::SimulatedDevice>(params, &hand, uri_text);
+}
+
+/// The hand during the settle phase: holding the pen lifted above its first point; after it,
+/// the script on the trial's clock.
+class SettlingHand final : public device::HandScript {
+ public:
+  SettlingHand(device::HandScript& script, double settle_s) : script_(script), settle_s_(settle_s) {
+    script_.rewind();
+    lifted_ = script_.command(0.0);
+    script_.rewind();
+    lifted_.pen_down = false;
+    lifted_.v_target_W.setZero();
+    lifted_.p_target_W.z() = std::max(lifted_.p_target_W.z(), 0.003);
+  }
+  device::HandCommand command(double t_s) noexcept override {
+    return t_s < settle_s_ ? lifted_ : script_.command(t_s - settle_s_);
+  }
+  void rewind() noexcept override { script_.rewind(); }
+
+ private:
+  device::HandScript& script_;
+  double settle_s_;
+  device::HandCommand lifted_;
+};
+
+std::string joined(const std::vector<std::string>& lines) {
+  std::string out;
+  for (const auto& l : lines) out += (out.empty() ? "" : "; ") + l;
+  return out;
+}
+
+}  // namespace
+
+TrialEnvironment::TrialEnvironment(std::string device_uri, render::WorldConfig world, double rate_hz)
+    : device_uri_(std::move(device_uri)), world_(std::move(world)), rate_hz_(rate_hz) {
+  HATTR_THROW_UNLESS(std::isfinite(rate_hz) && rate_hz >= 1.0 && rate_hz <= 10'000.0,
+                     "servo rate: expected 1 to 10000 Hz, got {}", rate_hz);
+  const device::DeviceUri uri = device::parseDeviceUri(device_uri_);
+  limits_ = uri.scheme == "sim" ? device::simulatedPenParams(uri).limits : device::openDevice(device_uri_, nullptr)->limits();
+  world_clamps_ = render::clampToDevice(world_.paper, limits_, rate_hz_);
+  paper_ = std::make_unique<render::PaperRenderer>(world_.paper, render::buildRelief(world_.relief));
+}
+
+guidance::WorldImpedance TrialEnvironment::impedance() const noexcept {
+  return {.normal_stiffness_N_per_m = world_.paper.contact.stiffness_N_per_m,
+          .normal_damping_N_s_per_m = world_.paper.contact.damping_N_s_per_m,
+          .tangential_stiffness_N_per_m = world_.paper.tangential_stiffness_N_per_m};
+}
+
+TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::HandScript& hand) {
+  HATTR_THROW_UNLESS(std::isfinite(setup.duration_s) && setup.duration_s > 0.0 && setup.duration_s <= 3600.0,
+                     "trial duration: expected (0, 3600] s, got {}", setup.duration_s);
+  const double ramp_s = servo::SafetyConfig{}.ramp_time_s;
+  HATTR_THROW_UNLESS(std::isfinite(setup.settle_s) && setup.settle_s >= ramp_s && setup.settle_s <= 60.0,
+                     "trial settle time: expected [{}, 60] s (at least the safety ramp), got {}", ramp_s, setup.settle_s);
+  TrialResult result;
+  result.clamps = env.worldClamps();
+
+  // Guidance, with its gains clamped to what the device renders passively with the paper.
+  guidance::GuidanceConfig config = setup.guidance;
+  // Both modes' gains are clamped (a trial may switch modes); the report names the one in use.
+  const std::string_view active = guidance::modeName(config.mode);
+  for (auto& line : guidance::clampGains(config, env.limits(), env.rate_hz(), env.impedance())) {
+    if (config.mode != guidance::TrainingMode::kBasic && line.starts_with(active)) result.clamps.push_back(std::move(line));
+  }
+  guidance::TrainingGuidance guidance(setup.reference, config);
+  guidance.startTrial(setup.settle_s);
+
+  // Device, paper, loop, recorder; the hand settles before the script starts.
+  SettlingHand settling(hand, setup.settle_s);
+  const auto device = openTrialDevice(env.deviceUri(), settling);
+  env.paper().reset();
+  servo::ServoLoop loop(*device, servo::ServoConfig{.rate_hz = env.rate_hz()});
+  loop.setWorld(&env.paper());
+  loop.setGuidance(&guidance);
+
+  ProfileMetadata metadata = setup.metadata;
+  metadata.device = env.deviceUri();
+  metadata.created_utc = utcNowIso8601();
+  if (metadata.source.empty()) metadata.source = "recorded";
+  auto& extra = metadata.extra;
+  extra["mode"] = std::string(guidance::modeName(config.mode));
+  extra["indexing"] = std::string(guidance::indexingName(config.playback.indexing));
+  extra["speed"] = fmt::format("{}", config.playback.speed);
+  extra["pcontrol_kp_N_per_m"] = fmt::format("{}", config.position.kp_N_per_m);
+  extra["pcontrol_kd_N_s_per_m"] = fmt::format("{}", config.position.kd_N_s_per_m);
+  extra["alpha_kp"] = fmt::format("{}", config.force.kp);
+  extra["alpha_kd_s"] = fmt::format("{}", config.force.kd_s);
+  extra["clamps"] = result.clamps.empty() ? "none" : joined(result.clamps);
+  extra["clock"] = setup.clock == Clock::kSimulated ? "simulated" : "real-time";
+  Recorder recorder(loop.samples(),
+                    RecorderConfig{.trigger = setup.trigger, .nominal_period_s = 1.0 / env.rate_hz()}, metadata);
+
+  const auto settle_ticks = static_cast<std::size_t>(std::llround(setup.settle_s * env.rate_hz()));
+  const auto ticks = static_cast<std::size_t>(std::llround(setup.duration_s * env.rate_hz()));
+  if (setup.clock == Clock::kSimulated) {
+    constexpr std::size_t kChunk = 64;  // drain well before the ring could fill
+    const auto run = [&](std::size_t count) {
+      for (std::size_t done = 0; done < count; done += kChunk) {
+        loop.runSimulated(std::min(kChunk, count - done));
+        recorder.drain();
+      }
+    };
+    run(settle_ticks);
+    recorder.start();
+    run(ticks);
+  } else {
+    loop.requireConsumer(&recorder.consumerTime());
+    recorder.startThread();
+    loop.start();
+    std::this_thread::sleep_for(std::chrono::duration<double>(setup.settle_s));
+    recorder.start();
+    std::this_thread::sleep_for(std::chrono::duration<double>(setup.duration_s));
+    loop.stop();
+    recorder.stopThread();
+  }
+  recorder.stop();
+
+  result.ticks = loop.counters().ticks.load();
+  result.overruns = loop.counters().overruns.load();
+  result.faults = loop.counters().faults.load();
+  result.missed_samples = recorder.missed();
+  result.profile = recorder.takeProfile();
+  if (result.profile.empty()) {
+    throw Error("the trial recorded no samples (with the pen-down trigger: the pen never touched the paper)");
+  }
+  return result;
+}
+
+TrialErrors trialErrors(const HapticProfile& trial, const guidance::ReferenceTrajectory& reference) {
+  TrialErrors errors;
+  std::size_t n = 0;
+  for (const Sample& s : trial.samples()) {
+    const double index = s.t_s / reference.dt_s();
+    if (index > static_cast<double>(reference.size() - 1)) break;
+    const guidance::ReferencePoint r = reference.at(index);
+    errors.position_rms_m += (s.p_WT - r.p_WT).head<2>().squaredNorm();
+    errors.force_rms_N += (s.f_user_W - r.f_W).squaredNorm();
+    ++n;
+  }
+  if (n > 0) {
+    errors.position_rms_m = std::sqrt(errors.position_rms_m / static_cast<double>(n));
+    errors.force_rms_N = std::sqrt(errors.force_rms_N / static_cast<double>(n));
+  }
+  return errors;
+}
+
+}  // namespace hattr::session
