@@ -175,12 +175,10 @@ detail::KernelProblem univariateProblem(const double* const* a, const double* co
   return problem;
 }
 
-// The batch kernel pays for whole blocks of SIMD lanes; below this many pairs, running
-// the pairs one by one is as fast.
-constexpr std::size_t kMinPairsForBatchKernel = 8;
-
-// Costs of the checked pairs (a[p], b[p]) into out[p]: the lane-batched kernel when all
-// lengths agree and there are enough pairs, else pair by pair.
+// Costs of the checked pairs (a[p], b[p]) into out[p]. When all lengths agree, whole
+// blocks of pairs go to the lane-batched kernel; a last partial block goes there too if
+// it fills at least half the lanes, else its pairs run one by one, as do pairs of
+// differing lengths.
 void costsOfPairs(std::span<const double* const> a, std::span<const double* const> b,
                   std::span<const std::size_t> a_len, std::span<const std::size_t> b_len,
                   const DtwOptions& options, double* out) {
@@ -188,13 +186,18 @@ void costsOfPairs(std::span<const double* const> a, std::span<const double* cons
   const bool equal_lengths =
       std::all_of(a_len.begin(), a_len.end(), [&](std::size_t n) { return n == a_len[0]; }) &&
       std::all_of(b_len.begin(), b_len.end(), [&](std::size_t m) { return m == b_len[0]; });
-  if (equal_lengths && count >= kMinPairsForBatchKernel) {
-    detail::KernelProblem problem = univariateProblem(a.data(), b.data(), a_len[0], b_len[0], options);
-    problem.count = count;
-    detail::batchDtw(problem, out);
-    return;
+  std::size_t batched = 0;
+  if (equal_lengths) {
+    const std::size_t width = detail::batchWidth();
+    batched = count % width >= width / 2 ? count : count - count % width;
   }
-  for (std::size_t p = 0; p < count; ++p) {
+  if (batched > 0) {
+    detail::KernelProblem problem =
+        univariateProblem(a.data(), b.data(), a_len[0], b_len[0], options);
+    problem.count = batched;
+    detail::batchDtw(problem, out);
+  }
+  for (std::size_t p = batched; p < count; ++p) {
     out[p] = detail::diagonalDtw(univariateProblem(&a[p], &b[p], a_len[p], b_len[p], options));
   }
 }
@@ -219,9 +222,8 @@ DtwResult dtw(std::span<const double> a, std::span<const double> b, const DtwOpt
   checkSeries("dtw", "b", b);
   checkOptions("dtw", options);
   return pathDtw(a.size(), b.size(), dtwBandRadius(a.size(), b.size(), options.band_fraction),
-                 options.abandon_above, [&](std::size_t i, std::size_t j) {
-                   return localCost(options.cost, a[i], b[j]);
-                 });
+                 options.abandon_above,
+                 [&](std::size_t i, std::size_t j) { return localCost(options.cost, a[i], b[j]); });
 }
 
 double dtwDistance(std::span<const double> a, std::span<const double> b,
@@ -239,8 +241,9 @@ double dtwReference(std::span<const double> a, std::span<const double> b,
   checkSeries("dtwReference", "a", a);
   checkSeries("dtwReference", "b", b);
   checkOptions("dtwReference", options);
-  return fullMatrixDtw(a.size(), b.size(), dtwBandRadius(a.size(), b.size(), options.band_fraction),
-                       [&](std::size_t i, std::size_t j) { return localCost(options.cost, a[i], b[j]); });
+  return fullMatrixDtw(
+      a.size(), b.size(), dtwBandRadius(a.size(), b.size(), options.band_fraction),
+      [&](std::size_t i, std::size_t j) { return localCost(options.cost, a[i], b[j]); });
 }
 
 DtwResult dtwDependent(Channels a, Channels b, const DtwOptions& options) {

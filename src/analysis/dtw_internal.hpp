@@ -31,6 +31,9 @@ double diagonalDtw(const KernelProblem& problem);
 /// lanes = pairs. Writes out[p] for p < count.
 void batchDtw(const KernelProblem& problem, double* out);
 
+/// Pairs per block of batchDtw (4 vectors of lanes); fewer pairs leave lanes idle.
+std::size_t batchWidth();
+
 /// Name of the instruction set the kernels dispatch to.
 const char* simdTargetName();
 

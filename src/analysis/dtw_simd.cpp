@@ -34,6 +34,7 @@ using Vd = hn::Vec<Tag>;
 using Index = std::ptrdiff_t;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr std::size_t kBatchGroups = 4;  // vectors of pairs per batch block
 
 // The local cost of lanes x and y; the same arithmetic as the scalar reference.
 template <DtwCost kCost>
@@ -122,15 +123,15 @@ double diagonalKernel(const KernelProblem& p) {
                                                   hn::LoadU(d, b0 + c * b_stride + t)));
           }
         }
-        const Vd best = hn::Min(hn::Min(hn::LoadU(d, up + t), hn::LoadU(d, left + t)),
-                                hn::LoadU(d, diag + t));
+        const Vd best =
+            hn::Min(hn::Min(hn::LoadU(d, up + t), hn::LoadU(d, left + t)), hn::LoadU(d, diag + t));
         const Vd value = hn::Add(cost, best);
         hn::StoreU(value, d, out + t);
         if constexpr (kAbandon) {
-          const Vd valid = t + lanes <= len
-                               ? value
-                               : hn::IfThenElse(hn::FirstN(d, static_cast<std::size_t>(len - t)),
-                                                value, inf);
+          const Vd valid =
+              t + lanes <= len
+                  ? value
+                  : hn::IfThenElse(hn::FirstN(d, static_cast<std::size_t>(len - t)), value, inf);
           vmin = hn::Min(vmin, valid);
         }
       }
@@ -163,8 +164,8 @@ template <DtwCost kCost, bool kAbandon>
 HWY_INLINE void batchStep(Tag d, Vd a_i, const double* b_j, double* cell, Vd& diag, Vd& left,
                           Vd& row_min) {
   const Vd up = hn::LoadU(d, cell);
-  const Vd value = hn::Add(localCost<kCost>(a_i, hn::LoadU(d, b_j)),
-                           hn::Min(hn::Min(up, diag), left));
+  const Vd value =
+      hn::Add(localCost<kCost>(a_i, hn::LoadU(d, b_j)), hn::Min(hn::Min(up, diag), left));
   diag = up;
   left = value;
   hn::StoreU(value, d, cell);
@@ -178,8 +179,7 @@ template <DtwCost kCost, bool kAbandon>
 void batchKernel(const KernelProblem& p, double* out) {
   const Tag d;
   const std::size_t lanes = hn::Lanes(d);
-  constexpr std::size_t kGroups = 4;
-  const std::size_t width = kGroups * lanes;
+  const std::size_t width = kBatchGroups * lanes;
   const std::size_t n = p.n;
   const std::size_t m = p.m;
   const std::size_t r = std::min(p.radius, std::max(n, m));
@@ -277,6 +277,8 @@ void batchDtwTarget(const KernelProblem& p, double* out) {
   }
 }
 
+std::size_t batchWidthTarget() { return kBatchGroups * hn::Lanes(Tag()); }
+
 const char* targetNameTarget() { return hwy::TargetName(HWY_TARGET); }
 
 }  // namespace HWY_NAMESPACE
@@ -289,6 +291,7 @@ namespace hattr::analysis::detail {
 
 HWY_EXPORT(diagonalDtwTarget);
 HWY_EXPORT(batchDtwTarget);
+HWY_EXPORT(batchWidthTarget);
 HWY_EXPORT(targetNameTarget);
 
 double diagonalDtw(const KernelProblem& problem) {
@@ -298,6 +301,8 @@ double diagonalDtw(const KernelProblem& problem) {
 void batchDtw(const KernelProblem& problem, double* out) {
   HWY_DYNAMIC_DISPATCH(batchDtwTarget)(problem, out);
 }
+
+std::size_t batchWidth() { return HWY_DYNAMIC_DISPATCH(batchWidthTarget)(); }
 
 const char* simdTargetName() { return HWY_DYNAMIC_DISPATCH(targetNameTarget)(); }
 

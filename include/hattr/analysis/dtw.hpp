@@ -14,13 +14,12 @@
 /// (empty series, non-finite values, mismatched channels, a NaN option) throws
 /// hattr::InputError.
 
+#include <Eigen/Core>
 #include <cstddef>
 #include <limits>
 #include <span>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace hattr::analysis {
 
