@@ -30,6 +30,8 @@ void registerDemoCommand(CLI::App& app);
 void registerServoCheckCommand(CLI::App& app);
 void registerWorldCommands(CLI::App& app);
 void registerRecordTrainCommands(CLI::App& app);
+void registerStudyCommands(CLI::App& app);
+void registerAnalysisCommands(CLI::App& app);
 
 /// The world configuration in `file`, or the defaults when `file` is empty.
 render::WorldConfig worldConfigOrDefault(const std::string& file);

@@ -20,6 +20,8 @@ int main(int argc, char** argv) {
   registerServoCheckCommand(app);
   registerWorldCommands(app);
   registerRecordTrainCommands(app);
+  registerStudyCommands(app);
+  registerAnalysisCommands(app);
   registerDemoCommand(app);
 
   try {

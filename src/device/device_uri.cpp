@@ -40,6 +40,8 @@ constexpr SimKey kSimKeys[] = {
      "stiffness of the simulated hand [N/m]"},
     {"hand_damping_N_s_per_m", 0.0, 1e3, [](SimulatedPenParams& p) { return &p.hand.damping_N_s_per_m; },
      "damping of the simulated hand [N·s/m]"},
+    {"hand_press_tau_s", 0.0, 1.0, [](SimulatedPenParams& p) { return &p.hand.press_time_constant_s; },
+     "time constant of the hand's pressing force [s]"},
     {"timeout_s", 1e-4, 10.0, [](SimulatedPenParams& p) { return &p.command_timeout_s; },
      "force drops to zero without a new command for this long [s]"},
 };

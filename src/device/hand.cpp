@@ -19,8 +19,8 @@ Vec3 handForce(const HandImpedance& hand, const HandCommand& command, const Vec3
   if (command.pen_down) {
     // Writing: the fingers steer the tip in the paper plane and press it into the paper
     // with the normal share F·sin θ of the axial force (the tangential share is carried
-    // by the grip). The hand does not hold the height.
-    force.z() = -std::max(command.press_N, 0.0) * std::sin(command.altitude_rad);
+    // by the grip). The hand does not hold the height, but the fingers still damp it.
+    force.z() = -std::max(command.press_N, 0.0) * std::sin(command.altitude_rad) - hand.damping_N_s_per_m * v_WT.z();
   }
   return force;
 }

@@ -19,6 +19,7 @@ void SimulatedDevice::reset() noexcept {
   v_WT_.setZero();
   command_W_.setZero();
   hand_force_W_.setZero();
+  press_N_ = 0.0;
   t_s_ = 0.0;
   last_write_s_ = 0.0;
   if (hand_) hand_->rewind();
@@ -35,7 +36,13 @@ void SimulatedDevice::advanceTo(double t_s) noexcept {
     const double t = t_s_ + h * (i + 1);
     if (hand_) {
       last_hand_ = hand_->command(t);
-      hand_force_W_ = handForce(params_.hand, last_hand_, p_WT_, v_WT_);
+      // Finger force rises and falls with the muscle's time constant.
+      const double target = last_hand_.pen_down ? last_hand_.press_N : 0.0;
+      const double tau = params_.hand.press_time_constant_s;
+      press_N_ += tau > 0.0 ? (target - press_N_) * std::min(1.0, h / tau) : target - press_N_;
+      HandCommand acting = last_hand_;
+      acting.press_N = press_N_;
+      hand_force_W_ = handForce(params_.hand, acting, p_WT_, v_WT_);
     } else {
       hand_force_W_.setZero();
     }

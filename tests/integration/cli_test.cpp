@@ -239,5 +239,84 @@ TEST(Cli, TrainRefusesBadModesAndMissingFilesWithExitTwo) {
   EXPECT_FALSE(std::filesystem::exists(dir / "o.csv"));
 }
 
+TEST(Cli, StudyCommandsReportStatusAndRefuseBadInputWithExitTwo) {
+  test::TempDir dir;
+  test::writeText(dir / "expert.csv", handScript());
+  test::writeText(dir / "bad.json", R"({"name": "x", "skill": "loop", "experts": {"loop": "nope.csv"},
+      "modes": ["basic", "omega"], "subjects": {"count": 2}})");
+  const RunResult bad = runHattr(dir, "study init " + (dir / "bad.json").string() + " --db " + (dir / "s.sqlite").string());
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_THAT(bad.err, HasSubstr("2 problems in the study definition"));
+  EXPECT_THAT(bad.err, HasSubstr("nope.csv\" not found"));
+  EXPECT_THAT(bad.err, HasSubstr("got \"omega\""));
+  EXPECT_FALSE(std::filesystem::exists(dir / "s.sqlite"));
+
+  test::writeText(dir / "study.json", R"({"name": "cli", "skill": "loop", "experts": {"loop": "expert.csv"},
+      "protocol": {"training_trials": 1, "recall_trials": 1, "tail_s": 0.05}, "world": {"relief": {"kind": "flat"}},
+      "subjects": {"count": 2, "participant": "script"}})");
+  const std::string db = (dir / "s.sqlite").string();
+  ASSERT_EQ(runHattr(dir, "study init " + (dir / "study.json").string() + " --db " + db).exit_code, 0);
+  ASSERT_EQ(runHattr(dir, "study run --quiet --subject S01 --db " + db).exit_code, 0);
+  const RunResult status = runHattr(dir, "study status --json --db " + db);
+  ASSERT_EQ(status.exit_code, 0) << status.err;
+  const auto json = nlohmann::json::parse(status.out);
+  EXPECT_EQ(json["trials_total"].get<int>(), 12);
+  EXPECT_EQ(json["trials_completed"].get<int>(), 6);
+  EXPECT_EQ(json["trials_interrupted"].get<int>(), 0);
+  ASSERT_EQ(json["subjects"].size(), 2u);
+  EXPECT_TRUE(json["subjects"][0]["next"].is_null());
+  EXPECT_EQ(json["subjects"][1]["next"]["sequence"].get<int>(), 0);
+
+  EXPECT_EQ(runHattr(dir, "study init " + (dir / "study.json").string() + " --db " + db).exit_code, 2);
+  const RunResult unknown = runHattr(dir, "study run --subject S99 --db " + db);
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_THAT(unknown.err, HasSubstr("--subject S99: no such subject"));
+  const RunResult not_db = runHattr(dir, "study status --db " + (dir / "study.json").string());
+  EXPECT_EQ(not_db.exit_code, 2);
+  EXPECT_THAT(not_db.err, HasSubstr("not a hattr study database"));
+}
+
+// R's warpbreaks, as write.csv(warpbreaks, row.names = FALSE) writes it (quoted fields).
+constexpr const char* kWarpbreaks = "\"breaks\",\"wool\",\"tension\"\n26,\"A\",\"L\"\n30,\"A\",\"L\"\n54,\"A\",\"L\"\n25,\"A\",\"L\"\n70,\"A\",\"L\"\n52,\"A\",\"L\"\n51,\"A\",\"L\"\n26,\"A\",\"L\"\n67,\"A\",\"L\"\n18,\"A\",\"M\"\n21,\"A\",\"M\"\n29,\"A\",\"M\"\n17,\"A\",\"M\"\n12,\"A\",\"M\"\n18,\"A\",\"M\"\n35,\"A\",\"M\"\n30,\"A\",\"M\"\n36,\"A\",\"M\"\n36,\"A\",\"H\"\n21,\"A\",\"H\"\n24,\"A\",\"H\"\n18,\"A\",\"H\"\n10,\"A\",\"H\"\n43,\"A\",\"H\"\n28,\"A\",\"H\"\n15,\"A\",\"H\"\n26,\"A\",\"H\"\n27,\"B\",\"L\"\n14,\"B\",\"L\"\n29,\"B\",\"L\"\n19,\"B\",\"L\"\n29,\"B\",\"L\"\n31,\"B\",\"L\"\n41,\"B\",\"L\"\n20,\"B\",\"L\"\n44,\"B\",\"L\"\n42,\"B\",\"M\"\n26,\"B\",\"M\"\n19,\"B\",\"M\"\n16,\"B\",\"M\"\n39,\"B\",\"M\"\n28,\"B\",\"M\"\n21,\"B\",\"M\"\n39,\"B\",\"M\"\n29,\"B\",\"M\"\n20,\"B\",\"H\"\n21,\"B\",\"H\"\n24,\"B\",\"H\"\n17,\"B\",\"H\"\n13,\"B\",\"H\"\n15,\"B\",\"H\"\n15,\"B\",\"H\"\n16,\"B\",\"H\"\n28,\"B\",\"H\"\n";
+
+TEST(Cli, AnovaMatchesRsAovAndTukeyOnAQuotedCsv) {
+  test::TempDir dir;
+  test::writeText(dir / "wb.csv", kWarpbreaks);
+  const RunResult r = runHattr(dir, "anova --json --response breaks --factor tension --factor wool --tukey tension " +
+                                        (dir / "wb.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto json = nlohmann::json::parse(r.out);
+  // R 4.2.2, options(digits = 15): s <- summary(aov(breaks ~ tension * wool, data = warpbreaks))[[1]];
+  // s[["F value"]]; s[["Pr(>F)"]]; TukeyHSD(aov(breaks ~ tension * wool, data = warpbreaks), "tension")
+  const auto rel = [](double got, double want) { return std::abs(got - want) / std::abs(want); };
+  ASSERT_EQ(json["rows"].size(), 4u);
+  EXPECT_EQ(json["rows"][2]["source"], "tension:wool");
+  EXPECT_LT(rel(json["rows"][0]["f"].get<double>(), 8.49804664835802), 1e-8);
+  EXPECT_LT(rel(json["rows"][0]["p"].get<double>(), 0.000692620936713444), 1e-8);
+  EXPECT_LT(rel(json["rows"][2]["p"].get<double>(), 0.021044190727862934), 1e-8);
+  EXPECT_EQ(json["rows"][3]["df"].get<int>(), 48);
+  EXPECT_LT(rel(json["tukey"]["comparisons"][1]["p_adj"].get<double>(), 0.000559539221793859), 1e-6);
+  const RunResult bad = runHattr(dir, "anova --response breaks --factor tension --factor colour " + (dir / "wb.csv").string());
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_THAT(bad.err, HasSubstr("no column \"colour\": expected one of breaks, wool, tension"));
+}
+
+TEST(Cli, DtwJsonHasCostPerChannelAndThePathWhenAsked) {
+  test::TempDir dir;
+  test::writeText(dir / "a.csv", handScript());
+  test::writeText(dir / "b.csv", handScript(3.0));
+  const RunResult r = runHattr(dir, "dtw --json --path --channels x,y,fz --band 0.2 " + (dir / "a.csv").string() + " " +
+                                        (dir / "b.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto json = nlohmann::json::parse(r.out);
+  EXPECT_EQ(json["cost_fn"], "abs");
+  EXPECT_EQ(json["band"].get<double>(), 0.2);
+  EXPECT_DOUBLE_EQ(json["cost"]["x"].get<double>(), 0.0);  // same x: identical after preprocessing
+  EXPECT_GT(json["cost"]["y"].get<double>(), 0.0);           // y drifts in B
+  EXPECT_EQ(json["path"]["y"].front(), nlohmann::json::array({0, 0}));
+  EXPECT_EQ(json["path"]["y"].back(), nlohmann::json::array({100, 100}));
+  EXPECT_EQ(runHattr(dir, "dtw --channels q " + (dir / "a.csv").string() + " " + (dir / "b.csv").string()).exit_code, 2);
+}
+
 }  // namespace
 }  // namespace hattr

@@ -35,6 +35,9 @@ class HandScript {
 struct HandImpedance {
   double stiffness_N_per_m = 300.0;
   double damping_N_s_per_m = 4.0;
+  /// The pressing force follows its command through a first-order lag (muscle activation
+  /// dynamics: finger force cannot step). 0: no lag.
+  double press_time_constant_s = 0.04;
 };
 
 /// Force the hand exerts on the pen for a command and the pen's state [N, W].

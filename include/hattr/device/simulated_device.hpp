@@ -59,6 +59,7 @@ class SimulatedDevice final : public Device {
   Vec3 command_W_ = Vec3::Zero();
   Vec3 hand_force_W_ = Vec3::Zero();
   HandCommand last_hand_{};
+  double press_N_ = 0.0;  // the hand's actual press, lagging its command
   double t_s_ = 0.0;
   double last_write_s_ = 0.0;
 };

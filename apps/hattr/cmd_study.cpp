@@ -1,0 +1,210 @@
+// hattr study init|run|status|export|import|example: training studies in a crash-safe database.
+
+#include <iostream>
+
+#include <fmt/format.h>
+
+#include "cli_common.hpp"
+#include "hattr/core/error.hpp"
+#include "hattr/session/study_export.hpp"
+#include "hattr/report/study_report.hpp"
+#include "hattr/session/study_runner.hpp"
+
+namespace hattr::cli {
+namespace {
+
+struct StudyOptions {
+  std::string study_file;
+  std::string db;
+  std::string subject;
+  std::string out;
+  std::string from;
+  std::string clock = "sim";
+  int max_trials = -1;
+  double band = -1.0;
+  bool json = false;
+  bool quiet = false;
+};
+
+nlohmann::json statusJson(const session::StudyDatabase& db) {
+  nlohmann::json subjects = nlohmann::json::array();
+  int total = 0, completed = 0, interrupted = 0;
+  for (const auto& s : db.subjects()) {
+    const auto trials = db.trials(s.id);
+    int done = 0;
+    for (const auto& t : trials) {
+      done += t.status == session::TrialStatus::kCompleted ? 1 : 0;
+      interrupted += t.interruptions + (t.status == session::TrialStatus::kRunning ? 1 : 0);
+    }
+    nlohmann::json order = nlohmann::json::array();
+    for (const auto m : s.mode_order) order.push_back(std::string(guidance::modeName(m)));
+    nlohmann::json next = nullptr;
+    if (const auto n = db.nextTrial(s.id)) {
+      next = {{"sequence", n->plan.sequence}, {"mode", std::string(guidance::modeName(n->plan.mode))},
+              {"phase", std::string(session::phaseName(n->plan.phase))}, {"trial", n->plan.index},
+              {"status", std::string(session::trialStatusName(n->status))}};
+    }
+    subjects.push_back({{"id", s.id}, {"participant", s.spec.participant}, {"mode_order", order},
+                        {"trials", trials.size()}, {"completed", done}, {"next", next}});
+    total += static_cast<int>(trials.size());
+    completed += done;
+  }
+  return {{"study", db.study().name}, {"file", db.file().string()}, {"schema_version", db.schemaVersion()},
+          {"subjects", subjects}, {"trials_total", total}, {"trials_completed", completed},
+          {"trials_interrupted", interrupted}};
+}
+
+std::unique_ptr<session::Participant> makeParticipant(const session::SubjectRecord& subject, const HapticProfile& expert) {
+  if (subject.spec.participant == "script") return session::makeScriptParticipant(subject, expert);
+  if (subject.spec.participant == "person") {
+    throw InputError(fmt::format("subject {} is a person: run their trials from the studio (hattr studio)", subject.id));
+  }
+  throw InputError(fmt::format("subject {}: participant \"{}\" is not available in this build", subject.id,
+                               subject.spec.participant));
+}
+
+void runInit(const StudyOptions& opt) {
+  const session::StudyDefinition study = session::loadStudy(opt.study_file);
+  const session::StudyDatabase db = session::StudyDatabase::create(opt.db, study);
+  const auto status = statusJson(db);
+  if (opt.json) return printJson(status);
+  std::cout << fmt::format("created {}: {} subjects, {} trials planned\n", opt.db, study.subjects.size(),
+                           status["trials_total"].get<int>());
+}
+
+void runRun(const StudyOptions& opt) {
+  session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kRunner);
+  session::StudyRunner runner(db, makeParticipant);
+  session::RunOptions run{.only_subject = opt.subject,
+                          .clock = opt.clock == "sim" ? session::Clock::kSimulated : session::Clock::kRealTime,
+                          .max_trials = opt.max_trials};
+  if (!opt.quiet) {
+    run.progress = [](const session::RunProgress& p) {
+      std::cerr << fmt::format("\r{} {:>3}/{:<3} {} {} {:>2}   ", p.subject, p.completed, p.total,
+                               guidance::modeName(p.trial->plan.mode), session::phaseName(p.trial->plan.phase),
+                               p.trial->plan.index)
+                << std::flush;
+    };
+  }
+  const int ran = runner.run(run);
+  if (!opt.quiet) std::cerr << '\n';
+  if (opt.json) return printJson(statusJson(db));
+  std::cout << fmt::format("ran {} trial{}\n", ran, ran == 1 ? "" : "s");
+}
+
+void runStatus(const StudyOptions& opt) {
+  const session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kReadOnly);
+  const auto status = statusJson(db);
+  if (opt.json) return printJson(status);
+  std::cout << fmt::format("{} ({}): {}/{} trials completed, {} interrupted\n", status["study"].get<std::string>(), opt.db,
+                           status["trials_completed"].get<int>(), status["trials_total"].get<int>(),
+                           status["trials_interrupted"].get<int>());
+  for (const auto& s : status["subjects"]) {
+    std::string next = "done";
+    if (!s["next"].is_null()) {
+      next = fmt::format("next: {} {} {}", s["next"]["mode"].get<std::string>(), s["next"]["phase"].get<std::string>(),
+                         s["next"]["trial"].get<int>());
+    }
+    std::cout << fmt::format("  {:<8} {:>3}/{:<3} order {}  {}\n", s["id"].get<std::string>(), s["completed"].get<int>(),
+                             s["trials"].get<int>(), s["mode_order"].dump(), next);
+  }
+}
+
+void runExport(const StudyOptions& opt) {
+  const session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kReadOnly);
+  const std::size_t n = session::exportStudy(db, opt.out);
+  std::cout << fmt::format("exported {} trial profiles to {}/\n", n, opt.out);
+}
+
+report::AnalysisOptions analysisOptions(const StudyOptions& opt) {
+  report::AnalysisOptions a;
+  a.band_fraction = opt.band;
+  return a;
+}
+
+void runAnalyze(const StudyOptions& opt) {
+  session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kReadWrite);
+  const report::StudyAnalysis analysis = report::analyzeStudy(db, analysisOptions(opt));
+  report::storeAnalysis(db, analysis);
+  if (!opt.out.empty()) report::writeAnalysisCsv(analysis, opt.out);
+  if (opt.json) return printJson(report::analysisToJson(analysis));
+  std::cout << fmt::format("analyzed {} recall trials of {}; results stored in the database{}\n", analysis.costs.size(),
+                           opt.db, opt.out.empty() ? "" : fmt::format(" and written to {}/", opt.out));
+  for (const auto& line : report::conclusions(analysis)) std::cout << "  " << line << '\n';
+}
+
+void runReport(const StudyOptions& opt) {
+  session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kReadWrite);
+  const report::StudyAnalysis analysis = report::analyzeStudy(db, analysisOptions(opt));
+  report::storeAnalysis(db, analysis);
+  report::writeAnalysisCsv(analysis, opt.out);
+  const auto html = report::writeStudyReport(db, analysis, opt.out);
+  std::cout << fmt::format("report: {} (and report.md, figures/, CSV tables beside it)\n", html.string());
+}
+
+void runImport(const StudyOptions& opt) {
+  const std::size_t n = session::importStudy(opt.from, opt.db);
+  std::cout << fmt::format("imported {} trials into {}\n", n, opt.db);
+}
+
+}  // namespace
+
+void registerStudyCommands(CLI::App& app) {
+  auto* study = app.add_subcommand("study", "Training studies: the paper's protocol in a crash-safe study database");
+  study->require_subcommand(1);
+  auto opt = std::make_shared<StudyOptions>();
+
+  auto* init = study->add_subcommand("init", "Create a study database from a study file (see `hattr study example`)");
+  init->add_option("STUDY", opt->study_file, "Study definition (JSON)")->required();
+  init->add_option("--db", opt->db, "Study database to create")->required();
+  init->add_flag("--json", opt->json, "Print the status as JSON");
+  init->callback([opt] { runInit(*opt); });
+
+  auto* run = study->add_subcommand("run", "Run the unfinished trials, resuming where the study stopped");
+  run->add_option("--db", opt->db, "Study database")->required();
+  run->add_option("--subject", opt->subject, "Run only this subject");
+  run->add_option("--clock", opt->clock, "sim: simulated time; real: the real-time loop")
+      ->check(CLI::IsMember({"sim", "real"}))
+      ->capture_default_str();
+  run->add_option("--max-trials", opt->max_trials, "Stop after this many trials");
+  run->add_flag("--quiet", opt->quiet, "No progress line");
+  run->add_flag("--json", opt->json, "Print the status as JSON when done");
+  run->callback([opt] { runRun(*opt); });
+
+  auto* status = study->add_subcommand("status", "Trials completed and interrupted, and each subject's next trial");
+  status->add_option("--db", opt->db, "Study database")->required();
+  status->add_flag("--json", opt->json,
+                   "Print JSON: subjects [{id, mode_order, trials, completed, next}], trials_total, trials_completed, "
+                   "trials_interrupted");
+  status->callback([opt] { runStatus(*opt); });
+
+  auto* exp = study->add_subcommand("export", "Write the study as files: definition, experts, trials table, one CSV per trial");
+  exp->add_option("--db", opt->db, "Study database")->required();
+  exp->add_option("--out", opt->out, "Folder to create")->required();
+  exp->callback([opt] { runExport(*opt); });
+
+  auto* imp = study->add_subcommand("import", "Create a study database from an export folder");
+  imp->add_option("FOLDER", opt->from, "Export folder")->required();
+  imp->add_option("--db", opt->db, "Study database to create")->required();
+  imp->callback([opt] { runImport(*opt); });
+
+  auto* analyze = study->add_subcommand(
+      "analyze", "DTW costs of every recall trial against the expert, ANOVAs, Tukey HSD and Table 1; stored in the database");
+  analyze->add_option("--db", opt->db, "Study database")->required();
+  analyze->add_option("--out", opt->out, "Also write recall_costs.csv, anova.csv, table1.csv here");
+  analyze->add_option("--band", opt->band, "Sakoe–Chiba band fraction for DTW (default: none, the paper's)")
+      ->check(CLI::Range(0.0, 1.0));
+  analyze->add_flag("--json", opt->json, "Print the whole analysis as JSON");
+  analyze->callback([opt] { runAnalyze(*opt); });
+
+  auto* rep = study->add_subcommand("report", "Analyze and write report.html (self-contained) and report.md with figures");
+  rep->add_option("--db", opt->db, "Study database")->required();
+  rep->add_option("--out", opt->out, "Folder for the report")->required();
+  rep->add_option("--band", opt->band, "Sakoe–Chiba band fraction for DTW (default: none)")->check(CLI::Range(0.0, 1.0));
+  rep->callback([opt] { runReport(*opt); });
+
+  auto* example = study->add_subcommand("example", "Print an example study file");
+  example->callback([] { std::cout << session::exampleStudyJson(); });
+}
+
+}  // namespace hattr::cli

@@ -1,0 +1,72 @@
+#pragma once
+/// The paper's evaluation of a study (its sections 5.1 and 6): for every recall trial, the
+/// DTW cost against the expert of the trajectory (x, y, z) and of the haptic profile
+/// (fx, fy, fz), after the paper's preprocessing; per metric, an ANOVA per mode with factors
+/// trial and subject (the "effect of training" and the "difference between subjects"), the
+/// overall mode × subject ANOVA (subject random: mode tested against mode × subject), Tukey
+/// HSD between modes, per-mode mean and variance, inter-subject variance, and each subject's
+/// best mode (the paper's Table 1). Offline code.
+
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "hattr/analysis/anova.hpp"
+#include "hattr/analysis/dtw.hpp"
+#include "hattr/analysis/preprocess.hpp"
+#include "hattr/session/study_database.hpp"
+
+namespace hattr::report {
+
+struct AnalysisOptions {
+  analysis::Normalization normalization = analysis::Normalization::kPaper;
+  analysis::DtwCost cost = analysis::DtwCost::kAbsolute;
+  double band_fraction = -1.0;  ///< Sakoe–Chiba band (negative: none, the paper's)
+  unsigned threads = 2;
+};
+
+/// One recall trial's costs against the expert.
+struct TrialCost {
+  std::int64_t trial_id = 0;
+  std::string subject;
+  std::string mode;          ///< "BASIC", "PCONTROL", "ALPHA"
+  int trial = 0;             ///< recall trial number, from 1
+  std::array<double, 3> position{};  ///< DTW cost of x, y, z
+  std::array<double, 3> force{};     ///< DTW cost of fx, fy, fz
+  [[nodiscard]] double trajectory() const { return position[0] + position[1] + position[2]; }
+  [[nodiscard]] double forceProfile() const { return force[0] + force[1] + force[2]; }
+};
+
+/// Everything computed for one metric.
+struct MetricResult {
+  std::string metric;                                      ///< "trajectory" or "force"
+  std::map<std::string, analysis::AnovaTable> per_mode;    ///< mode -> trial × subject ANOVA
+  analysis::AnovaTable overall;                            ///< mode × subject, subject random
+  std::optional<analysis::TukeyResult> tukey;              ///< between modes (error: mode × subject)
+  std::vector<analysis::GroupStats> per_mode_stats;        ///< mean, variance, sd per mode
+  std::vector<analysis::LevelVariance> inter_subject;      ///< per mode
+  std::map<std::string, std::vector<double>> mean_by_trial;  ///< mode -> mean cost per recall trial
+  std::map<std::string, std::string> best_mode;            ///< subject -> mode with the lowest mean cost
+};
+
+struct StudyAnalysis {
+  AnalysisOptions options;
+  std::vector<TrialCost> costs;
+  MetricResult trajectory;
+  MetricResult force;
+};
+
+/// Analyzes every completed recall trial. Throws InputError when the study is not complete
+/// enough for the balanced design (naming the missing trials).
+StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptions& options = {});
+
+nlohmann::json analysisToJson(const StudyAnalysis& analysis);
+/// Stores the analysis in the database (results key "analysis").
+void storeAnalysis(session::StudyDatabase& db, const StudyAnalysis& analysis);
+/// Writes recall_costs.csv, anova.csv and table1.csv into `dir` (created).
+void writeAnalysisCsv(const StudyAnalysis& analysis, const std::filesystem::path& dir);
+
+}  // namespace hattr::report

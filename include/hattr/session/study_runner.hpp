@@ -1,0 +1,73 @@
+#pragma once
+/// Runs a study's protocol: subject → mode (in the subject's counterbalanced order) →
+/// training trials → recall trials, with rests, each trial through runTrial and stored the
+/// moment it ends. The same code runs a simulated trainee, a person at the studio or a
+/// person on a real device: what differs is the Participant.
+
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "hattr/session/study_database.hpp"
+#include "hattr/session/trial.hpp"
+
+namespace hattr::session {
+
+/// Who does the trials.
+class Participant {
+ public:
+  virtual ~Participant() = default;
+  /// The hand that will hold the (simulated) pen in this trial; a person on a real device
+  /// returns a hand whose commands the device ignores.
+  virtual device::HandScript& handForTrial(const TrialPlan& plan) = 0;
+  /// Called once per trial after it is stored (a simulated trainee learns here). Also used
+  /// on resume to replay the completed trials, so it must be deterministic.
+  virtual void trialCompleted(const TrialPlan& plan, const HapticProfile& recorded) = 0;
+  /// The rest between trials (a person sees a countdown; a simulation does nothing).
+  virtual void rest(double /*seconds*/) {}
+  /// A prompt for the person ("Training with ALPHA: trial 3 of 11").
+  virtual void prompt(const std::string& /*text*/) {}
+};
+
+/// Makes the participant for a subject (the app decides which kinds exist).
+using ParticipantFactory =
+    std::function<std::unique_ptr<Participant>(const SubjectRecord& subject, const HapticProfile& expert)>;
+
+/// A participant that plays a hand script from its options ({"hand": "file.csv"}, or the
+/// expert's own profile when absent), with an optional seeded offset drawn per trial
+/// ({"jitter_mm": 0.5}); it does not learn. For tests and scripted demonstrations.
+std::unique_ptr<Participant> makeScriptParticipant(const SubjectRecord& subject, const HapticProfile& expert);
+
+struct RunProgress {
+  std::string subject;
+  int completed = 0;   ///< trials completed for this subject so far
+  int total = 0;
+  const TrialRecord* trial = nullptr;
+};
+
+struct RunOptions {
+  std::string only_subject;                           ///< run only this subject ("" = all)
+  Clock clock = Clock::kSimulated;
+  std::function<void(const RunProgress&)> progress;   ///< after each trial
+  int max_trials = -1;                                ///< stop after this many trials (-1: all)
+};
+
+class StudyRunner {
+ public:
+  /// `db` must be opened with OpenMode::kRunner.
+  StudyRunner(StudyDatabase& db, ParticipantFactory factory);
+  /// Runs every unfinished trial (of one subject, or all), resuming where the study stopped:
+  /// the participant first replays the completed trials. Returns trials run now.
+  int run(const RunOptions& options);
+
+ private:
+  int runSubject(const SubjectRecord& subject, const RunOptions& options, int budget);
+
+  StudyDatabase& db_;
+  ParticipantFactory factory_;
+  std::unique_ptr<TrialEnvironment> environment_;
+  std::shared_ptr<const guidance::ReferenceTrajectory> reference_;
+  HapticProfile expert_;
+};
+
+}  // namespace hattr::session

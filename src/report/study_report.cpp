@@ -1,0 +1,289 @@
+#include "hattr/report/study_report.hpp"
+
+#include <algorithm>
+#include <map>
+
+#include <fmt/format.h>
+
+#include "hattr/core/units.hpp"
+#include "hattr/io/profile_csv.hpp"
+#include "svg_plot_internal.hpp"
+
+namespace hattr::report {
+namespace {
+
+using detail::escape;
+using detail::Series;
+using detail::SvgPlot;
+
+/// One colour per mode, the same in every figure.
+std::string modeColour(const std::string& mode) {
+  if (mode == "BASIC") return "#1f77b4";
+  if (mode == "PCONTROL") return "#2ca02c";
+  if (mode == "ALPHA") return "#d62728";
+  return "#7f7f7f";
+}
+
+std::string p(double v) { return std::isfinite(v) ? (v < 0.001 ? "< 0.001" : fmt::format("{:.3f}", v)) : ""; }
+std::string g(double v) { return std::isfinite(v) ? fmt::format("{:.4g}", v) : ""; }
+
+/// A table as Markdown and as HTML at once.
+struct Table {
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+  std::string markdown() const {
+    std::string out = "| " + fmt::format("{}", fmt::join(header, " | ")) + " |\n|";
+    for (std::size_t i = 0; i < header.size(); ++i) out += "---|";
+    out += "\n";
+    for (const auto& r : rows) out += "| " + fmt::format("{}", fmt::join(r, " | ")) + " |\n";
+    return out;
+  }
+  std::string html() const {
+    std::string out = "<table><tr>";
+    for (const auto& h : header) out += "<th>" + escape(h) + "</th>";
+    out += "</tr>\n";
+    for (const auto& r : rows) {
+      out += "<tr>";
+      for (const auto& c : r) out += "<td>" + escape(c) + "</td>";
+      out += "</tr>\n";
+    }
+    return out + "</table>\n";
+  }
+};
+
+Table anovaTable(const analysis::AnovaTable& t) {
+  Table out{{"source", "df", "sum sq", "mean sq", "F", "p", "partial η²", "tested against"}, {}};
+  for (const auto& r : t.rows) {
+    out.rows.push_back({r.source, fmt::format("{}", r.df), g(r.sum_sq), g(r.mean_sq), g(r.f), p(r.p), g(r.partial_eta_sq),
+                        r.error_term});
+  }
+  return out;
+}
+
+const analysis::AnovaRow* findRow(const analysis::AnovaTable& t, const std::string& source) {
+  for (const auto& r : t.rows) {
+    if (r.source == source) return &r;
+  }
+  return nullptr;
+}
+
+/// A document built once, rendered to both Markdown and HTML.
+class Document {
+ public:
+  void heading(const std::string& text, int level = 2) {
+    md_ += fmt::format("\n{} {}\n\n", std::string(static_cast<std::size_t>(level), '#'), text);
+    html_ += fmt::format("<h{0}>{1}</h{0}>\n", level, escape(text));
+  }
+  void paragraph(const std::string& text) {
+    md_ += text + "\n\n";
+    html_ += "<p>" + escape(text) + "</p>\n";
+  }
+  void list(const std::vector<std::string>& items) {
+    html_ += "<ul>";
+    for (const auto& i : items) {
+      md_ += "- " + i + "\n";
+      html_ += "<li>" + escape(i) + "</li>";
+    }
+    md_ += "\n";
+    html_ += "</ul>\n";
+  }
+  void table(const Table& t) {
+    md_ += t.markdown() + "\n";
+    html_ += t.html();
+  }
+  void figure(const std::string& name, const std::string& svg, const std::string& caption,
+              std::map<std::string, std::string>& files) {
+    files["figures/" + name + ".svg"] = svg;
+    md_ += fmt::format("![{}](figures/{}.svg)\n\n*{}*\n\n", caption, name, caption);
+    html_ += fmt::format("<figure>{}<figcaption>{}</figcaption></figure>\n", svg, escape(caption));
+  }
+  const std::string& markdown() const { return md_; }
+  const std::string& html() const { return html_; }
+
+ private:
+  std::string md_;
+  std::string html_;
+};
+
+std::string metricUnit(const std::string& metric) {
+  return metric == "trajectory" ? "DTW cost of x + y + z (normalized units)" : "DTW cost of fx + fy + fz (normalized units)";
+}
+
+}  // namespace
+
+std::vector<std::string> conclusions(const StudyAnalysis& a, double alpha) {
+  std::vector<std::string> out;
+  for (const MetricResult* m : {&a.trajectory, &a.force}) {
+    const std::string what = m->metric == "trajectory" ? "trajectory (shape)" : "haptic-profile (force)";
+    // Which mode had the lowest mean recall cost, and did mode matter?
+    const auto best = std::min_element(m->per_mode_stats.begin(), m->per_mode_stats.end(),
+                                       [](const auto& x, const auto& y) { return x.stats.mean < y.stats.mean; });
+    const analysis::AnovaRow* mode = findRow(m->overall, "mode");
+    const analysis::AnovaRow* error = mode ? findRow(m->overall, mode->error_term) : nullptr;
+    if (mode && error && best != m->per_mode_stats.end()) {
+      const bool significant = mode->p < alpha;
+      out.push_back(fmt::format(
+          "On the {} metric, the lowest mean recall cost was with {} ({:.4g}); the effect of mode was {}significant "
+          "at α = {} (F({}, {}) = {:.3g}, p = {}).",
+          what, best->a_level, best->stats.mean, significant ? "" : "not ", alpha, mode->df, error->df, mode->f, p(mode->p)));
+    }
+    // Subjects differ?
+    if (const analysis::AnovaRow* subject = findRow(m->overall, "subject"); subject && std::isfinite(subject->p)) {
+      out.push_back(fmt::format("Subjects differed {}significantly on the {} metric (p = {}).",
+                                subject->p < alpha ? "" : "not ", what, p(subject->p)));
+    }
+    // Training effect within each mode: the trial factor of the per-mode ANOVA.
+    std::vector<std::string> trained;
+    for (const auto& [mode_name, table] : m->per_mode) {
+      if (const analysis::AnovaRow* trial = findRow(table, "trial"); trial && trial->p < alpha) trained.push_back(mode_name);
+    }
+    out.push_back(trained.empty()
+                      ? fmt::format("No mode showed a significant change over the recall trials on the {} metric.", what)
+                      : fmt::format("Recall trial number had a significant effect on the {} metric in: {}.", what,
+                                    fmt::join(trained, ", ")));
+  }
+  return out;
+}
+
+std::filesystem::path writeStudyReport(const session::StudyDatabase& db, const StudyAnalysis& a,
+                                       const std::filesystem::path& out) {
+  const session::StudyDefinition& study = db.study();
+  std::map<std::string, std::string> files;
+  Document doc;
+  doc.heading(fmt::format("Study report: {}", study.name), 1);
+
+  // Design.
+  const auto subjects = db.subjects();
+  doc.heading("Design");
+  doc.paragraph(fmt::format(
+      "{} subjects learned the skill \"{}\" in {} modes. Per mode: {} training trials ({}), then {} recall trials ({}). "
+      "Device {}, servo rate {} Hz, {} indexing. Costs: {} preprocessing, {} DTW cost, per axis, summed.",
+      subjects.size(), study.skill, study.modes.size(), study.protocol.training_trials,
+      study.protocol.training.guidance ? "with the mode's guidance, reference shown" : "without guidance",
+      study.protocol.recall_trials, study.protocol.recall.show_reference ? "reference shown" : "no guidance, reference hidden",
+      study.device, study.rate_hz, guidance::indexingName(study.indexing),
+      a.options.normalization == analysis::Normalization::kPaper ? "the paper's" : "z-score/none",
+      a.options.cost == analysis::DtwCost::kAbsolute ? "absolute-difference" : "squared"));
+  Table orders{{"subject", "participant", "mode order"}, {}};
+  for (const auto& s : subjects) {
+    std::vector<std::string> names;
+    for (const auto m : s.mode_order) names.emplace_back(guidance::modeName(m));
+    orders.rows.push_back({s.id, s.spec.participant, fmt::format("{}", fmt::join(names, " → "))});
+  }
+  doc.table(orders);
+
+  // Conclusions first, then the numbers behind them.
+  doc.heading("Conclusions");
+  doc.list(conclusions(a));
+
+  // Table 1.
+  doc.heading("Table 1: each subject's best mode");
+  Table table1{{"subject", "best mode, trajectory", "best mode, force profile"}, {}};
+  for (const auto& [subject, mode] : a.trajectory.best_mode) table1.rows.push_back({subject, mode, a.force.best_mode.at(subject)});
+  doc.table(table1);
+
+  // Per metric: ANOVA tables and figures 5/6.
+  for (const MetricResult* m : {&a.trajectory, &a.force}) {
+    const std::string title = m->metric == "trajectory" ? "Trajectory" : "Haptic profile (force)";
+    doc.heading(fmt::format("{}: mode × subject ANOVA (subject random)", title));
+    doc.table(anovaTable(m->overall));
+    if (m->tukey) {
+      Table t{{"comparison", "difference", "95 % lower", "95 % upper", "p adjusted"}, {}};
+      for (const auto& c : m->tukey->comparisons) t.rows.push_back({c.comparison, g(c.diff), g(c.lower), g(c.upper), p(c.p_adjusted)});
+      doc.paragraph(fmt::format("Tukey HSD between modes (error term {}):", m->tukey->error_term));
+      doc.table(t);
+    }
+    doc.heading(fmt::format("{}: per mode, trial × subject ANOVA (effect of training, difference between subjects)", title), 3);
+    for (const auto& [mode, table] : m->per_mode) {
+      doc.paragraph(mode + ":");
+      doc.table(anovaTable(table));
+    }
+
+    // Figure: mean cost per recall trial, per mode.
+    SvgPlot means(fmt::format("{}: mean recall cost per trial", title), "recall trial", metricUnit(m->metric), 600);
+    means.integerX();
+    for (const auto& [mode, values] : m->mean_by_trial) {
+      Series s{mode, modeColour(mode), {}, 2.0, false, true};
+      for (std::size_t i = 0; i < values.size(); ++i) s.points.emplace_back(static_cast<double>(i + 1), values[i]);
+      means.add(s);
+    }
+    doc.figure(m->metric + "_mean_by_trial", means.svg(),
+               fmt::format("Mean {} cost over subjects for each recall trial, per mode (the paper's figures 5 and 6).", m->metric),
+               files);
+    // Figure: mean and inter-subject variance per mode.
+    std::vector<detail::Bar> mean_bars, var_bars;
+    for (const auto& gs : m->per_mode_stats) mean_bars.push_back({gs.a_level, modeColour(gs.a_level), gs.stats.mean});
+    for (const auto& v : m->inter_subject) var_bars.push_back({v.level, modeColour(v.level), v.variance});
+    SvgPlot mean_plot(fmt::format("{}: mean recall cost per mode", title), "mode", metricUnit(m->metric), 420, 300);
+    mean_plot.bars(mean_bars);
+    doc.figure(m->metric + "_mean_per_mode", mean_plot.svg(), fmt::format("Mean {} cost per mode over all recall trials.", m->metric), files);
+    SvgPlot var_plot(fmt::format("{}: inter-subject variance per mode", title), "mode", "variance of subject means", 420, 300);
+    var_plot.bars(var_bars);
+    doc.figure(m->metric + "_variance_per_mode", var_plot.svg(),
+               fmt::format("Variance over subjects of each subject's mean {} cost, per mode.", m->metric), files);
+  }
+
+  // Figure 3: haptic profiles over time; and trajectories over the expert's.
+  const HapticProfile expert = db.expert(study.skill);
+  std::map<std::string, const TrialCost*> last_recall;  // "subject/mode" -> its last recall trial
+  for (const auto& c : a.costs) {
+    auto& slot = last_recall[c.subject + "/" + c.mode];
+    if (!slot || c.trial > slot->trial) slot = &c;
+  }
+  const std::string first_subject = subjects.empty() ? "" : subjects.front().id;
+  doc.heading("Haptic profiles and trajectories");
+  const char* axes[] = {"fx", "fy", "fz"};
+  for (int k = 0; k < 3; ++k) {
+    SvgPlot plot(fmt::format("Force {} over time: expert and {}'s last recall trials", axes[k], first_subject), "time [s]",
+                 fmt::format("{} [N] (force on the paper)", axes[k]), 640);
+    Series e{"expert", "#000000", {}, 2.0};
+    for (const Sample& s : expert.samples()) e.points.emplace_back(s.t_s, channelValue(s, *channelFromName(axes[k])));
+    plot.add(e);
+    for (const auto& [key, cost] : last_recall) {
+      if (cost->subject != first_subject) continue;
+      const HapticProfile trial = db.trialProfile(cost->trial_id);
+      Series s{cost->mode, modeColour(cost->mode), {}, 1.2};
+      for (const Sample& x : trial.samples()) s.points.emplace_back(x.t_s, channelValue(x, *channelFromName(axes[k])));
+      plot.add(s);
+    }
+    doc.figure(fmt::format("profile_{}", axes[k]), plot.svg(),
+               fmt::format("The expert's {} and one subject's last recall trial in each mode (the paper's figure 3).", axes[k]),
+               files);
+  }
+  for (const auto mode : study.modes) {
+    const std::string name(guidance::modeName(mode));
+    SvgPlot plot(fmt::format("Recall trajectories after {} training", name), "x [mm]", "y [mm]", 560, 420);
+    plot.equalAspect();
+    Series e{"expert", "#000000", {}, 2.5};
+    for (const Sample& s : expert.samples()) {
+      if (s.pen_down) e.points.emplace_back(units::metresToMillimetres(s.p_WT.x()), units::metresToMillimetres(s.p_WT.y()));
+    }
+    for (const auto& [key, cost] : last_recall) {
+      if (cost->mode != name) continue;
+      const HapticProfile trial = db.trialProfile(cost->trial_id);
+      Series s{name + " subjects", modeColour(name), {}, 1.0};
+      for (const Sample& x : trial.samples()) {
+        if (x.pen_down) s.points.emplace_back(units::metresToMillimetres(x.p_WT.x()), units::metresToMillimetres(x.p_WT.y()));
+      }
+      plot.add(s);
+    }
+    plot.add(e);
+    doc.figure(fmt::format("trajectories_{}", name), plot.svg(),
+               fmt::format("Every subject's last recall trajectory after {} training (pen down), over the expert's.", name), files);
+  }
+
+  // Write the files.
+  std::filesystem::create_directories(out / "figures");
+  for (const auto& [name, text] : files) io::writeFileAtomically(out / name, text, io::Overwrite::kReplace);
+  io::writeFileAtomically(out / "report.md", doc.markdown(), io::Overwrite::kReplace);
+  const std::string html = fmt::format(
+      "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title>\n<style>"
+      "body{{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}} table{{border-collapse:collapse;margin:0.5em 0}}"
+      "td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}} th{{background:#f2f2f2}} figure{{margin:1em 0}}"
+      "figcaption{{color:#555;font-size:0.9em}}</style></head><body>\n{}</body></html>\n",
+      escape(study.name), doc.html());
+  io::writeFileAtomically(out / "report.html", html, io::Overwrite::kReplace);
+  return out / "report.html";
+}
+
+}  // namespace hattr::report

@@ -1,0 +1,149 @@
+#include "svg_plot_internal.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
+namespace hattr::report::detail {
+namespace {
+
+/// "Nice" tick positions covering [lo, hi].
+std::vector<double> ticks(double lo, double hi, bool integers = false) {
+  const double span = hi - lo;
+  const double raw = span / 5.0;
+  const double magnitude = std::pow(10.0, std::floor(std::log10(raw)));
+  const double norm = raw / magnitude;
+  double step = (norm < 1.5 ? 1.0 : norm < 3.0 ? 2.0 : norm < 7.0 ? 5.0 : 10.0) * magnitude;
+  if (integers) step = std::max(1.0, std::round(step));
+  std::vector<double> out;
+  for (double t = std::ceil(lo / step) * step; t <= hi + step * 1e-9; t += step) out.push_back(std::abs(t) < step * 1e-9 ? 0.0 : t);
+  return out;
+}
+
+std::string number(double v) { return fmt::format("{:.4g}", v); }
+
+}  // namespace
+
+std::string escape(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+SvgPlot::SvgPlot(std::string title, std::string x_label, std::string y_label, int width, int height)
+    : title_(std::move(title)), x_label_(std::move(x_label)), y_label_(std::move(y_label)), width_(width), height_(height) {}
+
+std::string SvgPlot::svg() const {
+  // Plot area inside margins for the title, labels and legend.
+  const double left = 70, right = bars_.empty() ? 190 : 20, top = 34, bottom = 50;
+  const double pw = width_ - left - right, ph = height_ - top - bottom;
+
+  // Data ranges (bars: categories 0..n-1 and values from 0).
+  double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
+  for (const auto& s : series_) {
+    for (const auto& [x, y] : s.points) {
+      if (!std::isfinite(x) || !std::isfinite(y)) continue;
+      x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    }
+  }
+  if (!bars_.empty()) {
+    x0 = -0.5, x1 = static_cast<double>(bars_.size()) - 0.5, y0 = std::min(0.0, y0), y1 = std::max(y1, 0.0);
+    for (const auto& b : bars_) y0 = std::min(y0, b.value), y1 = std::max(y1, b.value);
+  }
+  if (!std::isfinite(x0)) x0 = 0, x1 = 1, y0 = 0, y1 = 1;
+  if (x1 - x0 < 1e-12) x0 -= 0.5, x1 += 0.5;
+  if (y1 - y0 < 1e-12) y0 -= 0.5, y1 += 0.5;
+  const double pad = 0.05 * (y1 - y0);
+  y0 -= bars_.empty() ? pad : 0.0;
+  y1 += pad;
+  double sx = pw / (x1 - x0), sy = ph / (y1 - y0);
+  if (equal_aspect_) {
+    const double s = std::min(sx, sy);
+    x1 = x0 + pw / s, y1 = y0 + ph / s, sx = sy = s;
+  }
+  const auto X = [&](double x) { return left + (x - x0) * sx; };
+  const auto Y = [&](double y) { return top + ph - (y - y0) * sy; };
+
+  std::string out = fmt::format(
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" viewBox=\"0 0 {} {}\" "
+      "font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
+      "<text x=\"{}\" y=\"18\" font-size=\"13\" font-weight=\"bold\">{}</text>\n",
+      width_, height_, width_, height_, left, escape(title_));
+
+  // Axes, ticks and grid.
+  for (const double t : ticks(y0, y1)) {
+    out += fmt::format("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#e4e4e4\"/>"
+                       "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"end\">{}</text>\n",
+                       left, Y(t), left + pw, Y(t), left - 6, Y(t) + 4, number(t));
+  }
+  if (bars_.empty()) {
+    for (const double t : ticks(x0, x1, integer_x_)) {
+      out += fmt::format("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#e4e4e4\"/>"
+                         "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n",
+                         X(t), top, X(t), top + ph, X(t), top + ph + 16, number(t));
+    }
+  }
+  out += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#555\"/>\n", left, top, pw, ph);
+  out += fmt::format("<text x=\"{:.1f}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n", left + pw / 2, height_ - 10,
+                     escape(x_label_));
+  out += fmt::format("<text transform=\"translate(16,{:.1f}) rotate(-90)\" text-anchor=\"middle\">{}</text>\n",
+                     top + ph / 2, escape(y_label_));
+
+  // Bars.
+  for (std::size_t i = 0; i < bars_.size(); ++i) {
+    const double x = static_cast<double>(i);
+    const double y_top = Y(std::max(bars_[i].value, 0.0)), y_base = Y(std::min(bars_[i].value, 0.0));
+    out += fmt::format("<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" fill=\"{}\"/>"
+                       "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>"
+                       "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\" font-size=\"10\">{}</text>\n",
+                       X(x - 0.3), y_top, 0.6 * sx, std::max(1.0, y_base - y_top), bars_[i].colour, X(x), top + ph + 16,
+                       escape(bars_[i].label), X(x), y_top - 4, number(bars_[i].value));
+  }
+
+  // Lines and markers, clipped to the plot area.
+  out += fmt::format("<clipPath id=\"c\"><rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"/></clipPath><g clip-path=\"url(#c)\">\n",
+                     left, top, pw, ph);
+  for (const auto& s : series_) {
+    std::string points;
+    for (const auto& [x, y] : s.points) {
+      if (std::isfinite(x) && std::isfinite(y)) points += fmt::format("{:.1f},{:.1f} ", X(x), Y(y));
+    }
+    out += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"{}\"{} points=\"{}\"/>\n", s.colour, s.width,
+                       s.dashed ? " stroke-dasharray=\"5,3\"" : "", points);
+    if (s.markers) {
+      for (const auto& [x, y] : s.points) {
+        if (std::isfinite(x) && std::isfinite(y)) {
+          out += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.5\" fill=\"{}\"/>", X(x), Y(y), s.colour);
+        }
+      }
+      out += "\n";
+    }
+  }
+  out += "</g>\n";
+
+  // Legend, one entry per distinct label.
+  std::vector<std::string> seen;
+  double ly = top + 8;
+  for (const auto& s : series_) {
+    if (s.label.empty() || std::find(seen.begin(), seen.end(), s.label) != seen.end()) continue;
+    seen.push_back(s.label);
+    out += fmt::format("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"{}\" stroke-width=\"3\"{}/>"
+                       "<text x=\"{:.1f}\" y=\"{:.1f}\">{}</text>\n",
+                       left + pw + 12, ly, left + pw + 32, ly, s.colour, s.dashed ? " stroke-dasharray=\"5,3\"" : "",
+                       left + pw + 38, ly + 4, escape(s.label));
+    ly += 16;
+  }
+  return out + "</svg>\n";
+}
+
+}  // namespace hattr::report::detail

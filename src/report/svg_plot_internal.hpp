@@ -1,0 +1,50 @@
+#pragma once
+// A small SVG plot for the study report: axes with ticks, labels with units, a legend, lines,
+// points and bars. Self-contained SVG text, no scripts, no network.
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace hattr::report::detail {
+
+struct Series {
+  std::string label;
+  std::string colour;  ///< CSS colour
+  std::vector<std::pair<double, double>> points;
+  double width = 1.5;
+  bool dashed = false;
+  bool markers = false;
+};
+
+struct Bar {
+  std::string label;   ///< category under the bar
+  std::string colour;
+  double value;
+};
+
+class SvgPlot {
+ public:
+  SvgPlot(std::string title, std::string x_label, std::string y_label, int width = 560, int height = 340);
+  void add(Series series) { series_.push_back(std::move(series)); }
+  /// Same scale on both axes (for trajectories drawn on the paper).
+  void equalAspect() { equal_aspect_ = true; }
+  /// x takes integer values only (trial numbers): ticks at integers.
+  void integerX() { integer_x_ = true; }
+  /// Bars instead of lines (categories along x).
+  void bars(std::vector<Bar> bars) { bars_ = std::move(bars); }
+  [[nodiscard]] std::string svg() const;
+
+ private:
+  std::string title_, x_label_, y_label_;
+  int width_, height_;
+  bool equal_aspect_ = false;
+  bool integer_x_ = false;
+  std::vector<Series> series_;
+  std::vector<Bar> bars_;
+};
+
+/// Escapes text for XML/HTML.
+std::string escape(const std::string& text);
+
+}  // namespace hattr::report::detail

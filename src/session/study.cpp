@@ -1,0 +1,343 @@
+#include "hattr/session/study.hpp"
+
+#include <algorithm>
+#include <fstream>
+#include <numeric>
+#include <random>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "hattr/core/error.hpp"
+
+namespace hattr::session {
+namespace {
+
+using nlohmann::json;
+
+/// Collects every problem of a study file before reporting them together.
+class Problems {
+ public:
+  explicit Problems(std::string_view source) : source_(source) {}
+  void add(std::string text) { lines_.push_back(std::move(text)); }
+  void throwIfAny() const {
+    if (lines_.empty()) return;
+    std::string message = fmt::format("{}: {} problem{} in the study definition:", source_, lines_.size(),
+                                      lines_.size() == 1 ? "" : "s");
+    for (const auto& l : lines_) message += "\n  - " + l;
+    throw InputError(message);
+  }
+
+ private:
+  std::string source_;
+  std::vector<std::string> lines_;
+};
+
+/// Reads a number key within a range, noting a problem instead of throwing.
+template <typename T>
+void readNumber(const json& object, const char* key, T& value, double lo, double hi, const std::string& where,
+                Problems& problems) {
+  const auto it = object.find(key);
+  if (it == object.end()) return;
+  const bool integral = std::is_integral_v<T>;
+  if (!it->is_number() || (integral && !it->is_number_integer()) || it->get<double>() < lo || it->get<double>() > hi) {
+    problems.add(fmt::format("{}{}: expected {} in [{}, {}], got {}", where, key, integral ? "an integer" : "a number",
+                             lo, hi, it->dump()));
+    return;
+  }
+  value = it->get<T>();
+}
+
+void readPhaseView(const json& object, const char* key, PhaseView& view, Problems& problems) {
+  const auto it = object.find(key);
+  if (it == object.end()) return;
+  if (!it->is_object()) {
+    problems.add(fmt::format("protocol.{}: expected an object {{\"show_reference\": bool, \"guidance\": bool}}", key));
+    return;
+  }
+  for (const auto& item : it->items()) {
+    bool* target = item.key() == "show_reference" ? &view.show_reference : item.key() == "guidance" ? &view.guidance : nullptr;
+    if (!target) {
+      problems.add(fmt::format("protocol.{}: unknown key \"{}\": expected show_reference, guidance", key, item.key()));
+    } else if (!item.value().is_boolean()) {
+      problems.add(fmt::format("protocol.{}.{}: expected true or false, got {}", key, item.key(), item.value().dump()));
+    } else {
+      *target = item.value().get<bool>();
+    }
+  }
+}
+
+}  // namespace
+
+std::string_view phaseName(Phase phase) { return phase == Phase::kTraining ? "training" : "recall"; }
+
+StudyDefinition parseStudy(std::string_view json_text, std::string_view source, const std::filesystem::path& base_dir,
+                           bool check_files) {
+  json root;
+  try {
+    root = json::parse(json_text);
+  } catch (const json::parse_error& e) {
+    throw InputError(fmt::format("{}: not valid JSON: {}", source, e.what()));
+  }
+  HATTR_THROW_UNLESS(root.is_object(), "{}: expected a JSON object, got {}", source, root.type_name());
+  Problems problems(source);
+  StudyDefinition study;
+
+  static const std::set<std::string> kKeys{"format", "name",  "skill",   "experts",  "modes",    "protocol", "order",
+                                           "device", "world", "rate_hz", "indexing", "subjects"};
+  for (const auto& item : root.items()) {
+    if (!kKeys.contains(item.key())) problems.add(fmt::format("unknown key \"{}\"", item.key()));
+  }
+  if (const auto f = root.find("format"); f != root.end() && *f != "hattr-study/1") {
+    problems.add(fmt::format("format: expected \"hattr-study/1\", got {}", f->dump()));
+  }
+
+  // Name, skill, experts.
+  const auto text = [&](const char* key, std::string& out, bool required) {
+    const auto it = root.find(key);
+    if (it == root.end()) {
+      if (required) problems.add(fmt::format("{}: missing (a string)", key));
+    } else if (!it->is_string() || it->get<std::string>().empty()) {
+      problems.add(fmt::format("{}: expected a non-empty string, got {}", key, it->dump()));
+    } else {
+      out = it->get<std::string>();
+    }
+  };
+  text("name", study.name, true);
+  text("skill", study.skill, true);
+  text("device", study.device, false);
+  if (const auto it = root.find("experts"); it == root.end() || !it->is_object() || it->empty()) {
+    problems.add("experts: expected an object {\"skill\": \"expert.csv\", ...} with at least one entry");
+  } else {
+    for (const auto& item : it->items()) {
+      if (!item.value().is_string()) {
+        problems.add(fmt::format("experts.{}: expected a file name, got {}", item.key(), item.value().dump()));
+        continue;
+      }
+      std::filesystem::path file = item.value().get<std::string>();
+      if (file.is_relative()) file = base_dir / file;
+      if (check_files && !std::filesystem::is_regular_file(file)) {
+        problems.add(fmt::format("experts.{}: expert file \"{}\" not found", item.key(), file.string()));
+      }
+      study.experts[item.key()] = file;
+    }
+    if (!study.skill.empty() && !study.experts.contains(study.skill)) {
+      problems.add(fmt::format("skill \"{}\": no expert reference for it in experts", study.skill));
+    }
+  }
+
+  // Modes.
+  if (const auto it = root.find("modes"); it != root.end()) {
+    if (!it->is_array() || it->empty()) problems.add("modes: expected a non-empty list such as [\"basic\", \"pcontrol\", \"alpha\"]");
+    std::set<guidance::TrainingMode> seen;
+    for (const auto& m : it->is_array() ? *it : json::array()) {
+      try {
+        const auto mode = guidance::parseMode(m.is_string() ? m.get<std::string>() : m.dump());
+        if (!seen.insert(mode).second) problems.add(fmt::format("modes: {} listed twice", m.dump()));
+        study.modes.push_back(mode);
+      } catch (const InputError& e) {
+        problems.add(fmt::format("modes: {}", e.what()));
+      }
+    }
+  } else {
+    study.modes = {guidance::TrainingMode::kBasic, guidance::TrainingMode::kPositionControl,
+                   guidance::TrainingMode::kForceControl};
+  }
+
+  // Protocol.
+  if (const auto it = root.find("protocol"); it != root.end()) {
+    if (!it->is_object()) {
+      problems.add("protocol: expected an object");
+    } else {
+      static const std::set<std::string> kProtocolKeys{"training_trials", "recall_trials", "rest_s", "tail_s", "training", "recall"};
+      for (const auto& item : it->items()) {
+        if (!kProtocolKeys.contains(item.key())) problems.add(fmt::format("protocol: unknown key \"{}\"", item.key()));
+      }
+      Protocol& p = study.protocol;
+      readNumber(*it, "training_trials", p.training_trials, 0, 1000, "protocol.", problems);
+      readNumber(*it, "recall_trials", p.recall_trials, 0, 1000, "protocol.", problems);
+      readNumber(*it, "rest_s", p.rest_s, 0.0, 3600.0, "protocol.", problems);
+      readNumber(*it, "tail_s", p.tail_s, 0.0, 60.0, "protocol.", problems);
+      readPhaseView(*it, "training", p.training, problems);
+      readPhaseView(*it, "recall", p.recall, problems);
+      if (p.training_trials + p.recall_trials == 0) problems.add("protocol: zero trials per mode (training_trials + recall_trials)");
+    }
+  }
+
+  // Order, rate, indexing, world.
+  if (const auto it = root.find("order"); it != root.end()) {
+    const std::string kind = it->is_object() && it->contains("kind") && (*it)["kind"].is_string() ? (*it)["kind"].get<std::string>() : "";
+    if (kind == "latin-square") study.order = OrderKind::kLatinSquare;
+    else if (kind == "fixed") study.order = OrderKind::kFixed;
+    else if (kind == "random") study.order = OrderKind::kRandom;
+    else problems.add(fmt::format("order: expected {{\"kind\": \"latin-square\" | \"fixed\" | \"random\", \"seed\": N}}, got {}", it->dump()));
+    if (it->is_object()) readNumber(*it, "seed", study.order_seed, 0, 9.0e15, "order.", problems);
+  }
+  readNumber(root, "rate_hz", study.rate_hz, 1.0, 10'000.0, "", problems);
+  if (const auto it = root.find("indexing"); it != root.end()) {
+    try {
+      study.indexing = guidance::parseIndexing(it->is_string() ? it->get<std::string>() : it->dump());
+    } catch (const InputError& e) {
+      problems.add(e.what());
+    }
+  }
+  if (const auto it = root.find("world"); it != root.end()) {
+    if (!it->is_object()) problems.add("world: expected a world configuration object (docs/rendering.md)");
+    else study.world = *it;
+  }
+
+  // Subjects: a list, or {"count": N, "prefix": "S", "participant": "simulated"}.
+  const auto subjects = root.find("subjects");
+  if (subjects == root.end()) {
+    problems.add("subjects: missing (a list of {\"id\": ...} or {\"count\": N})");
+  } else if (subjects->is_object()) {
+    int count = 0;
+    std::string prefix = subjects->value("prefix", std::string("S"));
+    readNumber(*subjects, "count", count, 1, 10'000, "subjects.", problems);
+    const std::string participant = subjects->value("participant", std::string("simulated"));
+    for (int i = 1; i <= count; ++i) {
+      study.subjects.push_back({fmt::format("{}{:02}", prefix, i), participant, static_cast<std::uint64_t>(i),
+                                subjects->value("options", json::object())});
+    }
+  } else if (subjects->is_array() && !subjects->empty()) {
+    std::set<std::string> ids;
+    for (std::size_t i = 0; i < subjects->size(); ++i) {
+      const json& s = (*subjects)[i];
+      if (!s.is_object() || !s.contains("id") || !s["id"].is_string() || s["id"].get<std::string>().empty()) {
+        problems.add(fmt::format("subjects[{}]: expected an object with a non-empty \"id\"", i));
+        continue;
+      }
+      SubjectSpec spec{s["id"].get<std::string>(), s.value("participant", std::string("simulated")),
+                       static_cast<std::uint64_t>(i + 1), s.value("options", json::object())};
+      readNumber(s, "seed", spec.seed, 0, 9.0e15, fmt::format("subjects[{}].", i), problems);
+      if (!ids.insert(spec.id).second) problems.add(fmt::format("subjects[{}]: id \"{}\" used twice", i, spec.id));
+      study.subjects.push_back(std::move(spec));
+    }
+  } else {
+    problems.add("subjects: expected a non-empty list or {\"count\": N}");
+  }
+  for (const auto& s : study.subjects) {
+    if (s.participant != "simulated" && s.participant != "script" && s.participant != "person") {
+      problems.add(fmt::format("subject {}: participant \"{}\": expected simulated, script or person", s.id, s.participant));
+    }
+  }
+  problems.throwIfAny();
+  return study;
+}
+
+StudyDefinition loadStudy(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  HATTR_THROW_UNLESS(in.good(), "{}: cannot open for reading", file.string());
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parseStudy(text.str(), file.string(), file.parent_path());
+}
+
+nlohmann::json studyToJson(const StudyDefinition& s) {
+  json experts = json::object();
+  for (const auto& [skill, file] : s.experts) experts[skill] = file.string();
+  json modes = json::array();
+  for (const auto m : s.modes) modes.push_back(std::string(guidance::modeName(m)));
+  const auto view = [](const PhaseView& v) { return json{{"show_reference", v.show_reference}, {"guidance", v.guidance}}; };
+  json subjects = json::array();
+  for (const auto& sub : s.subjects) {
+    subjects.push_back({{"id", sub.id}, {"participant", sub.participant}, {"seed", sub.seed}, {"options", sub.options}});
+  }
+  const char* order = s.order == OrderKind::kLatinSquare ? "latin-square" : s.order == OrderKind::kFixed ? "fixed" : "random";
+  return {{"format", "hattr-study/1"},
+          {"name", s.name},
+          {"skill", s.skill},
+          {"experts", experts},
+          {"modes", modes},
+          {"protocol",
+           {{"training_trials", s.protocol.training_trials},
+            {"recall_trials", s.protocol.recall_trials},
+            {"rest_s", s.protocol.rest_s},
+            {"tail_s", s.protocol.tail_s},
+            {"training", view(s.protocol.training)},
+            {"recall", view(s.protocol.recall)}}},
+          {"order", {{"kind", order}, {"seed", s.order_seed}}},
+          {"device", s.device},
+          {"world", s.world},
+          {"rate_hz", s.rate_hz},
+          {"indexing", std::string(guidance::indexingName(s.indexing))},
+          {"subjects", subjects}};
+}
+
+std::string exampleStudyJson() {
+  return R"({
+  "format": "hattr-study/1",
+  "name": "Na: three training modes",
+  "skill": "na",
+  "experts": {"na": "expert.csv"},
+  "modes": ["basic", "pcontrol", "alpha"],
+  "protocol": {
+    "training_trials": 11,
+    "recall_trials": 11,
+    "rest_s": 10,
+    "tail_s": 0.5,
+    "training": {"show_reference": true, "guidance": true},
+    "recall": {"show_reference": false, "guidance": false}
+  },
+  "order": {"kind": "latin-square"},
+  "device": "sim://pen",
+  "world": {"relief": {"kind": "grain"}},
+  "rate_hz": 1000,
+  "indexing": "time",
+  "subjects": {"count": 10, "prefix": "S", "participant": "simulated"}
+}
+)";
+}
+
+std::vector<std::vector<guidance::TrainingMode>> modeOrders(const StudyDefinition& study) {
+  const std::size_t n = study.modes.size();
+  std::vector<std::vector<guidance::TrainingMode>> sequences;
+  if (study.order == OrderKind::kLatinSquare) {
+    // Williams design: first row 0, 1, n-1, 2, n-2, ...; row r adds r (mod n). For odd n
+    // the mirrored square follows, so every mode precedes every other equally often.
+    std::vector<std::size_t> first;
+    for (std::size_t k = 0, lo = 1, hi = n - 1; k < n; ++k) {
+      first.push_back(k == 0 ? 0 : (k % 2 == 1 ? lo++ : hi--));
+    }
+    for (std::size_t r = 0; r < n; ++r) {
+      std::vector<guidance::TrainingMode> row;
+      for (const std::size_t c : first) row.push_back(study.modes[(c + r) % n]);
+      sequences.push_back(row);
+    }
+    if (n % 2 == 1) {
+      for (std::size_t r = 0; r < n; ++r) sequences.emplace_back(sequences[r].rbegin(), sequences[r].rend());
+    }
+  }
+  std::vector<std::vector<guidance::TrainingMode>> orders;
+  std::mt19937_64 rng(study.order_seed);
+  for (std::size_t s = 0; s < study.subjects.size(); ++s) {
+    switch (study.order) {
+      case OrderKind::kLatinSquare: orders.push_back(sequences[s % sequences.size()]); break;
+      case OrderKind::kFixed: orders.push_back(study.modes); break;
+      case OrderKind::kRandom: {
+        auto order = study.modes;
+        for (std::size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[rng() % i]);  // portable shuffle
+        orders.push_back(order);
+        break;
+      }
+    }
+  }
+  return orders;
+}
+
+std::vector<TrialPlan> planTrials(const StudyDefinition& study, const std::string& subject,
+                                  const std::vector<guidance::TrainingMode>& order) {
+  std::vector<TrialPlan> plan;
+  for (const auto mode : order) {
+    for (int i = 1; i <= study.protocol.training_trials; ++i) {
+      plan.push_back({subject, static_cast<int>(plan.size()), mode, Phase::kTraining, i, study.protocol.training});
+    }
+    for (int i = 1; i <= study.protocol.recall_trials; ++i) {
+      plan.push_back({subject, static_cast<int>(plan.size()), mode, Phase::kRecall, i, study.protocol.recall});
+    }
+  }
+  return plan;
+}
+
+}  // namespace hattr::session

@@ -1,0 +1,503 @@
+#include "hattr/session/study_database.hpp"
+
+#include <fcntl.h>
+#include <sqlite3.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <bit>
+#include <cstring>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "hattr/core/error.hpp"
+#include "hattr/io/profile_csv.hpp"
+
+namespace hattr::session {
+namespace {
+
+using nlohmann::json;
+
+// ---- A thin RAII layer over the SQLite C API --------------------------------------------
+
+class Statement {
+ public:
+  Statement(sqlite3* db, std::string_view sql) : db_(db) {
+    if (sqlite3_prepare_v2(db, sql.data(), static_cast<int>(sql.size()), &stmt_, nullptr) != SQLITE_OK) {
+      throw Error(fmt::format("study database: cannot prepare \"{}\": {}", sql, sqlite3_errmsg(db)));
+    }
+  }
+  ~Statement() { sqlite3_finalize(stmt_); }
+  Statement(const Statement&) = delete;
+  Statement& operator=(const Statement&) = delete;
+
+  Statement& bind(int i, std::int64_t v) { return check(sqlite3_bind_int64(stmt_, i, v)); }
+  Statement& bind(int i, int v) { return check(sqlite3_bind_int(stmt_, i, v)); }
+  Statement& bind(int i, double v) { return check(sqlite3_bind_double(stmt_, i, v)); }
+  Statement& bind(int i, std::string_view v) {
+    return check(sqlite3_bind_text(stmt_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT));
+  }
+  Statement& bindBlob(int i, std::string_view v) {
+    return check(sqlite3_bind_blob64(stmt_, i, v.data(), v.size(), SQLITE_TRANSIENT));
+  }
+  /// Steps once: true if a row is available.
+  bool step() {
+    const int rc = sqlite3_step(stmt_);
+    if (rc == SQLITE_ROW) return true;
+    if (rc == SQLITE_DONE) return false;
+    throw Error(fmt::format("study database: {}", sqlite3_errmsg(db_)));
+  }
+  void run() {
+    while (step()) {
+    }
+  }
+  std::int64_t integer(int col) const { return sqlite3_column_int64(stmt_, col); }
+  std::string text(int col) const {
+    const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(stmt_, col));
+    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, col))) : std::string();
+  }
+  std::string_view blob(int col) const {
+    const auto* p = static_cast<const char*>(sqlite3_column_blob(stmt_, col));
+    return {p, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, col))};
+  }
+
+ private:
+  Statement& check(int rc) {
+    if (rc != SQLITE_OK) throw Error(fmt::format("study database: bind failed: {}", sqlite3_errmsg(db_)));
+    return *this;
+  }
+  sqlite3* db_;
+  sqlite3_stmt* stmt_ = nullptr;
+};
+
+void exec(sqlite3* db, std::string_view sql) {
+  char* message = nullptr;
+  if (sqlite3_exec(db, std::string(sql).c_str(), nullptr, nullptr, &message) != SQLITE_OK) {
+    const std::string text = message ? message : "unknown error";
+    sqlite3_free(message);
+    throw Error(fmt::format("study database: {}", text));
+  }
+}
+
+/// A transaction that rolls back unless committed.
+class Transaction {
+ public:
+  explicit Transaction(sqlite3* db) : db_(db) { exec(db_, "BEGIN IMMEDIATE"); }
+  ~Transaction() {
+    if (!done_) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+  }
+  void commit() {
+    exec(db_, "COMMIT");
+    done_ = true;
+  }
+
+ private:
+  sqlite3* db_;
+  bool done_ = false;
+};
+
+std::int64_t scalar(sqlite3* db, std::string_view sql) {
+  Statement s(db, sql);
+  return s.step() ? s.integer(0) : 0;
+}
+
+// ---- Schema -----------------------------------------------------------------------------
+
+/// Version 1, as first released: kept verbatim so migrations start from it.
+constexpr std::string_view kSchemaV1 = R"(
+CREATE TABLE study (id INTEGER PRIMARY KEY CHECK (id = 1), name TEXT NOT NULL, definition TEXT NOT NULL,
+                    created_utc TEXT NOT NULL);
+CREATE TABLE experts (skill TEXT PRIMARY KEY, profile_csv TEXT NOT NULL);
+CREATE TABLE subjects (id TEXT PRIMARY KEY, position INTEGER NOT NULL, mode_order TEXT NOT NULL, spec TEXT NOT NULL);
+CREATE TABLE sessions (id INTEGER PRIMARY KEY, subject TEXT NOT NULL REFERENCES subjects(id), started_utc TEXT NOT NULL,
+                       ended_utc TEXT, pid INTEGER NOT NULL, host TEXT NOT NULL);
+CREATE TABLE trials (id INTEGER PRIMARY KEY, subject TEXT NOT NULL REFERENCES subjects(id), sequence INTEGER NOT NULL,
+                     mode TEXT NOT NULL, phase TEXT NOT NULL, trial_index INTEGER NOT NULL,
+                     show_reference INTEGER NOT NULL, guidance INTEGER NOT NULL,
+                     status TEXT NOT NULL DEFAULT 'pending', attempts INTEGER NOT NULL DEFAULT 0,
+                     session INTEGER REFERENCES sessions(id), started_utc TEXT, ended_utc TEXT, outcome TEXT,
+                     metadata TEXT, UNIQUE (subject, sequence));
+CREATE TABLE samples (trial INTEGER PRIMARY KEY REFERENCES trials(id), raw_pressure INTEGER NOT NULL,
+                      raw_tilt INTEGER NOT NULL, sample_count INTEGER NOT NULL, data BLOB NOT NULL);
+)";
+
+/// Migration 1 -> 2: interrupted attempts are counted per trial, and analyses get a table.
+constexpr std::string_view kMigrationV1ToV2 = R"(
+ALTER TABLE trials ADD COLUMN interruptions INTEGER NOT NULL DEFAULT 0;
+CREATE TABLE results (key TEXT PRIMARY KEY, value TEXT NOT NULL, updated_utc TEXT NOT NULL);
+)";
+
+constexpr std::string_view kMigrations[] = {kMigrationV1ToV2};
+
+void migrate(sqlite3* db, int from_version) {
+  for (int v = from_version; v < kStudySchemaVersion; ++v) {
+    Transaction t(db);
+    exec(db, kMigrations[v - 1]);
+    exec(db, fmt::format("PRAGMA user_version = {}", v + 1));
+    t.commit();
+  }
+}
+
+sqlite3* openSqlite(const std::filesystem::path& file, int flags) {
+  sqlite3* db = nullptr;
+  if (sqlite3_open_v2(file.c_str(), &db, flags, nullptr) != SQLITE_OK) {
+    const std::string message = db ? sqlite3_errmsg(db) : "out of memory";
+    sqlite3_close(db);
+    throw InputError(fmt::format("{}: cannot open the study database: {}", file.string(), message));
+  }
+  sqlite3_busy_timeout(db, 5000);
+  return db;
+}
+
+/// The exclusive runner lock: flock on the database file itself (independent of SQLite's
+/// own POSIX locks on Linux). Returns the descriptor, or throws naming the holder.
+int takeRunnerLock(const std::filesystem::path& file, sqlite3* db) {
+  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw Error(fmt::format("{}: cannot open for locking: {}", file.string(), std::strerror(errno)));
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    ::close(fd);
+    std::string holder = "another process";
+    try {
+      Statement s(db, "SELECT pid, host FROM sessions WHERE ended_utc IS NULL ORDER BY id DESC LIMIT 1");
+      if (s.step()) holder = fmt::format("process {} on {}", s.integer(0), s.text(1));
+    } catch (const Error&) {
+    }
+    throw InputError(fmt::format("{}: the study is being run by {}; wait for it to finish or stop it first",
+                                 file.string(), holder));
+  }
+  return fd;
+}
+
+std::string hostName() {
+  char name[256] = {};
+  ::gethostname(name, sizeof name - 1);
+  return name;
+}
+
+TrialStatus parseStatus(const std::string& text) {
+  if (text == "running") return TrialStatus::kRunning;
+  if (text == "completed") return TrialStatus::kCompleted;
+  if (text == "interrupted") return TrialStatus::kInterrupted;
+  return TrialStatus::kPending;
+}
+
+std::vector<Channel> storedChannels(const RawChannels& raw) {
+  std::vector<Channel> channels;
+  for (const auto& info : allChannels()) {
+    if (!info.derived && !needsRawChannel(info.channel, raw)) channels.push_back(info.channel);
+  }
+  return channels;
+}
+
+}  // namespace
+
+std::string_view trialStatusName(TrialStatus status) {
+  switch (status) {
+    case TrialStatus::kPending: return "pending";
+    case TrialStatus::kRunning: return "running";
+    case TrialStatus::kCompleted: return "completed";
+    case TrialStatus::kInterrupted: return "interrupted";
+  }
+  return "?";
+}
+
+// ---- Sample packing -------------------------------------------------------------------------
+
+std::string encodeSamples(const HapticProfile& profile) {
+  static_assert(std::endian::native == std::endian::little, "the samples table stores little-endian doubles");
+  const auto channels = storedChannels(profile.rawChannels());
+  std::string bytes(profile.size() * channels.size() * sizeof(double), '\0');
+  char* out = bytes.data();
+  for (const Sample& s : profile.samples()) {
+    for (const Channel c : channels) {
+      const double v = channelValue(s, c);
+      std::memcpy(out, &v, sizeof v);
+      out += sizeof v;
+    }
+  }
+  return bytes;
+}
+
+std::vector<Sample> decodeSamples(std::string_view bytes, const RawChannels& raw, std::size_t count) {
+  const auto channels = storedChannels(raw);
+  HATTR_THROW_UNLESS(bytes.size() == count * channels.size() * sizeof(double),
+                     "study database: a trial's samples hold {} bytes, expected {} samples × {} channels × 8",
+                     bytes.size(), count, channels.size());
+  std::vector<Sample> samples(count);
+  const char* in = bytes.data();
+  for (Sample& s : samples) {
+    for (const Channel c : channels) {
+      double v = 0.0;
+      std::memcpy(&v, in, sizeof v);
+      in += sizeof v;
+      switch (c) {
+        case Channel::kTime: s.t_s = v; break;
+        case Channel::kX: s.p_WT.x() = v; break;
+        case Channel::kY: s.p_WT.y() = v; break;
+        case Channel::kZ: s.p_WT.z() = v; break;
+        case Channel::kVx: s.v_WT.x() = v; break;
+        case Channel::kVy: s.v_WT.y() = v; break;
+        case Channel::kVz: s.v_WT.z() = v; break;
+        case Channel::kFx: s.f_user_W.x() = v; break;
+        case Channel::kFy: s.f_user_W.y() = v; break;
+        case Channel::kFz: s.f_user_W.z() = v; break;
+        case Channel::kCmdFx: s.f_cmd_W.x() = v; break;
+        case Channel::kCmdFy: s.f_cmd_W.y() = v; break;
+        case Channel::kCmdFz: s.f_cmd_W.z() = v; break;
+        case Channel::kGuideFx: s.f_guide_W.x() = v; break;
+        case Channel::kGuideFy: s.f_guide_W.y() = v; break;
+        case Channel::kGuideFz: s.f_guide_W.z() = v; break;
+        case Channel::kContact: s.in_contact = v != 0.0; break;
+        case Channel::kPenDown: s.pen_down = v != 0.0; break;
+        case Channel::kPressure: s.pressure_raw = v; break;
+        case Channel::kAzimuth: s.tilt_azimuth_rad = v; break;
+        case Channel::kAltitude: s.tilt_altitude_rad = v; break;
+        case Channel::kSpeed:
+        case Channel::kForceMagnitude: break;
+      }
+    }
+  }
+  return samples;
+}
+
+// ---- Opening -------------------------------------------------------------------------------
+
+StudyDatabase::StudyDatabase(std::filesystem::path file, sqlite3* db, int lock_fd)
+    : file_(std::move(file)), db_(db), lock_fd_(lock_fd) {}
+
+StudyDatabase::StudyDatabase(StudyDatabase&& other) noexcept
+    : file_(std::move(other.file_)), db_(std::exchange(other.db_, nullptr)), lock_fd_(std::exchange(other.lock_fd_, -1)),
+      study_(std::move(other.study_)) {}
+
+StudyDatabase& StudyDatabase::operator=(StudyDatabase&& other) noexcept {
+  std::swap(file_, other.file_);
+  std::swap(db_, other.db_);
+  std::swap(lock_fd_, other.lock_fd_);
+  std::swap(study_, other.study_);
+  return *this;
+}
+
+StudyDatabase::~StudyDatabase() {
+  if (db_) sqlite3_close(db_);
+  if (lock_fd_ >= 0) ::close(lock_fd_);
+}
+
+StudyDatabase StudyDatabase::create(const std::filesystem::path& file, const StudyDefinition& study) {
+  HATTR_THROW_UNLESS(!std::filesystem::exists(file), "{}: already exists; refusing to overwrite a study database",
+                     file.string());
+  // Read the experts first: a bad one leaves no half-made file.
+  std::map<std::string, std::string> expert_csv;
+  for (const auto& [skill, path] : study.experts) {
+    std::ostringstream text;
+    io::writeProfileCsv(io::readProfileCsv(path), text);
+    expert_csv[skill] = text.str();
+  }
+  sqlite3* db = openSqlite(file, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+  StudyDatabase database(file, db, -1);
+  exec(db, "PRAGMA journal_mode = WAL");
+  exec(db, "PRAGMA synchronous = FULL");
+  exec(db, "PRAGMA foreign_keys = ON");
+  {
+    Transaction t(db);
+    exec(db, fmt::format("PRAGMA application_id = {}", kStudyApplicationId));
+    exec(db, kSchemaV1);
+    exec(db, "PRAGMA user_version = 1");
+    Statement insert(db, "INSERT INTO study (id, name, definition, created_utc) VALUES (1, ?, ?, ?)");
+    insert.bind(1, study.name).bind(2, studyToJson(study).dump()).bind(3, utcNowIso8601()).run();
+    for (const auto& [skill, csv] : expert_csv) {
+      Statement e(db, "INSERT INTO experts (skill, profile_csv) VALUES (?, ?)");
+      e.bind(1, skill).bind(2, csv).run();
+    }
+    const auto orders = modeOrders(study);
+    for (std::size_t i = 0; i < study.subjects.size(); ++i) {
+      const SubjectSpec& spec = study.subjects[i];
+      json order = json::array();
+      for (const auto m : orders[i]) order.push_back(std::string(guidance::modeName(m)));
+      Statement s(db, "INSERT INTO subjects (id, position, mode_order, spec) VALUES (?, ?, ?, ?)");
+      s.bind(1, spec.id).bind(2, static_cast<int>(i)).bind(3, order.dump())
+          .bind(4, json{{"participant", spec.participant}, {"seed", spec.seed}, {"options", spec.options}}.dump())
+          .run();
+      for (const TrialPlan& p : planTrials(study, spec.id, orders[i])) {
+        Statement tr(db,
+                     "INSERT INTO trials (subject, sequence, mode, phase, trial_index, show_reference, guidance) "
+                     "VALUES (?, ?, ?, ?, ?, ?, ?)");
+        tr.bind(1, p.subject).bind(2, p.sequence).bind(3, guidance::modeName(p.mode)).bind(4, phaseName(p.phase))
+            .bind(5, p.index).bind(6, p.view.show_reference ? 1 : 0).bind(7, p.view.guidance ? 1 : 0).run();
+      }
+    }
+    t.commit();
+  }
+  migrate(db, 1);
+  database.loadDefinition();
+  return database;
+}
+
+StudyDatabase StudyDatabase::open(const std::filesystem::path& file, OpenMode mode) {
+  HATTR_THROW_UNLESS(std::filesystem::is_regular_file(file), "{}: no such study database (create one with `hattr study init`)",
+                     file.string());
+  sqlite3* db = openSqlite(file, mode == OpenMode::kReadOnly ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE);
+  StudyDatabase database(file, db, -1);
+
+  // Is this a hattr study, and one we can read?
+  std::int64_t app_id = 0, version = 0;
+  try {
+    app_id = scalar(db, "PRAGMA application_id");
+    version = scalar(db, "PRAGMA user_version");
+  } catch (const Error&) {
+    throw InputError(fmt::format("{}: not a hattr study database (not an SQLite file)", file.string()));
+  }
+  HATTR_THROW_UNLESS(app_id == kStudyApplicationId,
+                     "{}: not a hattr study database (SQLite application id {:#x}, expected {:#x})", file.string(),
+                     app_id, kStudyApplicationId);
+  HATTR_THROW_UNLESS(version >= 1 && version <= kStudySchemaVersion,
+                     "{}: study schema version {} is {} this build of hattr reads (1 to {}); {}", file.string(), version,
+                     version > kStudySchemaVersion ? "newer than" : "not one", kStudySchemaVersion,
+                     version > kStudySchemaVersion ? "use a newer hattr" : "the file is damaged");
+  if (mode != OpenMode::kReadOnly) {
+    exec(db, "PRAGMA synchronous = FULL");
+    exec(db, "PRAGMA foreign_keys = ON");
+  }
+  if (mode == OpenMode::kRunner) database.lock_fd_ = takeRunnerLock(file, db);
+  if (mode != OpenMode::kReadOnly && version < kStudySchemaVersion) migrate(db, static_cast<int>(version));
+  if (mode == OpenMode::kRunner) {
+    // We hold the runner lock: anything still marked running died with its process.
+    Transaction t(db);
+    exec(db, "UPDATE trials SET status = 'interrupted', interruptions = interruptions + 1 WHERE status = 'running'");
+    exec(db, fmt::format("UPDATE sessions SET ended_utc = '{}' WHERE ended_utc IS NULL", utcNowIso8601()));
+    t.commit();
+  }
+  database.loadDefinition();
+  return database;
+}
+
+void StudyDatabase::loadDefinition() {
+  Statement s(db_, "SELECT definition FROM study WHERE id = 1");
+  HATTR_THROW_UNLESS(s.step(), "{}: the study table is empty", file_.string());
+  // Experts live in the database; the paths only record where they came from.
+  study_ = parseStudy(s.text(0), file_.string() + ":study", "", false);
+}
+
+int StudyDatabase::schemaVersion() const { return static_cast<int>(scalar(db_, "PRAGMA user_version")); }
+
+HapticProfile StudyDatabase::expert(const std::string& skill) const {
+  Statement s(db_, "SELECT profile_csv FROM experts WHERE skill = ?");
+  s.bind(1, skill);
+  HATTR_THROW_UNLESS(s.step(), "{}: no expert reference for skill \"{}\"", file_.string(), skill);
+  std::istringstream in(s.text(0));
+  return io::readProfileCsv(in, fmt::format("{}:experts/{}", file_.string(), skill));
+}
+
+std::vector<SubjectRecord> StudyDatabase::subjects() const {
+  std::vector<SubjectRecord> out;
+  Statement s(db_, "SELECT id, position, mode_order, spec FROM subjects ORDER BY position");
+  while (s.step()) {
+    SubjectRecord r;
+    r.id = s.text(0);
+    r.position = static_cast<int>(s.integer(1));
+    for (const auto& m : json::parse(s.text(2))) r.mode_order.push_back(guidance::parseMode(m.get<std::string>()));
+    const json spec = json::parse(s.text(3));
+    r.spec = {r.id, spec["participant"].get<std::string>(), spec["seed"].get<std::uint64_t>(), spec["options"]};
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+std::vector<TrialRecord> StudyDatabase::trials(const std::string& subject) const {
+  std::vector<TrialRecord> out;
+  Statement s(db_,
+              "SELECT t.id, t.subject, t.sequence, t.mode, t.phase, t.trial_index, t.show_reference, t.guidance, "
+              "t.status, t.attempts, t.interruptions, t.started_utc, t.ended_utc, t.outcome, "
+              "COALESCE(s.sample_count, 0) FROM trials t LEFT JOIN samples s ON s.trial = t.id "
+              "WHERE ?1 = '' OR t.subject = ?1 ORDER BY t.subject, t.sequence");
+  s.bind(1, subject);
+  while (s.step()) {
+    TrialRecord r;
+    r.id = s.integer(0);
+    r.plan = {s.text(1), static_cast<int>(s.integer(2)), guidance::parseMode(s.text(3)),
+              s.text(4) == "training" ? Phase::kTraining : Phase::kRecall, static_cast<int>(s.integer(5)),
+              PhaseView{s.integer(6) != 0, s.integer(7) != 0}};
+    r.status = parseStatus(s.text(8));
+    r.attempts = static_cast<int>(s.integer(9));
+    r.interruptions = static_cast<int>(s.integer(10));
+    r.started_utc = s.text(11);
+    r.ended_utc = s.text(12);
+    r.outcome = s.text(13);
+    r.sample_count = s.integer(14);
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+std::optional<TrialRecord> StudyDatabase::nextTrial(const std::string& subject) const {
+  for (auto& t : trials(subject)) {
+    if (t.status != TrialStatus::kCompleted) return t;
+  }
+  return std::nullopt;
+}
+
+HapticProfile StudyDatabase::trialProfile(std::int64_t trial_id) const {
+  Statement s(db_,
+              "SELECT s.raw_pressure, s.raw_tilt, s.sample_count, s.data, t.metadata FROM samples s "
+              "JOIN trials t ON t.id = s.trial WHERE s.trial = ?");
+  s.bind(1, trial_id);
+  HATTR_THROW_UNLESS(s.step(), "{}: trial {} has no recorded samples", file_.string(), trial_id);
+  const RawChannels raw{s.integer(0) != 0, s.integer(1) != 0};
+  const json meta = json::parse(s.text(4));
+  ProfileMetadata metadata{meta["subject"], meta["skill"], meta["device"], meta["source"], meta["created_utc"],
+                           meta["rate_hz"].get<double>(), meta["extra"].get<std::map<std::string, std::string>>()};
+  HapticProfile profile(std::move(metadata), raw);
+  const auto samples = decodeSamples(s.blob(3), raw, static_cast<std::size_t>(s.integer(2)));
+  profile.reserve(samples.size());
+  for (const Sample& sample : samples) profile.append(sample);
+  return profile;
+}
+
+// ---- Writing ---------------------------------------------------------------------------------
+
+std::int64_t StudyDatabase::beginSession(const std::string& subject) {
+  Statement s(db_, "INSERT INTO sessions (subject, started_utc, pid, host) VALUES (?, ?, ?, ?)");
+  s.bind(1, subject).bind(2, utcNowIso8601()).bind(3, static_cast<std::int64_t>(::getpid())).bind(4, hostName()).run();
+  return sqlite3_last_insert_rowid(db_);
+}
+
+void StudyDatabase::endSession(std::int64_t session_id) {
+  Statement s(db_, "UPDATE sessions SET ended_utc = ? WHERE id = ?");
+  s.bind(1, utcNowIso8601()).bind(2, session_id).run();
+}
+
+void StudyDatabase::markRunning(std::int64_t trial_id, std::int64_t session_id) {
+  Statement s(db_,
+              "UPDATE trials SET status = 'running', attempts = attempts + 1, session = ?, started_utc = ? WHERE id = ?");
+  s.bind(1, session_id).bind(2, utcNowIso8601()).bind(3, trial_id).run();
+}
+
+void StudyDatabase::completeTrial(std::int64_t trial_id, const HapticProfile& profile, const std::string& outcome) {
+  const ProfileMetadata& m = profile.metadata();
+  const json meta = {{"subject", m.subject}, {"skill", m.skill},   {"device", m.device},
+                     {"source", m.source},   {"created_utc", m.created_utc}, {"rate_hz", m.nominal_rate_hz},
+                     {"extra", m.extra}};
+  const std::string data = encodeSamples(profile);
+  Transaction t(db_);
+  Statement samples(db_,
+                    "INSERT OR REPLACE INTO samples (trial, raw_pressure, raw_tilt, sample_count, data) VALUES (?, ?, ?, ?, ?)");
+  samples.bind(1, trial_id).bind(2, profile.rawChannels().pressure ? 1 : 0).bind(3, profile.rawChannels().tilt ? 1 : 0)
+      .bind(4, static_cast<std::int64_t>(profile.size())).bindBlob(5, data).run();
+  Statement trial(db_, "UPDATE trials SET status = 'completed', ended_utc = ?, outcome = ?, metadata = ? WHERE id = ?");
+  trial.bind(1, utcNowIso8601()).bind(2, outcome).bind(3, meta.dump()).bind(4, trial_id).run();
+  t.commit();
+}
+
+void StudyDatabase::putResult(const std::string& key, const std::string& value) {
+  Statement s(db_, "INSERT OR REPLACE INTO results (key, value, updated_utc) VALUES (?, ?, ?)");
+  s.bind(1, key).bind(2, value).bind(3, utcNowIso8601()).run();
+}
+
+std::optional<std::string> StudyDatabase::result(const std::string& key) const {
+  Statement s(db_, "SELECT value FROM results WHERE key = ?");
+  s.bind(1, key);
+  if (!s.step()) return std::nullopt;
+  return s.text(0);
+}
+
+}  // namespace hattr::session

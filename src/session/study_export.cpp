@@ -1,0 +1,95 @@
+#include "hattr/session/study_export.hpp"
+
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "hattr/core/error.hpp"
+#include "hattr/io/profile_csv.hpp"
+
+namespace hattr::session {
+namespace {
+
+constexpr std::string_view kTrialsHeader =
+    "id,subject,sequence,mode,phase,trial,show_reference,guidance,status,attempts,interruptions,started_utc,ended_utc,"
+    "samples,file";
+
+std::string trialFileName(const TrialPlan& p) {
+  return fmt::format("trials/{}/{:03}_{}_{}_{:02}.csv", p.subject, p.sequence, guidance::modeName(p.mode),
+                     phaseName(p.phase), p.index);
+}
+
+}  // namespace
+
+std::size_t exportStudy(const StudyDatabase& db, const std::filesystem::path& out) {
+  namespace fs = std::filesystem;
+  HATTR_THROW_UNLESS(!fs::exists(out) || fs::is_empty(out), "{}: exists and is not empty; choose a new folder",
+                     out.string());
+  fs::create_directories(out / "experts");
+
+  // The definition, with the experts pointing into the export.
+  StudyDefinition study = db.study();
+  for (auto& [skill, path] : study.experts) {
+    io::writeProfileCsv(db.expert(skill), out / "experts" / (skill + ".csv"));
+    path = fs::path("experts") / (skill + ".csv");
+  }
+  io::writeFileAtomically(out / "study.json", studyToJson(study).dump(2) + "\n");
+
+  // The trials table and a profile per completed trial.
+  std::string table = std::string(kTrialsHeader) + "\n";
+  std::size_t written = 0;
+  for (const TrialRecord& t : db.trials()) {
+    std::string file;
+    if (t.status == TrialStatus::kCompleted) {
+      file = trialFileName(t.plan);
+      fs::create_directories((out / file).parent_path());
+      io::writeProfileCsv(db.trialProfile(t.id), out / file);
+      ++written;
+    }
+    table += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", t.id, t.plan.subject, t.plan.sequence,
+                         guidance::modeName(t.plan.mode), phaseName(t.plan.phase), t.plan.index,
+                         t.plan.view.show_reference ? 1 : 0, t.plan.view.guidance ? 1 : 0, trialStatusName(t.status),
+                         t.attempts, t.interruptions, t.started_utc, t.ended_utc, t.sample_count, file);
+  }
+  io::writeFileAtomically(out / "trials.csv", table);
+  return written;
+}
+
+std::size_t importStudy(const std::filesystem::path& dir, const std::filesystem::path& db_file) {
+  StudyDatabase db = StudyDatabase::create(db_file, loadStudy(dir / "study.json"));
+  std::map<std::pair<std::string, int>, std::int64_t> ids;
+  for (const TrialRecord& t : db.trials()) ids[{t.plan.subject, t.plan.sequence}] = t.id;
+
+  // Every completed trial in trials.csv, its profile from its file.
+  const auto table_file = dir / "trials.csv";
+  std::ifstream in(table_file);
+  HATTR_THROW_UNLESS(in.good(), "{}: cannot open for reading", table_file.string());
+  std::string line;
+  std::getline(in, line);
+  HATTR_THROW_UNLESS(line == kTrialsHeader, "{}:1: expected the header \"{}\", got \"{}\"", table_file.string(),
+                     kTrialsHeader, line);
+  std::size_t imported = 0;
+  for (int number = 2; std::getline(in, line); ++number) {
+    std::vector<std::string> fields;
+    std::stringstream split(line);
+    for (std::string f; std::getline(split, f, ',');) fields.push_back(f);
+    if (line.ends_with(',')) fields.emplace_back();
+    HATTR_THROW_UNLESS(fields.size() == 15, "{}:{}: expected 15 fields, got {}", table_file.string(), number, fields.size());
+    if (fields[8] != "completed") continue;
+    int sequence = 0;
+    try {
+      sequence = std::stoi(fields[2]);
+    } catch (const std::exception&) {
+      throw InputError(fmt::format("{}:{}: sequence: expected an integer, got \"{}\"", table_file.string(), number, fields[2]));
+    }
+    const auto id = ids.find({fields[1], sequence});
+    HATTR_THROW_UNLESS(id != ids.end(), "{}:{}: subject {} has no trial {} in the study's plan", table_file.string(),
+                       number, fields[1], sequence);
+    db.completeTrial(id->second, io::readProfileCsv(dir / fields[14]), "imported");
+    ++imported;
+  }
+  return imported;
+}
+
+}  // namespace hattr::session

@@ -1,0 +1,128 @@
+#include "hattr/session/study_runner.hpp"
+
+#include <random>
+
+#include <fmt/format.h>
+
+#include "hattr/core/error.hpp"
+#include "hattr/io/profile_csv.hpp"
+
+namespace hattr::session {
+namespace {
+
+/// A hand script shifted by an offset drawn per trial.
+class ScriptParticipant final : public Participant {
+ public:
+  ScriptParticipant(HapticProfile script, double jitter_m, std::uint64_t seed)
+      : script_(std::move(script)), jitter_m_(jitter_m), seed_(seed) {}
+
+  device::HandScript& handForTrial(const TrialPlan& plan) override {
+    std::mt19937_64 rng(seed_ * 1'000'003ULL + static_cast<std::uint64_t>(plan.sequence));
+    std::uniform_real_distribution<double> offset(-jitter_m_, jitter_m_);
+    hand_ = std::make_unique<device::ProfileHandScript>(script_, 1.0471975511965976, Vec3(offset(rng), offset(rng), 0.0));
+    return *hand_;
+  }
+  void trialCompleted(const TrialPlan&, const HapticProfile&) override {}
+
+ private:
+  HapticProfile script_;
+  double jitter_m_;
+  std::uint64_t seed_;
+  std::unique_ptr<device::ProfileHandScript> hand_;
+};
+
+}  // namespace
+
+std::unique_ptr<Participant> makeScriptParticipant(const SubjectRecord& subject, const HapticProfile& expert) {
+  const auto& options = subject.spec.options;
+  HapticProfile script = options.contains("hand") ? io::readProfileCsv(options["hand"].get<std::string>()) : expert;
+  const double jitter_mm = options.value("jitter_mm", 0.0);
+  HATTR_THROW_UNLESS(jitter_mm >= 0.0 && jitter_mm <= 50.0, "subject {}: options.jitter_mm: expected 0 to 50, got {}",
+                     subject.id, jitter_mm);
+  return std::make_unique<ScriptParticipant>(std::move(script), jitter_mm / 1000.0, subject.spec.seed);
+}
+
+StudyRunner::StudyRunner(StudyDatabase& db, ParticipantFactory factory) : db_(db), factory_(std::move(factory)) {
+  const StudyDefinition& study = db_.study();
+  expert_ = db_.expert(study.skill);
+  environment_ = std::make_unique<TrialEnvironment>(study.device, render::parseWorldConfig(study.world.dump(), "study world"),
+                                                    study.rate_hz);
+  reference_ = std::make_shared<guidance::ReferenceTrajectory>(expert_, study.rate_hz);
+}
+
+int StudyRunner::run(const RunOptions& options) {
+  int ran = 0;
+  bool found = options.only_subject.empty();
+  for (const SubjectRecord& subject : db_.subjects()) {
+    if (!options.only_subject.empty() && subject.id != options.only_subject) continue;
+    found = true;
+    const int budget = options.max_trials < 0 ? -1 : options.max_trials - ran;
+    if (budget == 0) break;
+    ran += runSubject(subject, options, budget);
+  }
+  HATTR_THROW_UNLESS(found, "--subject {}: no such subject in the study", options.only_subject);
+  return ran;
+}
+
+int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& options, int budget) {
+  const StudyDefinition& study = db_.study();
+  const auto participant = factory_(subject, expert_);
+  std::vector<TrialRecord> trials = db_.trials(subject.id);
+
+  // Resume: the participant relives the trials already done, in order.
+  int completed = 0;
+  for (const TrialRecord& t : trials) {
+    if (t.status != TrialStatus::kCompleted) break;
+    participant->trialCompleted(t.plan, db_.trialProfile(t.id));
+    ++completed;
+  }
+  if (completed == static_cast<int>(trials.size())) return 0;
+
+  const std::int64_t session = db_.beginSession(subject.id);
+  int ran = 0;
+  for (std::size_t i = static_cast<std::size_t>(completed); i < trials.size(); ++i) {
+    if (budget >= 0 && ran >= budget) break;
+    const TrialRecord& record = trials[i];
+    const TrialPlan& plan = record.plan;
+    if (i > static_cast<std::size_t>(completed) || completed > 0) participant->rest(study.protocol.rest_s);
+    participant->prompt(fmt::format("{} with {}: trial {} of {}", plan.phase == Phase::kTraining ? "Training" : "Recall",
+                                    guidance::modeName(plan.mode), plan.index,
+                                    plan.phase == Phase::kTraining ? study.protocol.training_trials
+                                                                   : study.protocol.recall_trials));
+
+    // The trial: the mode's guidance in training, none (BASIC) in recall.
+    TrialSetup setup;
+    setup.guidance.mode = plan.view.guidance ? plan.mode : guidance::TrainingMode::kBasic;
+    setup.guidance.playback.indexing = study.indexing;
+    setup.reference = reference_;
+    setup.duration_s = reference_->duration_s() + study.protocol.tail_s;
+    setup.clock = options.clock;
+    setup.metadata.subject = subject.id;
+    setup.metadata.skill = study.skill;
+    setup.metadata.source = fmt::format("study:{}", study.name);
+    setup.metadata.extra["study_mode"] = std::string(guidance::modeName(plan.mode));
+    setup.metadata.extra["phase"] = std::string(phaseName(plan.phase));
+    setup.metadata.extra["trial"] = fmt::format("{}", plan.index);
+    setup.metadata.extra["sequence"] = fmt::format("{}", plan.sequence);
+    setup.metadata.extra["reference_shown"] = plan.view.show_reference ? "yes" : "no";
+
+    db_.markRunning(record.id, session);
+    TrialResult result = runTrial(*environment_, setup, participant->handForTrial(plan));
+    // Nothing in the profile may depend on when it ran, so a resumed study is bit-identical.
+    result.profile.metadata().created_utc = "";
+    db_.completeTrial(record.id, result.profile,
+                      fmt::format("ok: {} samples, {} missed, {} faults", result.profile.size(), result.missed_samples,
+                                  result.faults));
+    participant->trialCompleted(plan, result.profile);
+    ++ran;
+    if (options.progress) {
+      TrialRecord done = record;
+      done.status = TrialStatus::kCompleted;
+      options.progress({subject.id, static_cast<int>(i) + 1, static_cast<int>(trials.size()), &done});
+    }
+  }
+  db_.endSession(session);
+  return ran;
+}
+
+}  // namespace hattr::session
