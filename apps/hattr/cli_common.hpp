@@ -32,6 +32,7 @@ void registerWorldCommands(CLI::App& app);
 void registerRecordTrainCommands(CLI::App& app);
 void registerStudyCommands(CLI::App& app);
 void registerAnalysisCommands(CLI::App& app);
+void registerSimCommands(CLI::App& app);
 
 /// The world configuration in `file`, or the defaults when `file` is empty.
 render::WorldConfig worldConfigOrDefault(const std::string& file);

@@ -1,52 +1,99 @@
-// hattr demo: the main job as it stands. Today: import real pen recordings and summarize
-// their haptic profiles. The simulated study replaces this as the simulation lands.
+// hattr demo: the paper's whole experiment in silico — simulated expert and trainees through
+// the real servo loop, paper, guidance, study runner, database, analysis and report.
 
-#include <filesystem>
+#include <algorithm>
+#include <chrono>
 #include <iostream>
 
 #include <fmt/format.h>
 
 #include "cli_common.hpp"
-#include "hattr/core/error.hpp"
-#include "hattr/io/profile_csv.hpp"
-#include "hattr/io/tablet_import.hpp"
+#include "hattr/report/study_report.hpp"
+#include "hattr/sim/in_silico.hpp"
 
 namespace hattr::cli {
 namespace {
 
 struct DemoOptions {
-  std::string data_dir = "../shared/data/svc2004-task2";
   std::string out_dir = "demo-out";
+  int subjects = 10;
+  std::uint64_t seed = 1;
+  bool json = false;
 };
 
-void runDemo(const DemoOptions& opt) {
-  namespace fs = std::filesystem;
-  HATTR_THROW_UNLESS(fs::is_directory(opt.data_dir),
-                     "--data: expected a folder of SVC2004 .TXT files, got \"{}\" (not a folder)", opt.data_dir);
-  fs::create_directories(opt.out_dir);
-  const io::TabletCalibration calibration = io::svc2004Calibration();
-  std::cout << fmt::format("{:<12} {:>8} {:>9} {:>10} {:>12}\n", "recording", "samples", "pen down",
-                           "duration", "peak |f|");
-  // A writer's genuine signatures: their haptic profiles side by side.
-  for (int signature = 1; signature <= 5; ++signature) {
-    const std::string name = fmt::format("U1S{}", signature);
-    const HapticProfile profile = io::importSvc2004(fs::path(opt.data_dir) / (name + ".TXT"), calibration);
-    io::writeProfileCsv(profile, fs::path(opt.out_dir) / (name + ".csv"), io::Overwrite::kReplace);
-    std::cout << fmt::format("{:<12} {:>8} {:>9} {:>8.2f} s {:>10.2f} N\n", name, profile.size(),
-                             profile.penDownCount(), profile.duration_s(),
-                             profile.range(Channel::kForceMagnitude).max);
+/// A one-line progress bar on stderr.
+void progressBar(int done, int total) {
+  constexpr int kWidth = 40;
+  if (done != total && done % std::max(1, total / 100) != 0) return;  // about a hundred updates
+  const int filled = total > 0 ? done * kWidth / total : kWidth;
+  std::cerr << fmt::format("\r[{}{}] {:>4}/{} trials", std::string(static_cast<std::size_t>(filled), '#'),
+                           std::string(static_cast<std::size_t>(kWidth - filled), '.'), done, total)
+            << (done == total ? "\n" : "") << std::flush;
+}
+
+const analysis::AnovaRow* row(const analysis::AnovaTable& t, const std::string& source) {
+  for (const auto& r : t.rows) {
+    if (r.source == source) return &r;
   }
-  std::cout << fmt::format("\nprofiles written to {}/ (inspect one: hattr profile info {}/U1S1.csv)\n",
-                           opt.out_dir, opt.out_dir);
+  return nullptr;
+}
+
+void runDemo(const DemoOptions& opt) {
+  const auto start = std::chrono::steady_clock::now();
+  std::cout << fmt::format("hattr demo: the paper's study in silico — {} simulated subjects learn 'Na' (ந) in BASIC, "
+                           "PCONTROL and ALPHA,\n11 training + 11 recall trials per mode, through the real servo loop "
+                           "at 1 kHz (simulated time).\n\n",
+                           opt.subjects);
+  sim::InSilicoOptions options{.out_dir = opt.out_dir, .subjects = opt.subjects, .seed = opt.seed};
+  if (!opt.json) options.progress = progressBar;
+  const sim::InSilicoResult r = sim::runInSilicoStudy(options);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const std::uint64_t ticks = r.servo_ticks + static_cast<std::uint64_t>(r.trials) * 300;  // + each trial's settle
+
+  const auto& a = r.analysis;
+  if (opt.json) {
+    nlohmann::json json = report::analysisToJson(a);
+    json.erase("recall_costs");
+    json["database"] = r.database.string();
+    json["report"] = r.report_html.string();
+    json["trials"] = r.trials;
+    json["servo_ticks"] = ticks;
+    json["seconds"] = seconds;
+    return printJson(json);
+  }
+  // Table 1 and the ANOVA p-values.
+  std::cout << fmt::format("\nTable 1: each subject's best mode (lowest mean recall DTW cost)\n{:<8} {:<12} {:<12}\n", "subject",
+                           "trajectory", "force");
+  for (const auto& [subject, mode] : a.trajectory.best_mode) {
+    std::cout << fmt::format("{:<8} {:<12} {:<12}\n", subject, mode, a.force.best_mode.at(subject));
+  }
+  std::cout << "\nANOVA p-values (mode × subject, subject random; per mode: trial × subject)\n";
+  for (const auto* m : {&a.trajectory, &a.force}) {
+    const auto* mode = row(m->overall, "mode");
+    const auto* subject = row(m->overall, "subject");
+    std::cout << fmt::format("  {:<11} mode p = {:.4g}, subject p = {:.4g}", m->metric, mode ? mode->p : NAN,
+                             subject ? subject->p : NAN);
+    for (const auto& [name, table] : m->per_mode) {
+      const auto* trial = row(table, "trial");
+      std::cout << fmt::format(", {} trial p = {:.3g}", name, trial ? trial->p : NAN);
+    }
+    std::cout << '\n';
+  }
+  std::cout << "\nConclusions\n";
+  for (const auto& line : report::conclusions(a)) std::cout << "  - " << line << '\n';
+  std::cout << fmt::format("\n{} trials, {:.2f} M servo ticks, {:.1f} s.\nReport: {}\nStudy database: {}\n", r.trials,
+                           static_cast<double>(ticks) * 1e-6, seconds, r.report_html.string(), r.database.string());
 }
 
 }  // namespace
 
 void registerDemoCommand(CLI::App& app) {
   auto opt = std::make_shared<DemoOptions>();
-  auto* demo = app.add_subcommand("demo", "Run the main job as it stands: import real pen data as haptic profiles");
-  demo->add_option("--data", opt->data_dir, "Folder with SVC2004 task 2 .TXT files")->capture_default_str();
-  demo->add_option("--out", opt->out_dir, "Where to write the profiles")->capture_default_str();
+  auto* demo = app.add_subcommand("demo", "Run the paper's study in silico end to end and write the report");
+  demo->add_option("--out", opt->out_dir, "Folder for the expert, the study database and the report")->capture_default_str();
+  demo->add_option("--subjects", opt->subjects, "Simulated subjects")->check(CLI::Range(2, 1000))->capture_default_str();
+  demo->add_option("--seed", opt->seed, "Seed of the simulated subjects")->capture_default_str();
+  demo->add_flag("--json", opt->json, "Print the analysis as JSON (no progress bar)");
   demo->callback([opt] { runDemo(*opt); });
 }
 

@@ -9,6 +9,7 @@
 #include "hattr/session/study_export.hpp"
 #include "hattr/report/study_report.hpp"
 #include "hattr/session/study_runner.hpp"
+#include "hattr/sim/participant.hpp"
 
 namespace hattr::cli {
 namespace {
@@ -56,6 +57,7 @@ nlohmann::json statusJson(const session::StudyDatabase& db) {
 
 std::unique_ptr<session::Participant> makeParticipant(const session::SubjectRecord& subject, const HapticProfile& expert) {
   if (subject.spec.participant == "script") return session::makeScriptParticipant(subject, expert);
+  if (subject.spec.participant == "simulated") return sim::makeSimulatedParticipant(subject, expert);
   if (subject.spec.participant == "person") {
     throw InputError(fmt::format("subject {} is a person: run their trials from the studio (hattr studio)", subject.id));
   }

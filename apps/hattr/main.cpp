@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   registerRecordTrainCommands(app);
   registerStudyCommands(app);
   registerAnalysisCommands(app);
+  registerSimCommands(app);
   registerDemoCommand(app);
 
   try {

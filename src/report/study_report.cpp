@@ -25,6 +25,8 @@ std::string modeColour(const std::string& mode) {
 }
 
 std::string p(double v) { return std::isfinite(v) ? (v < 0.001 ? "< 0.001" : fmt::format("{:.3f}", v)) : ""; }
+/// "p = 0.042" or "p < 0.001", for sentences.
+std::string pIs(double v) { return v < 0.001 ? "p < 0.001" : fmt::format("p = {:.3f}", v); }
 std::string g(double v) { return std::isfinite(v) ? fmt::format("{:.4g}", v) : ""; }
 
 /// A table as Markdown and as HTML at once.
@@ -124,13 +126,13 @@ std::vector<std::string> conclusions(const StudyAnalysis& a, double alpha) {
       const bool significant = mode->p < alpha;
       out.push_back(fmt::format(
           "On the {} metric, the lowest mean recall cost was with {} ({:.4g}); the effect of mode was {}significant "
-          "at α = {} (F({}, {}) = {:.3g}, p = {}).",
-          what, best->a_level, best->stats.mean, significant ? "" : "not ", alpha, mode->df, error->df, mode->f, p(mode->p)));
+          "at α = {} (F({}, {}) = {:.3g}, {}).",
+          what, best->a_level, best->stats.mean, significant ? "" : "not ", alpha, mode->df, error->df, mode->f, pIs(mode->p)));
     }
     // Subjects differ?
     if (const analysis::AnovaRow* subject = findRow(m->overall, "subject"); subject && std::isfinite(subject->p)) {
-      out.push_back(fmt::format("Subjects differed {}significantly on the {} metric (p = {}).",
-                                subject->p < alpha ? "" : "not ", what, p(subject->p)));
+      out.push_back(fmt::format("Subjects differed {}significantly on the {} metric ({}).",
+                                subject->p < alpha ? "" : "not ", what, pIs(subject->p)));
     }
     // Training effect within each mode: the trial factor of the per-mode ANOVA.
     std::vector<std::string> trained;

@@ -1,0 +1,50 @@
+#pragma once
+/// The paper's study in silico: synthesize the expert, create a study with the paper's
+/// protocol, run it with simulated trainees through the real pipeline (servo loop, paper,
+/// guidance, study runner, database), analyze it and write the report. `hattr demo`, the
+/// A/A check and the sensitivity sweep are all this one function with other options.
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hattr/report/study_analysis.hpp"
+#include "hattr/sim/trainee_model.hpp"
+
+namespace hattr::sim {
+
+struct InSilicoOptions {
+  std::filesystem::path out_dir = "demo-out";
+  std::string glyph = "na";                 ///< data/glyphs/<glyph>.json
+  int subjects = 10;
+  std::uint64_t seed = 1;                   ///< subject i gets seed·1000 + i
+  int training_trials = 11;
+  int recall_trials = 11;
+  bool guidance = true;                     ///< false: an A/A study (no mode ever guides)
+  std::optional<TraineeModel> model;        ///< default: data/sim/trainee_model.json
+  bool write_report = true;
+  /// After each trial: trials done, trials in all.
+  std::function<void(int done, int total)> progress;
+};
+
+struct InSilicoResult {
+  std::filesystem::path database;
+  std::filesystem::path report_html;        ///< empty without a report
+  report::StudyAnalysis analysis;
+  std::uint64_t servo_ticks = 0;            ///< simulated servo ticks in all trials
+  int trials = 0;
+};
+
+/// Runs the whole study. An existing study database in out_dir is kept under a new name
+/// (study-<time>.sqlite), never overwritten. Throws InputError for bad options or data files.
+InSilicoResult runInSilicoStudy(const InSilicoOptions& options);
+
+/// Sets one trainee-model parameter's population value by its file key ("fast_rate", ...);
+/// throws InputError for an unknown key or a value outside the parameter's range.
+void setModelParameter(TraineeModel& model, std::string_view key, double value);
+/// The keys setModelParameter accepts.
+std::vector<std::string> modelParameterKeys();
+
+}  // namespace hattr::sim

@@ -1,0 +1,28 @@
+#pragma once
+/// A simulated trainee as a study participant (session::Participant): the study runner asks
+/// it for a hand for each trial and tells it each stored trial, from which it learns. The
+/// mode enters only through the guidance force recorded in the trial (docs/simulation.md).
+
+#include <memory>
+
+#include "hattr/session/study_runner.hpp"
+#include "hattr/sim/trainee.hpp"
+
+namespace hattr::sim {
+
+/// The participant for a subject with participant "simulated". Subject options:
+///   "template": the expert's script (what the expert meant to write) the trainee learns;
+///               default: the expert reference itself (see SimulatedTrainee on why the
+///               script is better);
+///   "model":    a trainee model file; default: data/sim/trainee_model.json.
+/// The subject's traits are drawn with its seed; the expert reference is what the trainee
+/// sees in training trials. Trial noise depends on the subject, the phase and the trial number
+/// but not on the mode: common random numbers across modes.
+std::unique_ptr<session::Participant> makeSimulatedParticipant(const session::SubjectRecord& subject,
+                                                               const HapticProfile& expert);
+
+/// As above with an explicit model (the sensitivity sweep varies it).
+std::unique_ptr<session::Participant> makeSimulatedParticipant(const session::SubjectRecord& subject,
+                                                               const HapticProfile& expert, const TraineeModel& model);
+
+}  // namespace hattr::sim

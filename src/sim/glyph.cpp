@@ -1,0 +1,134 @@
+#include "hattr/sim/glyph.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "hattr/core/error.hpp"
+#include "hattr/core/units.hpp"
+
+namespace hattr::sim {
+namespace {
+
+using nlohmann::json;
+
+constexpr std::array kTopKeys{"format", "version", "name", "character", "unicode", "description", "units",
+                              "size_note", "shape_note", "source_note", "strokes"};
+constexpr std::array kStrokeKeys{"note", "points"};
+
+std::string keyList(const auto& keys) {
+  std::string out;
+  for (const auto* k : keys) out += (out.empty() ? "" : ", ") + std::string(k);
+  return out;
+}
+
+void checkKeys(const json& object, const auto& keys, std::string_view where) {
+  for (const auto& item : object.items()) {
+    const bool known = std::any_of(keys.begin(), keys.end(), [&](const char* k) { return item.key() == k; });
+    HATTR_THROW_UNLESS(known, "{}: unknown key \"{}\": expected one of {}", where, item.key(), keyList(keys));
+  }
+}
+
+std::string optionalText(const json& object, const char* key, std::string_view where) {
+  const auto it = object.find(key);
+  if (it == object.end()) return {};
+  HATTR_THROW_UNLESS(it->is_string(), "{}: key {}: expected a string, got {}", where, key, it->dump());
+  return it->get<std::string>();
+}
+
+bool isUnicodeLabel(const std::string& text) {
+  if (text.size() < 6 || text.size() > 8 || text.compare(0, 2, "U+") != 0) return false;
+  return std::all_of(text.begin() + 2, text.end(), [](char c) { return std::isxdigit(static_cast<unsigned char>(c)) != 0; });
+}
+
+}  // namespace
+
+Glyph parseGlyph(std::string_view json_text, std::string_view source) {
+  json root;
+  try {
+    root = json::parse(json_text);
+  } catch (const json::parse_error& e) {
+    throw InputError(fmt::format("{}: not valid JSON: {}", source, e.what()));
+  }
+  HATTR_THROW_UNLESS(root.is_object(), "{}: expected a JSON object, got {}", source, root.type_name());
+  checkKeys(root, kTopKeys, source);
+
+  const auto format = root.find("format");
+  HATTR_THROW_UNLESS(format != root.end() && format->is_string() && *format == "hattr-glyph",
+                     "{}: key format: expected \"hattr-glyph\", got {}", source,
+                     format == root.end() ? std::string("nothing") : format->dump());
+  const auto version = root.find("version");
+  HATTR_THROW_UNLESS(version != root.end() && version->is_number_integer() && *version == 1,
+                     "{}: key version: expected 1, got {}", source,
+                     version == root.end() ? std::string("nothing") : version->dump());
+
+  Glyph glyph;
+  glyph.name = optionalText(root, "name", source);
+  HATTR_THROW_UNLESS(!glyph.name.empty(), "{}: key name: expected a non-empty string, got {}", source,
+                     root.contains("name") ? root["name"].dump() : std::string("nothing"));
+  glyph.unicode = optionalText(root, "unicode", source);
+  HATTR_THROW_UNLESS(glyph.unicode.empty() || isUnicodeLabel(glyph.unicode),
+                     "{}: key unicode: expected \"U+\" and 4 to 6 hex digits (or \"\"), got \"{}\"", source, glyph.unicode);
+  glyph.character = optionalText(root, "character", source);
+  for (const char* key : {"description", "units", "size_note", "shape_note", "source_note"}) {
+    (void)optionalText(root, key, source);
+  }
+
+  const auto strokes = root.find("strokes");
+  HATTR_THROW_UNLESS(strokes != root.end() && strokes->is_array() && !strokes->empty(),
+                     "{}: key strokes: expected a non-empty list of strokes, got {}", source,
+                     strokes == root.end() ? std::string("nothing") : strokes->dump());
+  for (std::size_t s = 0; s < strokes->size(); ++s) {
+    const json& stroke = (*strokes)[s];
+    const std::string where = fmt::format("{}: stroke {}", source, s + 1);
+    HATTR_THROW_UNLESS(stroke.is_object(), "{}: expected an object with \"points\", got {}", where, stroke.dump());
+    checkKeys(stroke, kStrokeKeys, where);
+    GlyphStroke out;
+    out.note = optionalText(stroke, "note", where);
+    const auto points = stroke.find("points");
+    HATTR_THROW_UNLESS(points != stroke.end() && points->is_array() && points->size() >= 2,
+                       "{}: key points: expected a list of at least two [x_mm, y_mm] points, got {}", where,
+                       points == stroke.end() ? std::string("nothing") : points->dump());
+    for (std::size_t p = 0; p < points->size(); ++p) {
+      const json& point = (*points)[p];
+      const bool numbers = point.is_array() && point.size() == 2 && point[0].is_number() && point[1].is_number();
+      const bool finite = numbers && std::isfinite(point[0].get<double>()) && std::isfinite(point[1].get<double>());
+      const bool inside = finite && std::abs(point[0].get<double>()) <= kMaxGlyphCoordinate_mm &&
+                          std::abs(point[1].get<double>()) <= kMaxGlyphCoordinate_mm;
+      HATTR_THROW_UNLESS(inside, "{}, point {}: expected [x_mm, y_mm], two finite numbers within ±{} mm, got {}", where,
+                         p + 1, kMaxGlyphCoordinate_mm, point.dump());
+      const Vec2 position(units::millimetresToMetres(point[0].get<double>()),
+                          units::millimetresToMetres(point[1].get<double>()));
+      HATTR_THROW_UNLESS(out.points.empty() || position != out.points.back(),
+                         "{}, point {}: expected a point different from point {}, got the same {}", where, p + 1, p,
+                         point.dump());
+      out.points.push_back(position);
+    }
+    glyph.strokes.push_back(std::move(out));
+  }
+  return glyph;
+}
+
+Glyph loadGlyph(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  HATTR_THROW_UNLESS(in.good(), "{}: cannot open the glyph file for reading", file.string());
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parseGlyph(text.str(), file.string());
+}
+
+double glyphPathLength(const Glyph& glyph) {
+  double length = 0.0;
+  for (const auto& stroke : glyph.strokes) {
+    for (std::size_t i = 1; i < stroke.points.size(); ++i) length += (stroke.points[i] - stroke.points[i - 1]).norm();
+  }
+  return length;
+}
+
+}  // namespace hattr::sim

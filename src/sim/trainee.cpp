@@ -1,0 +1,248 @@
+#include "hattr/sim/trainee.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <fmt/format.h>
+
+#include "hattr/core/error.hpp"
+#include "random_internal.hpp"
+
+namespace hattr::sim {
+namespace {
+
+// Independent random streams derived from the trainee's seed.
+constexpr std::uint64_t kDeviationStream = 0x446576696174696FULL;   // "Deviatio"
+constexpr std::uint64_t kPerceptionStream = 0x5065726365707469ULL;  // "Percepti"
+constexpr std::uint64_t kTrialNoiseStream = 0x547269616C4E6F69ULL;  // "TrialNoi"
+
+/// device::HandCommand's and device::ProfileHandScript's altitude when a profile has no tilt.
+constexpr double kDefaultAltitude_rad = 1.0471975511965976;
+
+/// Linear interpolation of a recording at times on the template's grid (both relative to their
+/// first samples). `valid[i]` is false where the recording does not cover t[i].
+struct Resampled {
+  Eigen::MatrixX2d p_xy;
+  Eigen::MatrixX3d f_guide;
+  std::vector<char> pen_down;
+  std::vector<char> valid;
+};
+
+Resampled resample(const HapticProfile& profile, const std::vector<double>& t) {
+  const auto& s = profile.samples();
+  const auto n = static_cast<Eigen::Index>(t.size());
+  Resampled out{Eigen::MatrixX2d::Zero(n, 2), Eigen::MatrixX3d::Zero(n, 3), std::vector<char>(t.size(), 0),
+                std::vector<char>(t.size(), 0)};
+  const double t0 = s.front().t_s;
+  const double end = s.back().t_s - t0;
+  std::size_t j = 0;
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    if (t[i] > end + 1e-9) break;
+    while (j + 2 < s.size() && s[j + 1].t_s - t0 <= t[i]) ++j;
+    const Sample& a = s[j];
+    const Sample& b = s[std::min(j + 1, s.size() - 1)];
+    const double span = b.t_s - a.t_s;
+    const double w = span > 0.0 ? std::clamp((t[i] - (a.t_s - t0)) / span, 0.0, 1.0) : 0.0;
+    const auto row = static_cast<Eigen::Index>(i);
+    out.p_xy.row(row) = ((1.0 - w) * a.p_WT.head<2>() + w * b.p_WT.head<2>()).transpose();
+    out.f_guide.row(row) = ((1.0 - w) * a.f_guide_W + w * b.f_guide_W).transpose();
+    out.pen_down[i] = static_cast<char>(w < 0.5 ? a.pen_down : b.pen_down);
+    out.valid[i] = 1;
+  }
+  return out;
+}
+
+}  // namespace
+
+double perceivedForce(double force_N, double weber_fraction, double standard_normal) noexcept {
+  return force_N * (1.0 + weber_fraction * standard_normal);
+}
+
+SimulatedTrainee::SimulatedTrainee(const TraineeModel& model, const SubjectTraits& traits,
+                                   const HapticProfile& template_script, std::uint64_t seed)
+    : traits_(traits),
+      basis_(static_cast<int>(model.basis_count.value), model.basis_width_ratio.value),
+      seed_(seed),
+      metadata_(template_script.metadata()) {
+  validateTraits(traits_);
+  HATTR_THROW_UNLESS(template_script.size() >= 2 && template_script.duration_s() > 0.0,
+                     "simulated trainee: template: expected at least two samples over a positive duration, got {}",
+                     template_script.size());
+  HATTR_THROW_UNLESS(model.projection_ridge.value >= 0.0 && model.projection_ridge.value <= 1.0,
+                     "simulated trainee: projection_ridge: expected [0, 1], got {}", model.projection_ridge.value);
+
+  // The template on its own grid.
+  const auto& samples = template_script.samples();
+  const auto n = static_cast<Eigen::Index>(samples.size());
+  const bool has_tilt = template_script.rawChannels().tilt;
+  const double t0 = samples.front().t_s;
+  duration_s_ = samples.back().t_s - t0;
+  t_s_.resize(samples.size());
+  template_xy_.resize(n, 2);
+  template_v_xy_.resize(n, 2);
+  template_z_.resize(n);
+  template_axial_N_.resize(n);
+  altitude_rad_.resize(n);
+  azimuth_rad_.resize(n);
+  pen_down_.resize(samples.size());
+  std::vector<double> u(samples.size());
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Sample& s = samples[static_cast<std::size_t>(i)];
+    t_s_[static_cast<std::size_t>(i)] = s.t_s - t0;
+    u[static_cast<std::size_t>(i)] = (s.t_s - t0) / duration_s_;
+    template_xy_.row(i) = s.p_WT.head<2>().transpose();
+    template_v_xy_.row(i) = s.v_WT.head<2>().transpose();
+    template_z_(i) = s.p_WT.z();
+    altitude_rad_(i) = has_tilt ? std::clamp(s.tilt_altitude_rad, 0.1, 1.5707963267948966) : kDefaultAltitude_rad;
+    azimuth_rad_(i) = has_tilt ? s.tilt_azimuth_rad : 0.0;
+    pen_down_[static_cast<std::size_t>(i)] = static_cast<char>(s.pen_down);
+    template_axial_N_(i) = s.pen_down ? std::max(-s.f_user_W.z(), 0.0) / std::sin(altitude_rad_(i)) : 0.0;
+  }
+  visual_xy_ = template_xy_;
+  visual_pen_down_ = pen_down_;
+
+  // The basis on the template's normalized time.
+  phi_ = basis_.design(u);
+  phi_rate_ = basis_.designDerivative(u) / duration_s_;
+  phi_mass_ = phi_.colwise().sum().transpose();
+  ridge_ = model.projection_ridge.value * (phi_.array().square().sum() / static_cast<double>(basis_.size()));
+
+  const auto k = static_cast<Eigen::Index>(basis_.size());
+  fast_ = PlanWeights::Zero(k, 3);
+  slow_ = PlanWeights::Zero(k, 3);
+  deviation_ = PlanWeights::Zero(k, 3);
+
+  // The personal deviation: independent normal weights, scaled so that the smooth field they
+  // make has the trainee's RMS over the trial.
+  detail::NormalSource normal(detail::streamSeed(seed_, kDeviationStream));
+  Eigen::MatrixX2d raw(k, 2);
+  for (Eigen::Index r = 0; r < k; ++r) {
+    for (Eigen::Index c = 0; c < 2; ++c) raw(r, c) = normal.normal();
+  }
+  const Eigen::MatrixX2d field = phi_ * raw;
+  const double rms = std::sqrt(field.rowwise().squaredNorm().mean());
+  if (rms > 0.0) deviation_.leftCols<2>() = raw * (traits_.deviation_rms_m / rms);
+}
+
+SimulatedTrainee::Series SimulatedTrainee::series(const PlanWeights& weights) const {
+  const Eigen::MatrixX3d offsets = phi_ * weights;
+  const Eigen::MatrixX3d rates = phi_rate_ * weights;
+  Series s;
+  s.p_xy = template_xy_ + offsets.leftCols<2>();
+  s.v_xy = template_v_xy_ + rates.leftCols<2>();
+  s.axial_N.resize(template_axial_N_.size());
+  for (Eigen::Index i = 0; i < s.axial_N.size(); ++i) {
+    const double planned = traits_.force_scale * template_axial_N_(i) + traits_.force_offset_N + offsets(i, 2);
+    s.axial_N(i) = pen_down_[static_cast<std::size_t>(i)] ? std::max(planned, 0.0) : 0.0;
+  }
+  return s;
+}
+
+HapticProfile SimulatedTrainee::profileOf(const Series& s, const std::string& source) const {
+  ProfileMetadata metadata = metadata_;
+  metadata.source = source;
+  HapticProfile profile(std::move(metadata), RawChannels{.tilt = true});
+  profile.reserve(t_s_.size());
+  for (std::size_t i = 0; i < t_s_.size(); ++i) {
+    const auto r = static_cast<Eigen::Index>(i);
+    Sample sample;
+    sample.t_s = t_s_[i];
+    sample.p_WT = Vec3(s.p_xy(r, 0), s.p_xy(r, 1), template_z_(r));
+    // No vertical target velocity: pen up, the hand holds the pen at least 3 mm high whatever
+    // the template's height (a recorded template falls onto the paper just before contact, and
+    // its speed would drive the pen into it); pen down, the hand only presses.
+    sample.v_WT = Vec3(s.v_xy(r, 0), s.v_xy(r, 1), 0.0);
+    sample.pen_down = pen_down_[i] != 0;
+    sample.in_contact = sample.pen_down;
+    sample.f_user_W = Vec3(0.0, 0.0, -s.axial_N(r) * std::sin(altitude_rad_(r)));
+    sample.tilt_altitude_rad = altitude_rad_(r);
+    sample.tilt_azimuth_rad = azimuth_rad_(r);
+    profile.append(sample);
+  }
+  return profile;
+}
+
+HapticProfile SimulatedTrainee::plan() const { return profileOf(series(planWeights()), "sim:trainee-plan"); }
+
+std::unique_ptr<device::HandScript> SimulatedTrainee::handForTrial(std::uint64_t trial_seed) const {
+  const PlanWeights weights = planWeights();
+  const Series planned = series(weights);
+  // Signal-dependent noise (Harris & Wolpert 1998): per basis window, SD proportional to the
+  // command there — the distance the plan covers in the window, and the planned axial force.
+  const Eigen::VectorXd speed = planned.v_xy.rowwise().norm();
+  const double window_s = basis_.spacing() * duration_s_;
+  const Eigen::VectorXd mean_speed = (phi_.transpose() * speed).cwiseQuotient(phi_mass_);
+  const Eigen::VectorXd mean_force = (phi_.transpose() * planned.axial_N).cwiseQuotient(phi_mass_);
+  detail::NormalSource normal(detail::streamSeed(detail::streamSeed(seed_, kTrialNoiseStream), trial_seed));
+  PlanWeights noise = PlanWeights::Zero(weights.rows(), 3);
+  for (Eigen::Index k = 0; k < weights.rows(); ++k) {
+    const double position_sd = traits_.position_noise_coefficient * mean_speed(k) * window_s;
+    noise(k, kPlanX) = position_sd * normal.normal();
+    noise(k, kPlanY) = position_sd * normal.normal();
+    noise(k, kPlanAxialForce) = traits_.force_noise_coefficient * mean_force(k) * normal.normal();
+  }
+  const HapticProfile trial = profileOf(series(weights + noise), "sim:trainee-hand");
+  return std::make_unique<device::ProfileHandScript>(trial);
+}
+
+Eigen::MatrixXd SimulatedTrainee::project(const Eigen::MatrixXd& values, const std::vector<char>& mask) const {
+  Eigen::MatrixXd phi_masked = phi_;
+  for (std::size_t i = 0; i < mask.size(); ++i) {
+    if (!mask[i]) phi_masked.row(static_cast<Eigen::Index>(i)).setZero();
+  }
+  Eigen::MatrixXd gram = phi_masked.transpose() * phi_masked;
+  gram.diagonal().array() += ridge_;
+  const Eigen::MatrixXd rhs = phi_masked.transpose() * values;
+  if (gram.diagonal().maxCoeff() <= 0.0) return Eigen::MatrixXd::Zero(gram.rows(), values.cols());
+  return gram.ldlt().solve(rhs);
+}
+
+void SimulatedTrainee::learn(const HapticProfile& recorded, bool template_shown) {
+  HATTR_THROW_UNLESS(recorded.size() >= 2, "simulated trainee: learn: expected a recorded trial of at least two samples, got {}",
+                     recorded.size());
+  const Resampled rec = resample(recorded, t_s_);  // both start at 0: they always overlap
+  const auto k = static_cast<Eigen::Index>(basis_.size());
+  PlanWeights error = PlanWeights::Zero(k, 3);
+
+  // (a) What the trainee sees: the template against its own trace, where both have ink.
+  if (template_shown) {
+    std::vector<char> mask(t_s_.size());
+    for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = static_cast<char>(rec.valid[i] && visual_pen_down_[i] && rec.pen_down[i]);
+    const Eigen::MatrixXd visual_error = visual_xy_ - rec.p_xy;
+    error.leftCols<2>() += project(visual_error, mask);
+  }
+
+  // (b) What the trainee felt: the guidance force, as an in-plane force and as the axial force
+  // that would give its normal part, perceived with Weber noise, read as a plan error.
+  Eigen::MatrixXd felt(static_cast<Eigen::Index>(t_s_.size()), 3);
+  felt.leftCols<2>() = rec.f_guide.leftCols<2>();
+  felt.col(2) = -rec.f_guide.col(2).cwiseQuotient(altitude_rad_.array().sin().matrix());
+  Eigen::MatrixXd felt_weights = project(felt, rec.valid);
+  detail::NormalSource normal(
+      detail::streamSeed(detail::streamSeed(seed_, kPerceptionStream), static_cast<std::uint64_t>(trials_learned_)));
+  for (Eigen::Index r = 0; r < felt_weights.rows(); ++r) {
+    for (Eigen::Index c = 0; c < 3; ++c) {
+      felt_weights(r, c) = perceivedForce(felt_weights(r, c), traits_.weber_fraction, normal.normal());
+    }
+  }
+  error.col(kPlanX) += felt_weights.col(0) / traits_.felt_force_stiffness_N_per_m;
+  error.col(kPlanY) += felt_weights.col(1) / traits_.felt_force_stiffness_N_per_m;
+  error.col(kPlanAxialForce) += felt_weights.col(2);
+
+  // The one learning rule.
+  fast_ = traits_.fast_retention * fast_ + traits_.fast_rate * error;
+  slow_ = traits_.slow_retention * slow_ + traits_.slow_rate * error;
+  ++trials_learned_;
+}
+
+void SimulatedTrainee::setVisualTemplate(const HapticProfile& shown) {
+  HATTR_THROW_UNLESS(shown.size() >= 2, "simulated trainee: visual template: expected at least two samples, got {}",
+                     shown.size());
+  const Resampled r = resample(shown, t_s_);
+  visual_xy_ = r.p_xy;
+  visual_pen_down_.assign(t_s_.size(), 0);
+  for (std::size_t i = 0; i < t_s_.size(); ++i) visual_pen_down_[i] = static_cast<char>(r.valid[i] && r.pen_down[i]);
+}
+
+}  // namespace hattr::sim

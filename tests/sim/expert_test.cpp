@@ -1,0 +1,243 @@
+// The simulated expert: its script passes through the glyph's via points in writing order,
+// starts and ends at rest, peaks at the documented handwriting speed, lifts the pen between
+// strokes and presses with a smooth force plan; played on the simulated pen it gives the
+// expert's haptic profile.
+
+#include <cmath>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "hattr/core/error.hpp"
+#include "hattr/sim/data_dir.hpp"
+#include "hattr/sim/expert.hpp"
+
+namespace hattr::sim {
+namespace {
+
+using ::testing::HasSubstr;
+
+const Glyph& na() {
+  static const Glyph glyph = loadGlyph(defaultDataDir() / "glyphs" / "na.json");
+  return glyph;
+}
+
+const HapticProfile& naScript() {
+  static const HapticProfile script = expertScript(na());
+  return script;
+}
+
+/// [first, last] sample indices of each pen-down run.
+std::vector<std::pair<std::size_t, std::size_t>> penDownRuns(const HapticProfile& p) {
+  std::vector<std::pair<std::size_t, std::size_t>> runs;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!p[i].pen_down) continue;
+    if (runs.empty() || runs.back().second + 1 != i) runs.emplace_back(i, i);
+    runs.back().second = i;
+  }
+  return runs;
+}
+
+/// Speed from the positions alone (central differences).
+std::vector<double> finiteDifferenceSpeed(const HapticProfile& p) {
+  std::vector<double> speed(p.size(), 0.0);
+  for (std::size_t i = 1; i + 1 < p.size(); ++i) {
+    speed[i] = (p[i + 1].p_WT - p[i - 1].p_WT).norm() / (p[i + 1].t_s - p[i - 1].t_s);
+  }
+  return speed;
+}
+
+double polylineLength(const std::vector<Vec2>& points) {
+  double length = 0.0;
+  for (std::size_t i = 1; i < points.size(); ++i) length += (points[i] - points[i - 1]).norm();
+  return length;
+}
+
+TEST(ExpertScript, PassesThroughEveryViaPointInWritingOrder) {
+  const HapticProfile& script = naScript();
+  const auto runs = penDownRuns(script);
+  ASSERT_EQ(runs.size(), na().strokes.size());
+  for (std::size_t s = 0; s < runs.size(); ++s) {
+    std::size_t previous = runs[s].first;
+    for (std::size_t k = 0; k < na().strokes[s].points.size(); ++k) {
+      const Vec2& via = na().strokes[s].points[k];
+      // The nearest pen-down sample of this stroke, searched from the previous via point on.
+      std::size_t best = previous;
+      for (std::size_t i = previous; i <= runs[s].second; ++i) {
+        if ((script[i].p_WT.head<2>() - via).norm() < (script[best].p_WT.head<2>() - via).norm()) best = i;
+      }
+      // At 1 kHz and at most 0.1 m/s, a sample lies within 0.05 mm of any point passed.
+      EXPECT_LT((script[best].p_WT.head<2>() - via).norm(), 5e-5) << "stroke " << s + 1 << ", via point " << k + 1;
+      EXPECT_GE(best, previous) << "via points are passed in writing order";
+      previous = best;
+    }
+  }
+}
+
+TEST(ExpertScript, StartsAndEndsAtRestAndRestsAtTouchDownAndLiftOff) {
+  const HapticProfile& script = naScript();
+  EXPECT_EQ(script.samples().front().v_WT.norm(), 0.0);
+  EXPECT_EQ(script.samples().back().v_WT.norm(), 0.0);
+  const auto speed = finiteDifferenceSpeed(script);
+  EXPECT_LT(speed[1], 1e-9);
+  EXPECT_LT(speed[speed.size() - 2], 1e-9);
+  for (const auto& [first, last] : penDownRuns(script)) {
+    EXPECT_LT(script[first].v_WT.norm(), 1e-9);
+    EXPECT_LT(script[last].v_WT.norm(), 1e-9);
+  }
+}
+
+TEST(ExpertScript, PeakSpeedIsTheDocumentedHandwritingSpeed) {
+  const auto speed = finiteDifferenceSpeed(naScript());
+  const double peak = *std::max_element(speed.begin(), speed.end());
+  EXPECT_GE(peak, 0.050);
+  EXPECT_LE(peak, 0.100);
+  EXPECT_NEAR(peak, ExpertConfig{}.peak_speed_m_per_s, 0.002);
+  // A slower writer: the same path, a lower peak.
+  ExpertConfig slow;
+  slow.peak_speed_m_per_s = 0.055;
+  const auto slow_speed = finiteDifferenceSpeed(expertScript(na(), slow));
+  EXPECT_NEAR(*std::max_element(slow_speed.begin(), slow_speed.end()), 0.055, 0.002);
+}
+
+TEST(ExpertScript, VelocityChannelIsTheDerivativeOfThePath) {
+  const HapticProfile& script = naScript();
+  double worst = 0.0;
+  for (std::size_t i = 1; i + 1 < script.size(); ++i) {
+    const Vec3 fd = (script[i + 1].p_WT - script[i - 1].p_WT) / (script[i + 1].t_s - script[i - 1].t_s);
+    worst = std::max(worst, (fd - script[i].v_WT).norm());
+  }
+  EXPECT_LT(worst, 0.002) << "within 2 mm/s everywhere (a central difference at 1 kHz)";
+}
+
+TEST(ExpertScript, LiftsThePenTwoToThreeMillimetresBetweenStrokes) {
+  const HapticProfile& script = naScript();
+  const auto runs = penDownRuns(script);
+  ASSERT_EQ(runs.size(), 3u);
+  for (const auto& [first, last] : runs) {
+    for (std::size_t i = first; i <= last; ++i) ASSERT_EQ(script[i].p_WT.z(), 0.0) << "on the paper while pen down";
+  }
+  for (std::size_t gap = 0; gap + 1 < runs.size(); ++gap) {
+    double highest = 0.0;
+    for (std::size_t i = runs[gap].second + 1; i < runs[gap + 1].first; ++i) {
+      EXPECT_FALSE(script[i].pen_down);
+      EXPECT_GE(script[i].p_WT.z(), 0.0);
+      highest = std::max(highest, script[i].p_WT.z());
+    }
+    EXPECT_GE(highest, 0.002);
+    EXPECT_LE(highest, 0.003 + 1e-12);
+  }
+  EXPECT_FALSE(script.samples().front().pen_down);
+  EXPECT_FALSE(script.samples().back().pen_down);
+}
+
+TEST(ExpertScript, StopsAtTheSharpCornerOfTheFirstStroke) {
+  // The first stroke turns 90° at the top left: handwriting comes to rest at such corners.
+  const HapticProfile& script = naScript();
+  const Vec2 corner = na().strokes[0].points[1];
+  std::size_t best = 0;
+  for (std::size_t i = 0; i < script.size(); ++i) {
+    if (script[i].pen_down && (script[i].p_WT.head<2>() - corner).norm() < (script[best].p_WT.head<2>() - corner).norm()) {
+      best = i;
+    }
+  }
+  EXPECT_LT(script[best].v_WT.norm(), 0.001);
+}
+
+TEST(ExpertScript, LongerMovementsTakeLongerButLessThanInProportion) {
+  // Isochrony: a movement's duration grows as its length to the power β (0.5 by default).
+  // Strokes 2 and 3 of ந are single movements; each pen-down run is its movement plus the
+  // touch-down and lift-off rests.
+  const ExpertConfig config;
+  const auto runs = penDownRuns(naScript());
+  const double rests_s = config.touch_down_s + config.lift_off_s;
+  const auto movement_s = [&](std::size_t s) {
+    return naScript()[runs[s].second].t_s - naScript()[runs[s].first].t_s - rests_s;
+  };
+  const double length_ratio = polylineLength(na().strokes[2].points) / polylineLength(na().strokes[1].points);
+  ASSERT_GT(length_ratio, 2.0);
+  EXPECT_NEAR(movement_s(2) / movement_s(1), std::pow(length_ratio, config.isochrony_exponent), 0.01);
+}
+
+TEST(ExpertScript, AxialForceRisesAtTouchDownHoldsAndFallsBeforeLiftOff) {
+  const ExpertConfig config;
+  const HapticProfile& script = naScript();
+  const double plateau_N = config.axial_force_N * std::sin(config.altitude_rad);
+  // The steepest step of a minimum-jerk rise over T is 1.875/T per second.
+  const double ramp_s = std::min(config.touch_down_s, config.lift_off_s);
+  const double max_step_N = plateau_N * 1.875 / ramp_s / config.rate_hz * 1.01;
+  for (std::size_t i = 0; i < script.size(); ++i) {
+    const double normal = -script[i].f_user_W.z();
+    if (!script[i].pen_down) {
+      EXPECT_EQ(normal, 0.0);
+    }
+    EXPECT_GE(normal, 0.0);
+    EXPECT_LE(normal, plateau_N + 1e-12);
+    if (i > 0) {
+      EXPECT_LE(std::abs(normal + script[i - 1].f_user_W.z()), max_step_N) << "at t = " << script[i].t_s;
+    }
+    EXPECT_EQ(script[i].tilt_altitude_rad, config.altitude_rad);
+    EXPECT_EQ(script[i].tilt_azimuth_rad, config.azimuth_rad);
+  }
+  // The first and last pen-down samples lie within one period of touch-down and lift-off, where
+  // a minimum-jerk rise over T has reached at most 10·(dt/T)³ of its plateau.
+  const double near_zero_N = plateau_N * 10.0 * std::pow(1.0 / (config.rate_hz * ramp_s), 3) * 1.01;
+  for (const auto& [first, last] : penDownRuns(script)) {
+    EXPECT_LE(-script[first].f_user_W.z(), near_zero_N) << "rises from zero at touch-down";
+    EXPECT_NEAR(-script[(first + last) / 2].f_user_W.z(), plateau_N, 1e-12) << "holds mid-stroke";
+    EXPECT_LE(-script[last].f_user_W.z(), near_zero_N) << "falls to zero at lift-off";
+    // Moving only at the plateau: the pen rests while the force rises and falls.
+    for (std::size_t i = first; i <= last; ++i) {
+      if (script[i].v_WT.norm() > 1e-9) {
+        ASSERT_NEAR(-script[i].f_user_W.z(), plateau_N, 1e-12);
+      }
+    }
+  }
+  EXPECT_TRUE(script.rawChannels().tilt);
+  EXPECT_EQ(script.metadata().subject, "expert");
+  EXPECT_EQ(script.metadata().skill, "na");
+}
+
+TEST(ExpertScript, RejectsABadConfigurationByName) {
+  ExpertConfig config;
+  config.peak_speed_m_per_s = -1.0;
+  try {
+    (void)expertScript(na(), config);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("peak_speed_m_per_s: expected a value in [0.01, 0.5] m/s, got -1"));
+  }
+  EXPECT_THROW((void)expertScript(Glyph{.name = "empty"}), InputError);
+}
+
+TEST(RecordExpert, PlaysTheScriptOnTheSimulatedPen) {
+  const HapticProfile script = expertScript(loadGlyph(defaultDataDir() / "glyphs" / "loop.json"));
+  render::WorldConfig world;
+  world.relief.kind = render::ReliefConfig::Kind::kFlat;
+  session::TrialEnvironment environment("sim://pen", world, 1000.0);
+  const HapticProfile expert =
+      recordExpert(environment, script, ProfileMetadata{.subject = "expert", .skill = "loop"});
+  EXPECT_NEAR(static_cast<double>(expert.size()), script.duration_s() * 1000.0, 1.0);
+  EXPECT_EQ(expert.metadata().extra.at("mode"), "BASIC");
+  EXPECT_EQ(expert.metadata().subject, "expert");
+  // Where the script writes at its plateau force, the pen is on the paper, close to the
+  // script's path (the hand's impedance lags a little), pressing with about the planned force.
+  const double plateau_N = ExpertConfig{}.axial_force_N * std::sin(ExpertConfig{}.altitude_rad);
+  double squared = 0.0, normal = 0.0;
+  std::size_t n = 0, in_contact = 0;
+  for (std::size_t i = 0; i < std::min(script.size(), expert.size()); ++i) {
+    if (!script[i].pen_down || -script[i].f_user_W.z() < plateau_N - 1e-9) continue;
+    squared += (expert[i].p_WT.head<2>() - script[i].p_WT.head<2>()).squaredNorm();
+    normal += -expert[i].f_user_W.z();
+    in_contact += expert[i].in_contact ? 1 : 0;
+    ++n;
+  }
+  ASSERT_GT(n, 500u);
+  EXPECT_EQ(in_contact, n);
+  EXPECT_LT(std::sqrt(squared / static_cast<double>(n)), 0.0015);
+  EXPECT_NEAR(normal / static_cast<double>(n), plateau_N, 0.1 * plateau_N);
+}
+
+}  // namespace
+}  // namespace hattr::sim
