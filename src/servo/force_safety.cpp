@@ -32,9 +32,10 @@ Vec3 ForceSafety::softWallForce(const Vec3& p_WT) const noexcept {
   return config_.wall_stiffness_N_per_m * (below - above);
 }
 
-Vec3 ForceSafety::filter(const Vec3& requested_W, const Vec3& p_WT, double dt_s) noexcept {
+Vec3 ForceSafety::filter(const Vec3& world_W, const Vec3& guidance_W, const Vec3& p_WT, double dt_s) noexcept {
   // A latched fault, or a bad number now: zero force at once (no rate limit on stopping).
-  if (fault_ == SafetyFault::kNone && !(requested_W.allFinite() && p_WT.allFinite() && std::isfinite(dt_s))) {
+  if (fault_ == SafetyFault::kNone &&
+      !(world_W.allFinite() && guidance_W.allFinite() && p_WT.allFinite() && std::isfinite(dt_s))) {
     latchFault(SafetyFault::kNonFiniteForce);
   }
   if (fault_ != SafetyFault::kNone) {
@@ -43,12 +44,21 @@ Vec3 ForceSafety::filter(const Vec3& requested_W, const Vec3& p_WT, double dt_s)
   }
   const double dt = std::max(dt_s, 0.0);
 
-  // Soft walls, then the magnitude clamp.
-  Vec3 force = requested_W + softWallForce(p_WT);
-  const double magnitude = force.norm();
-  if (magnitude > max_force_N_) {
-    force *= max_force_N_ / magnitude;
+  // Soft walls with the world's force, then the magnitude clamp: the guidance is scaled down
+  // first (the largest s in [0, 1] with |W + s·G| <= max), the world's force only if it alone
+  // exceeds the limit.
+  const Vec3 world = world_W + softWallForce(p_WT);
+  Vec3 force = world + guidance_W;
+  if (force.norm() > max_force_N_) {
     ++clamps_;
+    const double w2 = world.squaredNorm(), m2 = max_force_N_ * max_force_N_;
+    if (w2 >= m2) {
+      force = world * (max_force_N_ / std::sqrt(w2));
+    } else {
+      const double a = guidance_W.squaredNorm(), b = 2.0 * world.dot(guidance_W), c = w2 - m2;
+      const double s = (-b + std::sqrt(b * b - 4.0 * a * c)) / (2.0 * a);  // c < 0: one positive root
+      force = world + std::clamp(s, 0.0, 1.0) * guidance_W;
+    }
   }
 
   // Ramp in.

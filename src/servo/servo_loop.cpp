@@ -93,7 +93,7 @@ TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
   if (stalled || consumer_stalled) {
     safety_.restartRamp();
   } else {
-    command = safety_.filter(contact.f_on_pen_W + guide, pen.p_WT, dt_s);
+    command = safety_.filter(contact.f_on_pen_W, guide, pen.p_WT, dt_s);
   }
   if (device_.write(command) != device::DeviceStatus::kOk) safety_.latchFault(SafetyFault::kDeviceError);
   if (safety_.fault() != SafetyFault::kNone) status = TickStatus::kFaulted;

@@ -32,6 +32,21 @@ TEST(ForceSafety, ClampKeepsTheDirection) {
   EXPECT_NEAR(f.y() / f.x(), 4.0 / 3.0, 1e-12);
 }
 
+TEST(ForceSafety, ClampGivesWayWithTheGuidanceFirstSoThePaperKeepsItsSupport) {
+  SafetyConfig config = noRamp();
+  config.max_rate_N_per_s = 1e9;
+  ForceSafety safety(config, device::DeviceLimits{});  // 1.75 N
+  const Vec3 paper(0.0, 0.0, 1.5), guidance(2.0, 0.0, 0.0);
+  const Vec3 f = safety.filter(paper, guidance, Vec3::Zero(), 1e-3);
+  EXPECT_NEAR(f.z(), 1.5, 1e-12);                                  // the paper's support intact
+  EXPECT_NEAR(f.x(), std::sqrt(1.75 * 1.75 - 1.5 * 1.5), 1e-12);   // the guidance takes what is left
+  EXPECT_NEAR(f.norm(), 1.75, 1e-12);
+  // A paper force beyond the limit alone is clamped itself, without guidance.
+  const Vec3 g = safety.filter(Vec3(0.0, 0.0, 3.0), guidance, Vec3::Zero(), 1e-3);
+  EXPECT_NEAR(g.z(), 1.75, 1e-12);
+  EXPECT_NEAR(g.x(), 0.0, 1e-12);
+}
+
 TEST(ForceSafety, SoftWallsPushBackIntoTheWorkspace) {
   SafetyConfig config = noRamp();
   config.max_rate_N_per_s = 1e9;

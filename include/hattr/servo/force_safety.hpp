@@ -27,8 +27,14 @@ class ForceSafety {
   /// Throws InputError for negative or non-finite settings (setup time only).
   ForceSafety(const SafetyConfig& config, const device::DeviceLimits& limits);
 
-  /// The force to send to the device for the requested force at pen position p_WT.
-  Vec3 filter(const Vec3& requested_W, const Vec3& p_WT, double dt_s) noexcept;
+  /// The force to send to the device for the world's (the paper's) force and the guidance
+  /// force at pen position p_WT. When their sum exceeds the limit, the guidance gives way
+  /// first: the paper keeps supporting the pen as far as the limit allows.
+  Vec3 filter(const Vec3& world_W, const Vec3& guidance_W, const Vec3& p_WT, double dt_s) noexcept;
+  /// The same for a single force.
+  Vec3 filter(const Vec3& requested_W, const Vec3& p_WT, double dt_s) noexcept {
+    return filter(requested_W, Vec3::Zero(), p_WT, dt_s);
+  }
   /// Latches a fault: zero force until clearFault().
   void latchFault(SafetyFault fault) noexcept;
   /// Clears a latched fault; forces ramp in again.

@@ -1,0 +1,153 @@
+#pragma once
+/// The studio's live rig: one run of the pipeline that session::runTrial builds — a device
+/// opened by URI (a simulated pen held by a hand script), the paper of a TrialEnvironment,
+/// TrainingGuidance with gains clamped by guidance::clampGains, the ServoLoop and a
+/// session::Recorder — but kept open while it runs, so the GUI can watch the loop's triple
+/// buffer, post mailbox commands (mode switches) and start or stop recording.
+///
+/// runTrial owns its loop and returns only when the trial is over, so the studio cannot use
+/// it for a person who must see the pen move. LiveRig mirrors it step by step (same device
+/// set-up, same settle phase, same metadata, same recorder); with the same hand in simulated
+/// time it records the same profile bit for bit (tests/studio/live_rig_test.cpp). A library
+/// version of runTrial that exposes its loop while it runs would let this file shrink to a
+/// call (see the report in docs/studio.md).
+///
+/// Threads: the GUI thread calls every member; the servo thread runs the loop; in real time
+/// a relay thread takes every sample from the loop's ring and hands it to the recorder.
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "hattr/core/haptic_profile.hpp"
+#include "hattr/core/spsc_ring.hpp"
+#include "hattr/device/device.hpp"
+#include "hattr/device/hand.hpp"
+#include "hattr/guidance/training_guidance.hpp"
+#include "hattr/servo/servo_loop.hpp"
+#include "hattr/session/recorder.hpp"
+#include "hattr/session/trial.hpp"
+
+namespace hattr::studio {
+
+/// What a run records.
+enum class RecordMode {
+  kNone,     ///< nothing (free writing); the ring is still drained
+  kCommand,  ///< between armRecording() and disarmRecording() (start/stop buttons)
+  kPenDown,  ///< from the first pen-down until the pen has been up for pen_up_stop_s
+  kWindow,   ///< exactly the trial: [settle_s, settle_s + duration_s) of loop time
+};
+
+/// One run of the rig.
+struct RunSpec {
+  guidance::GuidanceConfig guidance;                               ///< mode, gains, indexing
+  std::shared_ptr<const guidance::ReferenceTrajectory> reference;  ///< null: BASIC only
+  ProfileMetadata metadata;                                        ///< subject, skill, ...
+  RecordMode record = RecordMode::kNone;
+  /// The pen is held lifted this long while the forces ramp in (at least the safety ramp,
+  /// 0.25 s); the trial's clock and guidance start after it. Not recorded.
+  double settle_s = 0.3;
+  double duration_s = 1.0;     ///< kWindow: how long the trial is recorded [s]
+  double pen_up_stop_s = 1.0;  ///< kPenDown: stop after the pen is up this long [s]
+  /// During the settle phase: true, the lifted pen follows the live hand (a person moves to
+  /// the start); false, it is held above the hand's first point, as runTrial does.
+  bool follow_during_settle = true;
+};
+
+/// The rig's state, readable from the GUI thread while a run goes on.
+struct RigStatus {
+  bool running = false;
+  bool settling = false;       ///< still in the settle phase
+  bool recording = false;      ///< the recorder is taking samples
+  bool window_done = false;    ///< kWindow: the trial's window has passed
+  bool pen_down_done = false;  ///< kPenDown: recorded and stopped after a long pen-up
+  std::uint64_t recorded_samples = 0;
+  double loop_time_s = 0.0;  ///< loop time of the newest sample the relay took
+};
+
+/// The run that records a trial set up for runTrial: its guidance, reference, metadata,
+/// duration and settle time, recorded over exactly [settle_s, settle_s + duration_s).
+/// `follow_during_settle`: true for a live hand (a person), false for a script (as runTrial).
+RunSpec trialRunSpec(const session::TrialSetup& setup, bool follow_during_settle);
+
+class LiveRig {
+ public:
+  LiveRig();
+  ~LiveRig();
+  LiveRig(const LiveRig&) = delete;
+  LiveRig& operator=(const LiveRig&) = delete;
+
+  /// Starts a run on `environment` (its paper, device URI and rate) with `hand` holding a
+  /// simulated pen. Real time: starts the servo thread (RealtimePolicy::kTry) and the relay
+  /// thread. Simulated: nothing moves until advanceSimulated(). A run in progress is
+  /// finished first and its recording discarded. `environment` and `hand` must outlive the
+  /// run. Throws InputError for bad settings (as runTrial).
+  void start(session::TrialEnvironment& environment, const RunSpec& spec, device::HandScript& hand,
+             session::Clock clock);
+  /// Simulated clock only: runs the loop for `seconds` of loop time (rounded to ticks), the
+  /// recorder draining between chunks of ticks as runTrial does.
+  void advanceSimulated(double seconds);
+  /// Stops the run (the device is commanded zero force) and returns what was recorded
+  /// (an empty profile when nothing was), with the run's counters. No-op result when idle.
+  session::TrialResult finish();
+
+  /// kCommand: start / stop taking samples (the start/stop buttons). Any thread.
+  void armRecording() noexcept;
+  void disarmRecording() noexcept;
+
+  /// The newest sample the loop published (the triple buffer). GUI thread only (the one
+  /// reader); false when nothing new since the last call (out keeps the last value).
+  bool readLatest(Sample& out) noexcept;
+  /// Posts a command to the servo thread's mailbox; false if full or not running.
+  bool post(const servo::ServoCommand& command) noexcept;
+  /// Switches the guidance mode with its cross-fade, through the mailbox.
+  bool switchMode(guidance::TrainingMode mode) noexcept;
+
+  [[nodiscard]] bool active() const noexcept { return loop_ != nullptr; }
+  [[nodiscard]] RigStatus status() const noexcept;
+  [[nodiscard]] const RunSpec& spec() const noexcept { return spec_; }
+  /// The loop's live counters (ticks, overruns, faults, drops). Only while active().
+  [[nodiscard]] const servo::LiveCounters* counters() const noexcept;
+  /// What the servo thread got from the real-time settings (after start in real time).
+  [[nodiscard]] std::string realtimeSummary() const;
+  /// Every gain and world clamp applied to this run.
+  [[nodiscard]] const std::vector<std::string>& clamps() const noexcept { return clamps_; }
+  [[nodiscard]] session::TrialEnvironment* environment() const noexcept { return environment_; }
+
+ private:
+  class SettlingHand;
+  void pump();           // relay: loop ring → recorder; consumer thread only
+  void publishStatus();  // consumer thread only
+
+  session::TrialEnvironment* environment_ = nullptr;
+  RunSpec spec_;
+  session::Clock clock_ = session::Clock::kSimulated;
+  std::vector<std::string> clamps_;
+  std::unique_ptr<SettlingHand> settling_;
+  std::unique_ptr<device::Device> device_;
+  std::unique_ptr<guidance::TrainingGuidance> guidance_;
+  std::unique_ptr<servo::ServoLoop> loop_;
+  std::unique_ptr<session::Recorder> recorder_;
+  std::unique_ptr<SpscRing<TickSample>> relay_;
+  std::thread relay_thread_;
+  std::atomic<bool> relay_stop_{false};
+
+  // Consumer-side state (relay thread or, in simulated time, the caller).
+  double window_begin_s_ = 0.0;
+  double window_end_s_ = 0.0;
+  double period_s_ = 1e-3;
+  bool window_armed_ = false;
+  bool was_recording_ = false;
+
+  // Published for the GUI thread.
+  std::atomic<bool> status_recording_{false};
+  std::atomic<bool> status_window_done_{false};
+  std::atomic<bool> status_pen_down_done_{false};
+  std::atomic<std::uint64_t> status_recorded_{0};
+  std::atomic<double> status_loop_time_s_{0.0};
+};
+
+}  // namespace hattr::studio

@@ -1,0 +1,168 @@
+#include "core/study_session.hpp"
+
+#include <fmt/format.h>
+
+#include "hattr/core/error.hpp"
+#include "hattr/render/world_config.hpp"
+
+namespace hattr::studio {
+
+StudySession::StudySession(const std::filesystem::path& file)
+    : db_(session::StudyDatabase::open(file, session::OpenMode::kRunner)) {
+  // The expert, the environment and the reference, as StudyRunner builds them.
+  const session::StudyDefinition& study = db_.study();
+  expert_ = db_.expert(study.skill);
+  environment_ = std::make_unique<session::TrialEnvironment>(
+      study.device, render::parseWorldConfig(study.world.dump(), "study world"), study.rate_hz);
+  reference_ = std::make_shared<guidance::ReferenceTrajectory>(expert_, study.rate_hz);
+}
+
+StudySession::~StudySession() {
+  try {
+    if (session_id_) db_.endSession(*session_id_);
+  } catch (...) {  // closing must not throw; the session's end time stays empty
+  }
+}
+
+void StudySession::selectSubject(const std::string& subject_id, double now_s) {
+  HATTR_THROW_UNLESS(state_ != State::kRunning, "study: cannot change subject while a trial runs");
+  bool found = false;
+  for (const session::SubjectRecord& s : db_.subjects()) found = found || s.id == subject_id;
+  HATTR_THROW_UNLESS(found, "study {}: no subject \"{}\"", db_.file().string(), subject_id);
+  if (session_id_) {
+    db_.endSession(*session_id_);
+    session_id_.reset();
+  }
+  subject_ = subject_id;
+  trials_ = db_.trials(subject_id);
+
+  // Resume at the first trial not completed, as the runner does.
+  completed_ = 0;
+  while (static_cast<std::size_t>(completed_) < trials_.size() &&
+         trials_[static_cast<std::size_t>(completed_)].status == session::TrialStatus::kCompleted) {
+    ++completed_;
+  }
+  next_ = static_cast<std::size_t>(completed_);
+  if (next_ >= trials_.size()) {
+    state_ = State::kFinished;
+  } else if (completed_ > 0) {
+    state_ = State::kResting;  // resuming: the runner rests before the first trial too
+    rest_until_s_ = now_s + db_.study().protocol.rest_s;
+  } else {
+    state_ = State::kReady;
+  }
+}
+
+std::string StudySession::participantKind() const {
+  for (const session::SubjectRecord& s : db_.subjects()) {
+    if (s.id == subject_) return s.spec.participant;
+  }
+  return {};
+}
+
+void StudySession::tick(double now_s) {
+  if (state_ == State::kResting && now_s >= rest_until_s_) state_ = State::kReady;
+}
+
+void StudySession::skipRest() {
+  if (state_ == State::kResting) state_ = State::kReady;
+}
+
+double StudySession::restRemaining_s(double now_s) const noexcept {
+  return state_ == State::kResting ? std::max(0.0, rest_until_s_ - now_s) : 0.0;
+}
+
+const session::TrialRecord* StudySession::currentTrial() const noexcept {
+  return next_ < trials_.size() && state_ != State::kNoSubject ? &trials_[next_] : nullptr;
+}
+
+std::string StudySession::prompt() const {
+  const session::TrialRecord* record = currentTrial();
+  if (record == nullptr) return state_ == State::kFinished ? "Every trial is done. Thank you!" : "";
+  const session::TrialPlan& plan = record->plan;
+  const session::Protocol& protocol = db_.study().protocol;
+  return fmt::format("{} with {}: trial {} of {}", plan.phase == session::Phase::kTraining ? "Training" : "Recall",
+                     guidance::modeName(plan.mode), plan.index,
+                     plan.phase == session::Phase::kTraining ? protocol.training_trials : protocol.recall_trials);
+}
+
+session::TrialSetup StudySession::currentSetup() const {
+  const session::TrialRecord* record = currentTrial();
+  HATTR_DEMAND(record != nullptr, "no current trial for subject {}", subject_);
+  const session::StudyDefinition& study = db_.study();
+  const session::TrialPlan& plan = record->plan;
+
+  // StudyRunner's set-up: the mode's guidance in training, none (BASIC) in recall.
+  session::TrialSetup setup;
+  setup.guidance.mode = plan.view.guidance ? plan.mode : guidance::TrainingMode::kBasic;
+  setup.guidance.playback.indexing = study.indexing;
+  setup.reference = reference_;
+  setup.duration_s = reference_->duration_s() + study.protocol.tail_s;
+  setup.clock = session::Clock::kRealTime;
+  setup.metadata.subject = subject_;
+  setup.metadata.skill = study.skill;
+  setup.metadata.source = fmt::format("study:{}", study.name);
+  setup.metadata.extra["study_mode"] = std::string(guidance::modeName(plan.mode));
+  setup.metadata.extra["phase"] = std::string(session::phaseName(plan.phase));
+  setup.metadata.extra["trial"] = fmt::format("{}", plan.index);
+  setup.metadata.extra["sequence"] = fmt::format("{}", plan.sequence);
+  setup.metadata.extra["reference_shown"] = plan.view.show_reference ? "yes" : "no";
+  return setup;
+}
+
+void StudySession::beginTrial() {
+  HATTR_DEMAND(state_ == State::kReady || state_ == State::kResting, "study: beginTrial() in state {}",
+               stateName(state_));
+  const session::TrialRecord* record = currentTrial();
+  HATTR_DEMAND(record != nullptr, "study: no trial to begin");
+  if (!session_id_) session_id_ = db_.beginSession(subject_);
+  db_.markRunning(record->id, *session_id_);
+  state_ = State::kRunning;
+}
+
+void StudySession::completeTrial(session::TrialResult result, double now_s) {
+  HATTR_DEMAND(state_ == State::kRunning, "study: completeTrial() in state {}", stateName(state_));
+  if (result.profile.empty()) {
+    state_ = State::kReady;
+    throw Error("the trial recorded no samples; it stays to be run again");
+  }
+  // Nothing in the profile may depend on when it ran (the runner's rule).
+  result.profile.metadata().created_utc = "";
+  const session::TrialRecord& record = trials_[next_];
+  try {
+    db_.completeTrial(record.id, result.profile,
+                      fmt::format("ok: {} samples, {} missed, {} faults", result.profile.size(), result.missed_samples,
+                                  result.faults));
+  } catch (...) {
+    state_ = State::kReady;  // not stored: the trial stays running in the database, to be run again
+    throw;
+  }
+  trials_[next_].status = session::TrialStatus::kCompleted;
+  ++completed_;
+  ++next_;
+  if (next_ >= trials_.size()) {
+    state_ = State::kFinished;
+    db_.endSession(*session_id_);
+    session_id_.reset();
+  } else {
+    state_ = State::kResting;
+    rest_until_s_ = now_s + db_.study().protocol.rest_s;
+  }
+}
+
+void StudySession::abandonTrial() {
+  if (state_ == State::kRunning) state_ = State::kReady;
+}
+
+std::string_view stateName(StudySession::State state) {
+  switch (state) {
+    case StudySession::State::kNoSubject: return "no subject";
+    case StudySession::State::kResting: return "resting";
+    case StudySession::State::kReady: return "ready";
+    case StudySession::State::kRunning: return "running";
+    case StudySession::State::kFinished: return "finished";
+  }
+  return "?";
+}
+
+}  // namespace hattr::studio

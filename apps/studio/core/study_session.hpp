@@ -1,0 +1,107 @@
+#pragma once
+/// A person's study session at the studio: the protocol of session::StudyRunner, stepped by
+/// the GUI instead of run in one call, because a person needs to see the pen, rest between
+/// trials and start each trial when ready. The steps and every database call are the
+/// runner's: the study database opened as the runner (exclusive lock, trials left running
+/// marked interrupted), resume at the first trial not completed, the runner's rule for
+/// rests and its prompts, the same TrialEnvironment and TrialSetup for each trial, the trial
+/// marked running before it starts and stored with its profile in one transaction when it
+/// ends (created_utc cleared, the runner's outcome text). With a scripted hand in simulated
+/// time it stores what the runner stores, bit for bit (tests/studio/study_session_test.cpp).
+///
+/// GUI thread only; times are seconds of any monotonic clock the caller keeps.
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hattr/session/study_database.hpp"
+#include "hattr/session/trial.hpp"
+
+namespace hattr::studio {
+
+class StudySession {
+ public:
+  enum class State {
+    kNoSubject,  ///< no subject picked yet
+    kResting,    ///< the rest before the next trial is counting down
+    kReady,      ///< the next trial waits for the person (prompt shown)
+    kRunning,    ///< a trial is running (marked running in the database)
+    kFinished,   ///< every trial of the subject is completed
+  };
+
+  /// Opens a study database as its runner. Throws InputError for a file that is not a
+  /// hattr study, a newer schema, or a study another runner holds (naming the holder).
+  explicit StudySession(const std::filesystem::path& file);
+  /// Ends the session in the database if one was begun.
+  ~StudySession();
+  StudySession(const StudySession&) = delete;
+  StudySession& operator=(const StudySession&) = delete;
+
+  [[nodiscard]] const session::StudyDefinition& study() const noexcept { return db_.study(); }
+  [[nodiscard]] const std::filesystem::path& file() const noexcept { return db_.file(); }
+  [[nodiscard]] std::vector<session::SubjectRecord> subjects() const { return db_.subjects(); }
+  [[nodiscard]] const HapticProfile& expert() const noexcept { return expert_; }
+  [[nodiscard]] const std::shared_ptr<const guidance::ReferenceTrajectory>& reference() const noexcept {
+    return reference_;
+  }
+  /// The study's device, paper and rate, built as the runner builds them.
+  [[nodiscard]] session::TrialEnvironment& environment() noexcept { return *environment_; }
+
+  /// Picks the subject and resumes at its first trial not completed. The runner's rule:
+  /// a rest comes before every trial but a new subject's first. Throws InputError for an
+  /// unknown subject; not while a trial runs.
+  void selectSubject(const std::string& subject_id, double now_s);
+  [[nodiscard]] const std::string& subject() const noexcept { return subject_; }
+  /// The subject's participant kind ("person" is the one meant for the studio).
+  [[nodiscard]] std::string participantKind() const;
+
+  /// Moves from resting to ready when the rest is over.
+  void tick(double now_s);
+  /// Ends the rest now (the experimenter's "next").
+  void skipRest();
+  [[nodiscard]] State state() const noexcept { return state_; }
+  [[nodiscard]] double restRemaining_s(double now_s) const noexcept;
+
+  /// The trial the subject does next (also while it runs), if any.
+  [[nodiscard]] const session::TrialRecord* currentTrial() const noexcept;
+  /// The runner's prompt for the current trial ("Training with ALPHA: trial 3 of 11").
+  [[nodiscard]] std::string prompt() const;
+  /// The runner's set-up of the current trial: guidance on in training, BASIC in recall,
+  /// the expert's duration plus the tail, the study metadata.
+  [[nodiscard]] session::TrialSetup currentSetup() const;
+  [[nodiscard]] int completedCount() const noexcept { return completed_; }
+  [[nodiscard]] int totalCount() const noexcept { return static_cast<int>(trials_.size()); }
+
+  /// Starts the current trial: begins the session if needed, marks the trial running.
+  /// Only when ready (or resting: the rest is cut short).
+  void beginTrial();
+  /// Stores the finished trial (profile and status in one transaction) and moves on: to a
+  /// rest before the next trial, or to finished (the session ends). Throws hattr::Error
+  /// for an empty recording or when the database refuses the write; either way the state
+  /// goes back to ready and the trial (still marked running) can be run again.
+  void completeTrial(session::TrialResult result, double now_s);
+  /// The person abandoned the trial: it stays marked running until run again (each run
+  /// counts an attempt; a crash leaves it to be marked interrupted). Back to ready.
+  void abandonTrial();
+
+ private:
+  session::StudyDatabase db_;
+  HapticProfile expert_;
+  std::unique_ptr<session::TrialEnvironment> environment_;
+  std::shared_ptr<const guidance::ReferenceTrajectory> reference_;
+  std::string subject_;
+  std::vector<session::TrialRecord> trials_;
+  std::size_t next_ = 0;  // index of the current trial in trials_
+  int completed_ = 0;
+  std::optional<std::int64_t> session_id_;
+  State state_ = State::kNoSubject;
+  double rest_until_s_ = 0.0;
+};
+
+std::string_view stateName(StudySession::State state);
+
+}  // namespace hattr::studio

@@ -1,0 +1,782 @@
+#include "ui/main_window.hpp"
+
+#include <QAction>
+#include <QApplication>
+#include <QCheckBox>
+#include <QCloseEvent>
+#include <QComboBox>
+#include <QDoubleSpinBox>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QFormLayout>
+#include <QHBoxLayout>
+#include <QHeaderView>
+#include <QLabel>
+#include <QLineEdit>
+#include <QMenuBar>
+#include <QMessageBox>
+#include <QPushButton>
+#include <QSlider>
+#include <QSplitter>
+#include <QStatusBar>
+#include <QTabWidget>
+#include <QTimer>
+#include <QToolBar>
+#include <QTreeWidget>
+#include <QVBoxLayout>
+#include <cmath>
+
+#include "core/profile_files.hpp"
+#include "hattr/core/error.hpp"
+#include "hattr/render/world_config.hpp"
+#include "ui/paper_view.hpp"
+#include "ui/profile_plot.hpp"
+
+namespace hattr::studio {
+namespace {
+
+constexpr int kFramePeriod_ms = 16;  // ~60 Hz display
+constexpr int kStatusPeriod_ms = 250;
+constexpr double kRollingWindow_s = 5.0;  // the plot's window while writing freely
+constexpr const char* kDeviceUri = "sim://pen";
+
+QString qs(const std::string& text) { return QString::fromStdString(text); }
+
+QLabel* wrappedLabel(const QString& text = {}) {
+  auto* label = new QLabel(text);
+  label->setWordWrap(true);
+  label->setTextInteractionFlags(Qt::TextSelectableByMouse);
+  return label;
+}
+
+}  // namespace
+
+MainWindow::MainWindow(std::unique_ptr<QSettings> settings, QWidget* parent)
+    : QMainWindow(parent), settings_(std::move(settings)) {
+  if (!settings_) settings_ = std::make_unique<QSettings>(QStringLiteral("hattr"), QStringLiteral("studio"));
+  clock_.start();
+  setWindowTitle(tr("hattr studio"));
+
+  // The default paper: the world file remembered, else the defaults.
+  world_file_ = settings_->value("world/file").toString();
+  render::WorldConfig world;
+  if (!world_file_.isEmpty()) {
+    try {
+      world = render::loadWorldConfig(world_file_.toStdString());
+    } catch (const std::exception&) {
+      world_file_.clear();  // a world file that went bad: fall back to the defaults silently
+    }
+  }
+  default_environment_ = std::make_unique<session::TrialEnvironment>(kDeviceUri, world, 1000.0);
+
+  buildUi();
+  buildActions();
+  loadSettings();
+  useEnvironment(*default_environment_);
+
+  frame_timer_ = new QTimer(this);
+  frame_timer_->setTimerType(Qt::PreciseTimer);
+  connect(frame_timer_, &QTimer::timeout, this, &MainWindow::onFrame);
+  frame_timer_->start(kFramePeriod_ms);
+  status_timer_ = new QTimer(this);
+  connect(status_timer_, &QTimer::timeout, this, &MainWindow::onStatus);
+  status_timer_->start(kStatusPeriod_ms);
+  refreshButtons();
+}
+
+MainWindow::~MainWindow() { (void)rig_.finish(); }
+
+double MainWindow::now_s() const { return static_cast<double>(clock_.nsecsElapsed()) * 1e-9; }
+
+// ---- Construction ------------------------------------------------------------------------
+
+void MainWindow::buildUi() {
+  paper_ = new PaperView;
+  paper_->setMouseHand(&hand_);
+  plot_ = new ProfilePlot;
+  left_splitter_ = new QSplitter(Qt::Vertical);
+  left_splitter_->addWidget(paper_);
+  left_splitter_->addWidget(plot_);
+  left_splitter_->setStretchFactor(0, 3);
+  left_splitter_->setStretchFactor(1, 1);
+
+  tabs_ = new QTabWidget;
+  buildWriteTab();
+  buildRecordTab();
+  buildTrainTab();
+  buildStudyTab();
+  buildReviewTab();
+  tabs_->setMinimumWidth(320);
+  connect(tabs_, &QTabWidget::currentChanged, this, [this] { refreshButtons(); });
+
+  splitter_ = new QSplitter(Qt::Horizontal);
+  splitter_->addWidget(left_splitter_);
+  splitter_->addWidget(tabs_);
+  splitter_->setStretchFactor(0, 3);
+  splitter_->setStretchFactor(1, 1);
+  setCentralWidget(splitter_);
+
+  // Tool bar: how hard the hand presses, the force arrows.
+  auto* tools = addToolBar(tr("Input"));
+  tools->setObjectName("input_toolbar");
+  tools->addWidget(new QLabel(tr(" Press ")));
+  press_slider_ = new QSlider(Qt::Horizontal);
+  press_slider_->setRange(PressScale::toSliderSteps(PressScale::kMin_N), PressScale::toSliderSteps(PressScale::kMax_N));
+  press_slider_->setFixedWidth(160);
+  press_slider_->setToolTip(
+      tr("How hard the hand presses the pen along its axis while the left button is held "
+         "(also the mouse wheel over the paper)"));
+  tools->addWidget(press_slider_);
+  press_label_ = new QLabel;
+  press_label_->setMinimumWidth(60);
+  tools->addWidget(press_label_);
+  connect(press_slider_, &QSlider::valueChanged, this, [this](int steps) {
+    MouseInput input = hand_.input();
+    input.press_N = PressScale::fromSliderSteps(steps);
+    hand_.setInput(input);
+    press_label_->setText(tr("%1 N").arg(input.press_N, 0, 'f', 1));
+  });
+  connect(paper_, &PaperView::pressChanged, this, [this](double press_N) {
+    const QSignalBlocker block(press_slider_);
+    press_slider_->setValue(PressScale::toSliderSteps(press_N));
+    press_label_->setText(tr("%1 N").arg(press_N, 0, 'f', 1));
+  });
+  tools->addSeparator();
+  arrows_check_ = new QCheckBox(tr("Force arrows"));
+  arrows_check_->setChecked(true);
+  connect(arrows_check_, &QCheckBox::toggled, this, [this](bool on) { paper_->setForceArrowsShown(on); });
+  tools->addWidget(arrows_check_);
+
+  // Status bar: the input, the loop, the activity; always visible.
+  status_input_ = new QLabel;
+  status_loop_ = new QLabel;
+  status_activity_ = new QLabel;
+  statusBar()->addWidget(status_activity_, 1);
+  statusBar()->addPermanentWidget(status_input_);
+  statusBar()->addPermanentWidget(status_loop_);
+}
+
+void MainWindow::buildWriteTab() {
+  auto* page = new QWidget;
+  auto* layout = new QVBoxLayout(page);
+  layout->addWidget(wrappedLabel(
+      tr("<b>Write</b> on the virtual paper with the simulated force-feedback pen. The mouse is your hand: "
+         "move it over the paper to move the pen, hold the <b>left button</b> to put the pen down, turn the "
+         "<b>wheel</b> (or use the Press slider) to press harder or lighter.")));
+  world_label_ = wrappedLabel();
+  layout->addWidget(world_label_);
+  auto* load_world = new QPushButton(tr("Load world…"));
+  connect(load_world, &QPushButton::clicked, this, [this] {
+    const QString file =
+        askOpenFile(tr("Load a world configuration"), tr("World configuration (*.json);;All files (*)"));
+    if (!file.isEmpty()) loadWorld(file);
+  });
+  auto* clear = new QPushButton(tr("Clear trail (C)"));
+  connect(clear, &QPushButton::clicked, this, &MainWindow::clearTrail);
+  layout->addWidget(load_world);
+  layout->addWidget(clear);
+  layout->addStretch(1);
+  tabs_->addTab(page, tr("Write"));
+}
+
+void MainWindow::buildRecordTab() {
+  auto* page = new QWidget;
+  auto* layout = new QVBoxLayout(page);
+  layout->addWidget(
+      wrappedLabel(tr("<b>Record an expert.</b> Name the expert and the character, then record: "
+                      "with the pen-down trigger the take starts when the pen touches the paper and "
+                      "ends after it has been lifted for a second.")));
+  auto* form = new QFormLayout;
+  expert_name_ = new QLineEdit;
+  expert_name_->setPlaceholderText(tr("e.g. expert1"));
+  character_ = new QLineEdit;
+  character_->setPlaceholderText(tr("e.g. na"));
+  trigger_ = new QComboBox;
+  trigger_->addItem(tr("Pen down starts, 1 s pen-up stops"));
+  trigger_->addItem(tr("Record / Stop buttons"));
+  form->addRow(tr("Expert"), expert_name_);
+  form->addRow(tr("Character"), character_);
+  form->addRow(tr("Trigger"), trigger_);
+  layout->addLayout(form);
+  record_button_ = new QPushButton(tr("Record (R)"));
+  connect(record_button_, &QPushButton::clicked, this, [this] {
+    if (activity_ == Activity::kRecording) {
+      stopRecording();
+    } else {
+      startRecording();
+    }
+  });
+  replay_take_button_ = new QPushButton(tr("Review take (P)"));
+  connect(replay_take_button_, &QPushButton::clicked, this, [this] {
+    if (take_) startPlayback(&*take_, nullptr);
+  });
+  retake_button_ = new QPushButton(tr("Re-take"));
+  connect(retake_button_, &QPushButton::clicked, this, [this] {
+    if (take_ && !take_saved_ && !confirm(tr("The current take is not saved. Discard it and record again?"))) return;
+    take_.reset();
+    take_saved_ = true;
+    startRecording();
+  });
+  save_take_button_ = new QPushButton(tr("Save take… (Ctrl+S)"));
+  connect(save_take_button_, &QPushButton::clicked, this, [this] {
+    if (!take_) return;
+    const QString file =
+        askSaveFile(tr("Save the take as a haptic profile"),
+                    qs(suggestedTakeFileName(expert_name_->text().toStdString(), character_->text().toStdString())));
+    if (!file.isEmpty()) saveTake(file);
+  });
+  for (auto* b : {record_button_, replay_take_button_, retake_button_, save_take_button_}) layout->addWidget(b);
+  take_label_ = wrappedLabel(tr("No take yet."));
+  layout->addWidget(take_label_);
+  layout->addStretch(1);
+  tabs_->addTab(page, tr("Record"));
+}
+
+void MainWindow::buildTrainTab() {
+  auto* page = new QWidget;
+  auto* layout = new QVBoxLayout(page);
+  layout->addWidget(
+      wrappedLabel(tr("<b>Train</b> against an expert's haptic profile. After the trial, DTW scores "
+                      "compare your trace (shape: x, y) and your force (fx, fy, fz) with the "
+                      "expert's; lower is closer.")));
+  reference_label_ = wrappedLabel(tr("No reference loaded."));
+  layout->addWidget(reference_label_);
+  auto* open = new QPushButton(tr("Open reference… (Ctrl+O)"));
+  connect(open, &QPushButton::clicked, this, [this] {
+    const QString file = askOpenFile(tr("Open a reference profile"), tr("Haptic profiles (*.csv);;All files (*)"));
+    if (!file.isEmpty()) loadReference(file);
+  });
+  layout->addWidget(open);
+  auto* form = new QFormLayout;
+  mode_combo_ = new QComboBox;
+  for (const auto mode : {guidance::TrainingMode::kBasic, guidance::TrainingMode::kPositionControl,
+                          guidance::TrainingMode::kForceControl}) {
+    mode_combo_->addItem(
+        QString::fromLatin1(guidance::modeName(mode).data(), static_cast<qsizetype>(guidance::modeName(mode).size())));
+  }
+  mode_combo_->setToolTip(tr("BASIC: no assistance (1) · PCONTROL: position guidance (2) · ALPHA: force guidance (3)"));
+  connect(mode_combo_, &QComboBox::activated, this,
+          [this](int index) { setMode(static_cast<guidance::TrainingMode>(index)); });
+  indexing_combo_ = new QComboBox;
+  indexing_combo_->addItem(tr("time (the paper's)"));
+  indexing_combo_->addItem(tr("progress (follows you)"));
+  show_reference_check_ = new QCheckBox(tr("Show the reference"));
+  show_reference_check_->setChecked(true);
+  connect(show_reference_check_, &QCheckBox::toggled, this, [this](bool on) {
+    if (activity_ != Activity::kStudyTrial) paper_->setReferenceShown(on);
+  });
+  settle_spin_ = new QDoubleSpinBox;
+  settle_spin_->setRange(0.3, 10.0);
+  settle_spin_->setSingleStep(0.5);
+  settle_spin_->setSuffix(tr(" s"));
+  settle_spin_->setValue(1.5);
+  settle_spin_->setToolTip(
+      tr("Before each trial the pen is held lifted this long while the forces ramp in; move "
+         "to the start meanwhile"));
+  form->addRow(tr("Mode"), mode_combo_);
+  form->addRow(tr("Indexing"), indexing_combo_);
+  form->addRow(tr("Get ready"), settle_spin_);
+  form->addRow(QString(), show_reference_check_);
+  layout->addLayout(form);
+  trial_button_ = new QPushButton(tr("Start trial (Space)"));
+  connect(trial_button_, &QPushButton::clicked, this, [this] {
+    if (activity_ == Activity::kTrial) {
+      abortActivity();
+    } else {
+      startTrial();
+    }
+  });
+  replay_trial_button_ = new QPushButton(tr("Replay trial (P)"));
+  connect(replay_trial_button_, &QPushButton::clicked, this, [this] {
+    if (last_trial_) startPlayback(&*last_trial_, last_trial_expert_ ? &*last_trial_expert_ : nullptr);
+  });
+  save_trial_button_ = new QPushButton(tr("Save trial… (Ctrl+Shift+S)"));
+  connect(save_trial_button_, &QPushButton::clicked, this, [this] {
+    if (!last_trial_) return;
+    const QString file = askSaveFile(tr("Save the trial as a haptic profile"), QStringLiteral("trial.csv"));
+    if (!file.isEmpty()) saveLastTrial(file);
+  });
+  for (auto* b : {trial_button_, replay_trial_button_, save_trial_button_}) layout->addWidget(b);
+  scores_label_ = wrappedLabel();
+  layout->addWidget(scores_label_);
+  layout->addStretch(1);
+  tabs_->addTab(page, tr("Train"));
+}
+
+void MainWindow::buildStudyTab() {
+  auto* page = new QWidget;
+  auto* layout = new QVBoxLayout(page);
+  layout->addWidget(
+      wrappedLabel(tr("<b>Study session</b> for a person: open a study database (made with "
+                      "<tt>hattr study init</tt>), pick the subject and follow the prompts. Every "
+                      "trial is stored the moment it ends; reopening resumes where it stopped.")));
+  auto* open = new QPushButton(tr("Open study… (Ctrl+D)"));
+  connect(open, &QPushButton::clicked, this, [this] {
+    const QString file = askOpenFile(tr("Open a study database"), tr("Study databases (*.sqlite *.db);;All files (*)"));
+    if (!file.isEmpty()) openStudy(file);
+  });
+  layout->addWidget(open);
+  study_label_ = wrappedLabel(tr("No study open."));
+  layout->addWidget(study_label_);
+  auto* row = new QHBoxLayout;
+  subject_combo_ = new QComboBox;
+  subject_button_ = new QPushButton(tr("Begin"));
+  connect(subject_button_, &QPushButton::clicked, this,
+          [this] { selectStudySubject(subject_combo_->currentData().toString()); });
+  row->addWidget(new QLabel(tr("Subject")));
+  row->addWidget(subject_combo_, 1);
+  row->addWidget(subject_button_);
+  layout->addLayout(row);
+  study_progress_ = wrappedLabel();
+  layout->addWidget(study_progress_);
+  study_prompt_ = wrappedLabel();
+  QFont big = study_prompt_->font();
+  big.setPointSizeF(big.pointSizeF() * 1.3);
+  big.setBold(true);
+  study_prompt_->setFont(big);
+  layout->addWidget(study_prompt_);
+  study_next_button_ = new QPushButton(tr("Start trial (Space) / skip rest (N)"));
+  connect(study_next_button_, &QPushButton::clicked, this, &MainWindow::studyNext);
+  layout->addWidget(study_next_button_);
+  close_study_button_ = new QPushButton(tr("Close study"));
+  connect(close_study_button_, &QPushButton::clicked, this, &MainWindow::closeStudy);
+  layout->addWidget(close_study_button_);
+  study_scores_ = wrappedLabel();
+  layout->addWidget(study_scores_);
+  layout->addStretch(1);
+  tabs_->addTab(page, tr("Study"));
+}
+
+void MainWindow::buildReviewTab() {
+  auto* page = new QWidget;
+  auto* layout = new QVBoxLayout(page);
+  layout->addWidget(
+      wrappedLabel(tr("<b>Review</b> a study: pick a completed trial to overlay it on the expert "
+                      "(orange on blue) and play it back.")));
+  auto* open = new QPushButton(tr("Open study for review… (Ctrl+Shift+D)"));
+  connect(open, &QPushButton::clicked, this, [this] {
+    const QString file =
+        askOpenFile(tr("Open a study database for review"), tr("Study databases (*.sqlite *.db);;All files (*)"));
+    if (!file.isEmpty()) openReview(file);
+  });
+  layout->addWidget(open);
+  review_label_ = wrappedLabel(tr("No study open for review."));
+  layout->addWidget(review_label_);
+  review_tree_ = new QTreeWidget;
+  review_tree_->setHeaderLabels({tr("Trial"), tr("Mode"), tr("Phase"), tr("Status")});
+  review_tree_->header()->setSectionResizeMode(QHeaderView::ResizeToContents);
+  connect(review_tree_, &QTreeWidget::currentItemChanged, this, [this](QTreeWidgetItem* item) {
+    if (item != nullptr && item->data(0, Qt::UserRole).isValid())
+      showReviewTrial(item->data(0, Qt::UserRole).toLongLong());
+  });
+  layout->addWidget(review_tree_, 1);
+  auto* row = new QHBoxLayout;
+  play_button_ = new QPushButton(tr("Play / pause (P)"));
+  connect(play_button_, &QPushButton::clicked, this, &MainWindow::togglePlayback);
+  speed_combo_ = new QComboBox;
+  for (const double speed : {0.25, 0.5, 1.0, 2.0}) speed_combo_->addItem(tr("%1×").arg(speed), speed);
+  speed_combo_->setCurrentIndex(2);
+  connect(speed_combo_, &QComboBox::activated, this,
+          [this] { playback_.setSpeed(speed_combo_->currentData().toDouble()); });
+  row->addWidget(play_button_, 1);
+  row->addWidget(speed_combo_);
+  layout->addLayout(row);
+  review_scores_ = wrappedLabel();
+  layout->addWidget(review_scores_);
+  tabs_->addTab(page, tr("Review"));
+}
+
+void MainWindow::buildActions() {
+  const auto add = [this](QMenu* menu, const QString& text, const QKeySequence& keys, auto slot) {
+    auto* action = new QAction(text, this);
+    action->setShortcut(keys);
+    action->setShortcutContext(Qt::WindowShortcut);
+    connect(action, &QAction::triggered, this, slot);
+    menu->addAction(action);
+    addAction(action);
+    return action;
+  };
+  QMenu* file = menuBar()->addMenu(tr("&File"));
+  add(file, tr("Open reference…"), QKeySequence(Qt::CTRL | Qt::Key_O), [this] {
+    const QString f = askOpenFile(tr("Open a reference profile"), tr("Haptic profiles (*.csv);;All files (*)"));
+    if (!f.isEmpty()) loadReference(f);
+  });
+  add(file, tr("Load world…"), QKeySequence(Qt::CTRL | Qt::Key_W), [this] {
+    const QString f = askOpenFile(tr("Load a world configuration"), tr("World configuration (*.json);;All files (*)"));
+    if (!f.isEmpty()) loadWorld(f);
+  });
+  add(file, tr("Open study…"), QKeySequence(Qt::CTRL | Qt::Key_D), [this] {
+    const QString f = askOpenFile(tr("Open a study database"), tr("Study databases (*.sqlite *.db);;All files (*)"));
+    if (!f.isEmpty()) openStudy(f);
+  });
+  add(file, tr("Open study for review…"), QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_D), [this] {
+    const QString f =
+        askOpenFile(tr("Open a study database for review"), tr("Study databases (*.sqlite *.db);;All files (*)"));
+    if (!f.isEmpty()) openReview(f);
+  });
+  file->addSeparator();
+  add(file, tr("Save take…"), QKeySequence(Qt::CTRL | Qt::Key_S), [this] { save_take_button_->click(); });
+  add(file, tr("Save last trial…"), QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_S),
+      [this] { save_trial_button_->click(); });
+  file->addSeparator();
+  add(file, tr("Quit"), QKeySequence(Qt::CTRL | Qt::Key_Q), [this] { close(); });
+
+  QMenu* act = menuBar()->addMenu(tr("&Actions"));
+  add(act, tr("Start / stop (the tab's main action)"), QKeySequence(Qt::Key_Space), [this] { primaryAction(); });
+  add(act, tr("Abort trial, recording or playback"), QKeySequence(Qt::Key_Escape), [this] { abortActivity(); });
+  add(act, tr("Record / stop recording"), QKeySequence(Qt::Key_R), [this] {
+    tabs_->setCurrentIndex(kTabRecord);
+    record_button_->click();
+  });
+  add(act, tr("Start trial"), QKeySequence(Qt::Key_T), [this] {
+    tabs_->setCurrentIndex(kTabTrain);
+    if (activity_ != Activity::kTrial) startTrial();
+  });
+  add(act, tr("Next (study: skip the rest, start the trial)"), QKeySequence(Qt::Key_N), [this] { studyNext(); });
+  add(act, tr("Play / pause"), QKeySequence(Qt::Key_P), [this] { togglePlayback(); });
+  add(act, tr("Clear trail"), QKeySequence(Qt::Key_C), [this] { clearTrail(); });
+  act->addSeparator();
+  add(act, tr("Mode BASIC"), QKeySequence(Qt::Key_1), [this] { setMode(guidance::TrainingMode::kBasic); });
+  add(act, tr("Mode PCONTROL"), QKeySequence(Qt::Key_2), [this] { setMode(guidance::TrainingMode::kPositionControl); });
+  add(act, tr("Mode ALPHA"), QKeySequence(Qt::Key_3), [this] { setMode(guidance::TrainingMode::kForceControl); });
+  act->addSeparator();
+  add(act, tr("Press harder"), QKeySequence(Qt::Key_Plus),
+      [this] { press_slider_->setValue(press_slider_->value() + 1); });
+  add(act, tr("Press lighter"), QKeySequence(Qt::Key_Minus),
+      [this] { press_slider_->setValue(press_slider_->value() - 1); });
+  QMenu* view = menuBar()->addMenu(tr("&View"));
+  for (int tab = 0; tab < tabs_->count(); ++tab) {
+    add(view, tabs_->tabText(tab), QKeySequence(Qt::CTRL | static_cast<Qt::Key>(Qt::Key_1 + tab)),
+        [this, tab] { tabs_->setCurrentIndex(tab); });
+  }
+  QMenu* help = menuBar()->addMenu(tr("&Help"));
+  add(help, tr("Shortcuts"), QKeySequence(Qt::Key_F1), [this] {
+    QMessageBox::information(
+        this, tr("hattr studio: shortcuts"),
+        tr("<table>"
+           "<tr><td><b>Space</b></td><td>the tab's main action: record/stop, start/stop trial, study next, "
+           "play/pause</td></tr>"
+           "<tr><td><b>Esc</b></td><td>abort the trial, recording or playback</td></tr>"
+           "<tr><td><b>R</b></td><td>record / stop recording</td></tr>"
+           "<tr><td><b>T</b></td><td>start a training trial</td></tr>"
+           "<tr><td><b>N</b></td><td>study: skip the rest / start the next trial</td></tr>"
+           "<tr><td><b>P</b></td><td>play / pause the take, trial or reviewed trial</td></tr>"
+           "<tr><td><b>1 2 3</b></td><td>BASIC, PCONTROL, ALPHA</td></tr>"
+           "<tr><td><b>+ −</b>, wheel</td><td>press harder / lighter</td></tr>"
+           "<tr><td><b>C</b></td><td>clear the trail</td></tr>"
+           "<tr><td><b>Ctrl+O</b></td><td>open a reference</td></tr>"
+           "<tr><td><b>Ctrl+S</b>, <b>Ctrl+Shift+S</b></td><td>save the take, save the last trial</td></tr>"
+           "<tr><td><b>Ctrl+D</b>, <b>Ctrl+Shift+D</b></td><td>open a study, open a study for review</td></tr>"
+           "<tr><td><b>Ctrl+W</b></td><td>load a world configuration</td></tr>"
+           "<tr><td><b>Ctrl+1…5</b></td><td>the tabs</td></tr>"
+           "</table>"));
+  });
+}
+
+// ---- Settings ------------------------------------------------------------------------------
+
+void MainWindow::loadSettings() {
+  QSettings& s = *settings_;
+  restoreGeometry(s.value("window/geometry").toByteArray());
+  restoreState(s.value("window/state").toByteArray());
+  splitter_->restoreState(s.value("window/splitter").toByteArray());
+  left_splitter_->restoreState(s.value("window/left_splitter").toByteArray());
+  tabs_->setCurrentIndex(s.value("window/tab", 0).toInt());
+  const double press_N = s.value("input/press_N", PressScale::kDefault_N).toDouble();
+  press_slider_->setValue(PressScale::toSliderSteps(press_N));
+  MouseInput input = hand_.input();
+  input.press_N = PressScale::fromSliderSteps(press_slider_->value());
+  hand_.setInput(input);
+  press_label_->setText(tr("%1 N").arg(input.press_N, 0, 'f', 1));
+  arrows_check_->setChecked(s.value("view/arrows", true).toBool());
+  expert_name_->setText(s.value("record/name").toString());
+  character_->setText(s.value("record/character").toString());
+  trigger_->setCurrentIndex(s.value("record/trigger", 0).toInt());
+  indexing_combo_->setCurrentIndex(s.value("train/indexing", 0).toInt());
+  show_reference_check_->setChecked(s.value("train/show_reference", true).toBool());
+  settle_spin_->setValue(s.value("train/settle_s", 1.5).toDouble());
+  setMode(static_cast<guidance::TrainingMode>(std::clamp(s.value("train/mode", 0).toInt(), 0, 2)));
+  // The reference of last time, quietly: a file that went away just leaves none loaded.
+  const QString reference = s.value("train/reference_file").toString();
+  if (!reference.isEmpty() && QFileInfo::exists(reference)) {
+    const bool was = interactive_;
+    interactive_ = false;
+    loadReference(reference);
+    interactive_ = was;
+    last_error_.clear();
+  }
+}
+
+void MainWindow::saveSettings() {
+  QSettings& s = *settings_;
+  s.setValue("window/geometry", saveGeometry());
+  s.setValue("window/state", saveState());
+  s.setValue("window/splitter", splitter_->saveState());
+  s.setValue("window/left_splitter", left_splitter_->saveState());
+  s.setValue("window/tab", tabs_->currentIndex());
+  s.setValue("input/press_N", hand_.input().press_N);
+  s.setValue("view/arrows", arrows_check_->isChecked());
+  s.setValue("record/name", expert_name_->text());
+  s.setValue("record/character", character_->text());
+  s.setValue("record/trigger", trigger_->currentIndex());
+  s.setValue("train/mode", static_cast<int>(mode_));
+  s.setValue("train/indexing", indexing_combo_->currentIndex());
+  s.setValue("train/show_reference", show_reference_check_->isChecked());
+  s.setValue("train/settle_s", settle_spin_->value());
+  s.setValue("train/reference_file", reference_file_);
+  s.setValue("world/file", world_file_);
+  s.sync();
+}
+
+void MainWindow::closeEvent(QCloseEvent* event) {
+  if (take_ && !take_saved_ && !confirm(tr("The take is not saved. Quit and lose it?"))) {
+    event->ignore();
+    return;
+  }
+  if (last_trial_ && !last_trial_saved_ && !confirm(tr("The last trial was not stored anywhere. Quit and lose it?"))) {
+    event->ignore();
+    return;
+  }
+  saveSettings();
+  (void)rig_.finish();
+  event->accept();
+}
+
+// ---- Dialogs -------------------------------------------------------------------------------
+
+void MainWindow::setInteractive(bool interactive, bool answer) {
+  interactive_ = interactive;
+  answer_ = answer;
+}
+
+void MainWindow::showError(const QString& what, const QString& detail) {
+  last_error_ = what + QStringLiteral(": ") + detail;
+  statusBar()->showMessage(last_error_, 10000);
+  if (interactive_)
+    QMessageBox::critical(this, tr("hattr studio"),
+                          QStringLiteral("<b>%1</b><br><br>%2").arg(what.toHtmlEscaped(), detail.toHtmlEscaped()));
+}
+
+bool MainWindow::confirm(const QString& question) {
+  if (!interactive_) return answer_;
+  return QMessageBox::question(this, tr("hattr studio"), question, QMessageBox::Yes | QMessageBox::No,
+                               QMessageBox::No) == QMessageBox::Yes;
+}
+
+QString MainWindow::askSaveFile(const QString& title, const QString& suggested) {
+  if (!interactive_) return {};
+  const QString dir = settings_->value("files/last_dir").toString();
+  const QString file =
+      QFileDialog::getSaveFileName(this, title, dir.isEmpty() ? suggested : dir + "/" + suggested,
+                                   tr("Haptic profiles (*.csv)"), nullptr, QFileDialog::DontConfirmOverwrite);
+  if (!file.isEmpty()) settings_->setValue("files/last_dir", QFileInfo(file).absolutePath());
+  return file;
+}
+
+QString MainWindow::askOpenFile(const QString& title, const QString& filter) {
+  if (!interactive_) return {};
+  const QString file = QFileDialog::getOpenFileName(this, title, settings_->value("files/last_dir").toString(), filter);
+  if (!file.isEmpty()) settings_->setValue("files/last_dir", QFileInfo(file).absolutePath());
+  return file;
+}
+
+// ---- The live rig and the display -----------------------------------------------------------
+
+void MainWindow::useEnvironment(session::TrialEnvironment& environment) {
+  environment_ = &environment;
+  const DeviceLimits& limits = environment.limits();
+  paper_->setPaper(environment.paper().relief(), limits.workspace_min_m.x(), limits.workspace_min_m.y(),
+                   limits.workspace_max_m.x(), limits.workspace_max_m.y());
+  QString clamps;
+  for (const auto& line : environment.worldClamps()) clamps += QStringLiteral("<br>· ") + qs(line).toHtmlEscaped();
+  world_label_->setText(tr("Device <tt>%1</tt> at %2 Hz; world: %3%4")
+                            .arg(qs(environment.deviceUri()).toHtmlEscaped())
+                            .arg(environment.rate_hz())
+                            .arg(world_file_.isEmpty() ? tr("defaults") : world_file_.toHtmlEscaped())
+                            .arg(clamps.isEmpty() ? QString() : tr("<br>Clamped to the device:%1").arg(clamps)));
+  startFreeRun();
+}
+
+void MainWindow::startFreeRun() {
+  RunSpec spec;
+  spec.metadata.subject = "studio";
+  try {
+    rig_.start(*environment_, spec, hand_, session::Clock::kRealTime);
+  } catch (const std::exception& e) {
+    showError(tr("The servo loop could not start"), QString::fromUtf8(e.what()));
+  }
+  if (activity_ != Activity::kPlayback) activity_ = Activity::kFree;
+}
+
+void MainWindow::consumeLive(const Sample& sample) {
+  switch (activity_) {
+    case Activity::kTrial:
+    case Activity::kStudyTrial: {
+      const double t_trial = sample.t_s - rig_.spec().settle_s;
+      if (t_trial < 0.0 || t_trial > rig_.spec().duration_s) return;
+      paper_->trail().append(sample);
+      plot_->trainee().append(t_trial, sample.f_user_W);
+      return;
+    }
+    case Activity::kFree:
+    case Activity::kRecording: {
+      paper_->trail().append(sample);
+      // A trial or take stays on the plot until the pen writes again.
+      if (plot_holds_result_) {
+        if (!sample.pen_down) return;
+        plot_holds_result_ = false;
+        plot_->clear();
+        plot_->setTitle(tr("Live"));
+      }
+      ForceSeries& series = plot_->trainee();
+      series.append(sample.t_s, sample.f_user_W);
+      // Keep the last few seconds.
+      std::size_t old = 0;
+      while (old < series.size() && series.t_s[old] < sample.t_s - kRollingWindow_s) ++old;
+      if (old > 64) {
+        for (auto* v : {&series.t_s, &series.fx_N, &series.fy_N, &series.fz_N})
+          v->erase(v->begin(), v->begin() + static_cast<std::ptrdiff_t>(old));
+      }
+      plot_->setTimeWindow(std::make_pair(sample.t_s - kRollingWindow_s, sample.t_s));
+      return;
+    }
+    case Activity::kPlayback: return;
+  }
+}
+
+void MainWindow::onFrame() {
+  const double now = now_s();
+  Sample sample;
+  const bool fresh = rig_.active() && rig_.readLatest(sample);
+  if (fresh) latest_ = sample;
+  const RigStatus status = rig_.status();
+  if (activity_ != Activity::kPlayback) paper_->setPen(rig_.active() ? std::optional<Sample>(latest_) : std::nullopt);
+  if (fresh) consumeLive(latest_);
+
+  QString banner;
+  switch (activity_) {
+    case Activity::kTrial:
+    case Activity::kStudyTrial: {
+      // The reference's point now (time indexing), the countdown, the end.
+      const double t_trial = status.loop_time_s - rig_.spec().settle_s;
+      if (trial_expert_ != nullptr && rig_.spec().guidance.playback.indexing == guidance::Indexing::kTime) {
+        Playback where;
+        where.load(trial_expert_);
+        const std::size_t i = where.indexAt(std::max(0.0, t_trial) * rig_.spec().guidance.playback.speed +
+                                            trial_expert_->samples().front().t_s);
+        paper_->setReferenceCue(Eigen::Vector2d((*trial_expert_)[i].p_WT.head<2>()));
+      }
+      if (status.settling) {
+        banner = tr("Get ready: %1 s").arg(std::max(0.0, -t_trial), 0, 'f', 1);
+      } else {
+        banner = tr("Write! %1 s").arg(std::max(0.0, rig_.spec().duration_s - t_trial), 0, 'f', 1);
+      }
+      if (status.window_done) finishTrial();
+      break;
+    }
+    case Activity::kRecording:
+      if (rig_.spec().record == RecordMode::kPenDown) {
+        banner = status.recording ? tr("Recording… lift the pen for 1 s to stop")
+                                  : (status.settling ? tr("Get ready…") : tr("Put the pen down to start recording"));
+      } else if (status.settling) {
+        banner = tr("Get ready…");
+      } else {
+        if (!recording_armed_) rig_.armRecording();
+        recording_armed_ = true;
+        banner = tr("Recording… press R to stop");
+      }
+      if (status.pen_down_done) stopRecording();
+      break;
+    case Activity::kPlayback: {
+      const double t = playback_.time_s(now);
+      const std::size_t i = playback_.indexAt(t);
+      const HapticProfile& p = *playback_.profile();
+      paper_->trail().assign(p, 0, i + 1);
+      paper_->setPen(p[i]);
+      plot_->setCursorTime(t);
+      banner = tr("Playback %1 / %2 s").arg(t, 0, 'f', 2).arg(p.samples().back().t_s, 0, 'f', 2);
+      if (playback_.playing() && playback_.finished(now)) playback_.pause(now);
+      break;
+    }
+    case Activity::kFree:
+      if (study_ && study_->state() != StudySession::State::kNoSubject) {
+        study_->tick(now);
+        switch (study_->state()) {
+          case StudySession::State::kResting:
+            banner = tr("Rest: %1 s").arg(std::ceil(study_->restRemaining_s(now)), 0, 'f', 0);
+            break;
+          case StudySession::State::kReady: banner = qs(study_->prompt()) + tr(" — Space to start"); break;
+          case StudySession::State::kFinished: banner = tr("Every trial is done. Thank you!"); break;
+          default: break;
+        }
+        refreshStudyPanel();
+      }
+      break;
+  }
+  paper_->setBanner(banner);
+  paper_->update();
+  plot_->update();
+}
+
+void MainWindow::onStatus() {
+  const double now = now_s();
+  // The input.
+  const MouseInput& input = hand_.input();
+  status_input_->setText(tr("Input: mouse (%1, %2) mm · %3 · press %4 N")
+                             .arg(input.x_m * 1000.0, 0, 'f', 1)
+                             .arg(input.y_m * 1000.0, 0, 'f', 1)
+                             .arg(input.pen_down ? tr("pen down") : tr("pen up"))
+                             .arg(input.press_N, 0, 'f', 1));
+  // The loop: measured rate, overruns, faults, drops, stalls.
+  const servo::LiveCounters* counters = rig_.counters();
+  if (counters == nullptr) {
+    status_loop_->setText(tr("Loop: stopped"));
+  } else {
+    const std::uint64_t ticks = counters->ticks.load();
+    if (ticks >= last_ticks_ && now > last_status_s_) {
+      loop_rate_hz_ = static_cast<double>(ticks - last_ticks_) / (now - last_status_s_);
+    }
+    last_ticks_ = ticks;
+    status_loop_->setText(tr("Loop: %1 Hz · overruns %2 · faults %3 · drops %4 · stalls %5 · %6")
+                              .arg(loop_rate_hz_, 0, 'f', 0)
+                              .arg(counters->overruns.load())
+                              .arg(counters->faults.load())
+                              .arg(counters->dropped_samples.load())
+                              .arg(counters->stalls.load() + counters->consumer_stalls.load())
+                              .arg(qs(rig_.realtimeSummary())));
+  }
+  last_status_s_ = now;
+  static const char* kNames[] = {"writing", "recording", "training trial", "study trial", "playback"};
+  status_activity_->setText(tr("Activity: %1 · mode %2")
+                                .arg(QString::fromLatin1(kNames[static_cast<int>(activity_)]))
+                                .arg(mode_combo_->currentText()));
+}
+
+void MainWindow::refreshButtons() {
+  const bool free = activity_ == Activity::kFree || activity_ == Activity::kPlayback;
+  record_button_->setText(activity_ == Activity::kRecording ? tr("Stop recording (R)") : tr("Record (R)"));
+  record_button_->setEnabled(free || activity_ == Activity::kRecording);
+  replay_take_button_->setEnabled(take_.has_value() && free);
+  retake_button_->setEnabled(take_.has_value() && free);
+  save_take_button_->setEnabled(take_.has_value());
+  trial_button_->setText(activity_ == Activity::kTrial ? tr("Stop trial (Esc)") : tr("Start trial (Space)"));
+  trial_button_->setEnabled((free && reference_profile_) || activity_ == Activity::kTrial);
+  replay_trial_button_->setEnabled(last_trial_.has_value() && free);
+  save_trial_button_->setEnabled(last_trial_.has_value());
+  const bool study_open = study_ != nullptr;
+  subject_combo_->setEnabled(study_open && activity_ != Activity::kStudyTrial);
+  subject_button_->setEnabled(study_open && activity_ != Activity::kStudyTrial);
+  close_study_button_->setEnabled(study_open && activity_ != Activity::kStudyTrial);
+  study_next_button_->setEnabled(
+      study_open && free &&
+      (study_->state() == StudySession::State::kReady || study_->state() == StudySession::State::kResting));
+  play_button_->setEnabled(review_trial_.has_value() || playback_.loaded());
+}
+
+void MainWindow::showReference(const HapticProfile* expert) {
+  paper_->reference().clear();
+  if (expert != nullptr) paper_->reference().assign(*expert);
+  paper_->setReferenceCue(std::nullopt);
+}
+
+}  // namespace hattr::studio

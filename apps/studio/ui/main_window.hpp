@@ -1,0 +1,242 @@
+#pragma once
+/// The studio's main window: the paper view and the haptic-profile plot beside five tabs —
+/// Write (free writing), Record (an expert's take), Train (a trial against a reference in
+/// BASIC, PCONTROL or ALPHA, scored by DTW), Study (a person's study session from a study
+/// database) and Review (a study's subjects and trials, overlaid on the expert and played
+/// back). One live rig runs the servo loop in real time on the simulated pen the mouse
+/// holds; the window reads the loop's newest sample at display rate and never waits on it.
+/// Every action is also a public member, so tests (and scripts) drive what a person drives.
+
+#include <QElapsedTimer>
+#include <QMainWindow>
+#include <QSettings>
+#include <memory>
+#include <optional>
+
+#include "core/live_rig.hpp"
+#include "core/mouse_hand.hpp"
+#include "core/series.hpp"
+#include "core/study_session.hpp"
+#include "core/trial_scoring.hpp"
+#include "hattr/session/study_database.hpp"
+
+class QAction;
+class QCheckBox;
+class QComboBox;
+class QDoubleSpinBox;
+class QLabel;
+class QLineEdit;
+class QPushButton;
+class QSlider;
+class QSplitter;
+class QTabWidget;
+class QTimer;
+class QTreeWidget;
+class QTreeWidgetItem;
+
+namespace hattr::studio {
+
+class PaperView;
+class ProfilePlot;
+
+class MainWindow final : public QMainWindow {
+  Q_OBJECT
+
+ public:
+  /// What the rig and the view are doing.
+  enum class Activity { kFree, kRecording, kTrial, kStudyTrial, kPlayback };
+  enum Tab : int { kTabWrite = 0, kTabRecord, kTabTrain, kTabStudy, kTabReview };
+
+  /// `settings`: where settings are remembered (null: QSettings "hattr"/"studio").
+  explicit MainWindow(std::unique_ptr<QSettings> settings = nullptr, QWidget* parent = nullptr);
+  ~MainWindow() override;
+
+  /// Interactive (default): errors in dialogs, questions asked. Otherwise (tests) errors are
+  /// kept in lastError() and every question is answered `answer`.
+  void setInteractive(bool interactive, bool answer = false);
+  [[nodiscard]] const QString& lastError() const { return last_error_; }
+
+  // ---- Actions (the buttons, menus and shortcuts call these); false when refused. ------
+  /// Loads a reference profile for training (Train tab).
+  bool loadReference(const QString& file);
+  /// Loads a world configuration (paper, friction, relief) for writing and training.
+  bool loadWorld(const QString& file);
+  /// The training mode; during a trial it switches through the servo mailbox (cross-fade).
+  void setMode(guidance::TrainingMode mode);
+  bool startTrial();
+  /// Stops a running trial or recording without keeping it; stops a playback.
+  void abortActivity();
+  bool startRecording();
+  bool stopRecording();
+  /// Saves the current take as a haptic profile (refuses to replace a file unless confirmed).
+  bool saveTake(const QString& file);
+  /// Saves the last trial (also after a study database refused it).
+  bool saveLastTrial(const QString& file);
+  bool openStudy(const QString& file);
+  bool selectStudySubject(const QString& subject);
+  /// Study: cut the rest short / start the next trial.
+  bool studyNext();
+  void closeStudy();
+  bool openReview(const QString& file);
+  /// Review: shows the trial with this database id overlaid on the expert.
+  bool showReviewTrial(qint64 trial_id);
+  /// Plays back (or pauses) the profile on show: a take, the last trial or a reviewed trial.
+  void togglePlayback();
+  void clearTrail();
+  /// The tab's main action (Space): record/stop, start/stop a trial, the study's next step, play/pause.
+  void primaryAction();
+
+  [[nodiscard]] Activity activity() const { return activity_; }
+  [[nodiscard]] guidance::TrainingMode mode() const { return mode_; }
+  [[nodiscard]] const std::optional<TrialScores>& lastScores() const { return last_scores_; }
+  [[nodiscard]] const std::optional<HapticProfile>& lastTrial() const { return last_trial_; }
+  [[nodiscard]] const std::optional<HapticProfile>& take() const { return take_; }
+  [[nodiscard]] StudySession* study() const { return study_.get(); }
+  [[nodiscard]] PaperView* paperView() const { return paper_; }
+  [[nodiscard]] ProfilePlot* plot() const { return plot_; }
+  [[nodiscard]] MouseHand& mouseHand() { return hand_; }
+  [[nodiscard]] LiveRig& rig() { return rig_; }
+  [[nodiscard]] QTabWidget* tabs() const { return tabs_; }
+
+ protected:
+  void closeEvent(QCloseEvent* event) override;
+
+ private:
+  // Construction (main_window.cpp).
+  void buildUi();
+  void buildWriteTab();
+  void buildRecordTab();
+  void buildTrainTab();
+  void buildStudyTab();
+  void buildReviewTab();
+  void buildActions();
+  void loadSettings();
+  void saveSettings();
+
+  // The loop and the display (main_window.cpp).
+  void startFreeRun();
+  void useEnvironment(session::TrialEnvironment& environment);
+  void onFrame();
+  void onStatus();
+  void consumeLive(const Sample& sample);
+  void finishTrial();
+  void showScores(const HapticProfile& expert, const HapticProfile& trial, QLabel* where);
+  void showReference(const HapticProfile* expert);
+  void refreshButtons();
+  [[nodiscard]] double now_s() const;
+
+  // Dialogs.
+  void showError(const QString& what, const QString& detail);
+  bool confirm(const QString& question);
+  QString askSaveFile(const QString& title, const QString& suggested);
+  QString askOpenFile(const QString& title, const QString& filter);
+
+  // Actions helpers (main_window_actions.cpp).
+  void fillStudySubjects();
+  void refreshStudyPanel();
+  void fillReviewTree();
+  void startPlayback(const HapticProfile* profile, const HapticProfile* expert);
+  bool saveProfileTo(const HapticProfile& profile, const QString& file, bool& saved_flag);
+
+  std::unique_ptr<QSettings> settings_;
+  QElapsedTimer clock_;
+  bool interactive_ = true;
+  bool answer_ = false;
+  QString last_error_;
+
+  // The live rig on the mouse's hand.
+  MouseHand hand_;
+  LiveRig rig_;
+  std::unique_ptr<session::TrialEnvironment> default_environment_;
+  session::TrialEnvironment* environment_ = nullptr;
+  QString world_file_;
+  Activity activity_ = Activity::kFree;
+  Sample latest_{};
+  bool plot_holds_result_ = false;  // the plot shows a trial or take until the pen writes again
+
+  // Train.
+  std::optional<HapticProfile> reference_profile_;
+  std::shared_ptr<const guidance::ReferenceTrajectory> reference_;
+  QString reference_file_;
+  guidance::TrainingMode mode_ = guidance::TrainingMode::kBasic;
+  std::optional<HapticProfile> last_trial_;
+  std::optional<HapticProfile> last_trial_expert_;
+  bool last_trial_saved_ = true;
+  std::optional<TrialScores> last_scores_;
+  const HapticProfile* trial_expert_ = nullptr;  // the reference of the running trial
+  bool trial_shows_reference_ = true;
+
+  // Record.
+  bool recording_armed_ = false;  // start/stop buttons: armed once the settle phase is over
+  std::optional<HapticProfile> take_;
+  bool take_saved_ = true;
+
+  // Study and review.
+  std::unique_ptr<StudySession> study_;
+  std::unique_ptr<session::StudyDatabase> review_db_;
+  std::optional<HapticProfile> review_trial_;
+  std::optional<HapticProfile> review_expert_;
+
+  // Playback.
+  Playback playback_;
+  const HapticProfile* playback_expert_ = nullptr;
+  Activity before_playback_ = Activity::kFree;
+
+  // Status bar counters.
+  std::uint64_t last_ticks_ = 0;
+  double last_status_s_ = 0.0;
+  double loop_rate_hz_ = 0.0;
+
+  // Widgets.
+  PaperView* paper_ = nullptr;
+  ProfilePlot* plot_ = nullptr;
+  QSplitter* splitter_ = nullptr;
+  QSplitter* left_splitter_ = nullptr;
+  QTabWidget* tabs_ = nullptr;
+  QTimer* frame_timer_ = nullptr;
+  QTimer* status_timer_ = nullptr;
+  QSlider* press_slider_ = nullptr;
+  QLabel* press_label_ = nullptr;
+  QCheckBox* arrows_check_ = nullptr;
+  QLabel* status_input_ = nullptr;
+  QLabel* status_loop_ = nullptr;
+  QLabel* status_activity_ = nullptr;
+  // Write tab.
+  QLabel* world_label_ = nullptr;
+  // Record tab.
+  QLineEdit* expert_name_ = nullptr;
+  QLineEdit* character_ = nullptr;
+  QComboBox* trigger_ = nullptr;
+  QPushButton* record_button_ = nullptr;
+  QPushButton* replay_take_button_ = nullptr;
+  QPushButton* retake_button_ = nullptr;
+  QPushButton* save_take_button_ = nullptr;
+  QLabel* take_label_ = nullptr;
+  // Train tab.
+  QLabel* reference_label_ = nullptr;
+  QComboBox* mode_combo_ = nullptr;
+  QComboBox* indexing_combo_ = nullptr;
+  QCheckBox* show_reference_check_ = nullptr;
+  QDoubleSpinBox* settle_spin_ = nullptr;
+  QPushButton* trial_button_ = nullptr;
+  QPushButton* save_trial_button_ = nullptr;
+  QPushButton* replay_trial_button_ = nullptr;
+  QLabel* scores_label_ = nullptr;
+  // Study tab.
+  QLabel* study_label_ = nullptr;
+  QComboBox* subject_combo_ = nullptr;
+  QPushButton* subject_button_ = nullptr;
+  QLabel* study_progress_ = nullptr;
+  QLabel* study_prompt_ = nullptr;
+  QPushButton* study_next_button_ = nullptr;
+  QPushButton* close_study_button_ = nullptr;
+  QLabel* study_scores_ = nullptr;
+  // Review tab.
+  QLabel* review_label_ = nullptr;
+  QTreeWidget* review_tree_ = nullptr;
+  QLabel* review_scores_ = nullptr;
+  QPushButton* play_button_ = nullptr;
+  QComboBox* speed_combo_ = nullptr;
+};
+
+}  // namespace hattr::studio

@@ -1,0 +1,625 @@
+// The main window's actions: record, train, study, review, playback.
+#include <fmt/format.h>
+
+#include <QCheckBox>
+#include <QComboBox>
+#include <QDoubleSpinBox>
+#include <QFileInfo>
+#include <QLabel>
+#include <QLineEdit>
+#include <QPushButton>
+#include <QStatusBar>
+#include <QTabWidget>
+#include <QTreeWidget>
+
+#include "core/profile_files.hpp"
+#include "hattr/core/error.hpp"
+#include "hattr/render/world_config.hpp"
+#include "ui/main_window.hpp"
+#include "ui/paper_view.hpp"
+#include "ui/profile_plot.hpp"
+
+namespace hattr::studio {
+namespace {
+
+QString qs(const std::string& text) { return QString::fromStdString(text); }
+QString qs(std::string_view text) { return QString::fromUtf8(text.data(), static_cast<qsizetype>(text.size())); }
+QString what(const std::exception& e) { return QString::fromUtf8(e.what()); }
+
+QString describeProfile(const HapticProfile& p) {
+  return QObject::tr("%1 samples, %2 s, %3 with the pen down")
+      .arg(p.size())
+      .arg(p.duration_s(), 0, 'f', 2)
+      .arg(p.penDownCount());
+}
+
+}  // namespace
+
+// ---- Train --------------------------------------------------------------------------------
+
+bool MainWindow::loadReference(const QString& file) {
+  if (activity_ == Activity::kTrial || activity_ == Activity::kStudyTrial) {
+    showError(tr("The reference cannot change now"), tr("finish or abort the trial first (Esc)"));
+    return false;
+  }
+  try {
+    HapticProfile profile = loadReferenceProfile(file.toStdString());
+    reference_profile_ = std::move(profile);
+    reference_file_ = file;
+    reference_ = nullptr;  // built at the trial's rate when a trial starts
+    reference_label_->setText(
+        tr("Reference <b>%1</b> (%2, %3): %4")
+            .arg(QFileInfo(file).fileName().toHtmlEscaped(), qs(reference_profile_->metadata().subject).toHtmlEscaped(),
+                 qs(reference_profile_->metadata().skill).toHtmlEscaped(), describeProfile(*reference_profile_)));
+    if (activity_ == Activity::kFree || activity_ == Activity::kRecording) {
+      showReference(&*reference_profile_);
+      paper_->setReferenceShown(show_reference_check_->isChecked());
+      plot_->setExpert(ForceSeries::fromProfile(*reference_profile_, 4000, -reference_profile_->samples().front().t_s));
+    }
+    refreshButtons();
+    return true;
+  } catch (const std::exception& e) {
+    showError(tr("The reference could not be loaded"), what(e));
+    return false;
+  }
+}
+
+bool MainWindow::loadWorld(const QString& file) {
+  if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) {
+    showError(tr("The world cannot change now"), tr("finish the trial or recording first"));
+    return false;
+  }
+  try {
+    auto environment = std::make_unique<session::TrialEnvironment>(default_environment_->deviceUri(),
+                                                                   render::loadWorldConfig(file.toStdString()),
+                                                                   default_environment_->rate_hz());
+    (void)rig_.finish();
+    default_environment_ = std::move(environment);
+    world_file_ = file;
+    if (!study_) useEnvironment(*default_environment_);
+    return true;
+  } catch (const std::exception& e) {
+    showError(tr("The world configuration could not be loaded"), what(e));
+    return false;
+  }
+}
+
+void MainWindow::setMode(guidance::TrainingMode mode) {
+  mode_ = mode;
+  mode_combo_->setCurrentIndex(static_cast<int>(mode));
+  // During a trial the mode switches through the servo mailbox, with the cross-fade.
+  if (activity_ == Activity::kTrial && !rig_.switchMode(mode)) {
+    showError(tr("The mode could not be switched"), tr("the servo loop's mailbox is full; try again"));
+  }
+}
+
+bool MainWindow::startTrial() {
+  if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) return false;
+  if (!reference_profile_) {
+    showError(tr("No reference"), tr("open an expert's haptic profile first (Ctrl+O)"));
+    return false;
+  }
+  try {
+    reference_ = std::make_shared<guidance::ReferenceTrajectory>(*reference_profile_, environment_->rate_hz());
+    session::TrialSetup setup;
+    setup.guidance.mode = mode_;
+    setup.guidance.playback.indexing =
+        indexing_combo_->currentIndex() == 0 ? guidance::Indexing::kTime : guidance::Indexing::kProgress;
+    setup.reference = reference_;
+    setup.duration_s = reference_->duration_s() + session::Protocol{}.tail_s;  // the study protocol's tail
+    setup.settle_s = settle_spin_->value();
+    setup.clock = session::Clock::kRealTime;
+    setup.metadata.subject = "trainee";
+    setup.metadata.skill = reference_profile_->metadata().skill;
+    setup.metadata.source = "studio";
+    setup.metadata.extra["reference_file"] = QFileInfo(reference_file_).fileName().toStdString();
+    playback_.load(nullptr);
+    rig_.start(*environment_, trialRunSpec(setup, true), hand_, session::Clock::kRealTime);
+  } catch (const std::exception& e) {
+    showError(tr("The trial could not start"), what(e));
+    startFreeRun();
+    return false;
+  }
+  activity_ = Activity::kTrial;
+  trial_expert_ = &*reference_profile_;
+  trial_shows_reference_ = show_reference_check_->isChecked();
+  showReference(trial_expert_);
+  paper_->setReferenceShown(trial_shows_reference_);
+  paper_->overlay().clear();
+  paper_->trail().clear();
+  plot_->setExpert(ForceSeries::fromProfile(*trial_expert_, 4000, -trial_expert_->samples().front().t_s));
+  plot_->trainee().clear();
+  plot_->setCursorTime(std::nullopt);
+  plot_->setTimeWindow(std::make_pair(0.0, rig_.spec().duration_s));
+  plot_->setTitle(tr("Trial: %1").arg(qs(guidance::modeName(mode_))));
+  scores_label_->setText(tr("Trial running…"));
+  refreshButtons();
+  return true;
+}
+
+void MainWindow::finishTrial() {
+  session::TrialResult result = rig_.finish();
+  const Activity was = activity_;
+  activity_ = Activity::kFree;
+  startFreeRun();
+  paper_->setReferenceCue(std::nullopt);
+  if (result.profile.empty()) {
+    showError(tr("The trial recorded nothing"), tr("the loop delivered no samples in the trial's window"));
+    refreshButtons();
+    return;
+  }
+  // Keep the trial before anything can fail.
+  last_trial_ = result.profile;
+  last_trial_expert_ = *trial_expert_;
+  last_trial_saved_ = false;
+  paper_->trail().assign(*last_trial_);
+  plot_->setTrainee(ForceSeries::fromProfile(*last_trial_));
+  plot_->setTimeWindow(std::nullopt);
+  plot_holds_result_ = true;
+
+  QLabel* scores_label = scores_label_;
+  if (was == Activity::kStudyTrial && study_) {
+    scores_label = study_scores_;
+    try {
+      study_->completeTrial(std::move(result), now_s());
+      last_trial_saved_ = true;
+      statusBar()->showMessage(tr("Trial stored in the study database."), 5000);
+    } catch (const std::exception& e) {
+      showError(tr("The trial could not be stored in the study database"),
+                what(e) + tr("\n\nThe trial is kept: save it with File → Save last trial… (Ctrl+Shift+S); "
+                             "the study will run this trial again."));
+    }
+    refreshStudyPanel();
+  }
+  showScores(*last_trial_expert_, *last_trial_, scores_label);
+  if (was == Activity::kTrial) {
+    scores_label_->setText(scores_label_->text() + tr("<br>%1 ticks, %2 overruns, %3 missed samples, %4 faults")
+                                                       .arg(result.ticks)
+                                                       .arg(result.overruns)
+                                                       .arg(result.missed_samples)
+                                                       .arg(result.faults));
+  }
+  refreshButtons();
+}
+
+void MainWindow::showScores(const HapticProfile& expert, const HapticProfile& trial, QLabel* where) {
+  try {
+    const TrialScores scores = scoreTrial(expert, trial);
+    last_scores_ = scores;
+    where->setText(tr("<b>Shape</b> (DTW x + y): %1 &nbsp; <b>Force</b> (DTW fx + fy + fz): %2<br>"
+                      "<small>x %3 · y %4 · fx %5 · fy %6 · fz %7 — the paper's normalization, on the expert's %8 "
+                      "time steps; lower is closer</small>")
+                       .arg(scores.shape, 0, 'g', 4)
+                       .arg(scores.force, 0, 'g', 4)
+                       .arg(scores.x, 0, 'g', 4)
+                       .arg(scores.y, 0, 'g', 4)
+                       .arg(scores.fx, 0, 'g', 4)
+                       .arg(scores.fy, 0, 'g', 4)
+                       .arg(scores.fz, 0, 'g', 4)
+                       .arg(scores.expert_samples));
+  } catch (const std::exception& e) {
+    last_scores_.reset();
+    where->setText(tr("Not scored: %1").arg(what(e).toHtmlEscaped()));
+  }
+}
+
+bool MainWindow::saveLastTrial(const QString& file) {
+  if (!last_trial_) return false;
+  return saveProfileTo(*last_trial_, file, last_trial_saved_);
+}
+
+// ---- Record -------------------------------------------------------------------------------
+
+bool MainWindow::startRecording() {
+  if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) return false;
+  if (take_ && !take_saved_ && !confirm(tr("The current take is not saved. Discard it and record a new one?"))) {
+    return false;
+  }
+  RunSpec spec;
+  spec.record = trigger_->currentIndex() == 0 ? RecordMode::kPenDown : RecordMode::kCommand;
+  spec.metadata.subject = expert_name_->text().trimmed().toStdString();
+  spec.metadata.skill = character_->text().trimmed().toStdString();
+  spec.metadata.source = "recorded";
+  playback_.load(nullptr);
+  try {
+    rig_.start(*environment_, spec, hand_, session::Clock::kRealTime);
+  } catch (const std::exception& e) {
+    showError(tr("The recording could not start"), what(e));
+    startFreeRun();
+    return false;
+  }
+  recording_armed_ = false;  // the start/stop trigger arms once the pen has settled
+  take_.reset();
+  take_saved_ = true;
+  activity_ = Activity::kRecording;
+  paper_->trail().clear();
+  paper_->overlay().clear();
+  plot_->trainee().clear();
+  plot_->setCursorTime(std::nullopt);
+  plot_->setTitle(tr("Recording"));
+  take_label_->setText(tr("Recording…"));
+  refreshButtons();
+  return true;
+}
+
+bool MainWindow::stopRecording() {
+  if (activity_ != Activity::kRecording) return false;
+  rig_.disarmRecording();
+  session::TrialResult result = rig_.finish();
+  activity_ = Activity::kFree;
+  startFreeRun();
+  if (result.profile.empty()) {
+    take_label_->setText(tr("Nothing was recorded (the pen never touched the paper)."));
+    refreshButtons();
+    return false;
+  }
+  take_ = std::move(result.profile);
+  take_saved_ = false;
+  paper_->trail().assign(*take_);
+  plot_->setTrainee(ForceSeries::fromProfile(*take_));
+  plot_->setExpert({});
+  plot_->setTimeWindow(std::nullopt);
+  plot_->setTitle(tr("Take"));
+  plot_holds_result_ = true;
+  take_label_->setText(tr("Take: %1; %2 missed samples. Not saved yet.")
+                           .arg(describeProfile(*take_))
+                           .arg(qs(take_->metadata().extra["missed_samples"])));
+  refreshButtons();
+  return true;
+}
+
+bool MainWindow::saveTake(const QString& file) {
+  if (!take_) return false;
+  try {
+    // The take is renamed as the person typed it; the take in memory stays as it is.
+    HapticProfile named = nameTake(*take_, expert_name_->text().toStdString(), character_->text().toStdString());
+    bool saved = false;
+    if (!saveProfileTo(named, file, saved)) return false;
+    take_saved_ = true;
+    take_label_->setText(tr("Take: %1. Saved as %2.").arg(describeProfile(*take_), file.toHtmlEscaped()));
+    return true;
+  } catch (const std::exception& e) {
+    showError(tr("The take was not saved (it is still here)"), what(e));
+    return false;
+  }
+}
+
+bool MainWindow::saveProfileTo(const HapticProfile& profile, const QString& file, bool& saved_flag) {
+  try {
+    SaveOutcome outcome = saveProfile(profile, file.toStdString(), false);
+    if (outcome == SaveOutcome::kNeedsConfirmation) {
+      if (!confirm(tr("%1 already exists. Replace it?").arg(file))) {
+        last_error_ = tr("%1 already exists; not replaced").arg(file);
+        return false;
+      }
+      outcome = saveProfile(profile, file.toStdString(), true);
+    }
+    saved_flag = outcome == SaveOutcome::kSaved;
+    statusBar()->showMessage(tr("Saved %1").arg(file), 5000);
+    return saved_flag;
+  } catch (const std::exception& e) {
+    showError(tr("Not saved (nothing is lost: it is still in memory)"), what(e));
+    return false;
+  }
+}
+
+// ---- Abort, playback, primary action ------------------------------------------------------------
+
+void MainWindow::abortActivity() {
+  switch (activity_) {
+    case Activity::kTrial:
+    case Activity::kStudyTrial:
+    case Activity::kRecording:
+      (void)rig_.finish();
+      if (activity_ == Activity::kStudyTrial && study_) study_->abandonTrial();
+      if (activity_ == Activity::kRecording) take_label_->setText(tr("Recording aborted; nothing kept."));
+      if (activity_ == Activity::kTrial) scores_label_->setText(tr("Trial aborted; nothing kept."));
+      activity_ = Activity::kFree;
+      paper_->setReferenceCue(std::nullopt);
+      startFreeRun();
+      break;
+    case Activity::kPlayback:
+      playback_.pause(now_s());
+      activity_ = Activity::kFree;
+      plot_->setCursorTime(std::nullopt);
+      break;
+    case Activity::kFree: break;
+  }
+  refreshButtons();
+}
+
+void MainWindow::startPlayback(const HapticProfile* profile, const HapticProfile* expert) {
+  if (profile == nullptr || profile->empty()) return;
+  if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) return;
+  playback_.load(profile);
+  playback_.setSpeed(speed_combo_->currentData().toDouble());
+  playback_expert_ = expert;
+  showReference(expert);
+  paper_->setReferenceShown(true);
+  if (!review_trial_ || profile != &*review_trial_) paper_->overlay().clear();  // a reviewed trial stays overlaid
+  plot_holds_result_ = true;
+  plot_->setExpert(expert != nullptr ? ForceSeries::fromProfile(*expert) : ForceSeries{});
+  plot_->setTrainee(ForceSeries::fromProfile(*profile));
+  plot_->setTimeWindow(std::nullopt);
+  activity_ = Activity::kPlayback;
+  playback_.play(now_s());
+  refreshButtons();
+}
+
+void MainWindow::togglePlayback() {
+  const double now = now_s();
+  if (activity_ == Activity::kPlayback) {
+    if (playback_.playing()) {
+      playback_.pause(now);
+    } else {
+      playback_.play(now);
+    }
+    return;
+  }
+  // Nothing playing: play what the tab shows.
+  switch (tabs_->currentIndex()) {
+    case kTabRecord:
+      if (take_) startPlayback(&*take_, nullptr);
+      break;
+    case kTabReview:
+      if (review_trial_) startPlayback(&*review_trial_, review_expert_ ? &*review_expert_ : nullptr);
+      break;
+    default:
+      if (last_trial_) startPlayback(&*last_trial_, last_trial_expert_ ? &*last_trial_expert_ : nullptr);
+      break;
+  }
+}
+
+void MainWindow::clearTrail() {
+  if (activity_ == Activity::kPlayback) abortActivity();
+  paper_->trail().clear();
+  paper_->overlay().clear();
+}
+
+void MainWindow::primaryAction() {
+  switch (tabs_->currentIndex()) {
+    case kTabRecord:
+      if (activity_ == Activity::kRecording) {
+        stopRecording();
+      } else {
+        startRecording();
+      }
+      break;
+    case kTabTrain:
+      if (activity_ == Activity::kTrial) {
+        abortActivity();
+      } else {
+        startTrial();
+      }
+      break;
+    case kTabStudy: studyNext(); break;
+    case kTabReview: togglePlayback(); break;
+    default: break;
+  }
+}
+
+// ---- Study --------------------------------------------------------------------------------
+
+bool MainWindow::openStudy(const QString& file) {
+  if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) {
+    showError(tr("A study cannot be opened now"), tr("finish the trial or recording first"));
+    return false;
+  }
+  try {
+    auto session = std::make_unique<StudySession>(file.toStdString());
+    closeStudy();
+    study_ = std::move(session);
+    settings_->setValue("study/file", file);
+  } catch (const std::exception& e) {
+    showError(tr("The study could not be opened"), what(e));
+    return false;
+  }
+  const session::StudyDefinition& study = study_->study();
+  study_label_->setText(tr("<b>%1</b> (%2): skill %3, %4 training + %5 recall trials per mode, rest %6 s")
+                            .arg(qs(study.name).toHtmlEscaped(), QFileInfo(file).fileName().toHtmlEscaped(),
+                                 qs(study.skill).toHtmlEscaped())
+                            .arg(study.protocol.training_trials)
+                            .arg(study.protocol.recall_trials)
+                            .arg(study.protocol.rest_s));
+  fillStudySubjects();
+  (void)rig_.finish();
+  useEnvironment(study_->environment());
+  showReference(nullptr);
+  tabs_->setCurrentIndex(kTabStudy);
+  refreshStudyPanel();
+  refreshButtons();
+  return true;
+}
+
+void MainWindow::fillStudySubjects() {
+  subject_combo_->clear();
+  if (!study_) return;
+  for (const session::SubjectRecord& s : study_->subjects()) {
+    subject_combo_->addItem(tr("%1 (%2)").arg(qs(s.id), qs(s.spec.participant)), qs(s.id));
+  }
+}
+
+bool MainWindow::selectStudySubject(const QString& subject) {
+  if (!study_ || activity_ == Activity::kStudyTrial) return false;
+  try {
+    std::string kind;
+    for (const auto& s : study_->subjects()) {
+      if (s.id == subject.toStdString()) kind = s.spec.participant;
+    }
+    if (kind != "person" &&
+        !confirm(tr("Subject %1 is a \"%2\" participant, not a person. Run its trials here with the mouse anyway?")
+                     .arg(subject, qs(kind)))) {
+      return false;
+    }
+    study_->selectSubject(subject.toStdString(), now_s());
+  } catch (const std::exception& e) {
+    showError(tr("The subject could not be selected"), what(e));
+    return false;
+  }
+  if (activity_ == Activity::kPlayback) abortActivity();
+  showReference(&study_->expert());
+  paper_->setReferenceShown(false);
+  paper_->trail().clear();
+  plot_->clear();
+  refreshStudyPanel();
+  refreshButtons();
+  return true;
+}
+
+void MainWindow::refreshStudyPanel() {
+  if (!study_) {
+    study_progress_->clear();
+    study_prompt_->clear();
+    return;
+  }
+  const auto state = study_->state();
+  study_progress_->setText(state == StudySession::State::kNoSubject ? tr("Pick a subject and press Begin.")
+                                                                    : tr("Subject %1: %2 of %3 trials done (%4)")
+                                                                          .arg(qs(study_->subject()))
+                                                                          .arg(study_->completedCount())
+                                                                          .arg(study_->totalCount())
+                                                                          .arg(qs(stateName(state))));
+  QString prompt = qs(study_->prompt());
+  if (state == StudySession::State::kResting) {
+    prompt = tr("Rest %1 s, then: %2").arg(std::ceil(study_->restRemaining_s(now_s())), 0, 'f', 0).arg(prompt);
+  }
+  if (const session::TrialRecord* t = study_->currentTrial(); t != nullptr && state != StudySession::State::kFinished) {
+    prompt += t->plan.view.show_reference ? tr("<br><small>the reference is shown</small>")
+                                          : tr("<br><small>from memory: the reference is hidden</small>");
+  }
+  study_prompt_->setText(prompt);
+  const bool free = activity_ == Activity::kFree || activity_ == Activity::kPlayback;
+  study_next_button_->setEnabled(free &&
+                                 (state == StudySession::State::kReady || state == StudySession::State::kResting));
+}
+
+bool MainWindow::studyNext() {
+  if (!study_ || (activity_ != Activity::kFree && activity_ != Activity::kPlayback)) return false;
+  const auto state = study_->state();
+  if (state != StudySession::State::kReady && state != StudySession::State::kResting) return false;
+  if (activity_ == Activity::kPlayback) abortActivity();
+  try {
+    const session::TrialRecord plan_record = *study_->currentTrial();
+    session::TrialSetup setup = study_->currentSetup();
+    setup.settle_s = settle_spin_->value();  // the person's "get ready" (not recorded)
+    study_->beginTrial();
+    try {
+      rig_.start(study_->environment(), trialRunSpec(setup, true), hand_, session::Clock::kRealTime);
+    } catch (...) {
+      study_->abandonTrial();
+      throw;
+    }
+    activity_ = Activity::kStudyTrial;
+    trial_expert_ = &study_->expert();
+    trial_shows_reference_ = plan_record.plan.view.show_reference;
+    showReference(trial_expert_);
+    paper_->setReferenceShown(trial_shows_reference_);
+    paper_->trail().clear();
+    paper_->overlay().clear();
+    plot_->setExpert(trial_shows_reference_
+                         ? ForceSeries::fromProfile(*trial_expert_, 4000, -trial_expert_->samples().front().t_s)
+                         : ForceSeries{});
+    plot_->trainee().clear();
+    plot_->setCursorTime(std::nullopt);
+    plot_->setTimeWindow(std::make_pair(0.0, rig_.spec().duration_s));
+    plot_->setTitle(qs(study_->prompt()));
+    study_scores_->setText(tr("Trial running…"));
+  } catch (const std::exception& e) {
+    showError(tr("The study trial could not start"), what(e));
+    startFreeRun();
+    return false;
+  }
+  refreshStudyPanel();
+  refreshButtons();
+  return true;
+}
+
+void MainWindow::closeStudy() {
+  if (activity_ == Activity::kStudyTrial) return;
+  if (!study_) return;
+  (void)rig_.finish();  // the loop runs on the study's paper: stop it before the study goes
+  study_.reset();
+  subject_combo_->clear();
+  study_label_->setText(tr("No study open."));
+  showReference(reference_profile_ ? &*reference_profile_ : nullptr);
+  paper_->setReferenceShown(show_reference_check_->isChecked());
+  useEnvironment(*default_environment_);
+  refreshStudyPanel();
+  refreshButtons();
+}
+
+// ---- Review -------------------------------------------------------------------------------
+
+bool MainWindow::openReview(const QString& file) {
+  try {
+    review_db_ = std::make_unique<session::StudyDatabase>(
+        session::StudyDatabase::open(file.toStdString(), session::OpenMode::kReadOnly));
+    settings_->setValue("review/file", file);
+  } catch (const std::exception& e) {
+    showError(tr("The study could not be opened for review"), what(e));
+    return false;
+  }
+  review_label_->setText(
+      tr("<b>%1</b> (%2)")
+          .arg(qs(review_db_->study().name).toHtmlEscaped(), QFileInfo(file).fileName().toHtmlEscaped()));
+  fillReviewTree();
+  tabs_->setCurrentIndex(kTabReview);
+  refreshButtons();
+  return true;
+}
+
+void MainWindow::fillReviewTree() {
+  review_tree_->clear();
+  if (!review_db_) return;
+  try {
+    for (const session::SubjectRecord& subject : review_db_->subjects()) {
+      const std::vector<session::TrialRecord> trials = review_db_->trials(subject.id);
+      int done = 0;
+      for (const auto& t : trials) done += t.status == session::TrialStatus::kCompleted ? 1 : 0;
+      auto* top = new QTreeWidgetItem(review_tree_, {qs(subject.id), qs(subject.spec.participant), QString(),
+                                                     tr("%1/%2 done").arg(done).arg(trials.size())});
+      for (const session::TrialRecord& t : trials) {
+        auto* item = new QTreeWidgetItem(
+            top, {tr("#%1 (%2)").arg(t.plan.sequence + 1).arg(t.plan.index), qs(guidance::modeName(t.plan.mode)),
+                  qs(session::phaseName(t.plan.phase)), qs(session::trialStatusName(t.status))});
+        if (t.status == session::TrialStatus::kCompleted)
+          item->setData(0, Qt::UserRole, QVariant::fromValue<qint64>(t.id));
+      }
+    }
+    review_tree_->expandAll();
+  } catch (const std::exception& e) {
+    showError(tr("The study's trials could not be read"), what(e));
+  }
+}
+
+bool MainWindow::showReviewTrial(qint64 trial_id) {
+  if (!review_db_) return false;
+  if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) return false;
+  try {
+    review_trial_ = review_db_->trialProfile(trial_id);
+    review_expert_ = review_db_->expert(review_db_->study().skill);
+  } catch (const std::exception& e) {
+    showError(tr("The trial could not be read"), what(e));
+    return false;
+  }
+  if (activity_ == Activity::kPlayback) abortActivity();
+  showReference(&*review_expert_);
+  paper_->setReferenceShown(true);
+  paper_->overlay().assign(*review_trial_);
+  paper_->trail().clear();
+  plot_->setExpert(ForceSeries::fromProfile(*review_expert_));
+  plot_->setTrainee(ForceSeries::fromProfile(*review_trial_));
+  plot_->setTimeWindow(std::nullopt);
+  plot_->setCursorTime(std::nullopt);
+  plot_holds_result_ = true;
+  plot_->setTitle(tr("%1, %2 %3 trial %4")
+                      .arg(qs(review_trial_->metadata().subject))
+                      .arg(qs(review_trial_->metadata().extra["study_mode"]))
+                      .arg(qs(review_trial_->metadata().extra["phase"]))
+                      .arg(qs(review_trial_->metadata().extra["trial"])));
+  showScores(*review_expert_, *review_trial_, review_scores_);
+  refreshButtons();
+  return true;
+}
+
+}  // namespace hattr::studio

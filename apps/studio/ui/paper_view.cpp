@@ -1,0 +1,225 @@
+#include "ui/paper_view.hpp"
+
+#include <QMouseEvent>
+#include <QPainter>
+#include <QPainterPath>
+#include <QWheelEvent>
+#include <cmath>
+
+#include "core/relief_image.hpp"
+
+namespace hattr::studio {
+namespace {
+
+constexpr double kReliefPixelsPerMetre = 6000.0;  // cached relief: 6 px/mm
+constexpr double kArrowMetresPerNewton = 0.01;    // force arrows: 10 mm of paper per newton
+constexpr double kPenRadius_px = 6.0;
+
+QPolygonF strokePolygon(const std::vector<Eigen::Vector2d>& stroke, const PaperMapping& mapping) {
+  QPolygonF polygon;
+  polygon.reserve(static_cast<qsizetype>(stroke.size()));
+  for (const auto& p : stroke) polygon << mapping.toWidget(p.x(), p.y());
+  return polygon;
+}
+
+}  // namespace
+
+PaperView::PaperView(QWidget* parent) : QWidget(parent) {
+  setMouseTracking(true);
+  setMinimumSize(480, 360);
+  setFocusPolicy(Qt::StrongFocus);
+  setCursor(Qt::CrossCursor);
+  mapping_.setWidgetSize(width(), height());
+}
+
+void PaperView::setPaper(const render::HeightField& relief, double x_min_m, double y_min_m, double x_max_m,
+                         double y_max_m) {
+  mapping_.setPaperRect(x_min_m, y_min_m, x_max_m, y_max_m);
+  const int w = static_cast<int>(std::lround((x_max_m - x_min_m) * kReliefPixelsPerMetre));
+  const int h = static_cast<int>(std::lround((y_max_m - y_min_m) * kReliefPixelsPerMetre));
+  relief_image_ = reliefImage(relief, x_min_m, y_min_m, x_max_m, y_max_m, w, h);
+  update();
+}
+
+void PaperView::resizeEvent(QResizeEvent* event) {
+  QWidget::resizeEvent(event);
+  mapping_.setWidgetSize(width(), height(), 10);
+}
+
+// ---- Mouse: the hand ---------------------------------------------------------------------
+
+void PaperView::publish(const QPointF& px, std::optional<bool> pen_down) {
+  if (hand_ == nullptr) return;
+  MouseInput input = hand_->input();
+  const Eigen::Vector2d p = mapping_.clampToPaper(mapping_.toPaper(px));
+  input.x_m = p.x();
+  input.y_m = p.y();
+  if (pen_down) input.pen_down = *pen_down;
+  hand_->setInput(input);
+}
+
+void PaperView::mouseMoveEvent(QMouseEvent* event) { publish(event->position(), std::nullopt); }
+
+void PaperView::mousePressEvent(QMouseEvent* event) {
+  if (event->button() == Qt::LeftButton) publish(event->position(), true);
+}
+
+void PaperView::mouseReleaseEvent(QMouseEvent* event) {
+  if (event->button() == Qt::LeftButton) publish(event->position(), false);
+}
+
+void PaperView::wheelEvent(QWheelEvent* event) {
+  if (hand_ == nullptr) return;
+  MouseInput input = hand_->input();
+  input.press_N = PressScale::afterWheel(input.press_N, event->angleDelta().y());
+  hand_->setInput(input);
+  emit pressChanged(input.press_N);
+  event->accept();
+}
+
+// ---- Drawing -------------------------------------------------------------------------------
+
+void PaperView::drawTrail(QPainter& painter, const Trail& trail, const QColor& colour, double width_px) const {
+  painter.setPen(QPen(colour, width_px, Qt::SolidLine, Qt::RoundCap, Qt::RoundJoin));
+  for (const auto& stroke : trail.strokes()) {
+    if (stroke.size() == 1) {
+      painter.drawPoint(mapping_.toWidget(stroke.front().x(), stroke.front().y()));
+    } else {
+      painter.drawPolyline(strokePolygon(stroke, mapping_));
+    }
+  }
+}
+
+void PaperView::drawArrow(QPainter& painter, const QPointF& from, const Eigen::Vector2d& f_N,
+                          const QColor& colour) const {
+  const double length_px = f_N.norm() * kArrowMetresPerNewton * mapping_.pixelsPerMetre();
+  if (length_px < 2.0) return;
+  // Screen y points down: the paper's +y is up.
+  const QPointF direction(f_N.x() / f_N.norm(), -f_N.y() / f_N.norm());
+  const QPointF tip = from + direction * length_px;
+  const QPointF normal(-direction.y(), direction.x());
+  const double head = std::min(9.0, 0.4 * length_px);
+  painter.setPen(QPen(colour, 2.5, Qt::SolidLine, Qt::RoundCap));
+  painter.drawLine(from, tip);
+  painter.setBrush(colour);
+  painter.drawPolygon(
+      QPolygonF{tip, tip - direction * head + normal * head * 0.5, tip - direction * head - normal * head * 0.5});
+  painter.setBrush(Qt::NoBrush);
+}
+
+void PaperView::paintEvent(QPaintEvent*) {
+  QPainter painter(this);
+  painter.setRenderHint(QPainter::Antialiasing);
+  painter.setRenderHint(QPainter::SmoothPixmapTransform);
+
+  // The desk and the paper with its grain.
+  painter.fillRect(rect(), QColor(66, 70, 78));
+  const QRectF paper = mapping_.paperRectPx();
+  if (relief_image_.isNull()) {
+    painter.fillRect(paper, paperColour());
+  } else {
+    painter.drawImage(paper, relief_image_);
+  }
+  painter.setPen(QPen(QColor(160, 160, 150), 1.0));
+  painter.drawRect(paper);
+
+  // A scale bar: 10 mm.
+  const double bar_px = 0.010 * mapping_.pixelsPerMetre();
+  const QPointF bar_end(paper.right() - 12.0, paper.bottom() - 12.0);
+  painter.setPen(QPen(QColor(90, 90, 90), 2.0));
+  painter.drawLine(bar_end - QPointF(bar_px, 0.0), bar_end);
+  painter.drawText(QRectF(bar_end.x() - bar_px, bar_end.y() - 20.0, bar_px, 16.0), Qt::AlignCenter, tr("10 mm"));
+
+  // Reference, reviewed trial, the pen's trail.
+  if (reference_shown_) drawTrail(painter, reference_, PaperColours::reference(), 3.0);
+  drawTrail(painter, overlay_, PaperColours::overlay(), 2.5);
+  drawTrail(painter, trail_, PaperColours::ink(), 2.5);
+
+  // Where the reference is now.
+  if (cue_m_ && reference_shown_) {
+    painter.setPen(QPen(PaperColours::reference(), 2.0));
+    painter.drawEllipse(mapping_.toWidget(cue_m_->x(), cue_m_->y()), 8.0, 8.0);
+  }
+
+  // The hand's target (the cursor on the paper).
+  if (hand_ != nullptr) {
+    const QPointF target = mapping_.toWidget(hand_->input().x_m, hand_->input().y_m);
+    painter.setPen(QPen(QColor(120, 120, 120), 1.0));
+    painter.drawLine(target - QPointF(5, 0), target + QPointF(5, 0));
+    painter.drawLine(target - QPointF(0, 5), target + QPointF(0, 5));
+  }
+
+  // The pen: filled on the paper, a ring growing with its height above it; its forces.
+  if (pen_) {
+    const QPointF at = mapping_.toWidget(pen_->p_WT);
+    if (arrows_shown_) {
+      drawArrow(painter, at, pen_->f_user_W.head<2>(), PaperColours::userForce());
+      drawArrow(painter, at, pen_->f_guide_W.head<2>(), PaperColours::guideForce());
+    }
+    const double lift_px = std::clamp(pen_->p_WT.z() * 1000.0, 0.0, 10.0) * 1.5;
+    if (pen_->in_contact) {
+      painter.setPen(QPen(Qt::white, 1.5));
+      painter.setBrush(PaperColours::ink());
+      painter.drawEllipse(at, kPenRadius_px, kPenRadius_px);
+    } else {
+      painter.setPen(QPen(PaperColours::ink(), 1.5));
+      painter.setBrush(Qt::NoBrush);
+      painter.drawEllipse(at, kPenRadius_px + lift_px, kPenRadius_px + lift_px);
+    }
+    painter.setBrush(Qt::NoBrush);
+  }
+
+  // Read-outs (millimetres and newtons for people).
+  painter.setPen(QColor(40, 40, 40));
+  QFont small = font();
+  small.setPointSizeF(small.pointSizeF() * 0.9);
+  painter.setFont(small);
+  const QRectF info(paper.left() + 8.0, paper.top() + 6.0, paper.width() - 16.0, 18.0);
+  if (pen_) {
+    painter.drawText(info, Qt::AlignLeft | Qt::AlignVCenter,
+                     tr("pen z %1 mm · fz %2 N · guidance %3 N")
+                         .arg(pen_->p_WT.z() * 1000.0, 0, 'f', 2)
+                         .arg(pen_->f_user_W.z(), 0, 'f', 2)
+                         .arg(pen_->f_guide_W.norm(), 0, 'f', 2));
+  }
+  if (hand_ != nullptr) {
+    painter.drawText(info, Qt::AlignRight | Qt::AlignVCenter,
+                     tr("press %1 N (wheel)").arg(hand_->input().press_N, 0, 'f', 1));
+  }
+
+  // Legend.
+  const QPointF legend(paper.left() + 10.0, paper.bottom() - 12.0);
+  const struct {
+    QColor colour;
+    QString text;
+  } items[] = {{PaperColours::reference(), tr("reference")},
+               {PaperColours::ink(), tr("pen trail")},
+               {PaperColours::overlay(), tr("reviewed trial")},
+               {PaperColours::userForce(), tr("your force")},
+               {PaperColours::guideForce(), tr("guidance")}};
+  double x = legend.x();
+  for (const auto& item : items) {
+    painter.setPen(QPen(item.colour, 3.0));
+    painter.drawLine(QPointF(x, legend.y() - 4.0), QPointF(x + 14.0, legend.y() - 4.0));
+    painter.setPen(QColor(60, 60, 60));
+    const double text_w = painter.fontMetrics().horizontalAdvance(item.text);
+    painter.drawText(QPointF(x + 18.0, legend.y()), item.text);
+    x += 30.0 + text_w;
+  }
+
+  // The banner.
+  if (!banner_.isEmpty()) {
+    QFont big = font();
+    big.setPointSizeF(big.pointSizeF() * 1.6);
+    big.setBold(true);
+    painter.setFont(big);
+    const QRectF box(paper.left() + paper.width() * 0.15, paper.top() + 28.0, paper.width() * 0.7, 40.0);
+    painter.setPen(Qt::NoPen);
+    painter.setBrush(QColor(30, 34, 44, 200));
+    painter.drawRoundedRect(box, 8.0, 8.0);
+    painter.setPen(Qt::white);
+    painter.drawText(box, Qt::AlignCenter, banner_);
+  }
+}
+
+}  // namespace hattr::studio

@@ -1,0 +1,90 @@
+#pragma once
+/// The paper seen from above: the paper's grain (the relief of the world configuration,
+/// cached as an image), the expert's reference when the phase shows it, the pen's trail, a
+/// trial overlaid for review, the pen with the user's force and the guidance force as arrows
+/// in the paper plane, and a banner for prompts and countdowns. The mouse over the view is
+/// the hand holding the simulated pen: the cursor is the hand's target, the left button puts
+/// the pen down, the wheel sets how hard the hand presses. Millimetres only in the labels.
+
+#include <QImage>
+#include <QString>
+#include <QWidget>
+#include <optional>
+
+#include "core/mouse_hand.hpp"
+#include "core/paper_mapping.hpp"
+#include "core/series.hpp"
+#include "hattr/core/sample.hpp"
+#include "hattr/render/height_field.hpp"
+
+namespace hattr::studio {
+
+/// The colours of the view (also what the smoke test looks for).
+struct PaperColours {
+  static QColor reference() { return {40, 110, 230}; }  ///< the expert's path
+  static QColor ink() { return {20, 20, 35}; }          ///< the pen's trail
+  static QColor overlay() { return {225, 70, 20}; }     ///< a reviewed trial
+  static QColor userForce() { return {235, 120, 0}; }   ///< the user's force on the paper
+  static QColor guideForce() { return {0, 165, 70}; }   ///< the guidance force on the pen
+};
+
+class PaperView final : public QWidget {
+  Q_OBJECT
+
+ public:
+  explicit PaperView(QWidget* parent = nullptr);
+
+  /// The hand the mouse drives (may be null: the mouse does nothing).
+  void setMouseHand(MouseHand* hand) { hand_ = hand; }
+  /// The paper's relief and the rectangle of the paper shown [m]; rebuilds the cached image.
+  void setPaper(const render::HeightField& relief, double x_min_m, double y_min_m, double x_max_m, double y_max_m);
+
+  /// The pen as the loop last published it (nullopt: no pen drawn).
+  void setPen(const std::optional<Sample>& pen) { pen_ = pen; }
+  /// The expert's reference path (drawn when shown).
+  Trail& reference() { return reference_; }
+  void setReferenceShown(bool shown) { reference_shown_ = shown; }
+  [[nodiscard]] bool referenceShown() const { return reference_shown_; }
+  /// Where the reference is now (a marker), or nothing.
+  void setReferenceCue(const std::optional<Eigen::Vector2d>& cue_m) { cue_m_ = cue_m; }
+  /// The pen's trail (live, or a replayed take).
+  Trail& trail() { return trail_; }
+  /// A trial overlaid on the reference (review).
+  Trail& overlay() { return overlay_; }
+  /// Text over the paper (prompts, countdowns); empty: none.
+  void setBanner(const QString& text) { banner_ = text; }
+  void setForceArrowsShown(bool shown) { arrows_shown_ = shown; }
+
+  [[nodiscard]] const PaperMapping& mapping() const { return mapping_; }
+
+ signals:
+  /// The wheel changed the press force [N].
+  void pressChanged(double press_N);
+
+ protected:
+  void paintEvent(QPaintEvent* event) override;
+  void resizeEvent(QResizeEvent* event) override;
+  void mouseMoveEvent(QMouseEvent* event) override;
+  void mousePressEvent(QMouseEvent* event) override;
+  void mouseReleaseEvent(QMouseEvent* event) override;
+  void wheelEvent(QWheelEvent* event) override;
+
+ private:
+  void publish(const QPointF& px, std::optional<bool> pen_down);
+  void drawTrail(QPainter& painter, const Trail& trail, const QColor& colour, double width_px) const;
+  void drawArrow(QPainter& painter, const QPointF& from, const Eigen::Vector2d& f_N, const QColor& colour) const;
+
+  MouseHand* hand_ = nullptr;
+  PaperMapping mapping_;
+  QImage relief_image_;
+  std::optional<Sample> pen_;
+  Trail reference_;
+  Trail trail_;
+  Trail overlay_;
+  bool reference_shown_ = true;
+  bool arrows_shown_ = true;
+  std::optional<Eigen::Vector2d> cue_m_;
+  QString banner_;
+};
+
+}  // namespace hattr::studio

@@ -1,0 +1,348 @@
+// The live rig (the studio's runTrial that stays open) and the study stepper (the studio's
+// StudyRunner for a person): the same library calls, the same bits.
+#include <QtTest>
+#include <chrono>
+#include <fstream>
+#include <thread>
+
+#include "core/live_rig.hpp"
+#include "core/mouse_hand.hpp"
+#include "core/study_session.hpp"
+#include "hattr/core/error.hpp"
+#include "hattr/io/profile_csv.hpp"
+#include "hattr/session/study_runner.hpp"
+#include "studio_test_support.hpp"
+
+using namespace hattr;
+using namespace hattr::studio;
+
+namespace {
+
+/// Equal in everything but the creation time; on a difference, says where.
+bool sameButCreationTime(HapticProfile a, HapticProfile b) {
+  a.metadata().created_utc.clear();
+  b.metadata().created_utc.clear();
+  if (!(a.metadata() == b.metadata())) {
+    for (const auto& [k, v] : a.metadata().extra) {
+      if (b.metadata().extra[k] != v)
+        qWarning("metadata %s: %s vs %s", k.c_str(), v.c_str(), b.metadata().extra[k].c_str());
+    }
+    qWarning("subject %s/%s source %s/%s device %s/%s rate %g/%g", a.metadata().subject.c_str(),
+             b.metadata().subject.c_str(), a.metadata().source.c_str(), b.metadata().source.c_str(),
+             a.metadata().device.c_str(), b.metadata().device.c_str(), a.metadata().nominal_rate_hz,
+             b.metadata().nominal_rate_hz);
+  }
+  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) {
+    if (!(a[i] == b[i])) {
+      qWarning("sample %zu differs: t %.17g/%.17g x %.17g/%.17g fz %.17g/%.17g", i, a[i].t_s, b[i].t_s, a[i].p_WT.x(),
+               b[i].p_WT.x(), a[i].f_user_W.z(), b[i].f_user_W.z());
+      break;
+    }
+  }
+  return a == b;
+}
+
+std::string studyJson() {
+  return test::smallStudyJson("[\"basic\", \"pcontrol\"]", 2.0,
+                              "[{\"id\": \"P01\", \"participant\": \"person\"}, "
+                              "{\"id\": \"S01\", \"participant\": \"script\", \"seed\": 3}]",
+                              "flat");
+}
+
+}  // namespace
+
+class StudioRigTest : public QObject {
+  Q_OBJECT
+
+ private slots:
+  void initTestCase() {
+    environment_ = std::make_unique<session::TrialEnvironment>("sim://pen", test::flatWorld(), 1000.0);
+    expert_ = test::recordExpert(*environment_);
+    QVERIFY(expert_.size() > 1000);
+    reference_ = std::make_shared<guidance::ReferenceTrajectory>(expert_, 1000.0);
+  }
+
+  // ---- LiveRig ----
+  void liveRigRecordsWhatRunTrialRecordsBitForBit() {
+    for (const auto mode : {guidance::TrainingMode::kBasic, guidance::TrainingMode::kPositionControl,
+                            guidance::TrainingMode::kForceControl}) {
+      session::TrialSetup setup;
+      setup.guidance.mode = mode;
+      setup.reference = reference_;
+      setup.duration_s = reference_->duration_s() + 0.3;
+      setup.metadata.subject = "T1";
+      setup.metadata.skill = "eight";
+      device::ProfileHandScript hand_a(expert_, 1.0471975511965976, Vec3(0.002, -0.001, 0.0));
+      const session::TrialResult a = session::runTrial(*environment_, setup, hand_a);
+
+      device::ProfileHandScript hand_b(expert_, 1.0471975511965976, Vec3(0.002, -0.001, 0.0));
+      LiveRig rig;
+      rig.start(*environment_, trialRunSpec(setup, false), hand_b, session::Clock::kSimulated);
+      rig.advanceSimulated(setup.settle_s);
+      rig.advanceSimulated(setup.duration_s);
+      QVERIFY(rig.status().window_done);
+      const session::TrialResult b = rig.finish();
+      QVERIFY(!rig.active());
+      QCOMPARE(b.profile.size(), a.profile.size());
+      QVERIFY2(sameButCreationTime(a.profile, b.profile), guidance::modeName(mode).data());
+      QCOMPARE(b.clamps, a.clamps);
+      QCOMPARE(b.missed_samples, std::uint64_t{0});
+    }
+  }
+
+  void liveRigSwitchesModeThroughTheMailbox() {
+    MouseHand hand;
+    hand.setInput({.x_m = 0.008, .y_m = 0.0, .pen_down = false, .press_N = 1.0});
+    RunSpec spec;
+    spec.reference = reference_;
+    spec.guidance.mode = guidance::TrainingMode::kBasic;
+    LiveRig rig;
+    rig.start(*environment_, spec, hand, session::Clock::kSimulated);
+    rig.advanceSimulated(0.5);
+    Sample s;
+    QVERIFY(rig.readLatest(s));
+    QCOMPARE(s.f_guide_W.norm(), 0.0);
+    QVERIFY(rig.switchMode(guidance::TrainingMode::kPositionControl));
+    rig.advanceSimulated(0.2);
+    QVERIFY(rig.readLatest(s));
+    QVERIFY2(s.f_guide_W.norm() > 0.1, "PCONTROL pulls the pen toward the reference");
+    (void)rig.finish();
+  }
+
+  void liveRigPenDownTriggerRecordsFromTouchUntilALongLift() {
+    MouseHand hand;
+    hand.setInput({.x_m = 0.0, .y_m = 0.0, .pen_down = false, .press_N = 1.2});
+    RunSpec spec;
+    spec.record = RecordMode::kPenDown;
+    spec.pen_up_stop_s = 0.2;
+    LiveRig rig;
+    rig.start(*environment_, spec, hand, session::Clock::kSimulated);
+    rig.advanceSimulated(0.5);
+    QVERIFY(!rig.status().recording);
+    QCOMPARE(rig.status().recorded_samples, std::uint64_t{0});
+    hand.setInput({.x_m = 0.01, .y_m = 0.0, .pen_down = true, .press_N = 1.2});
+    rig.advanceSimulated(0.5);
+    QVERIFY(rig.status().recording);
+    hand.setInput({.x_m = 0.01, .y_m = 0.0, .pen_down = false, .press_N = 1.2});
+    rig.advanceSimulated(0.5);
+    QVERIFY(rig.status().pen_down_done);
+    const session::TrialResult r = rig.finish();
+    QVERIFY(r.profile.size() > 300);
+    QVERIFY(r.profile[0].pen_down);
+    QVERIFY(!r.profile.samples().back().pen_down);
+  }
+
+  void liveRigInRealTimeRecordsTheTrialWindowAsTheMouseMoves() {
+    MouseHand hand;
+    hand.setInput({.x_m = 0.0, .y_m = 0.0, .pen_down = false, .press_N = 1.2});
+    RunSpec spec;
+    spec.record = RecordMode::kWindow;
+    spec.settle_s = 0.3;
+    spec.duration_s = 0.4;
+    LiveRig rig;
+    rig.start(*environment_, spec, hand, session::Clock::kRealTime);
+    const auto begin = std::chrono::steady_clock::now();
+    Sample latest;
+    // The GUI thread's part: move the mouse with the button held, read the newest sample.
+    while (!rig.status().window_done && std::chrono::steady_clock::now() - begin < std::chrono::seconds(5)) {
+      const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+      hand.setInput({.x_m = 0.02 * t, .y_m = 0.0, .pen_down = true, .press_N = 1.2});
+      (void)rig.readLatest(latest);
+      std::this_thread::sleep_for(std::chrono::milliseconds(16));
+    }
+    QVERIFY(rig.status().window_done);
+    const session::TrialResult r = rig.finish();
+    QVERIFY(r.ticks > 100);
+    // The trial's window on its own clock: from 0 to under 0.4 s, at most one sample per
+    // tick (how many depends on the machine's timing, which decides nothing here).
+    QVERIFY2(r.profile.size() > 50 && r.profile.size() <= 401, std::to_string(r.profile.size()).c_str());
+    QCOMPARE(r.profile[0].t_s, 0.0);
+    QVERIFY(r.profile.samples().back().t_s > 0.2 && r.profile.samples().back().t_s < 0.4);
+    const double origin = std::stod(r.profile.metadata().extra.at("t_origin_s"));
+    QVERIFY(origin >= 0.2995 && origin < 0.31);
+    QCOMPARE(r.profile.metadata().extra.at("clock"), std::string("real-time"));
+    QVERIFY(r.profile.penDownCount() > 0);
+  }
+
+  void liveRigRestartsCleanlyWhileRunning() {
+    MouseHand hand;
+    LiveRig rig;
+    RunSpec spec;
+    rig.start(*environment_, spec, hand, session::Clock::kRealTime);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    rig.start(*environment_, spec, hand, session::Clock::kRealTime);  // finishes the first run
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    QVERIFY(rig.status().running);
+    QVERIFY(rig.counters()->ticks.load() > 10);
+    const session::TrialResult r = rig.finish();
+    QVERIFY(r.profile.empty());  // nothing recorded
+    QVERIFY(!rig.active());
+    QVERIFY(!rig.status().running);
+  }
+
+  void liveRigRefusesATooShortSettleSayingWhy() {
+    MouseHand hand;
+    LiveRig rig;
+    RunSpec spec;
+    spec.settle_s = 0.1;
+    try {
+      rig.start(*environment_, spec, hand, session::Clock::kSimulated);
+      QFAIL("no error");
+    } catch (const InputError& e) {
+      QVERIFY2(QString(e.what()).contains("settle time: expected [0.25, 60] s"), e.what());
+    }
+    QVERIFY(!rig.active());
+  }
+
+  // ---- StudySession ----
+  void studySessionStoresWhatTheStudyRunnerStoresBitForBit() {
+    const auto dir = makeStudyFolder("same");
+    const session::StudyDefinition study = session::loadStudy(dir / "study.json");
+    { (void)session::StudyDatabase::create(dir / "runner.sqlite", study); }
+    { (void)session::StudyDatabase::create(dir / "studio.sqlite", study); }
+
+    // The CLI's way: the runner with a scripted participant.
+    {
+      auto db = session::StudyDatabase::open(dir / "runner.sqlite", session::OpenMode::kRunner);
+      session::StudyRunner runner(db, session::makeScriptParticipant);
+      QCOMPARE(runner.run({.only_subject = "P01"}), 4);
+    }
+    // The studio's way: the stepper and the live rig, with the same hand in simulated time.
+    {
+      StudySession session(dir / "studio.sqlite");
+      session.selectSubject("P01", 0.0);
+      QCOMPARE(session.state(), StudySession::State::kReady);
+      double now = 0.0;
+      LiveRig rig;
+      while (session.state() != StudySession::State::kFinished) {
+        session.tick(now);
+        if (session.state() == StudySession::State::kResting) {
+          now += 1.0;
+          continue;
+        }
+        QCOMPARE(session.state(), StudySession::State::kReady);
+        const session::TrialSetup setup = session.currentSetup();
+        session.beginTrial();
+        device::ProfileHandScript hand(session.expert(), 1.0471975511965976, Vec3(0.0, 0.0, 0.0));
+        rig.start(session.environment(), trialRunSpec(setup, false), hand, session::Clock::kSimulated);
+        rig.advanceSimulated(setup.settle_s);
+        rig.advanceSimulated(setup.duration_s);
+        session.completeTrial(rig.finish(), now);
+      }
+      QCOMPARE(session.completedCount(), 4);
+    }
+    const auto a = session::StudyDatabase::open(dir / "runner.sqlite", session::OpenMode::kReadOnly);
+    const auto b = session::StudyDatabase::open(dir / "studio.sqlite", session::OpenMode::kReadOnly);
+    const auto ta = a.trials("P01");
+    const auto tb = b.trials("P01");
+    QCOMPARE(tb.size(), ta.size());
+    for (std::size_t i = 0; i < ta.size(); ++i) {
+      QCOMPARE(tb[i].status, session::TrialStatus::kCompleted);
+      QCOMPARE(tb[i].outcome, ta[i].outcome);
+      QVERIFY2(a.trialProfile(ta[i].id) == b.trialProfile(tb[i].id), std::to_string(i).c_str());
+    }
+    std::filesystem::remove_all(dir);
+  }
+
+  void studySessionRestsPromptsAndResumes() {
+    const auto dir = makeStudyFolder("resume");
+    { (void)session::StudyDatabase::create(dir / "s.sqlite", session::loadStudy(dir / "study.json")); }
+    {
+      StudySession session(dir / "s.sqlite");
+      QCOMPARE(session.participantKind(), std::string());
+      session.selectSubject("P01", 100.0);
+      QCOMPARE(session.participantKind(), std::string("person"));
+      QCOMPARE(session.prompt(), std::string("Training with BASIC: trial 1 of 1"));
+      QCOMPARE(session.currentSetup().guidance.mode, guidance::TrainingMode::kBasic);
+      runOneTrial(session, 100.0);
+      // A rest of rest_s before the next trial, then ready.
+      QCOMPARE(session.state(), StudySession::State::kResting);
+      QCOMPARE(session.restRemaining_s(101.0), 1.0);
+      session.tick(101.5);
+      QCOMPARE(session.state(), StudySession::State::kResting);
+      session.tick(102.0);
+      QCOMPARE(session.state(), StudySession::State::kReady);
+      QCOMPARE(session.prompt(), std::string("Recall with BASIC: trial 1 of 1"));
+      QVERIFY(!session.currentTrial()->plan.view.show_reference);
+    }
+    {
+      // Reopened: resumes at trial 2, after a rest (the runner's rule).
+      StudySession session(dir / "s.sqlite");
+      session.selectSubject("P01", 0.0);
+      QCOMPARE(session.completedCount(), 1);
+      QCOMPARE(session.state(), StudySession::State::kResting);
+      session.skipRest();
+      QCOMPARE(session.state(), StudySession::State::kReady);
+      QCOMPARE(session.currentTrial()->plan.sequence, 1);
+    }
+    std::filesystem::remove_all(dir);
+  }
+
+  void studySessionAbandonedTrialIsRunAgainAndCountsAttempts() {
+    const auto dir = makeStudyFolder("abandon");
+    { (void)session::StudyDatabase::create(dir / "s.sqlite", session::loadStudy(dir / "study.json")); }
+    {
+      StudySession session(dir / "s.sqlite");
+      session.selectSubject("P01", 0.0);
+      session.beginTrial();
+      session.abandonTrial();
+      QCOMPARE(session.state(), StudySession::State::kReady);
+      runOneTrial(session, 0.0);
+      QCOMPARE(session.completedCount(), 1);
+    }
+    const auto db = session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kReadOnly);
+    QCOMPARE(db.trials("P01")[0].attempts, 2);
+    QCOMPARE(db.trials("P01")[0].status, session::TrialStatus::kCompleted);
+    std::filesystem::remove_all(dir);
+  }
+
+  void studySessionRefusesAStudyAnotherRunnerHolds() {
+    const auto dir = makeStudyFolder("lock");
+    { (void)session::StudyDatabase::create(dir / "s.sqlite", session::loadStudy(dir / "study.json")); }
+    StudySession first(dir / "s.sqlite");
+    try {
+      StudySession second(dir / "s.sqlite");
+      QFAIL("no error");
+    } catch (const InputError& e) {
+      QVERIFY2(QString(e.what()).contains("s.sqlite"), e.what());
+    }
+    std::filesystem::remove_all(dir);
+  }
+
+  void studySessionRefusesAFileThatIsNoStudy() {
+    const auto dir = test::freshTempDir("nostudy");
+    std::ofstream(dir / "x.sqlite") << "hello";
+    try {
+      StudySession session(dir / "x.sqlite");
+      QFAIL("no error");
+    } catch (const InputError& e) {
+      QVERIFY2(QString(e.what()).contains("x.sqlite"), e.what());
+    }
+    std::filesystem::remove_all(dir);
+  }
+
+ private:
+  std::filesystem::path makeStudyFolder(const std::string& name) {
+    const auto dir = test::freshTempDir(name);
+    io::writeProfileCsv(expert_, dir / "expert.csv");
+    std::ofstream(dir / "study.json") << studyJson();
+    return dir;
+  }
+
+  void runOneTrial(StudySession& session, double now) {
+    const session::TrialSetup setup = session.currentSetup();
+    session.beginTrial();
+    device::ProfileHandScript hand(session.expert());
+    LiveRig rig;
+    rig.start(session.environment(), trialRunSpec(setup, false), hand, session::Clock::kSimulated);
+    rig.advanceSimulated(setup.settle_s + setup.duration_s);
+    session.completeTrial(rig.finish(), now);
+  }
+
+  std::unique_ptr<session::TrialEnvironment> environment_;
+  HapticProfile expert_;
+  std::shared_ptr<const guidance::ReferenceTrajectory> reference_;
+};
+
+QTEST_GUILESS_MAIN(StudioRigTest)
+#include "studio_rig_test.moc"

@@ -1,0 +1,305 @@
+// The studio end to end, offscreen: the main window on the real servo loop in real time, the
+// mouse driven along a path like a person's hand. A training trial is run and scored, the
+// window is saved as a screenshot (studio_smoke.png in the build folder) and its pixels are
+// checked for the paper's grain, the expert's reference and the pen's trail. Then a take is
+// recorded and saved, a study trial is run and stored, and the study is reviewed.
+#include <QLabel>
+#include <QStatusBar>
+#include <QTabWidget>
+#include <QtTest>
+#include <cmath>
+#include <fstream>
+
+#include "hattr/io/profile_csv.hpp"
+#include "hattr/session/study_database.hpp"
+#include "studio_test_support.hpp"
+#include "ui/main_window.hpp"
+#include "ui/paper_view.hpp"
+
+using namespace hattr;
+using namespace hattr::studio;
+
+#ifndef HATTR_STUDIO_SCREENSHOT_DIR
+#define HATTR_STUDIO_SCREENSHOT_DIR "."
+#endif
+
+namespace {
+
+/// True if a pixel within `radius` of p has a colour within `tolerance` of `colour`.
+bool colourNear(const QImage& image, QPoint p, const QColor& colour, int radius = 1, int tolerance = 60) {
+  for (int dy = -radius; dy <= radius; ++dy) {
+    for (int dx = -radius; dx <= radius; ++dx) {
+      const QPoint q = p + QPoint(dx, dy);
+      if (!image.rect().contains(q)) continue;
+      const QColor c = image.pixelColor(q);
+      const int d =
+          std::abs(c.red() - colour.red()) + std::abs(c.green() - colour.green()) + std::abs(c.blue() - colour.blue());
+      if (d <= tolerance) return true;
+    }
+  }
+  return false;
+}
+
+/// The share of a profile's pen-down points (every `step`-th) drawn in `colour` in the
+/// window's screenshot.
+double shareDrawn(const QImage& shot, const MainWindow& window, const HapticProfile& profile, const QColor& colour,
+                  std::size_t step = 25) {
+  const PaperView* view = window.paperView();
+  const QPoint origin = view->mapTo(&window, QPoint(0, 0));
+  int found = 0, total = 0;
+  for (std::size_t i = 0; i < profile.size(); i += step) {
+    if (!profile[i].pen_down) continue;
+    const QPointF px = view->mapping().toWidget(profile[i].p_WT) + QPointF(origin);
+    ++total;
+    found += colourNear(shot, px.toPoint(), colour) ? 1 : 0;
+  }
+  return total == 0 ? 0.0 : static_cast<double>(found) / total;
+}
+
+void sendMouse(QWidget* view, QEvent::Type type, QPointF at, Qt::MouseButton button, Qt::MouseButtons buttons) {
+  QMouseEvent event(type, at, view->mapToGlobal(at), button, buttons, Qt::NoModifier);
+  QCoreApplication::sendEvent(view, &event);
+}
+
+}  // namespace
+
+class StudioSmokeTest : public QObject {
+  Q_OBJECT
+
+ private slots:
+  void initTestCase() {
+    dir_ = test::freshTempDir("smoke");
+    // The expert: a figure-eight recorded through runTrial, saved as a haptic profile.
+    session::TrialEnvironment flat("sim://pen", test::flatWorld(), 1000.0);
+    expert_ = test::recordExpert(flat);
+    expert_file_ = dir_ / "expert.csv";
+    io::writeProfileCsv(expert_, expert_file_);
+
+    auto settings =
+        std::make_unique<QSettings>(QString::fromStdString((dir_ / "studio.ini").string()), QSettings::IniFormat);
+    settings->setValue("train/settle_s", 0.5);
+    settings->setValue("record/trigger", 1);  // start/stop buttons
+    settings->setValue("record/name", "Ana");
+    settings->setValue("record/character", "eight");
+    window_ = std::make_unique<MainWindow>(std::move(settings));
+    window_->setInteractive(false);
+    window_->resize(1280, 820);
+    window_->show();
+    QVERIFY(QTest::qWaitForWindowExposed(window_.get()));
+  }
+
+  void cleanupTestCase() {
+    window_.reset();
+    std::filesystem::remove_all(dir_);
+  }
+
+  void aTrainingTrialIsDrawnScoredAndScreenshot() {
+    MainWindow& w = *window_;
+    QVERIFY2(w.loadReference(QString::fromStdString(expert_file_.string())), qPrintable(w.lastError()));
+    // A bad file: refused with a message naming it, nothing else changes.
+    QVERIFY(!w.loadReference(QString::fromStdString((dir_ / "missing.csv").string())));
+    QVERIFY2(w.lastError().contains("missing.csv"), qPrintable(w.lastError()));
+    QVERIFY2(w.loadReference(QString::fromStdString(expert_file_.string())), qPrintable(w.lastError()));
+    w.tabs()->setCurrentIndex(MainWindow::kTabTrain);
+    w.setMode(guidance::TrainingMode::kPositionControl);
+    QVERIFY2(w.startTrial(), qPrintable(w.lastError()));
+    QCOMPARE(w.activity(), MainWindow::Activity::kTrial);
+
+    // A person 8 mm to the right of the expert, at the expert's pace.
+    driveAlongExpert(w, Vec3(0.008, 0.0, 0.0), MainWindow::Activity::kTrial,
+                     HATTR_STUDIO_SCREENSHOT_DIR "/studio_trial.png");
+    QCOMPARE(w.activity(), MainWindow::Activity::kFree);
+    QVERIFY2(w.lastTrial().has_value(), qPrintable(w.lastError()));
+    QVERIFY(w.lastTrial()->size() > 1000);
+    QVERIFY(w.lastTrial()->penDownCount() > 500);
+    QVERIFY(w.lastScores().has_value());
+    QVERIFY(w.lastScores()->shape > 0.0);
+    QCOMPARE(w.lastTrial()->metadata().extra.at("mode"), std::string("PCONTROL"));
+
+    // Let a few frames draw, then the screenshot.
+    QTest::qWait(100);
+    const QImage shot = w.grab().toImage();
+    const QString path = QStringLiteral(HATTR_STUDIO_SCREENSHOT_DIR "/studio_smoke.png");
+    QVERIFY(shot.save(path));
+    qInfo("screenshot: %s", qPrintable(path));
+
+    // The paper: light, with its grain (gray levels vary) where nothing is drawn.
+    const PaperView* view = w.paperView();
+    const QPoint origin = view->mapTo(&w, QPoint(0, 0));
+    const QPointF corner = view->mapping().toWidget(0.050, 0.030) + QPointF(origin);
+    int lo = 255, hi = 0;
+    double sum = 0.0;
+    for (int dy = 0; dy < 30; ++dy) {
+      for (int dx = 0; dx < 30; ++dx) {
+        const int g = qGray(shot.pixel(corner.toPoint() + QPoint(dx, dy)));
+        lo = std::min(lo, g);
+        hi = std::max(hi, g);
+        sum += g;
+      }
+    }
+    QVERIFY2(sum / 900.0 > 170.0, "the paper is light");
+    QVERIFY2(hi - lo >= 8, "the paper shows its grain");
+    // The reference where the expert wrote, the trail where the pen wrote.
+    const double reference = shareDrawn(shot, w, expert_, PaperColours::reference());
+    const double trail = shareDrawn(shot, w, *w.lastTrial(), PaperColours::ink());
+    QVERIFY2(reference > 0.7, qPrintable(QString("reference drawn at %1 of its points").arg(reference)));
+    QVERIFY2(trail > 0.7, qPrintable(QString("trail drawn at %1 of its points").arg(trail)));
+    // The status bar shows the input and the loop.
+    QString status;
+    for (const QLabel* label : w.statusBar()->findChildren<QLabel*>()) status += label->text() + " ";
+    QVERIFY2(status.contains("Input: mouse") && status.contains("Hz") && status.contains("overruns") &&
+                 status.contains("faults"),
+             qPrintable(status));
+  }
+
+  void aTakeIsRecordedAndSavedButNeverOverwrittenUnasked() {
+    MainWindow& w = *window_;
+    w.tabs()->setCurrentIndex(MainWindow::kTabRecord);
+    QVERIFY2(w.startRecording(), qPrintable(w.lastError()));
+    QCOMPARE(w.activity(), MainWindow::Activity::kRecording);
+    QTest::qWait(400);  // settle
+    driveFor(w, 0.6, Vec3(-0.02, 0.0, 0.0));
+    QVERIFY(w.stopRecording());
+    QVERIFY(w.take().has_value());
+    QVERIFY(w.take()->penDownCount() > 100);
+    const QString file = QString::fromStdString((dir_ / "take.csv").string());
+    QVERIFY2(w.saveTake(file), qPrintable(w.lastError()));
+    const HapticProfile saved = io::readProfileCsv(file.toStdString());
+    QCOMPARE(saved.metadata().subject, std::string("Ana"));
+    QCOMPARE(saved.metadata().skill, std::string("eight"));
+    QCOMPARE(saved.size(), w.take()->size());
+    // Saving again is refused (the question is answered no) and the file is untouched.
+    const auto size = std::filesystem::file_size(file.toStdString());
+    QVERIFY(!w.saveTake(file));
+    QVERIFY2(w.lastError().contains("already exists"), qPrintable(w.lastError()));
+    QCOMPARE(std::filesystem::file_size(file.toStdString()), size);
+  }
+
+  void aStudyTrialIsStoredAndReviewed() {
+    MainWindow& w = *window_;
+    std::ofstream(dir_ / "study.json") << test::smallStudyJson(
+        "[\"pcontrol\"]", 1.0, "[{\"id\": \"P01\", \"participant\": \"person\"}]", "grain");
+    const auto db_file = dir_ / "study.sqlite";
+    { (void)session::StudyDatabase::create(db_file, session::loadStudy(dir_ / "study.json")); }
+    QVERIFY2(w.openStudy(QString::fromStdString(db_file.string())), qPrintable(w.lastError()));
+    QVERIFY2(w.selectStudySubject("P01"), qPrintable(w.lastError()));
+    QCOMPARE(w.study()->state(), StudySession::State::kReady);
+    QVERIFY(w.studyNext());
+    QCOMPARE(w.activity(), MainWindow::Activity::kStudyTrial);
+    driveAlongExpert(w, Vec3(0.003, 0.002, 0.0), MainWindow::Activity::kStudyTrial);
+    QCOMPARE(w.study()->completedCount(), 1);
+    QCOMPARE(w.study()->state(), StudySession::State::kResting);
+    w.closeStudy();
+
+    // Stored through the library: readable, completed, with the runner's metadata.
+    {
+      const auto db = session::StudyDatabase::open(db_file, session::OpenMode::kReadOnly);
+      const auto trials = db.trials("P01");
+      QCOMPARE(trials[0].status, session::TrialStatus::kCompleted);
+      QVERIFY(trials[0].outcome.starts_with("ok: "));
+      const HapticProfile stored = db.trialProfile(trials[0].id);
+      QCOMPARE(stored.metadata().extra.at("study_mode"), std::string("PCONTROL"));
+      QCOMPARE(stored.metadata().created_utc, std::string());
+    }
+
+    // Review: overlay and play back.
+    QVERIFY2(w.openReview(QString::fromStdString(db_file.string())), qPrintable(w.lastError()));
+    const auto db = session::StudyDatabase::open(db_file, session::OpenMode::kReadOnly);
+    QVERIFY2(w.showReviewTrial(db.trials("P01")[0].id), qPrintable(w.lastError()));
+    QVERIFY(!w.paperView()->overlay().empty());
+    w.togglePlayback();
+    QCOMPARE(w.activity(), MainWindow::Activity::kPlayback);
+    QTest::qWait(300);
+    QVERIFY(!w.paperView()->trail().empty());
+    w.grab().save(QStringLiteral(HATTR_STUDIO_SCREENSHOT_DIR "/studio_review.png"));
+    w.abortActivity();
+    QCOMPARE(w.activity(), MainWindow::Activity::kFree);
+  }
+
+  void shortcutsSwitchModesAndStartTrials() {
+    MainWindow& w = *window_;
+    w.activateWindow();
+    QVERIFY(QTest::qWaitForWindowActive(&w));
+    w.tabs()->setCurrentIndex(MainWindow::kTabTrain);
+    w.paperView()->setFocus();
+    QTest::keyClick(&w, Qt::Key_3);
+    QCOMPARE(w.mode(), guidance::TrainingMode::kForceControl);
+    QTest::keyClick(&w, Qt::Key_1);
+    QCOMPARE(w.mode(), guidance::TrainingMode::kBasic);
+    QTest::keyClick(&w, Qt::Key_Space);  // the Train tab's main action: start a trial
+    QCOMPARE(w.activity(), MainWindow::Activity::kTrial);
+    QCOMPARE(w.rig().spec().guidance.mode, guidance::TrainingMode::kBasic);
+    QTest::keyClick(&w, Qt::Key_Escape);
+    QCOMPARE(w.activity(), MainWindow::Activity::kFree);
+  }
+
+  void settingsAreRememberedAcrossSessions() {
+    const QString ini = QString::fromStdString((dir_ / "studio.ini").string());
+    window_->setMode(guidance::TrainingMode::kForceControl);
+    window_->setInteractive(false, true);  // "quit and lose the unsaved trial?" yes
+    QVERIFY(window_->close());
+    window_.reset();
+    MainWindow again(std::make_unique<QSettings>(ini, QSettings::IniFormat));
+    again.setInteractive(false, true);
+    QCOMPARE(again.mode(), guidance::TrainingMode::kForceControl);
+    QVERIFY(again.startTrial());  // the reference of last time is loaded again
+    again.abortActivity();
+    QSettings settings(ini, QSettings::IniFormat);
+    QCOMPARE(settings.value("record/name").toString(), QString("Ana"));
+    QCOMPARE(settings.value("train/settle_s").toDouble(), 0.5);
+  }
+
+ private:
+  /// Holds the left button and moves the mouse along the expert's path (shifted), on the
+  /// trial's clock, until the activity ends.
+  /// With `mid_shot`, the window is saved there 0.6 s into the trial.
+  void driveAlongExpert(MainWindow& w, const Vec3& offset, MainWindow::Activity during,
+                        const char* mid_shot = nullptr) {
+    PaperView* view = w.paperView();
+    const auto at = [&](double t_trial) {
+      Playback where;
+      where.load(&expert_);
+      const Vec3 p = expert_[where.indexAt(std::max(0.0, t_trial))].p_WT + offset;
+      return view->mapping().toWidget(p);
+    };
+    sendMouse(view, QEvent::MouseMove, at(0.0), Qt::NoButton, Qt::NoButton);
+    sendMouse(view, QEvent::MouseButtonPress, at(0.0), Qt::LeftButton, Qt::LeftButton);
+    QElapsedTimer timer;
+    timer.start();
+    while (w.activity() == during && timer.elapsed() < 15000) {
+      const double t_trial = w.rig().status().loop_time_s - w.rig().spec().settle_s;
+      sendMouse(view, QEvent::MouseMove, at(t_trial), Qt::NoButton, Qt::LeftButton);
+      if (mid_shot != nullptr && t_trial > 0.6) {
+        QVERIFY(w.grab().save(QString::fromLatin1(mid_shot)));
+        mid_shot = nullptr;
+      }
+      QTest::qWait(8);
+    }
+    sendMouse(view, QEvent::MouseButtonRelease, at(10.0), Qt::LeftButton, Qt::NoButton);
+  }
+
+  /// Holds the left button and moves the mouse along a short line for `seconds`.
+  void driveFor(MainWindow& w, double seconds, const Vec3& start) {
+    PaperView* view = w.paperView();
+    sendMouse(view, QEvent::MouseButtonPress, view->mapping().toWidget(start), Qt::LeftButton, Qt::LeftButton);
+    QElapsedTimer timer;
+    timer.start();
+    while (static_cast<double>(timer.elapsed()) < seconds * 1000.0) {
+      const double t = static_cast<double>(timer.elapsed()) * 1e-3;
+      sendMouse(view, QEvent::MouseMove,
+                view->mapping().toWidget(start + Vec3(0.03 * t, 0.01 * std::sin(8.0 * t), 0.0)), Qt::NoButton,
+                Qt::LeftButton);
+      QTest::qWait(8);
+    }
+    sendMouse(view, QEvent::MouseButtonRelease, view->mapping().toWidget(start), Qt::LeftButton, Qt::NoButton);
+    QTest::qWait(100);
+  }
+
+  std::filesystem::path dir_;
+  HapticProfile expert_;
+  std::filesystem::path expert_file_;
+  std::unique_ptr<MainWindow> window_;
+};
+
+QTEST_MAIN(StudioSmokeTest)
+#include "studio_smoke_test.moc"

@@ -1,0 +1,33 @@
+#pragma once
+// Shared helpers of the studio tests: a synthetic expert recorded through runTrial, a
+// flat-paper environment (quick to build), temporary folders.
+
+#include <filesystem>
+#include <string>
+
+#include "hattr/core/haptic_profile.hpp"
+#include "hattr/render/world_config.hpp"
+#include "hattr/session/trial.hpp"
+
+namespace hattr::studio::test {
+
+/// A figure-eight written in `duration_s` (about 40 × 30 mm, centred on `centre`), pressing
+/// with `normal_N` on the paper, sampled at 200 Hz: a hand script for ProfileHandScript.
+HapticProfile figureEightScript(double duration_s = 1.2, double normal_N = 0.8, Vec3 centre = Vec3::Zero());
+
+/// A world with flat paper (no relief to build) and the default friction and texture.
+render::WorldConfig flatWorld();
+
+/// The expert: the figure-eight recorded through session::runTrial in simulated time.
+HapticProfile recordExpert(session::TrialEnvironment& environment, double duration_s = 1.2);
+
+/// A small study file over the expert "expert.csv" (skill "eight"), one training and one
+/// recall trial per mode, fixed order, on sim://pen at 1 kHz. `modes` and `subjects` are
+/// JSON arrays; `relief` a relief kind ("flat", "grain").
+std::string smallStudyJson(const std::string& modes, double rest_s, const std::string& subjects,
+                           const std::string& relief);
+
+/// A fresh empty folder under the system's temporary folder.
+std::filesystem::path freshTempDir(const std::string& name);
+
+}  // namespace hattr::studio::test
