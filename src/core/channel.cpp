@@ -101,4 +101,32 @@ double channelValue(const Sample& s, Channel channel) {
   return std::nan("");
 }
 
+void setChannelValue(Sample& s, Channel channel, double v) {
+  switch (channel) {
+    case Channel::kTime: s.t_s = v; break;
+    case Channel::kX: s.p_WT.x() = v; break;
+    case Channel::kY: s.p_WT.y() = v; break;
+    case Channel::kZ: s.p_WT.z() = v; break;
+    case Channel::kVx: s.v_WT.x() = v; break;
+    case Channel::kVy: s.v_WT.y() = v; break;
+    case Channel::kVz: s.v_WT.z() = v; break;
+    case Channel::kFx: s.f_user_W.x() = v; break;
+    case Channel::kFy: s.f_user_W.y() = v; break;
+    case Channel::kFz: s.f_user_W.z() = v; break;
+    case Channel::kCmdFx: s.f_cmd_W.x() = v; break;
+    case Channel::kCmdFy: s.f_cmd_W.y() = v; break;
+    case Channel::kCmdFz: s.f_cmd_W.z() = v; break;
+    case Channel::kGuideFx: s.f_guide_W.x() = v; break;
+    case Channel::kGuideFy: s.f_guide_W.y() = v; break;
+    case Channel::kGuideFz: s.f_guide_W.z() = v; break;
+    case Channel::kContact: s.in_contact = v != 0.0; break;
+    case Channel::kPenDown: s.pen_down = v != 0.0; break;
+    case Channel::kPressure: s.pressure_raw = v; break;
+    case Channel::kAzimuth: s.tilt_azimuth_rad = v; break;
+    case Channel::kAltitude: s.tilt_altitude_rad = v; break;
+    case Channel::kSpeed:
+    case Channel::kForceMagnitude: break;  // derived, never a column
+  }
+}
+
 }  // namespace hattr

@@ -121,34 +121,6 @@ std::vector<Column> parseColumnRow(std::string_view line, const LineReader& read
 
 // ---- Sample fields ---------------------------------------------------------------------
 
-void setChannel(Sample& s, Channel channel, double v) {
-  switch (channel) {
-    case Channel::kTime: s.t_s = v; break;
-    case Channel::kX: s.p_WT.x() = v; break;
-    case Channel::kY: s.p_WT.y() = v; break;
-    case Channel::kZ: s.p_WT.z() = v; break;
-    case Channel::kVx: s.v_WT.x() = v; break;
-    case Channel::kVy: s.v_WT.y() = v; break;
-    case Channel::kVz: s.v_WT.z() = v; break;
-    case Channel::kFx: s.f_user_W.x() = v; break;
-    case Channel::kFy: s.f_user_W.y() = v; break;
-    case Channel::kFz: s.f_user_W.z() = v; break;
-    case Channel::kCmdFx: s.f_cmd_W.x() = v; break;
-    case Channel::kCmdFy: s.f_cmd_W.y() = v; break;
-    case Channel::kCmdFz: s.f_cmd_W.z() = v; break;
-    case Channel::kGuideFx: s.f_guide_W.x() = v; break;
-    case Channel::kGuideFy: s.f_guide_W.y() = v; break;
-    case Channel::kGuideFz: s.f_guide_W.z() = v; break;
-    case Channel::kContact: s.in_contact = v != 0.0; break;
-    case Channel::kPenDown: s.pen_down = v != 0.0; break;
-    case Channel::kPressure: s.pressure_raw = v; break;
-    case Channel::kAzimuth: s.tilt_azimuth_rad = v; break;
-    case Channel::kAltitude: s.tilt_altitude_rad = v; break;
-    case Channel::kSpeed:
-    case Channel::kForceMagnitude: break;  // derived, never a column
-  }
-}
-
 double parseValue(std::string_view field, const Column& column, int index, const LineReader& reader) {
   const auto where = [&] { return fmt::format("{}: column {} ({})", reader.where(), index, column.header); };
   const auto value = detail::parseDouble(field);
@@ -166,7 +138,7 @@ Sample parseRow(std::string_view line, const std::vector<Column>& columns, const
                      columns.size(), fields.size());
   Sample sample;
   for (std::size_t i = 0; i < fields.size(); ++i) {
-    setChannel(sample, columns[i].channel,
+    setChannelValue(sample, columns[i].channel,
                parseValue(fields[i], columns[i], static_cast<int>(i) + 1, reader));
   }
   return sample;

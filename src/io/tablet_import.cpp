@@ -1,5 +1,7 @@
 #include "hattr/io/tablet_import.hpp"
 
+#include "hattr/core/text_file.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -140,13 +142,7 @@ TabletCalibration susigCalibration() {
 
 TabletCalibration parseCalibration(std::string_view json_text, std::string_view source_name,
                                    TabletCalibration cal) {
-  nlohmann::json json;
-  try {
-    json = nlohmann::json::parse(json_text);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(fmt::format("{}: not valid JSON: {}", source_name, e.what()));
-  }
-  HATTR_THROW_UNLESS(json.is_object(), "{}: expected a JSON object, got {}", source_name, json.type_name());
+  const nlohmann::json json = parseJsonObject(json_text, source_name);
   for (const auto& item : json.items()) {
     const std::string& key = item.key();
     const nlohmann::json& value = item.value();
@@ -180,10 +176,7 @@ TabletCalibration parseCalibration(std::string_view json_text, std::string_view 
 }
 
 TabletCalibration loadCalibration(const std::filesystem::path& file, TabletCalibration defaults) {
-  std::ifstream in = detail::openInputFile(file);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parseCalibration(text.str(), file.string(), std::move(defaults));
+  return parseCalibration(readTextFile(file), file.string(), std::move(defaults));
 }
 
 double pressureToNewtons(double raw, const TabletCalibration& cal) {

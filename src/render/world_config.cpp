@@ -1,5 +1,7 @@
 #include "hattr/render/world_config.hpp"
 
+#include "hattr/core/text_file.hpp"
+
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -73,13 +75,7 @@ class Section {
 }  // namespace
 
 WorldConfig parseWorldConfig(std::string_view json_text, std::string_view source, const std::filesystem::path& base_dir) {
-  json root;
-  try {
-    root = json::parse(json_text);
-  } catch (const json::parse_error& e) {
-    throw InputError(fmt::format("{}: not valid JSON: {}", source, e.what()));
-  }
-  HATTR_THROW_UNLESS(root.is_object(), "{}: expected a JSON object, got {}", source, root.type_name());
+  const json root = parseJsonObject(json_text, source);
   for (const auto& item : root.items()) {
     static const std::vector<std::string> kTop{"paper", "friction", "texture", "relief", "writing_angle_deg"};
     HATTR_THROW_UNLESS(std::find(kTop.begin(), kTop.end(), item.key()) != kTop.end(),
@@ -142,11 +138,7 @@ WorldConfig parseWorldConfig(std::string_view json_text, std::string_view source
 }
 
 WorldConfig loadWorldConfig(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  HATTR_THROW_UNLESS(in.good(), "{}: cannot open for reading", file.string());
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parseWorldConfig(text.str(), file.string(), file.parent_path());
+  return parseWorldConfig(readTextFile(file), file.string(), file.parent_path());
 }
 
 std::string defaultWorldConfigJson() {

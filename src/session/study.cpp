@@ -1,5 +1,7 @@
 #include "hattr/session/study.hpp"
 
+#include "hattr/core/text_file.hpp"
+
 #include <algorithm>
 #include <fstream>
 #include <numeric>
@@ -74,13 +76,7 @@ std::string_view phaseName(Phase phase) { return phase == Phase::kTraining ? "tr
 
 StudyDefinition parseStudy(std::string_view json_text, std::string_view source, const std::filesystem::path& base_dir,
                            bool check_files) {
-  json root;
-  try {
-    root = json::parse(json_text);
-  } catch (const json::parse_error& e) {
-    throw InputError(fmt::format("{}: not valid JSON: {}", source, e.what()));
-  }
-  HATTR_THROW_UNLESS(root.is_object(), "{}: expected a JSON object, got {}", source, root.type_name());
+  const json root = parseJsonObject(json_text, source);
   Problems problems(source);
   StudyDefinition study;
 
@@ -227,11 +223,7 @@ StudyDefinition parseStudy(std::string_view json_text, std::string_view source, 
 }
 
 StudyDefinition loadStudy(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  HATTR_THROW_UNLESS(in.good(), "{}: cannot open for reading", file.string());
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parseStudy(text.str(), file.string(), file.parent_path());
+  return parseStudy(readTextFile(file), file.string(), file.parent_path());
 }
 
 nlohmann::json studyToJson(const StudyDefinition& s) {

@@ -1,5 +1,7 @@
 #include "hattr/sim/glyph.hpp"
 
+#include "hattr/core/text_file.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -50,13 +52,7 @@ bool isUnicodeLabel(const std::string& text) {
 }  // namespace
 
 Glyph parseGlyph(std::string_view json_text, std::string_view source) {
-  json root;
-  try {
-    root = json::parse(json_text);
-  } catch (const json::parse_error& e) {
-    throw InputError(fmt::format("{}: not valid JSON: {}", source, e.what()));
-  }
-  HATTR_THROW_UNLESS(root.is_object(), "{}: expected a JSON object, got {}", source, root.type_name());
+  const json root = parseJsonObject(json_text, source);
   checkKeys(root, kTopKeys, source);
 
   const auto format = root.find("format");
@@ -115,13 +111,7 @@ Glyph parseGlyph(std::string_view json_text, std::string_view source) {
   return glyph;
 }
 
-Glyph loadGlyph(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  HATTR_THROW_UNLESS(in.good(), "{}: cannot open the glyph file for reading", file.string());
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parseGlyph(text.str(), file.string());
-}
+Glyph loadGlyph(const std::filesystem::path& file) { return parseGlyph(readTextFile(file), file.string()); }
 
 double glyphPathLength(const Glyph& glyph) {
   double length = 0.0;

@@ -1,5 +1,7 @@
 #include "hattr/sim/trainee_model.hpp"
 
+#include "hattr/core/text_file.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -196,13 +198,7 @@ double drawValue(const ModelParameter& p, detail::NormalSource& normal) {
 }  // namespace
 
 TraineeModel parseTraineeModel(std::string_view json_text, std::string_view source) {
-  json root;
-  try {
-    root = json::parse(json_text);
-  } catch (const json::parse_error& e) {
-    throw InputError(fmt::format("{}: not valid JSON: {}", source, e.what()));
-  }
-  HATTR_THROW_UNLESS(root.is_object(), "{}: expected a JSON object, got {}", source, root.type_name());
+  const json root = parseJsonObject(json_text, source);
   for (const auto& item : root.items()) {
     const bool known = std::any_of(kTopKeys.begin(), kTopKeys.end(), [&](const char* k) { return item.key() == k; });
     HATTR_THROW_UNLESS(known, "{}: unknown key \"{}\": expected one of {}", source, item.key(), keyList(kTopKeys));
@@ -240,11 +236,7 @@ TraineeModel parseTraineeModel(std::string_view json_text, std::string_view sour
 }
 
 TraineeModel loadTraineeModel(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  HATTR_THROW_UNLESS(in.good(), "{}: cannot open the trainee model for reading", file.string());
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parseTraineeModel(text.str(), file.string());
+  return parseTraineeModel(readTextFile(file), file.string());
 }
 
 SubjectTraits populationTraits(const TraineeModel& m) {

@@ -142,7 +142,7 @@ TEST(GlyphFile, AMissingFileIsReportedByName) {
     (void)loadGlyph(dir / "none.json");
     FAIL() << "expected an InputError";
   } catch (const InputError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("none.json: cannot open the glyph file"));
+    EXPECT_THAT(e.what(), HasSubstr("none.json: cannot open for reading: No such file or directory"));
   }
 }
 

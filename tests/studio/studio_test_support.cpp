@@ -3,8 +3,12 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <fstream>
 
 #include "hattr/device/hand.hpp"
+#include "hattr/io/profile_csv.hpp"
+#include "hattr/session/study_database.hpp"
+#include "hattr/session/study_runner.hpp"
 
 namespace hattr::studio::test {
 
@@ -55,6 +59,31 @@ std::string smallStudyJson(const std::string& modes, double rest_s, const std::s
          R"("}}, "rate_hz": 1000, "indexing": "time",)"
          R"("subjects": )" +
          subjects + "}";
+}
+
+std::filesystem::path reportStudy(const std::filesystem::path& dir, bool complete) {
+  HapticProfile expert({.subject = "expert", .skill = "curve", .nominal_rate_hz = 100.0});
+  for (int i = 0; i <= 40; ++i) {
+    Sample s;
+    s.t_s = i * 0.01;
+    s.p_WT = Vec3(0.0005 * i, 0.004 * std::sin(i * 0.15), 0.0);
+    s.f_user_W = Vec3(0.0, 0.0, -1.0 - 0.3 * std::sin(i * 0.2));
+    s.pen_down = true;
+    expert.append(s);
+  }
+  io::writeProfileCsv(expert, dir / "expert.csv");
+  std::ofstream(dir / "study.json")
+      << R"({"name": "report test", "skill": "curve", "experts": {"curve": "expert.csv"},)"
+         R"("protocol": {"training_trials": 1, "recall_trials": 3, "rest_s": 0, "tail_s": 0.05},)"
+         R"("world": {"relief": {"kind": "flat"}},)"
+         R"("subjects": {"count": 3, "participant": "script", "options": {"jitter_mm": 2.0}}})";
+  const auto db_file = dir / "s.sqlite";
+  { (void)session::StudyDatabase::create(db_file, session::loadStudy(dir / "study.json")); }
+  if (complete) {
+    session::StudyDatabase db = session::StudyDatabase::open(db_file, session::OpenMode::kRunner);
+    session::StudyRunner(db, session::makeScriptParticipant).run({});
+  }
+  return db_file;
 }
 
 std::filesystem::path freshTempDir(const std::string& name) {

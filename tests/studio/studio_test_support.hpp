@@ -27,6 +27,11 @@ HapticProfile recordExpert(session::TrialEnvironment& environment, double durati
 std::string smallStudyJson(const std::string& modes, double rest_s, const std::string& subjects,
                            const std::string& relief);
 
+/// A study database `dir`/s.sqlite for the report (3 scripted subjects, 3 modes, 1 training
+/// + 3 recall trials each, over a short expert curve), run to the end by StudyRunner when
+/// `complete`, else left with every trial to do.
+std::filesystem::path reportStudy(const std::filesystem::path& dir, bool complete);
+
 /// A fresh empty folder under the system's temporary folder.
 std::filesystem::path freshTempDir(const std::string& name);
 

@@ -37,7 +37,8 @@ void MouseHand::rewind() noexcept { started_ = false; }
 
 device::HandCommand MouseHand::command(double t_s) noexcept {
   (void)buffer_.read(current_);  // keeps the last input when nothing new was published
-  const double target_press = current_.pen_down ? std::max(current_.press_N, 0.0) : 0.0;
+  const double wanted_press = current_.tablet ? current_.tablet_press_N : current_.press_N;
+  const double target_press = current_.pen_down ? std::max(wanted_press, 0.0) : 0.0;
   if (!started_) {
     started_ = true;
     x_m_ = current_.x_m;
@@ -67,8 +68,8 @@ device::HandCommand MouseHand::command(double t_s) noexcept {
   command.v_target_W = Vec3(vx_, vy_, 0.0);
   command.press_N = press_N_;
   command.pen_down = current_.pen_down;
-  command.altitude_rad = params_.altitude_rad;
-  command.azimuth_rad = params_.azimuth_rad;
+  command.altitude_rad = current_.tablet ? current_.altitude_rad : params_.altitude_rad;
+  command.azimuth_rad = current_.tablet ? current_.azimuth_rad : params_.azimuth_rad;
   return command;
 }
 

@@ -19,7 +19,13 @@ struct MouseInput {
   double x_m = 0.0;       ///< cursor on the paper [m]
   double y_m = 0.0;       ///< cursor on the paper [m]
   bool pen_down = false;  ///< the left button is held: the hand means to write
-  double press_N = 1.2;   ///< intended axial force while writing [N]
+  double press_N = 1.2;   ///< intended axial force while writing [N] (wheel / slider)
+  /// A pen tablet is the hand (QTabletEvent): the pen angles and press force below replace
+  /// the mouse hand's fixed tilt and press_N (which keeps the wheel's setting).
+  bool tablet = false;
+  double tablet_press_N = 0.0;                 ///< from the tablet's pressure [N]
+  double altitude_rad = 1.0471975511965976;    ///< from the tablet's tilt [rad]
+  double azimuth_rad = 2.356194490192345;      ///< from the tablet's tilt [rad]
 };
 
 /// The press force a person sets with the wheel or the slider [N].

@@ -5,12 +5,14 @@
 #include <QCheckBox>
 #include <QCloseEvent>
 #include <QComboBox>
+#include <QDesktopServices>
 #include <QDoubleSpinBox>
 #include <QFileDialog>
 #include <QFileInfo>
 #include <QFormLayout>
 #include <QHBoxLayout>
 #include <QHeaderView>
+#include <QInputDialog>
 #include <QLabel>
 #include <QLineEdit>
 #include <QMenuBar>
@@ -26,6 +28,7 @@
 #include <QVBoxLayout>
 #include <cmath>
 
+#include "core/device_choice.hpp"
 #include "core/profile_files.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/render/world_config.hpp"
@@ -38,7 +41,6 @@ namespace {
 constexpr int kFramePeriod_ms = 16;  // ~60 Hz display
 constexpr int kStatusPeriod_ms = 250;
 constexpr double kRollingWindow_s = 5.0;  // the plot's window while writing freely
-constexpr const char* kDeviceUri = "sim://pen";
 
 QString qs(const std::string& text) { return QString::fromStdString(text); }
 
@@ -56,6 +58,7 @@ MainWindow::MainWindow(std::unique_ptr<QSettings> settings, QWidget* parent)
   if (!settings_) settings_ = std::make_unique<QSettings>(QStringLiteral("hattr"), QStringLiteral("studio"));
   clock_.start();
   setWindowTitle(tr("hattr studio"));
+  url_opener_ = [](const QUrl& url) { return QDesktopServices::openUrl(url); };
 
   // The default paper: the world file remembered, else the defaults.
   world_file_ = settings_->value("world/file").toString();
@@ -67,7 +70,14 @@ MainWindow::MainWindow(std::unique_ptr<QSettings> settings, QWidget* parent)
       world_file_.clear();  // a world file that went bad: fall back to the defaults silently
     }
   }
-  default_environment_ = std::make_unique<session::TrialEnvironment>(kDeviceUri, world, 1000.0);
+  // The device remembered, else sim://pen (one that no longer validates falls back quietly).
+  std::string device_uri = settings_->value("device/uri", QString::fromLatin1(kDefaultDeviceUri)).toString().toStdString();
+  try {
+    (void)validateStudioDevice(device_uri);
+  } catch (const std::exception&) {
+    device_uri = kDefaultDeviceUri;
+  }
+  default_environment_ = std::make_unique<session::TrialEnvironment>(device_uri, world, 1000.0);
 
   buildUi();
   buildActions();
@@ -173,7 +183,18 @@ void MainWindow::buildWriteTab() {
   });
   auto* clear = new QPushButton(tr("Clear trail (C)"));
   connect(clear, &QPushButton::clicked, this, &MainWindow::clearTrail);
+  auto* device = new QPushButton(tr("Device…"));
+  device->setToolTip(tr("The device the hand holds, by URI (sim://pen?continuous_force_N=1.2, ...)"));
+  connect(device, &QPushButton::clicked, this, &MainWindow::askDevice);
+  auto* calibration = new QPushButton(tr("Tablet calibration…"));
+  calibration->setToolTip(tr("A pen tablet's pressure → force calibration (JSON, as `hattr import --calibration`)"));
+  connect(calibration, &QPushButton::clicked, this, [this] {
+    const QString f = askOpenFile(tr("Load a tablet calibration"), tr("Tablet calibration (*.json);;All files (*)"));
+    if (!f.isEmpty()) loadTabletCalibration(f);
+  });
   layout->addWidget(load_world);
+  layout->addWidget(device);
+  layout->addWidget(calibration);
   layout->addWidget(clear);
   layout->addStretch(1);
   tabs_->addTab(page, tr("Write"));
@@ -381,6 +402,10 @@ void MainWindow::buildReviewTab() {
   row->addWidget(play_button_, 1);
   row->addWidget(speed_combo_);
   layout->addLayout(row);
+  report_button_ = new QPushButton(tr("Open report… (Ctrl+Shift+R)"));
+  report_button_->setToolTip(tr("Analyze the study (DTW, ANOVA) and open report.html, written next to the database"));
+  connect(report_button_, &QPushButton::clicked, this, [this] { (void)openReport(); });
+  layout->addWidget(report_button_);
   review_scores_ = wrappedLabel();
   layout->addWidget(review_scores_);
   tabs_->addTab(page, tr("Review"));
@@ -413,6 +438,13 @@ void MainWindow::buildActions() {
     const QString f =
         askOpenFile(tr("Open a study database for review"), tr("Study databases (*.sqlite *.db);;All files (*)"));
     if (!f.isEmpty()) openReview(f);
+  });
+  add(file, tr("Open report…"), QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_R), [this] { (void)openReport(); });
+  file->addSeparator();
+  add(file, tr("Device…"), QKeySequence(), [this] { askDevice(); });
+  add(file, tr("Tablet calibration…"), QKeySequence(), [this] {
+    const QString f = askOpenFile(tr("Load a tablet calibration"), tr("Tablet calibration (*.json);;All files (*)"));
+    if (!f.isEmpty()) loadTabletCalibration(f);
   });
   file->addSeparator();
   add(file, tr("Save take…"), QKeySequence(Qt::CTRL | Qt::Key_S), [this] { save_take_button_->click(); });
@@ -468,6 +500,7 @@ void MainWindow::buildActions() {
            "<tr><td><b>Ctrl+S</b>, <b>Ctrl+Shift+S</b></td><td>save the take, save the last trial</td></tr>"
            "<tr><td><b>Ctrl+D</b>, <b>Ctrl+Shift+D</b></td><td>open a study, open a study for review</td></tr>"
            "<tr><td><b>Ctrl+W</b></td><td>load a world configuration</td></tr>"
+           "<tr><td><b>Ctrl+Shift+R</b></td><td>review: open the study's report</td></tr>"
            "<tr><td><b>Ctrl+1…5</b></td><td>the tabs</td></tr>"
            "</table>"));
   });
@@ -496,6 +529,15 @@ void MainWindow::loadSettings() {
   show_reference_check_->setChecked(s.value("train/show_reference", true).toBool());
   settle_spin_->setValue(s.value("train/settle_s", 1.5).toDouble());
   setMode(static_cast<guidance::TrainingMode>(std::clamp(s.value("train/mode", 0).toInt(), 0, 2)));
+  // The tablet calibration of last time, quietly (a file that went bad: the defaults).
+  const QString calibration = s.value("input/tablet_calibration").toString();
+  if (!calibration.isEmpty() && QFileInfo::exists(calibration)) {
+    const bool was = interactive_;
+    interactive_ = false;
+    loadTabletCalibration(calibration);
+    interactive_ = was;
+    last_error_.clear();
+  }
   // The reference of last time, quietly: a file that went away just leaves none loaded.
   const QString reference = s.value("train/reference_file").toString();
   if (!reference.isEmpty() && QFileInfo::exists(reference)) {
@@ -578,6 +620,17 @@ QString MainWindow::askOpenFile(const QString& title, const QString& filter) {
   const QString file = QFileDialog::getOpenFileName(this, title, settings_->value("files/last_dir").toString(), filter);
   if (!file.isEmpty()) settings_->setValue("files/last_dir", QFileInfo(file).absolutePath());
   return file;
+}
+
+void MainWindow::askDevice() {
+  if (!interactive_) return;
+  bool ok = false;
+  const QString uri = QInputDialog::getText(
+      this, tr("Device"),
+      tr("The device the hand holds, by URI. The mouse or tablet can only hold a simulated pen (sim://).\n\n%1")
+          .arg(qs(device::deviceUriHelp())),
+      QLineEdit::Normal, deviceUri(), &ok);
+  if (ok && !uri.trimmed().isEmpty()) (void)setDevice(uri.trimmed());
 }
 
 // ---- The live rig and the display -----------------------------------------------------------
@@ -722,11 +775,12 @@ void MainWindow::onStatus() {
   const double now = now_s();
   // The input.
   const MouseInput& input = hand_.input();
-  status_input_->setText(tr("Input: mouse (%1, %2) mm · %3 · press %4 N")
+  status_input_->setText(tr("Input: %1 (%2, %3) mm · %4 · press %5 N")
+                             .arg(input.tablet ? tr("tablet") : tr("mouse"))
                              .arg(input.x_m * 1000.0, 0, 'f', 1)
                              .arg(input.y_m * 1000.0, 0, 'f', 1)
                              .arg(input.pen_down ? tr("pen down") : tr("pen up"))
-                             .arg(input.press_N, 0, 'f', 1));
+                             .arg(input.tablet ? input.tablet_press_N : input.press_N, 0, 'f', 1));
   // The loop: measured rate, overruns, faults, drops, stalls.
   const servo::LiveCounters* counters = rig_.counters();
   if (counters == nullptr) {
@@ -771,6 +825,7 @@ void MainWindow::refreshButtons() {
       study_open && free &&
       (study_->state() == StudySession::State::kReady || study_->state() == StudySession::State::kResting));
   play_button_->setEnabled(review_trial_.has_value() || playback_.loaded());
+  report_button_->setEnabled(review_db_ != nullptr);
 }
 
 void MainWindow::showReference(const HapticProfile* expert) {

@@ -10,6 +10,8 @@
 #include <QElapsedTimer>
 #include <QMainWindow>
 #include <QSettings>
+#include <QUrl>
+#include <functional>
 #include <memory>
 #include <optional>
 
@@ -83,6 +85,17 @@ class MainWindow final : public QMainWindow {
   /// Plays back (or pauses) the profile on show: a take, the last trial or a reviewed trial.
   void togglePlayback();
   void clearTrail();
+  /// The device for the live rig, by URI (validateStudioDevice: sim:// only); applied to the
+  /// rig at once when nothing runs (a study keeps its own device). Remembered in settings.
+  bool setDevice(const QString& uri);
+  [[nodiscard]] QString deviceUri() const;
+  /// A tablet calibration JSON (io::loadCalibration over defaultTabletCalibration()).
+  bool loadTabletCalibration(const QString& file);
+  /// Review: analyzes the open study, writes its report next to the database
+  /// (<stem>-report/) and opens report.html with the URL opener.
+  bool openReport();
+  /// Who opens URLs (default QDesktopServices::openUrl); tests replace it.
+  void setUrlOpener(std::function<bool(const QUrl&)> opener) { url_opener_ = std::move(opener); }
   /// The tab's main action (Space): record/stop, start/stop a trial, the study's next step, play/pause.
   void primaryAction();
 
@@ -130,6 +143,8 @@ class MainWindow final : public QMainWindow {
   bool confirm(const QString& question);
   QString askSaveFile(const QString& title, const QString& suggested);
   QString askOpenFile(const QString& title, const QString& filter);
+  /// The Device… dialog: asks for a URI and applies it.
+  void askDevice();
 
   // Actions helpers (main_window_actions.cpp).
   void fillStudySubjects();
@@ -174,6 +189,9 @@ class MainWindow final : public QMainWindow {
   // Study and review.
   std::unique_ptr<StudySession> study_;
   std::unique_ptr<session::StudyDatabase> review_db_;
+  QString review_file_;
+  std::function<bool(const QUrl&)> url_opener_;
+  QString tablet_calibration_file_;
   std::optional<HapticProfile> review_trial_;
   std::optional<HapticProfile> review_expert_;
 
@@ -237,6 +255,7 @@ class MainWindow final : public QMainWindow {
   QLabel* review_scores_ = nullptr;
   QPushButton* play_button_ = nullptr;
   QComboBox* speed_combo_ = nullptr;
+  QPushButton* report_button_ = nullptr;
 };
 
 }  // namespace hattr::studio

@@ -6,13 +6,18 @@
 #include <QDoubleSpinBox>
 #include <QFileInfo>
 #include <QLabel>
+#include <QApplication>
+#include <QDir>
 #include <QLineEdit>
 #include <QPushButton>
 #include <QStatusBar>
 #include <QTabWidget>
 #include <QTreeWidget>
 
+#include "core/device_choice.hpp"
 #include "core/profile_files.hpp"
+#include "core/study_report_export.hpp"
+#include "core/tablet_input.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/render/world_config.hpp"
 #include "ui/main_window.hpp"
@@ -82,6 +87,65 @@ bool MainWindow::loadWorld(const QString& file) {
     showError(tr("The world configuration could not be loaded"), what(e));
     return false;
   }
+}
+
+bool MainWindow::setDevice(const QString& uri) {
+  if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) {
+    showError(tr("The device cannot change now"), tr("finish the trial or recording first"));
+    return false;
+  }
+  try {
+    (void)validateStudioDevice(uri.toStdString());
+    auto environment = std::make_unique<session::TrialEnvironment>(uri.toStdString(), default_environment_->world(),
+                                                                   default_environment_->rate_hz());
+    (void)rig_.finish();
+    default_environment_ = std::move(environment);
+    settings_->setValue("device/uri", uri);
+    // A study keeps its own device; the new one is used when it is closed.
+    if (!study_) useEnvironment(*default_environment_);
+    return true;
+  } catch (const std::exception& e) {
+    showError(tr("The device cannot be used"), what(e));
+    return false;
+  }
+}
+
+QString MainWindow::deviceUri() const { return qs(default_environment_->deviceUri()); }
+
+bool MainWindow::loadTabletCalibration(const QString& file) {
+  try {
+    paper_->setTabletCalibration(hattr::studio::loadTabletCalibration(file.toStdString()));
+    tablet_calibration_file_ = file;
+    settings_->setValue("input/tablet_calibration", file);
+    return true;
+  } catch (const std::exception& e) {
+    showError(tr("The tablet calibration could not be loaded"), what(e));
+    return false;
+  }
+}
+
+bool MainWindow::openReport() {
+  if (!review_db_) {
+    showError(tr("No study open for review"), tr("open a study for review first (Ctrl+Shift+D)"));
+    return false;
+  }
+  std::filesystem::path html;
+  try {
+    QApplication::setOverrideCursor(Qt::WaitCursor);
+    html = writeReviewReport(*review_db_, std::filesystem::path(review_file_.toStdString()));
+    QApplication::restoreOverrideCursor();
+  } catch (const std::exception& e) {
+    QApplication::restoreOverrideCursor();
+    showError(tr("The report could not be made"), what(e));
+    return false;
+  }
+  const QString file = QString::fromStdString(html.string());
+  statusBar()->showMessage(tr("Report written: %1").arg(QDir::toNativeSeparators(file)), 10000);
+  if (url_opener_ && !url_opener_(QUrl::fromLocalFile(file))) {
+    showError(tr("The report could not be opened"), tr("no program opens %1; it was written there").arg(file));
+    return false;
+  }
+  return true;
 }
 
 void MainWindow::setMode(guidance::TrainingMode mode) {
@@ -555,6 +619,7 @@ bool MainWindow::openReview(const QString& file) {
     review_db_ = std::make_unique<session::StudyDatabase>(
         session::StudyDatabase::open(file.toStdString(), session::OpenMode::kReadOnly));
     settings_->setValue("review/file", file);
+    review_file_ = file;
   } catch (const std::exception& e) {
     showError(tr("The study could not be opened for review"), what(e));
     return false;

@@ -3,6 +3,7 @@
 #include <QMouseEvent>
 #include <QPainter>
 #include <QPainterPath>
+#include <QTabletEvent>
 #include <QWheelEvent>
 #include <cmath>
 
@@ -54,7 +55,25 @@ void PaperView::publish(const QPointF& px, std::optional<bool> pen_down) {
   const Eigen::Vector2d p = mapping_.clampToPaper(mapping_.toPaper(px));
   input.x_m = p.x();
   input.y_m = p.y();
+  input.tablet = false;  // the mouse moved: it is the hand again
   if (pen_down) input.pen_down = *pen_down;
+  hand_->setInput(input);
+}
+
+void PaperView::tabletEvent(QTabletEvent* event) {
+  event->accept();
+  if (hand_ == nullptr) return;
+  MouseInput input = hand_->input();
+  const Eigen::Vector2d p = mapping_.clampToPaper(mapping_.toPaper(event->position()));
+  input.x_m = p.x();
+  input.y_m = p.y();
+  input.tablet = true;
+  if (event->type() == QEvent::TabletPress) input.pen_down = true;
+  if (event->type() == QEvent::TabletRelease) input.pen_down = false;
+  input.tablet_press_N = tabletPressureToNewtons(event->pressure(), tablet_calibration_);
+  const PenAngles angles = penAnglesFromTilt(event->xTilt(), event->yTilt());
+  input.altitude_rad = angles.altitude_rad;
+  input.azimuth_rad = angles.azimuth_rad;
   hand_->setInput(input);
 }
 

@@ -14,6 +14,7 @@
 #include "core/mouse_hand.hpp"
 #include "core/paper_mapping.hpp"
 #include "core/series.hpp"
+#include "core/tablet_input.hpp"
 #include "hattr/core/sample.hpp"
 #include "hattr/render/height_field.hpp"
 
@@ -57,6 +58,10 @@ class PaperView final : public QWidget {
 
   [[nodiscard]] const PaperMapping& mapping() const { return mapping_; }
 
+  /// How a pen tablet's pressure becomes the hand's press force (defaultTabletCalibration()).
+  void setTabletCalibration(const io::TabletCalibration& calibration) { tablet_calibration_ = calibration; }
+  [[nodiscard]] const io::TabletCalibration& tabletCalibration() const { return tablet_calibration_; }
+
  signals:
   /// The wheel changed the press force [N].
   void pressChanged(double press_N);
@@ -68,6 +73,9 @@ class PaperView final : public QWidget {
   void mousePressEvent(QMouseEvent* event) override;
   void mouseReleaseEvent(QMouseEvent* event) override;
   void wheelEvent(QWheelEvent* event) override;
+  /// A pen tablet: position as the mouse's, pressure → press force through the tablet
+  /// calibration, tilt → pen angles. Accepted, so Qt synthesizes no mouse events.
+  void tabletEvent(QTabletEvent* event) override;
 
  private:
   void publish(const QPointF& px, std::optional<bool> pen_down);
@@ -76,6 +84,7 @@ class PaperView final : public QWidget {
 
   MouseHand* hand_ = nullptr;
   PaperMapping mapping_;
+  io::TabletCalibration tablet_calibration_ = defaultTabletCalibration();
   QImage relief_image_;
   std::optional<Sample> pen_;
   Trail reference_;

@@ -46,5 +46,7 @@ std::string_view channelNameList();
 bool needsRawChannel(Channel channel, const RawChannels& have);
 /// The value of `channel` in one sample, in SI units (flags as 0 or 1).
 double channelValue(const Sample& sample, Channel channel);
+/// Sets a stored channel of a sample (flags: non-zero is true); derived channels are ignored.
+void setChannelValue(Sample& sample, Channel channel, double value);
 
 }  // namespace hattr

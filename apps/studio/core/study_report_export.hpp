@@ -1,0 +1,20 @@
+#pragma once
+/// The analysis report of a study from Review: report::analyzeStudy and
+/// report::writeStudyReport into a folder next to the database (<db stem>-report/).
+/// GUI thread (it takes a moment: DTW over every recall trial); throws InputError when the
+/// study is not complete enough (the library's message names the missing trials).
+
+#include <filesystem>
+
+#include "hattr/session/study_database.hpp"
+
+namespace hattr::studio {
+
+/// <folder of db_file>/<stem of db_file>-report
+std::filesystem::path reportFolderFor(const std::filesystem::path& db_file);
+
+/// Analyzes the study in `db` (opened from `db_file`) and writes its report into
+/// reportFolderFor(db_file). Returns the path of report.html.
+std::filesystem::path writeReviewReport(const session::StudyDatabase& db, const std::filesystem::path& db_file);
+
+}  // namespace hattr::studio

@@ -1,0 +1,260 @@
+// The studio's inputs and outputs beyond the mouse: a pen tablet as the hand (pressure through
+// the tablet calibration, tilt as the pen's angles, QTabletEvent on the paper view), the device
+// picked by URI (validated by the library, remembered), and the analysis report of a reviewed
+// study written next to its database and handed to a URL opener (no browser in tests).
+#include <QLabel>
+#include <QPointingDevice>
+#include <QStatusBar>
+#include <QTabletEvent>
+#include <QtTest>
+#include <cmath>
+#include <fstream>
+#include <functional>
+
+#include "core/device_choice.hpp"
+#include "core/mouse_hand.hpp"
+#include "core/study_report_export.hpp"
+#include "core/tablet_input.hpp"
+#include "hattr/core/error.hpp"
+#include "studio_test_support.hpp"
+#include "ui/main_window.hpp"
+#include "ui/paper_view.hpp"
+
+using namespace hattr;
+using namespace hattr::studio;
+
+namespace {
+
+constexpr double kDeg = 3.141592653589793 / 180.0;
+
+QString thrownMessage(const std::function<void()>& call) {
+  try {
+    call();
+  } catch (const InputError& e) {
+    return QString::fromUtf8(e.what());
+  }
+  return {};
+}
+
+QString inputStatus(const MainWindow& w) {
+  for (const QLabel* label : w.statusBar()->findChildren<QLabel*>()) {
+    if (label->text().startsWith("Input:")) return label->text();
+  }
+  return {};
+}
+
+}  // namespace
+
+class StudioInputTest : public QObject {
+  Q_OBJECT
+
+ private slots:
+  void initTestCase() { dir_ = test::freshTempDir("input"); }
+  void cleanupTestCase() {
+    window_.reset();
+    std::filesystem::remove_all(dir_);
+  }
+
+  // ---- Tablet mapping (core, no widgets) ----
+  void tiltBecomesAltitudeAndAzimuth() {
+    const PenAngles upright = penAnglesFromTilt(0.0, 0.0);
+    QVERIFY(std::abs(upright.altitude_rad - 90.0 * kDeg) < 1e-12);
+    // Barrel leaning right by 30°: altitude 60°, azimuth 90° (clockwise from +y).
+    const PenAngles right = penAnglesFromTilt(30.0, 0.0);
+    QVERIFY(std::abs(right.altitude_rad - 60.0 * kDeg) < 1e-9);
+    QVERIFY(std::abs(right.azimuth_rad - 90.0 * kDeg) < 1e-9);
+    // Qt's +yTilt is toward the writer: W's −y, azimuth 180°.
+    const PenAngles toward = penAnglesFromTilt(0.0, 30.0);
+    QVERIFY(std::abs(toward.altitude_rad - 60.0 * kDeg) < 1e-9);
+    QVERIFY(std::abs(toward.azimuth_rad - 180.0 * kDeg) < 1e-9);
+    QVERIFY(std::abs(penAnglesFromTilt(0.0, -30.0).azimuth_rad) < 1e-9);
+    QVERIFY(std::abs(penAnglesFromTilt(-30.0, 0.0).azimuth_rad - 270.0 * kDeg) < 1e-9);
+    // Both tilts: the barrel's angle from the vertical is atan(√(tan²x + tan²y)).
+    const PenAngles both = penAnglesFromTilt(45.0, 45.0);
+    QVERIFY(std::abs(both.altitude_rad - (90.0 * kDeg - std::atan(std::sqrt(2.0)))) < 1e-9);
+    QVERIFY(std::abs(both.azimuth_rad - 135.0 * kDeg) < 1e-9);  // the writer's lower right
+    // Almost flat is clamped; nonsense gives an upright pen.
+    QVERIFY(std::abs(penAnglesFromTilt(89.9, 0.0).altitude_rad - kTabletMinAltitude_rad) < 1e-12);
+    QVERIFY(std::abs(penAnglesFromTilt(std::nan(""), 0.0).altitude_rad - 90.0 * kDeg) < 1e-12);
+  }
+
+  void pressureGoesThroughTheTabletCalibration() {
+    const io::TabletCalibration cal = defaultTabletCalibration();
+    QCOMPARE(cal.pressure_max_N, io::svc2004Calibration().pressure_max_N);
+    QCOMPARE(tabletPressureToNewtons(0.0, cal), 0.0);
+    QVERIFY(std::abs(tabletPressureToNewtons(1.0, cal) - cal.pressure_max_N) < 1e-12);
+    QVERIFY(std::abs(tabletPressureToNewtons(0.5, cal) - 0.5 * cal.pressure_max_N) < 1e-12);
+    QVERIFY(std::abs(tabletPressureToNewtons(1.7, cal) - cal.pressure_max_N) < 1e-12);  // clamped
+    QVERIFY(std::abs(tabletPressureToNewtons(0.5, cal) - io::pressureToNewtons(0.5 * cal.pressure_max_raw, cal)) <
+            1e-12);
+    // A calibration file overrides the full scale and the curve.
+    const auto file = dir_ / "cal.json";
+    std::ofstream(file) << "{\"pressure_max_N\": 3.5, \"pressure_exponent\": 2.0}";
+    const io::TabletCalibration custom = loadTabletCalibration(file);
+    QVERIFY(std::abs(tabletPressureToNewtons(1.0, custom) - 3.5) < 1e-12);
+    QVERIFY(std::abs(tabletPressureToNewtons(0.5, custom) - 3.5 * 0.25) < 1e-12);
+    std::ofstream(dir_ / "bad.json") << "{\"pressure_max_M\": 3.5}";
+    QVERIFY(thrownMessage([&] { (void)loadTabletCalibration(dir_ / "bad.json"); }).contains("pressure_max_M"));
+  }
+
+  void aTabletInputDrivesTheHandsAnglesAndPress() {
+    MouseHand hand;
+    MouseInput input;
+    input.pen_down = true;
+    input.press_N = 1.2;
+    input.tablet = true;
+    input.tablet_press_N = 2.0;
+    input.altitude_rad = 50.0 * kDeg;
+    input.azimuth_rad = 30.0 * kDeg;
+    hand.setInput(input);
+    const device::HandCommand c = hand.command(0.0);
+    QCOMPARE(c.press_N, 2.0);
+    QCOMPARE(c.altitude_rad, 50.0 * kDeg);
+    QCOMPARE(c.azimuth_rad, 30.0 * kDeg);
+    // The mouse again: its press and the fixed 60° tilt.
+    input.tablet = false;
+    hand.setInput(input);
+    hand.rewind();
+    const device::HandCommand m = hand.command(1.0);
+    QCOMPARE(m.press_N, 1.2);
+    QCOMPARE(m.altitude_rad, hand.params().altitude_rad);
+  }
+
+  // ---- Device URIs (core) ----
+  void deviceUrisAreCheckedByTheLibrary() {
+    QCOMPARE(validateStudioDevice("sim://pen?continuous_force_N=1.2").limits.continuous_force_N, 1.2);
+    QVERIFY(thrownMessage([] { (void)validateStudioDevice("usb://x"); })
+                .contains("device URI \"usb://x\": unknown scheme"));
+    QVERIFY(thrownMessage([] { (void)validateStudioDevice("udp://host:9000"); }).contains("reserved"));
+    QVERIFY(thrownMessage([] { (void)validateStudioDevice("plugin:/x/lib.so"); }).contains("reserved"));
+    QVERIFY(thrownMessage([] { (void)validateStudioDevice("sim://pen?mass=1"); }).contains("unknown key"));
+  }
+
+  // ---- The window ----
+  void aTabletEventOnThePaperDrivesTheHand() {
+    MainWindow& w = window();
+    (void)w.rig().finish();  // the servo thread stops reading the hand: the test reads it
+    PaperView* view = w.paperView();
+    const QPointingDevice stylus("test stylus", 4242, QInputDevice::DeviceType::Stylus,
+                                 QPointingDevice::PointerType::Pen,
+                                 QInputDevice::Capability::Position | QInputDevice::Capability::Pressure |
+                                     QInputDevice::Capability::XTilt | QInputDevice::Capability::YTilt,
+                                 1, 2);
+    const QPointF at(view->width() * 0.4, view->height() * 0.5);
+    QTabletEvent press(QEvent::TabletPress, &stylus, at, view->mapToGlobal(at), 0.5, 30.0f, 0.0f, 0.0f, 0.0, 0.0f,
+                       Qt::NoModifier, Qt::LeftButton, Qt::LeftButton);
+    QVERIFY(QApplication::sendEvent(view, &press));
+    QVERIFY(press.isAccepted());
+    const Eigen::Vector2d expected = view->mapping().clampToPaper(view->mapping().toPaper(at));
+    const MouseInput& input = w.mouseHand().input();
+    QVERIFY(input.tablet);
+    QVERIFY(input.pen_down);
+    QVERIFY(std::abs(input.x_m - expected.x()) < 1e-12 && std::abs(input.y_m - expected.y()) < 1e-12);
+    w.mouseHand().rewind();
+    const device::HandCommand c = w.mouseHand().command(0.0);
+    QVERIFY(c.pen_down);
+    QVERIFY(std::abs(c.press_N - 0.5 * defaultTabletCalibration().pressure_max_N) < 1e-9);
+    QVERIFY(std::abs(c.altitude_rad - 60.0 * kDeg) < 1e-6);
+    QVERIFY(std::abs(c.azimuth_rad - 90.0 * kDeg) < 1e-6);
+    QVERIFY(std::abs(c.p_target_W.x() - expected.x()) < 1e-12);
+    QTRY_VERIFY_WITH_TIMEOUT(inputStatus(w).startsWith("Input: tablet"), 2000);
+
+    // A calibration from the menu changes the force.
+    const auto file = dir_ / "studio_cal.json";
+    std::ofstream(file) << "{\"pressure_max_N\": 2.0}";
+    QVERIFY2(w.loadTabletCalibration(QString::fromStdString(file.string())), qPrintable(w.lastError()));
+    QTabletEvent move(QEvent::TabletMove, &stylus, at, view->mapToGlobal(at), 1.0, 0.0f, 0.0f, 0.0f, 0.0, 0.0f,
+                      Qt::NoModifier, Qt::NoButton, Qt::LeftButton);
+    QVERIFY(QApplication::sendEvent(view, &move));
+    QVERIFY(std::abs(w.mouseHand().command(0.001).altitude_rad - 90.0 * kDeg) < 1e-9);
+    QCOMPARE(w.mouseHand().input().tablet_press_N, 2.0);
+    QTabletEvent release(QEvent::TabletRelease, &stylus, at, view->mapToGlobal(at), 0.0, 0.0f, 0.0f, 0.0f, 0.0,
+                         0.0f, Qt::NoModifier, Qt::LeftButton, Qt::NoButton);
+    QVERIFY(QApplication::sendEvent(view, &release));
+    QVERIFY(!w.mouseHand().input().pen_down);
+
+    // The mouse moves: it is the hand again.
+    QMouseEvent mouse(QEvent::MouseMove, at, view->mapToGlobal(at), Qt::NoButton, Qt::NoButton, Qt::NoModifier);
+    QApplication::sendEvent(view, &mouse);
+    QVERIFY(!w.mouseHand().input().tablet);
+    QTRY_VERIFY_WITH_TIMEOUT(inputStatus(w).startsWith("Input: mouse"), 2000);
+  }
+
+  void aGoodDeviceUriChangesTheRigAndABadOneIsRefused() {
+    MainWindow& w = window();
+    QVERIFY2(w.setDevice("sim://pen?continuous_force_N=1.2"), qPrintable(w.lastError()));
+    QVERIFY(w.rig().active());
+    QCOMPARE(w.rig().environment()->limits().continuous_force_N, 1.2);
+    QCOMPARE(w.deviceUri(), QString("sim://pen?continuous_force_N=1.2"));
+
+    QVERIFY(!w.setDevice("usb://x"));
+    QVERIFY2(w.lastError().contains("device URI \"usb://x\": unknown scheme"), qPrintable(w.lastError()));
+    QVERIFY(!w.setDevice("udp://host:9000"));
+    QVERIFY2(w.lastError().contains("reserved"), qPrintable(w.lastError()));
+    QVERIFY(!w.setDevice("sim://pen?continuous_force_N=-1"));
+    QVERIFY2(w.lastError().contains("continuous_force_N"), qPrintable(w.lastError()));
+    QCOMPARE(w.deviceUri(), QString("sim://pen?continuous_force_N=1.2"));
+    QCOMPARE(w.rig().environment()->limits().continuous_force_N, 1.2);
+
+    // Remembered: a new window starts on it.
+    window_.reset();
+    QCOMPARE(window().deviceUri(), QString("sim://pen?continuous_force_N=1.2"));
+    QCOMPARE(window().rig().environment()->limits().continuous_force_N, 1.2);
+    QVERIFY(window().setDevice("sim://pen"));
+  }
+
+  void theReportOfAnUnfinishedStudyIsRefusedWithTheLibrarysMessage() {
+    MainWindow& w = window();
+    const auto folder = dir_ / "unfinished";
+    std::filesystem::create_directories(folder);
+    const auto db_file = test::reportStudy(folder, false);
+    QVERIFY2(w.openReview(QString::fromStdString(db_file.string())), qPrintable(w.lastError()));
+    QList<QUrl> opened;
+    w.setUrlOpener([&](const QUrl& url) {
+      opened << url;
+      return true;
+    });
+    QVERIFY(!w.openReport());
+    QVERIFY2(w.lastError().contains("recall trials are not completed yet"), qPrintable(w.lastError()));
+    QVERIFY(opened.isEmpty());
+    QVERIFY(!std::filesystem::exists(reportFolderFor(db_file) / "report.html"));
+  }
+
+  void theReportOfAFinishedStudyIsWrittenBesideItAndOpened() {
+    MainWindow& w = window();
+    const auto folder = dir_ / "finished";
+    std::filesystem::create_directories(folder);
+    const auto db_file = test::reportStudy(folder, true);
+    QVERIFY2(w.openReview(QString::fromStdString(db_file.string())), qPrintable(w.lastError()));
+    QList<QUrl> opened;
+    w.setUrlOpener([&](const QUrl& url) {
+      opened << url;
+      return true;
+    });
+    QVERIFY2(w.openReport(), qPrintable(w.lastError()));
+    const auto html = folder / "s-report" / "report.html";
+    QVERIFY(std::filesystem::exists(html));
+    QVERIFY(std::filesystem::file_size(html) > 1000);
+    QCOMPARE(opened.size(), 1);
+    QCOMPARE(opened.front(), QUrl::fromLocalFile(QString::fromStdString(html.string())));
+  }
+
+ private:
+  MainWindow& window() {
+    if (!window_) {
+      const QString ini = QString::fromStdString((dir_ / "studio.ini").string());
+      window_ = std::make_unique<MainWindow>(std::make_unique<QSettings>(ini, QSettings::IniFormat));
+      window_->setInteractive(false);
+      window_->resize(1100, 760);
+      window_->show();
+      (void)QTest::qWaitForWindowExposed(window_.get());
+    }
+    return *window_;
+  }
+
+  std::filesystem::path dir_;
+  std::unique_ptr<MainWindow> window_;
+};
+
+QTEST_MAIN(StudioInputTest)
+#include "studio_input_test.moc"
