@@ -12,40 +12,8 @@
 namespace hattr::session {
 namespace {
 
-/// The device for a trial; a simulated pen starts just above where the hand begins.
-std::unique_ptr<device::Device> openTrialDevice(const std::string& uri_text, device::HandScript& hand) {
-  const device::DeviceUri uri = device::parseDeviceUri(uri_text);
-  if (uri.scheme != "sim") return device::openDevice(uri_text, &hand);
-  device::SimulatedPenParams params = device::simulatedPenParams(uri);
-  hand.rewind();
-  params.start_position_W = hand.command(0.0).p_target_W;
-  params.start_position_W.z() = std::max(params.start_position_W.z(), 0.003);
-  hand.rewind();
-  return std::make_unique<device::SimulatedDevice>(params, &hand, uri_text);
-}
-
-/// The hand during the settle phase: holding the pen lifted above its first point; after it,
-/// the script on the trial's clock.
-class SettlingHand final : public device::HandScript {
- public:
-  SettlingHand(device::HandScript& script, double settle_s) : script_(script), settle_s_(settle_s) {
-    script_.rewind();
-    lifted_ = script_.command(0.0);
-    script_.rewind();
-    lifted_.pen_down = false;
-    lifted_.v_target_W.setZero();
-    lifted_.p_target_W.z() = std::max(lifted_.p_target_W.z(), 0.003);
-  }
-  device::HandCommand command(double t_s) noexcept override {
-    return t_s < settle_s_ ? lifted_ : script_.command(t_s - settle_s_);
-  }
-  void rewind() noexcept override { script_.rewind(); }
-
- private:
-  device::HandScript& script_;
-  double settle_s_;
-  device::HandCommand lifted_;
-};
+/// The hand lifts the pen at least this high while settling.
+constexpr double kLiftHeight_m = 0.003;
 
 std::string joined(const std::vector<std::string>& lines) {
   std::string out;
@@ -53,7 +21,67 @@ std::string joined(const std::vector<std::string>& lines) {
   return out;
 }
 
+/// The pen lifted: no press, at least the lift height, no vertical speed.
+device::HandCommand lifted(device::HandCommand command) noexcept {
+  command.pen_down = false;
+  command.press_N = 0.0;
+  command.v_target_W.z() = 0.0;
+  command.p_target_W.z() = std::max(command.p_target_W.z(), kLiftHeight_m);
+  return command;
+}
+
 }  // namespace
+
+SettlingHand::SettlingHand(device::HandScript& script, double settle_s, bool follow)
+    : script_(script), settle_s_(settle_s), follow_(follow) {
+  script_.rewind();
+  lifted_ = lifted(script_.command(0.0));
+  lifted_.v_target_W.setZero();
+  script_.rewind();
+}
+
+device::HandCommand SettlingHand::command(double t_s) noexcept {
+  if (follow_) return t_s < settle_s_ ? lifted(script_.command(t_s)) : script_.command(t_s);
+  return t_s < settle_s_ ? lifted_ : script_.command(t_s - settle_s_);
+}
+
+std::unique_ptr<device::Device> openTrialDevice(const std::string& uri_text, device::HandScript& hand) {
+  const device::DeviceUri uri = device::parseDeviceUri(uri_text);
+  if (uri.scheme != "sim") return device::openDevice(uri_text, &hand);
+  device::SimulatedPenParams params = device::simulatedPenParams(uri);
+  hand.rewind();
+  params.start_position_W = hand.command(0.0).p_target_W;
+  params.start_position_W.z() = std::max(params.start_position_W.z(), kLiftHeight_m);
+  hand.rewind();
+  return std::make_unique<device::SimulatedDevice>(params, &hand, uri_text);
+}
+
+std::vector<std::string> clampTrialGains(guidance::GuidanceConfig& config, const TrialEnvironment& env) {
+  std::vector<std::string> clamps = env.worldClamps();
+  const std::string_view active = guidance::modeName(config.mode);
+  for (auto& line : guidance::clampGains(config, env.limits(), env.rate_hz(), env.impedance())) {
+    if (config.mode != guidance::TrainingMode::kBasic && line.starts_with(active)) clamps.push_back(std::move(line));
+  }
+  return clamps;
+}
+
+ProfileMetadata trialMetadata(ProfileMetadata metadata, const TrialEnvironment& env, const guidance::GuidanceConfig& config,
+                              const std::vector<std::string>& clamps, Clock clock) {
+  metadata.device = env.deviceUri();
+  metadata.created_utc = utcNowIso8601();
+  if (metadata.source.empty()) metadata.source = "recorded";
+  auto& extra = metadata.extra;
+  extra["mode"] = std::string(guidance::modeName(config.mode));
+  extra["indexing"] = std::string(guidance::indexingName(config.playback.indexing));
+  extra["speed"] = fmt::format("{}", config.playback.speed);
+  extra["pcontrol_kp_N_per_m"] = fmt::format("{}", config.position.kp_N_per_m);
+  extra["pcontrol_kd_N_s_per_m"] = fmt::format("{}", config.position.kd_N_s_per_m);
+  extra["alpha_kp"] = fmt::format("{}", config.force.kp);
+  extra["alpha_kd_s"] = fmt::format("{}", config.force.kd_s);
+  extra["clamps"] = clamps.empty() ? "none" : joined(clamps);
+  extra["clock"] = clock == Clock::kSimulated ? "simulated" : "real-time";
+  return metadata;
+}
 
 TrialEnvironment::TrialEnvironment(std::string device_uri, render::WorldConfig world, double rate_hz)
     : device_uri_(std::move(device_uri)), world_(std::move(world)), rate_hz_(rate_hz) {
@@ -78,15 +106,10 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
   HATTR_THROW_UNLESS(std::isfinite(setup.settle_s) && setup.settle_s >= ramp_s && setup.settle_s <= 60.0,
                      "trial settle time: expected [{}, 60] s (at least the safety ramp), got {}", ramp_s, setup.settle_s);
   TrialResult result;
-  result.clamps = env.worldClamps();
 
   // Guidance, with its gains clamped to what the device renders passively with the paper.
   guidance::GuidanceConfig config = setup.guidance;
-  // Both modes' gains are clamped (a trial may switch modes); the report names the one in use.
-  const std::string_view active = guidance::modeName(config.mode);
-  for (auto& line : guidance::clampGains(config, env.limits(), env.rate_hz(), env.impedance())) {
-    if (config.mode != guidance::TrainingMode::kBasic && line.starts_with(active)) result.clamps.push_back(std::move(line));
-  }
+  result.clamps = clampTrialGains(config, env);
   guidance::TrainingGuidance guidance(setup.reference, config);
   guidance.startTrial(setup.settle_s);
 
@@ -97,21 +120,7 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
   servo::ServoLoop loop(*device, servo::ServoConfig{.rate_hz = env.rate_hz()});
   loop.setWorld(&env.paper());
   loop.setGuidance(&guidance);
-
-  ProfileMetadata metadata = setup.metadata;
-  metadata.device = env.deviceUri();
-  metadata.created_utc = utcNowIso8601();
-  if (metadata.source.empty()) metadata.source = "recorded";
-  auto& extra = metadata.extra;
-  extra["mode"] = std::string(guidance::modeName(config.mode));
-  extra["indexing"] = std::string(guidance::indexingName(config.playback.indexing));
-  extra["speed"] = fmt::format("{}", config.playback.speed);
-  extra["pcontrol_kp_N_per_m"] = fmt::format("{}", config.position.kp_N_per_m);
-  extra["pcontrol_kd_N_s_per_m"] = fmt::format("{}", config.position.kd_N_s_per_m);
-  extra["alpha_kp"] = fmt::format("{}", config.force.kp);
-  extra["alpha_kd_s"] = fmt::format("{}", config.force.kd_s);
-  extra["clamps"] = result.clamps.empty() ? "none" : joined(result.clamps);
-  extra["clock"] = setup.clock == Clock::kSimulated ? "simulated" : "real-time";
+  const ProfileMetadata metadata = trialMetadata(setup.metadata, env, config, result.clamps, setup.clock);
   Recorder recorder(loop.samples(),
                     RecorderConfig{.trigger = setup.trigger, .nominal_period_s = 1.0 / env.rate_hz()}, metadata);
 

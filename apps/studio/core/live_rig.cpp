@@ -16,61 +16,8 @@ namespace {
 constexpr std::size_t kRelayCapacity = 1024;                 // power of two
 constexpr std::size_t kSimulatedChunk = 64;                  // ticks between drains, as runTrial
 constexpr auto kRelayPoll = std::chrono::microseconds(500);  // as Recorder::startThread
-constexpr double kLiftHeight_m = 0.003;                      // as runTrial's settle phase
-
-std::string joined(const std::vector<std::string>& lines) {
-  std::string out;
-  for (const auto& line : lines) out += (out.empty() ? "" : "; ") + line;
-  return out;
-}
-
-/// The device for a run, as runTrial opens it: a simulated pen starts just above where the
-/// hand begins.
-std::unique_ptr<device::Device> openRunDevice(const std::string& uri_text, device::HandScript& hand) {
-  const device::DeviceUri uri = device::parseDeviceUri(uri_text);
-  if (uri.scheme != "sim") return device::openDevice(uri_text, &hand);
-  device::SimulatedPenParams params = device::simulatedPenParams(uri);
-  hand.rewind();
-  params.start_position_W = hand.command(0.0).p_target_W;
-  params.start_position_W.z() = std::max(params.start_position_W.z(), kLiftHeight_m);
-  hand.rewind();
-  return std::make_unique<device::SimulatedDevice>(params, &hand, uri_text);
-}
 
 }  // namespace
-
-/// The hand during the settle phase: the pen held lifted (above the script's first point as
-/// runTrial does, or following a live hand); after it, the script.
-class LiveRig::SettlingHand final : public device::HandScript {
- public:
-  SettlingHand(device::HandScript& script, double settle_s, bool follow)
-      : script_(script), settle_s_(settle_s), follow_(follow) {
-    // Held above the first point at rest, exactly as runTrial's settle phase.
-    script_.rewind();
-    lifted_ = lift(script_.command(0.0));
-    lifted_.v_target_W.setZero();
-    script_.rewind();
-  }
-  device::HandCommand command(double t_s) noexcept override {
-    if (follow_) return t_s < settle_s_ ? lift(script_.command(t_s)) : script_.command(t_s);
-    return t_s < settle_s_ ? lifted_ : script_.command(t_s - settle_s_);
-  }
-  void rewind() noexcept override { script_.rewind(); }
-
- private:
-  static device::HandCommand lift(device::HandCommand command) noexcept {
-    command.pen_down = false;
-    command.press_N = 0.0;
-    command.v_target_W.z() = 0.0;
-    if (command.p_target_W.z() < kLiftHeight_m) command.p_target_W.z() = kLiftHeight_m;
-    return command;
-  }
-
-  device::HandScript& script_;
-  double settle_s_;
-  bool follow_;
-  device::HandCommand lifted_;
-};
 
 RunSpec trialRunSpec(const session::TrialSetup& setup, bool follow_during_settle) {
   RunSpec spec;
@@ -101,43 +48,18 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
                      "pen-up stop time: expected > 0 s, got {}", spec.pen_up_stop_s);
   spec_ = spec;
   clock_ = clock;
-  clamps_ = environment.worldClamps();
-
-  // Guidance, its gains clamped to what the device renders passively with the paper
-  // (both modes are clamped; the report names the one in use), as runTrial does.
+  // Guidance, device, paper and loop, set up as runTrial sets them up.
   guidance::GuidanceConfig config = spec.guidance;
-  const std::string_view active_mode = guidance::modeName(config.mode);
-  for (auto& line :
-       guidance::clampGains(config, environment.limits(), environment.rate_hz(), environment.impedance())) {
-    if (config.mode != guidance::TrainingMode::kBasic && line.starts_with(active_mode))
-      clamps_.push_back(std::move(line));
-  }
+  clamps_ = session::clampTrialGains(config, environment);
   auto guidance = std::make_unique<guidance::TrainingGuidance>(spec.reference, config);
   guidance->startTrial(spec.settle_s);
-
-  // Device, paper, loop; the hand settles before the script starts.
-  auto settling = std::make_unique<SettlingHand>(hand, spec.settle_s, spec.follow_during_settle);
-  auto device = openRunDevice(environment.deviceUri(), *settling);
+  auto settling = std::make_unique<session::SettlingHand>(hand, spec.settle_s, spec.follow_during_settle);
+  auto device = session::openTrialDevice(environment.deviceUri(), *settling);
   environment.paper().reset();
   auto loop = std::make_unique<servo::ServoLoop>(*device, servo::ServoConfig{.rate_hz = environment.rate_hz()});
   loop->setWorld(&environment.paper());
   loop->setGuidance(guidance.get());
-
-  // The recording's metadata, as runTrial writes it.
-  ProfileMetadata metadata = spec.metadata;
-  metadata.device = environment.deviceUri();
-  metadata.created_utc = utcNowIso8601();
-  if (metadata.source.empty()) metadata.source = "recorded";
-  auto& extra = metadata.extra;
-  extra["mode"] = std::string(guidance::modeName(config.mode));
-  extra["indexing"] = std::string(guidance::indexingName(config.playback.indexing));
-  extra["speed"] = fmt::format("{}", config.playback.speed);
-  extra["pcontrol_kp_N_per_m"] = fmt::format("{}", config.position.kp_N_per_m);
-  extra["pcontrol_kd_N_s_per_m"] = fmt::format("{}", config.position.kd_N_s_per_m);
-  extra["alpha_kp"] = fmt::format("{}", config.force.kp);
-  extra["alpha_kd_s"] = fmt::format("{}", config.force.kd_s);
-  extra["clamps"] = clamps_.empty() ? "none" : joined(clamps_);
-  extra["clock"] = clock == session::Clock::kSimulated ? "simulated" : "real-time";
+  const ProfileMetadata metadata = session::trialMetadata(spec.metadata, environment, config, clamps_, clock);
 
   // The recorder takes samples through a relay ring, so a trial's window starts and ends
   // at exact ticks whatever the clock.

@@ -118,7 +118,6 @@ class LiveRig {
   [[nodiscard]] session::TrialEnvironment* environment() const noexcept { return environment_; }
 
  private:
-  class SettlingHand;
   void pump();           // relay: loop ring → recorder; consumer thread only
   void publishStatus();  // consumer thread only
 
@@ -126,7 +125,7 @@ class LiveRig {
   RunSpec spec_;
   session::Clock clock_ = session::Clock::kSimulated;
   std::vector<std::string> clamps_;
-  std::unique_ptr<SettlingHand> settling_;
+  std::unique_ptr<session::SettlingHand> settling_;
   std::unique_ptr<device::Device> device_;
   std::unique_ptr<guidance::TrainingGuidance> guidance_;
   std::unique_ptr<servo::ServoLoop> loop_;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "hattr/core/haptic_profile.hpp"
+#include "hattr/device/device.hpp"
 #include "hattr/device/hand.hpp"
 #include "hattr/guidance/training_guidance.hpp"
 #include "hattr/render/world_config.hpp"
@@ -65,6 +66,36 @@ struct TrialResult {
   std::uint64_t overruns = 0;
   std::uint64_t faults = 0;
 };
+
+/// The hand during a trial's settle phase: the pen held lifted (at least 3 mm) above the
+/// script's first point at rest — or, with `follow`, above wherever a live hand is — and after
+/// `settle_s` the script (on the trial's clock, or unchanged when following).
+class SettlingHand final : public device::HandScript {
+ public:
+  SettlingHand(device::HandScript& script, double settle_s, bool follow = false);
+  device::HandCommand command(double t_s) noexcept override;
+  void rewind() noexcept override { script_.rewind(); }
+
+ private:
+  device::HandScript& script_;
+  double settle_s_;
+  bool follow_;
+  device::HandCommand lifted_;
+};
+
+/// The device a trial uses: the URI's device; a simulated pen starts 3 mm above where the
+/// hand begins. Throws InputError for a bad URI.
+std::unique_ptr<device::Device> openTrialDevice(const std::string& uri, device::HandScript& hand);
+
+/// Clamps the gains of every mode (a trial may switch modes) to what the environment renders
+/// passively; returns the world's clamps and those of the mode in use, for the report.
+std::vector<std::string> clampTrialGains(guidance::GuidanceConfig& config, const TrialEnvironment& environment);
+
+/// A trial recording's metadata: `base` plus the device, creation time, source, the mode,
+/// indexing, speed, the gains used, the clamps and the clock.
+ProfileMetadata trialMetadata(ProfileMetadata base, const TrialEnvironment& environment,
+                              const guidance::GuidanceConfig& config, const std::vector<std::string>& clamps,
+                              Clock clock);
 
 /// Runs one trial: the settle phase, then `duration_s` recorded. A simulated pen starts 3 mm
 /// above the hand's first target. Throws InputError for bad settings; hattr::Error if the
