@@ -31,3 +31,14 @@ function(hattr_add_module name)
     ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
     LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 endfunction()
+
+# hattr_add_plugin(NAME SOURCES ... DEPENDS ...): a driver plugin, a shared object loaded
+# with dlopen (plugin:/path/libNAME.so). Only the entry symbol is visible; the hattr code it
+# links stays private to it (--exclude-libs), so it never clashes with the host's copy.
+function(hattr_add_plugin name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPENDS" ${ARGN})
+  add_library(${name} MODULE ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE hattr::device ${ARG_DEPENDS} hattr_compile_options)
+  set_target_properties(${name} PROPERTIES PREFIX "lib" CXX_VISIBILITY_PRESET hidden VISIBILITY_INLINES_HIDDEN ON)
+  target_link_options(${name} PRIVATE -Wl,--exclude-libs,ALL -Wl,--no-undefined)
+endfunction()

@@ -33,6 +33,9 @@ void registerRecordTrainCommands(CLI::App& app);
 void registerStudyCommands(CLI::App& app);
 void registerAnalysisCommands(CLI::App& app);
 void registerSimCommands(CLI::App& app);
+void registerDevicesCommands(CLI::App& app);
+/// `serve` and `keygen` under the `devices` (alias `device`) command: the network device server.
+void registerDeviceServeCommands(CLI::App& devices);
 
 /// The world configuration in `file`, or the defaults when `file` is empty.
 render::WorldConfig worldConfigOrDefault(const std::string& file);

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "cli_common.hpp"
+#include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/session/trial.hpp"
 
@@ -38,7 +39,9 @@ void addCommonOptions(CLI::App& cmd, TrialOptions& opt) {
   cmd.add_option("-o,--output", opt.output, "Haptic-profile CSV to write")->required();
   cmd.add_option("--world", opt.world, "World (paper) configuration JSON (default: built-in defaults)");
   cmd.add_option("--rate", opt.rate_hz, "Servo rate [Hz]")->check(CLI::Range(1.0, 10000.0))->capture_default_str();
-  cmd.add_option("--clock", opt.clock, "sim: simulated time (fast, deterministic); real: the real-time loop")
+  cmd.add_option("--clock", opt.clock,
+                 "sim: simulated time (fast, deterministic); real: the real-time loop. Devices that cannot be "
+                 "simulated (udp://, hardware plugins) always run in real time")
       ->check(CLI::IsMember({"sim", "real"}))
       ->capture_default_str();
   cmd.add_option("--subject", opt.subject, "Subject recorded in the metadata");
@@ -73,6 +76,13 @@ void runTrialCommand(const TrialOptions& opt, bool training) {
   }
   const session::TrialResult result = session::runTrial(env, setup, hand);
   for (const auto& c : result.clamps) std::cerr << "hattr: clamped: " << c << '\n';
+  // A trial the device broke off keeps what it recorded (marked failed) and exits 1.
+  if (!result.failure.empty()) {
+    if (result.profile.empty()) throw Error(fmt::format("the trial failed before recording began: {}", result.failure));
+    io::writeProfileCsv(result.profile, opt.output, opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
+    throw Error(fmt::format("the trial failed after {:.3f} s: {}; what was recorded is in {} (metadata: failed)",
+                            result.profile.duration_s(), result.failure, opt.output));
+  }
   io::writeProfileCsv(result.profile, opt.output, opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
 
   if (opt.json) {
@@ -82,14 +92,17 @@ void runTrialCommand(const TrialOptions& opt, bool training) {
     json["missed_samples"] = result.missed_samples;
     json["overruns"] = result.overruns;
     json["faults"] = result.faults;
+    json["link_faults"] = result.link_faults;
+    json["stalls"] = result.stalls;
+    json["clock"] = result.clock;
     printJson(json);
     return;
   }
-  std::cout << fmt::format("{} {} -> {}: {} samples, {:.3f} s, {} missed, {} overruns, {} faults\n",
+  std::cout << fmt::format("{} {} -> {}: {} samples, {:.3f} s, {} missed, {} overruns, {} faults, {} clock\n",
                            training ? "trained" : "recorded",
                            training ? std::string(guidance::modeName(setup.guidance.mode)) : std::string("expert"),
                            opt.output, result.profile.size(), result.profile.duration_s(), result.missed_samples,
-                           result.overruns, result.faults);
+                           result.overruns, result.faults, result.clock);
 }
 
 }  // namespace

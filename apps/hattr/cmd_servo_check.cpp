@@ -8,6 +8,7 @@
 
 #include "cli_common.hpp"
 #include "hattr/device/device_uri.hpp"
+#include "hattr/device/udp_device.hpp"
 #include "hattr/render/paper_renderer.hpp"
 #include "hattr/servo/servo_loop.hpp"
 
@@ -29,6 +30,27 @@ nlohmann::json percentilesUs(const DurationHistogram& h) {
   const auto us = [](std::int64_t ns) { return static_cast<double>(ns) * 1e-3; };
   return {{"p50", us(h.percentile_ns(0.50))}, {"p99", us(h.percentile_ns(0.99))},
           {"p99_9", us(h.percentile_ns(0.999))}, {"max", us(h.max_ns())}, {"count", h.count()}};
+}
+
+// The network link of a udp:// device: round trip, state age, loss, late packets, drops.
+nlohmann::json linkJson(const device::LinkStats& s) {
+  nlohmann::json drops = nlohmann::json::object();
+  for (std::size_t r = 0; r < device::net::kDropReasonCount; ++r) {
+    drops[std::string(device::net::dropReasonName(static_cast<device::net::DropReason>(r)))] = s.drops[r];
+  }
+  const double expected = static_cast<double>(s.states_received + s.states_lost);
+  return {{"rtt_us", percentilesUs(s.rtt)},
+          {"state_age_us", percentilesUs(s.state_age)},
+          {"clock_offset_us", static_cast<double>(s.clock_offset_ns) * 1e-3},
+          {"commands_sent", s.commands_sent},
+          {"states_received", s.states_received},
+          {"states_lost", s.states_lost},
+          {"loss", expected > 0.0 ? static_cast<double>(s.states_lost) / expected : 0.0},
+          {"states_late", s.states_late},
+          {"held_reads", s.held_reads},
+          {"disconnected_reads", s.disconnected_reads},
+          {"reconnects", s.reconnects},
+          {"drops", drops}};
 }
 
 servo::RealtimePolicy parsePolicy(const std::string& text) {
@@ -96,9 +118,17 @@ void runServoCheck(const ServoCheckOptions& opt) {
         {"overruns", c.overruns.load()},
         {"dropped_samples", c.dropped_samples.load()},
         {"faults", c.faults.load()},
-        {"stalls", c.stalls.load()}}},
+        {"stalls", c.stalls.load()},
+        {"link_faults", c.link_faults.load()},
+        {"disconnected_ticks", c.disconnected_ticks.load()}}},
       {"ratio_p99", floor_p99 > 0.0 ? loop_p99 / floor_p99 : 0.0},
   };
+  const auto* udp = dynamic_cast<const device::UdpDevice*>(device.get());
+  if (udp != nullptr) {
+    json["link"] = linkJson(udp->linkStats());
+    json["link"]["server_rate_hz"] = udp->serverRate_hz();
+    json["link"]["fault"] = udp->faultReason();
+  }
   if (opt.json) {
     printJson(json);
     return;
@@ -118,6 +148,26 @@ void runServoCheck(const ServoCheckOptions& opt) {
             << fmt::format("\nticks {}, overruns {}, dropped samples {}, faults {}, stalls {}\nratio p99 (loop/floor) {:.2f}\n",
                            c.ticks.load(), c.overruns.load(), c.dropped_samples.load(), c.faults.load(), c.stalls.load(),
                            json["ratio_p99"].get<double>());
+  if (udp != nullptr) {
+    const nlohmann::json& link = json["link"];
+    std::string drops;
+    for (const auto& [reason, count] : link["drops"].items()) {
+      if (count.get<std::uint64_t>() > 0) drops += fmt::format("{}{} {}", drops.empty() ? "" : ", ", reason, count.get<std::uint64_t>());
+    }
+    std::cout << fmt::format("\nlink to {} (server at {} Hz)\n", opt.device, link["server_rate_hz"].get<double>())
+              << fmt::format("{:<22} {:>9} {:>9} {:>9} {:>9}\n", "[µs]", "p50", "p99", "p99.9", "max")
+              << row("round trip", link["rtt_us"]) << row("state age", link["state_age_us"])
+              << fmt::format("commands sent {}, states received {}, lost {} ({:.3f} %), late {} (dropped, none applied)\n",
+                             link["commands_sent"].get<std::uint64_t>(), link["states_received"].get<std::uint64_t>(),
+                             link["states_lost"].get<std::uint64_t>(), 100.0 * link["loss"].get<double>(),
+                             link["states_late"].get<std::uint64_t>())
+              << fmt::format("held reads {}, disconnected reads {}, reconnects {}, clock offset {:.1f} µs\n",
+                             link["held_reads"].get<std::uint64_t>(), link["disconnected_reads"].get<std::uint64_t>(),
+                             link["reconnects"].get<std::uint64_t>(), link["clock_offset_us"].get<double>())
+              << fmt::format("drops: {}\nloop: link faults {}, disconnected ticks {}\n", drops.empty() ? "none" : drops,
+                             c.link_faults.load(), c.disconnected_ticks.load());
+    if (!link["fault"].get<std::string>().empty()) std::cout << "last link fault: " << link["fault"].get<std::string>() << '\n';
+  }
 }
 
 }  // namespace
@@ -142,11 +192,10 @@ void registerServoCheckCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--json", opt->json,
                 "Print JSON: loop and floor {period_error_us {p50, p99, p99_9, max}}, loop {tick_compute_us, overruns, "
-                "dropped_samples, faults}, ratio_p99");
+                "dropped_samples, faults}, ratio_p99; for udp:// devices also link {rtt_us, state_age_us, clock_offset_us, "
+                "commands_sent, states_received, states_lost, loss, states_late, held_reads, "
+                "disconnected_reads, reconnects, drops {reason: count}}");
   cmd->callback([opt] { runServoCheck(*opt); });
-
-  auto* devices = app.add_subcommand("devices", "List the device URIs hattr accepts and their parameters");
-  devices->callback([] { std::cout << device::deviceUriHelp(); });
 }
 
 }  // namespace hattr::cli

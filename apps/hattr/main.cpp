@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   registerProfileCommands(app);
   registerImportCommands(app);
   registerServoCheckCommand(app);
+  registerDevicesCommands(app);
   registerWorldCommands(app);
   registerRecordTrainCommands(app);
   registerStudyCommands(app);

@@ -7,13 +7,16 @@
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/device/plugin_device.hpp"
+#include "hattr/device/udp_device.hpp"
 
 namespace hattr::device {
 namespace {
 
 constexpr std::string_view kAccepted =
-    "sim://pen[?key=value&...] (simulated force-feedback pen); reserved, not in this build: "
-    "udp://host:port (remote partner), plugin:/path/lib.so (hardware driver)";
+    "sim://pen[?key=value&...] (simulated force-feedback pen); "
+    "udp://HOST:PORT?key=FILE[&hold_ms=5&timeout_s=1] (a pen served by `hattr device serve`); "
+    "plugin:/path/libX.so[?key=value&...] or plugin:NAME (a driver plugin: hardware, sim, replay)";
 
 struct SimKey {
   std::string_view key;
@@ -52,6 +55,27 @@ std::string simKeyList() {
   return keys;
 }
 
+/// %XX escapes decoded (a path or a name with spaces); a broken escape is refused.
+std::string percentDecoded(std::string_view uri, std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (text[i] != '%') {
+      out += text[i];
+      continue;
+    }
+    unsigned value = 0;
+    const char* first = text.data() + i + 1;
+    const auto [end, ec] = i + 2 < text.size() ? std::from_chars(first, first + 2, value, 16)
+                                                : std::from_chars_result{first, std::errc::invalid_argument};
+    HATTR_THROW_UNLESS(ec == std::errc{} && end == first + 2,
+                       "device URI \"{}\": expected %XX (two hex digits) in \"{}\"", uri, text);
+    out += static_cast<char>(value);
+    i += 2;
+  }
+  return out;
+}
+
 }  // namespace
 
 DeviceUri parseDeviceUri(std::string_view uri) {
@@ -68,7 +92,7 @@ DeviceUri parseDeviceUri(std::string_view uri) {
     rest = uri.substr(sep + 3);
   }
   const auto question = rest.find('?');
-  out.target = rest.substr(0, question);
+  out.target = percentDecoded(uri, rest.substr(0, question));
   if (question != std::string_view::npos) {
     std::string_view query = rest.substr(question + 1);
     while (!query.empty()) {
@@ -77,7 +101,7 @@ DeviceUri parseDeviceUri(std::string_view uri) {
       const auto eq = pair.find('=');
       HATTR_THROW_UNLESS(eq != std::string_view::npos && eq > 0,
                          "device URI \"{}\": expected key=value in the query, got \"{}\"", uri, pair);
-      HATTR_THROW_UNLESS(out.query.emplace(pair.substr(0, eq), pair.substr(eq + 1)).second,
+      HATTR_THROW_UNLESS(out.query.emplace(percentDecoded(uri, pair.substr(0, eq)), percentDecoded(uri, pair.substr(eq + 1))).second,
                          "device URI \"{}\": key \"{}\" appears twice", uri, pair.substr(0, eq));
       query = amp == std::string_view::npos ? std::string_view{} : query.substr(amp + 1);
     }
@@ -114,17 +138,18 @@ std::unique_ptr<Device> openDevice(std::string_view uri_text, HandScript* hand) 
                        uri_text, uri.target);
     return std::make_unique<SimulatedDevice>(simulatedPenParams(uri), hand, std::string(uri_text));
   }
-  if (uri.scheme == "udp" || uri.scheme == "plugin") {
-    throw InputError(fmt::format("device URI \"{}\": {} devices are reserved and not available in this build; "
-                                 "accepted: {}",
-                                 uri_text, uri.scheme, kAccepted));
-  }
+  if (uri.scheme == "plugin") return openPluginDevice(uri, uri_text, hand);
+  if (uri.scheme == "udp") return openUdpDevice(uri, uri_text, hand);
   throw InputError(fmt::format("device URI \"{}\": unknown scheme \"{}\"; accepted: {}", uri_text, uri.scheme, kAccepted));
 }
 
 std::string deviceUriHelp() {
   std::string text = fmt::format("Device URIs: {}.\nsim://pen keys:\n", kAccepted);
-  for (const auto& k : kSimKeys) text += fmt::format("  {:<24} {} in [{}, {}]\n", k.key, k.help, k.min, k.max);
+  SimulatedPenParams defaults;
+  for (const auto& k : kSimKeys) {
+    text += fmt::format("  {:<24} {} in [{}, {}], default {}\n", k.key, k.help, k.min, k.max, *k.field(defaults));
+  }
+  text += udpDeviceHelp();
   return text;
 }
 

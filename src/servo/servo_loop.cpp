@@ -20,6 +20,16 @@ void bump(std::atomic<std::uint64_t>& counter) noexcept { counter.fetch_add(1, s
 
 }  // namespace
 
+std::string_view loopClockName(LoopClock clock) noexcept {
+  switch (clock) {
+    case LoopClock::kNone: return "none";
+    case LoopClock::kSimulated: return "simulated";
+    case LoopClock::kRealTime: return "real-time";
+    case LoopClock::kDevice: return "device";
+  }
+  return "unknown";
+}
+
 ServoLoop::ServoLoop(device::Device& device, ServoConfig config)
     : device_(device),
       config_(std::move(config)),
@@ -39,12 +49,15 @@ void ServoLoop::resetRun() noexcept {
   tick_number_ = 0;
   sim_now_ = std::chrono::nanoseconds(0);
   for (auto* c : {&counters_.ticks, &counters_.overruns, &counters_.dropped_samples, &counters_.faults,
-                  &counters_.stalls, &counters_.consumer_stalls}) {
+                  &counters_.stalls, &counters_.consumer_stalls, &counters_.link_faults, &counters_.disconnected_ticks}) {
     c->store(0, std::memory_order_relaxed);
   }
   period_error_.clear();
   tick_compute_.clear();
   safety_.restartRamp();
+  link_down_ = false;
+  counters_.disconnected.store(false, std::memory_order_relaxed);
+  last_device_wall_ = std::chrono::nanoseconds(-1);
 }
 
 void ServoLoop::drainCommands() noexcept {
@@ -76,9 +89,19 @@ TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
   const double dt_s = seconds(dt);
   drainCommands();
 
-  // Read the pen, render the paper, add guidance.
+  // Read the pen, render the paper, add guidance. A device fault latches; a lost link (or an
+  // unplugged device) zeroes the force while it lasts and ramps in again when it returns.
   PenState pen;
-  if (device_.read(now, pen) != device::DeviceStatus::kOk) safety_.latchFault(SafetyFault::kDeviceError);
+  const device::DeviceStatus read_status = device_.read(now, pen);
+  if (read_status == device::DeviceStatus::kFault) safety_.latchFault(SafetyFault::kDeviceError);
+  const bool disconnected = read_status == device::DeviceStatus::kDisconnected;
+  if (disconnected) {
+    if (!link_down_) bump(counters_.link_faults);
+    bump(counters_.disconnected_ticks);
+    status = TickStatus::kDeviceError;
+  }
+  link_down_ = disconnected;
+  counters_.disconnected.store(disconnected, std::memory_order_relaxed);
   ContactForces contact;
   if (world_) world_->render(pen, dt_s, contact);
   const Vec3 guide = guidance_ ? guidance_->compute(pen, contact, dt_s) : Vec3(Vec3::Zero());
@@ -90,12 +113,13 @@ TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
 
   // Every force passes the safety path; a stall zeroes it outright.
   Vec3 command = Vec3::Zero();
-  if (stalled || consumer_stalled) {
+  if (stalled || consumer_stalled || disconnected) {
     safety_.restartRamp();
   } else {
     command = safety_.filter(contact.f_on_pen_W, guide, pen.p_WT, dt_s);
   }
-  if (device_.write(command) != device::DeviceStatus::kOk) safety_.latchFault(SafetyFault::kDeviceError);
+  const device::DeviceStatus write_status = device_.write(command);
+  if (write_status == device::DeviceStatus::kFault) safety_.latchFault(SafetyFault::kDeviceError);
   if (safety_.fault() != SafetyFault::kNone) status = TickStatus::kFaulted;
   counters_.faults.store(safety_.faultCount(), std::memory_order_relaxed);
 
@@ -122,6 +146,7 @@ TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
 }
 
 void ServoLoop::runSimulated(std::size_t ticks) noexcept {
+  clock_.store(LoopClock::kSimulated, std::memory_order_release);
   for (std::size_t i = 0; i < ticks; ++i) {
     (void)tick(sim_now_);
     sim_now_ += period_;
@@ -131,6 +156,11 @@ void ServoLoop::runSimulated(std::size_t ticks) noexcept {
 void ServoLoop::start() {
   HATTR_DEMAND(!running(), "start() on a running servo loop");
   stop_requested_.store(false);
+  if (device_.clocking() == device::DeviceClocking::kDeviceClock) {
+    startDeviceClock();
+    return;
+  }
+  clock_.store(LoopClock::kRealTime, std::memory_order_release);
   std::promise<void> started;
   auto started_future = started.get_future();
   thread_ = std::thread([this, &started] {
@@ -154,8 +184,50 @@ void ServoLoop::start() {
 
 void ServoLoop::stop() {
   stop_requested_.store(true, std::memory_order_release);
+  // A device clock stops first (no tick runs after stopClock returns), then its watchdog.
+  if (clock() == LoopClock::kDevice && running()) device_.stopClock();
   if (thread_.joinable()) thread_.join();
   running_.store(false, std::memory_order_release);
+}
+
+// The device calls the tick from its own thread; the loop measures the period between calls.
+void ServoLoop::startDeviceClock() {
+  clock_.store(LoopClock::kDevice, std::memory_order_release);
+  last_device_tick_ns_.store(monotonicNow().count(), std::memory_order_release);
+  running_.store(true, std::memory_order_release);
+  try {
+    device_.startClock(&ServoLoop::deviceTick, this);
+  } catch (...) {
+    running_.store(false, std::memory_order_release);
+    throw;
+  }
+  thread_ = std::thread([this] { watchDeviceClock(); });
+}
+
+void ServoLoop::deviceTick(void* context, std::chrono::nanoseconds now) noexcept {
+  auto* self = static_cast<ServoLoop*>(context);
+  const auto wall = monotonicNow();
+  if (self->last_device_wall_.count() >= 0) {
+    self->period_error_.record(std::abs((wall - self->last_device_wall_ - self->period_).count()));
+  }
+  self->last_device_wall_ = wall;
+  (void)self->tick(now);
+  const auto done = monotonicNow();
+  if (done - wall > self->period_) bump(self->counters_.overruns);
+  self->last_device_tick_ns_.store(done.count(), std::memory_order_release);
+}
+
+// A device clock that stops calling cannot be made to tick: count the stall so the run is
+// marked (the device zeroes its force on its own without commands, as the ABI requires).
+void ServoLoop::watchDeviceClock() {
+  bool stalled = false;
+  while (!stop_requested_.load(std::memory_order_acquire)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    const auto gap = monotonicNow().count() - last_device_tick_ns_.load(std::memory_order_acquire);
+    const bool now_stalled = gap > config_.stall_threshold.count();
+    if (now_stalled && !stalled) bump(counters_.stalls);
+    stalled = now_stalled;
+  }
 }
 
 // Absolute deadlines on CLOCK_MONOTONIC; a late tick is counted, never made up for.

@@ -464,6 +464,13 @@ void StudyDatabase::completeTrial(std::int64_t trial_id, const HapticProfile& pr
   t.commit();
 }
 
+void StudyDatabase::failTrial(std::int64_t trial_id, const std::string& reason) {
+  Statement s(db_,
+              "UPDATE trials SET status = 'interrupted', interruptions = interruptions + 1, ended_utc = ?, outcome = ? "
+              "WHERE id = ? AND status = 'running'");
+  s.bind(1, utcNowIso8601()).bind(2, "failed: " + reason).bind(3, trial_id).run();
+}
+
 void StudyDatabase::putResult(const std::string& key, const std::string& value) {
   Statement s(db_, "INSERT OR REPLACE INTO results (key, value, updated_utc) VALUES (?, ?, ?)");
   s.bind(1, key).bind(2, value).bind(3, utcNowIso8601()).run();

@@ -108,6 +108,15 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
 
     db_.markRunning(record.id, session);
     TrialResult result = runTrial(*environment_, setup, participant->handForTrial(plan));
+    // A trial the device broke off is not data: mark it, keep everything stored, and stop.
+    if (!result.failure.empty()) {
+      db_.failTrial(record.id, result.failure);
+      db_.endSession(session);
+      throw Error(fmt::format("subject {}: {} trial {} with {} failed: {}; completed trials are kept, and `study run` "
+                              "repeats this one",
+                              subject.id, phaseName(plan.phase), plan.index, guidance::modeName(plan.mode),
+                              result.failure));
+    }
     // Nothing in the profile may depend on when it ran, so a resumed study is bit-identical.
     result.profile.metadata().created_utc = "";
     db_.completeTrial(record.id, result.profile,

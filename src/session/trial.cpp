@@ -1,6 +1,7 @@
 #include "hattr/session/trial.hpp"
 
 #include <cmath>
+#include <optional>
 #include <thread>
 
 #include <fmt/format.h>
@@ -28,6 +29,49 @@ device::HandCommand lifted(device::HandCommand command) noexcept {
   command.v_target_W.z() = 0.0;
   command.p_target_W.z() = std::max(command.p_target_W.z(), kLiftHeight_m);
   return command;
+}
+
+/// A device (a network link) that stays disconnected this long, or a loop whose clock (a
+/// device's own) stops ticking this long, ends the trial; shorter dropouts and stalls zero the
+/// force, ramp in again and are counted in the trial's result and metadata.
+constexpr auto kGiveUpAfter = std::chrono::milliseconds(50);
+
+/// Waits `seconds` of a real-time run, watching every 2 ms for what ends a trial early: a
+/// latched fault, a device lost for longer than kGiveUpAfter, a clock that stopped ticking for
+/// as long. Returns why it ended early, or "".
+std::string waitUnlessFailed(const servo::ServoLoop& loop, const device::Device& device, double seconds) {
+  using Clock = std::chrono::steady_clock;
+  const auto until = Clock::now() + std::chrono::duration<double>(seconds);
+  const auto& c = loop.counters();
+  std::optional<Clock::time_point> lost_since;
+  std::uint64_t last_ticks = c.ticks.load();
+  auto last_tick_seen = Clock::now();
+  while (Clock::now() < until) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    const auto now = Clock::now();
+    if (c.faults.load() > 0) {
+      const std::string reason = device.faultReason();
+      return fmt::format("device fault: {}", reason.empty() ? "the safety path latched a fault" : reason);
+    }
+    // Lost: disconnected without a break for the give-up time.
+    if (!c.disconnected.load()) {
+      lost_since.reset();
+    } else if (!lost_since) {
+      lost_since = now;
+    } else if (now - *lost_since > kGiveUpAfter) {
+      const std::string reason = device.faultReason();
+      return fmt::format("device lost: {}", reason.empty() ? "the device disconnected" : reason);
+    }
+    // Stopped: no tick for the give-up time.
+    if (const std::uint64_t ticks = c.ticks.load(); ticks != last_ticks) {
+      last_ticks = ticks;
+      last_tick_seen = now;
+    } else if (now - last_tick_seen > kGiveUpAfter) {
+      return loop.clock() == servo::LoopClock::kDevice ? "the device's clock stopped calling the servo loop"
+                                                        : "the servo loop stopped ticking";
+    }
+  }
+  return "";
 }
 
 }  // namespace
@@ -113,20 +157,25 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
   guidance::TrainingGuidance guidance(setup.reference, config);
   guidance.startTrial(setup.settle_s);
 
-  // Device, paper, loop, recorder; the hand settles before the script starts.
+  // Device, paper, loop, recorder; the hand settles before the script starts. A device that
+  // cannot be simulated runs in real time whatever the setup asks.
   SettlingHand settling(hand, setup.settle_s);
   const auto device = openTrialDevice(env.deviceUri(), settling);
+  const Clock clock = device->clocking() == device::DeviceClocking::kSimulatable ? setup.clock : Clock::kRealTime;
   env.paper().reset();
   servo::ServoLoop loop(*device, servo::ServoConfig{.rate_hz = env.rate_hz()});
   loop.setWorld(&env.paper());
   loop.setGuidance(&guidance);
-  const ProfileMetadata metadata = trialMetadata(setup.metadata, env, config, result.clamps, setup.clock);
+  ProfileMetadata metadata = trialMetadata(setup.metadata, env, config, result.clamps, clock);
+  if (clock == Clock::kRealTime && device->clocking() == device::DeviceClocking::kDeviceClock) {
+    metadata.extra["clock"] = "device";
+  }
   Recorder recorder(loop.samples(),
                     RecorderConfig{.trigger = setup.trigger, .nominal_period_s = 1.0 / env.rate_hz()}, metadata);
 
   const auto settle_ticks = static_cast<std::size_t>(std::llround(setup.settle_s * env.rate_hz()));
   const auto ticks = static_cast<std::size_t>(std::llround(setup.duration_s * env.rate_hz()));
-  if (setup.clock == Clock::kSimulated) {
+  if (clock == Clock::kSimulated) {
     constexpr std::size_t kChunk = 64;  // drain well before the ring could fill
     const auto run = [&](std::size_t count) {
       for (std::size_t done = 0; done < count; done += kChunk) {
@@ -141,20 +190,33 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
     loop.requireConsumer(&recorder.consumerTime());
     recorder.startThread();
     loop.start();
-    std::this_thread::sleep_for(std::chrono::duration<double>(setup.settle_s));
-    recorder.start();
-    std::this_thread::sleep_for(std::chrono::duration<double>(setup.duration_s));
+    result.failure = waitUnlessFailed(loop, *device, setup.settle_s);
+    if (result.failure.empty()) {
+      recorder.start();
+      result.failure = waitUnlessFailed(loop, *device, setup.duration_s);
+    }
     loop.stop();
     recorder.stopThread();
   }
   recorder.stop();
 
-  result.ticks = loop.counters().ticks.load();
-  result.overruns = loop.counters().overruns.load();
-  result.faults = loop.counters().faults.load();
+  const auto& counters = loop.counters();
+  result.ticks = counters.ticks.load();
+  result.overruns = counters.overruns.load();
+  result.faults = counters.faults.load();
+  result.link_faults = counters.link_faults.load();
+  result.stalls = counters.stalls.load();
+  result.max_period_error_s = static_cast<double>(loop.periodError().max_ns()) * 1e-9;
+  result.clock = std::string(servo::loopClockName(loop.clock()));
   result.missed_samples = recorder.missed();
   result.profile = recorder.takeProfile();
-  if (result.profile.empty()) {
+  if (!result.failure.empty()) result.profile.metadata().extra["failed"] = result.failure;
+  if (result.link_faults > 0) {
+    result.profile.metadata().extra["link_faults"] =
+        fmt::format("{} ({} ticks without the device, force zeroed)", result.link_faults,
+                    counters.disconnected_ticks.load());
+  }
+  if (result.profile.empty() && result.failure.empty()) {
     throw Error("the trial recorded no samples (with the pen-down trigger: the pen never touched the paper)");
   }
   return result;

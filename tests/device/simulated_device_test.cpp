@@ -136,8 +136,11 @@ TEST(DeviceUri, OpensASimulatedPenWithParameters) {
 TEST(DeviceUri, BadUrisListWhatIsAccepted) {
   EXPECT_THAT(openError("pen"), HasSubstr("expected scheme://target, accepted: sim://pen"));
   EXPECT_THAT(openError("usb://phantom"), HasSubstr("unknown scheme \"usb\"; accepted: sim://pen"));
-  EXPECT_THAT(openError("udp://10.0.0.1:5000"), HasSubstr("udp devices are reserved and not available in this build"));
-  EXPECT_THAT(openError("plugin:/opt/lib.so"), HasSubstr("plugin devices are reserved"));
+  EXPECT_THAT(openError("usb://phantom"), HasSubstr("plugin:/path/libX.so[?key=value&...] or plugin:NAME"));
+  EXPECT_THAT(openError("usb://phantom"), HasSubstr("udp://HOST:PORT?key=FILE"));
+  EXPECT_THAT(openError("udp://10.0.0.1:5000"), HasSubstr("missing key=FILE"));
+  EXPECT_THAT(openError("plugin:/opt/lib.so"), HasSubstr("plugin:/opt/lib.so: file not found"));
+  EXPECT_THAT(openError("sim://pen?mass_kg=%2"), HasSubstr("expected %XX (two hex digits)"));
   EXPECT_THAT(openError("sim://arm"), HasSubstr("the simulator offers sim://pen, got sim://arm"));
   EXPECT_THAT(openError("sim://pen?mas_kg=1"), HasSubstr("unknown key \"mas_kg\": expected one of mass_kg"));
   EXPECT_EQ(openError("sim://pen?mass_kg=-1"), "sim://pen: key mass_kg: expected a number in [0.001, 10], got \"-1\"");

@@ -6,6 +6,7 @@
 #include <QPointingDevice>
 #include <QStatusBar>
 #include <QTabletEvent>
+#include <QTemporaryDir>
 #include <QtTest>
 #include <cmath>
 #include <fstream>
@@ -15,6 +16,7 @@
 #include "core/mouse_hand.hpp"
 #include "core/study_report_export.hpp"
 #include "core/tablet_input.hpp"
+#include "hattr/net/device_server.hpp"
 #include "hattr/core/error.hpp"
 #include "studio_test_support.hpp"
 #include "ui/main_window.hpp"
@@ -122,11 +124,14 @@ class StudioInputTest : public QObject {
 
   // ---- Device URIs (core) ----
   void deviceUrisAreCheckedByTheLibrary() {
-    QCOMPARE(validateStudioDevice("sim://pen?continuous_force_N=1.2").limits.continuous_force_N, 1.2);
+    QCOMPARE(validateStudioDevice("sim://pen?continuous_force_N=1.2").continuous_force_N, 1.2);
+    // Plugins and network devices are accepted: the in-tree sim plugin opens; a server that is
+    // not there, a missing key or a missing plugin are named.
+    QCOMPARE(validateStudioDevice("plugin:sim?continuous_force_N=1.3").continuous_force_N, 1.3);
     QVERIFY(thrownMessage([] { (void)validateStudioDevice("usb://x"); })
                 .contains("device URI \"usb://x\": unknown scheme"));
-    QVERIFY(thrownMessage([] { (void)validateStudioDevice("udp://host:9000"); }).contains("reserved"));
-    QVERIFY(thrownMessage([] { (void)validateStudioDevice("plugin:/x/lib.so"); }).contains("reserved"));
+    QVERIFY(thrownMessage([] { (void)validateStudioDevice("udp://127.0.0.1:9000"); }).contains("missing key=FILE"));
+    QVERIFY(thrownMessage([] { (void)validateStudioDevice("plugin:/x/lib.so"); }).contains("file not found"));
     QVERIFY(thrownMessage([] { (void)validateStudioDevice("sim://pen?mass=1"); }).contains("unknown key"));
   }
 
@@ -190,11 +195,35 @@ class StudioInputTest : public QObject {
     QVERIFY(!w.setDevice("usb://x"));
     QVERIFY2(w.lastError().contains("device URI \"usb://x\": unknown scheme"), qPrintable(w.lastError()));
     QVERIFY(!w.setDevice("udp://host:9000"));
-    QVERIFY2(w.lastError().contains("reserved"), qPrintable(w.lastError()));
+    QVERIFY2(w.lastError().contains("expected an IPv4 address"), qPrintable(w.lastError()));
+    QVERIFY(!w.setDevice("plugin:/no/such/lib.so"));
+    QVERIFY2(w.lastError().contains("file not found"), qPrintable(w.lastError()));
     QVERIFY(!w.setDevice("sim://pen?continuous_force_N=-1"));
     QVERIFY2(w.lastError().contains("continuous_force_N"), qPrintable(w.lastError()));
     QCOMPARE(w.deviceUri(), QString("sim://pen?continuous_force_N=1.2"));
     QCOMPARE(w.rig().environment()->limits().continuous_force_N, 1.2);
+
+    // A driver plugin is a device like any other: the rig runs on it.
+    QVERIFY2(w.setDevice("plugin:sim?continuous_force_N=1.1"), qPrintable(w.lastError()));
+    QVERIFY(w.rig().active());
+    QCOMPARE(w.rig().environment()->limits().continuous_force_N, 1.1);
+    // And so is a pen served over the network by a device server on this machine.
+    {
+      const QTemporaryDir dir;
+      const std::string key_file = (dir.path() + "/shared.key").toStdString();
+      device::net::writeKeyFile(key_file, device::net::randomKey(), false);
+      net::DeviceServerConfig config;
+      config.device_uri = "sim://pen?continuous_force_N=0.9";
+      config.key = device::net::readKeyFile(key_file);
+      net::DeviceServer server(config);
+      server.start();
+      const QString uri = QString::fromStdString("udp://" + server.endpoint().text() + "?key=" + key_file);
+      QVERIFY2(w.setDevice(uri), qPrintable(w.lastError()));
+      QVERIFY(w.rig().active());
+      QCOMPARE(w.rig().environment()->limits().continuous_force_N, 0.9);
+      QTRY_VERIFY_WITH_TIMEOUT(server.sessionLive(), 2000);
+      QVERIFY2(w.setDevice("sim://pen?continuous_force_N=1.2"), qPrintable(w.lastError()));
+    }
 
     // Remembered: a new window starts on it.
     window_.reset();

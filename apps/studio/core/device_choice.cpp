@@ -6,10 +6,10 @@
 
 namespace hattr::studio {
 
-device::SimulatedPenParams validateStudioDevice(std::string_view uri) {
-  // openDevice names every refusal the library's way (unknown scheme, reserved, bad key).
+DeviceLimits validateStudioDevice(std::string_view uri) {
+  // openDevice names every refusal the library's way (unknown scheme, bad key, no plugin).
   const std::unique_ptr<device::Device> probe = device::openDevice(uri, nullptr);
-  return device::simulatedPenParams(device::parseDeviceUri(uri));
+  return probe->limits();
 }
 
 }  // namespace hattr::studio

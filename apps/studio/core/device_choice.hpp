@@ -1,7 +1,8 @@
 #pragma once
-/// Choosing the studio's device by URI (hattr::device::parseDeviceUri). The mouse or tablet
-/// hand can only hold a simulated pen, so only sim:// URIs are accepted; udp:// and plugin:
-/// are refused with the library's "reserved" message. GUI thread; throws InputError.
+/// Choosing the studio's device by URI: every kind the library opens (sim://pen, plugin:,
+/// udp://). The mouse or tablet hand holds a simulated pen (sim://pen, the sim plugin, a
+/// simulated pen served over udp://); a hardware pen is held by the person, and the mouse then
+/// only moves the view. GUI thread; throws InputError with the library's messages.
 
 #include <string_view>
 
@@ -12,9 +13,9 @@ namespace hattr::studio {
 /// The device the studio starts with.
 inline constexpr const char* kDefaultDeviceUri = "sim://pen";
 
-/// Checks `uri` as openDevice would (the library's messages, e.g. `device URI "usb://x":
-/// unknown scheme ...`) and returns the simulated pen's parameters (its limits). Throws
-/// InputError for anything the studio's hand cannot drive.
-device::SimulatedPenParams validateStudioDevice(std::string_view uri);
+/// Opens `uri` once as openDevice does (the library's messages, e.g. `device URI "usb://x":
+/// unknown scheme ...`; a plugin that does not load; a device server that does not answer)
+/// and returns the device's limits. Throws InputError.
+DeviceLimits validateStudioDevice(std::string_view uri);
 
 }  // namespace hattr::studio

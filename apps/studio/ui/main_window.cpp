@@ -184,7 +184,7 @@ void MainWindow::buildWriteTab() {
   auto* clear = new QPushButton(tr("Clear trail (C)"));
   connect(clear, &QPushButton::clicked, this, &MainWindow::clearTrail);
   auto* device = new QPushButton(tr("Device…"));
-  device->setToolTip(tr("The device the hand holds, by URI (sim://pen?continuous_force_N=1.2, ...)"));
+  device->setToolTip(tr("The device by URI: sim://pen?continuous_force_N=1.2, plugin:NAME, udp://HOST:PORT?key=FILE, ..."));
   connect(device, &QPushButton::clicked, this, &MainWindow::askDevice);
   auto* calibration = new QPushButton(tr("Tablet calibration…"));
   calibration->setToolTip(tr("A pen tablet's pressure → force calibration (JSON, as `hattr import --calibration`)"));
@@ -627,7 +627,8 @@ void MainWindow::askDevice() {
   bool ok = false;
   const QString uri = QInputDialog::getText(
       this, tr("Device"),
-      tr("The device the hand holds, by URI. The mouse or tablet can only hold a simulated pen (sim://).\n\n%1")
+      tr("The device, by URI. The mouse or tablet holds a simulated pen (sim://pen, plugin:sim, or one served "
+         "over udp://); a hardware pen (plugin:, udp://) is held by the person.\n\n%1")
           .arg(qs(device::deviceUriHelp())),
       QLineEdit::Normal, deviceUri(), &ok);
   if (ok && !uri.trimmed().isEmpty()) (void)setDevice(uri.trimmed());

@@ -85,7 +85,7 @@ class MainWindow final : public QMainWindow {
   /// Plays back (or pauses) the profile on show: a take, the last trial or a reviewed trial.
   void togglePlayback();
   void clearTrail();
-  /// The device for the live rig, by URI (validateStudioDevice: sim:// only); applied to the
+  /// The device for the live rig, by URI (validateStudioDevice: sim://, plugin:, udp://); applied to the
   /// rig at once when nothing runs (a study keeps its own device). Remembered in settings.
   bool setDevice(const QString& uri);
   [[nodiscard]] QString deviceUri() const;

@@ -23,6 +23,17 @@ struct DeviceCapabilities {
 
 enum class DeviceStatus { kOk, kFault, kDisconnected };
 
+/// Who runs the servo loop's clock for a device (ServoLoop::start picks from this).
+enum class DeviceClocking {
+  kSimulatable,   ///< the loop's own clock: simulated time or a real-time thread (sim://pen)
+  kHostRealTime,  ///< the loop's real-time thread only (hardware polled by the host, udp://)
+  kDeviceClock,   ///< the device calls the tick from its own thread at its rate (HD scheduler)
+};
+
+/// The tick a device-clocked device calls, once per servo period, from its own thread.
+/// `now` is the device's time since startClock(). Must not be called after stopClock().
+using DeviceTickFn = void (*)(void* context, std::chrono::nanoseconds now) noexcept;
+
 class Device {
  public:
   virtual ~Device() = default;
@@ -34,6 +45,17 @@ class Device {
   [[nodiscard]] virtual DeviceCapabilities capabilities() const noexcept = 0;
   /// The URI the device was opened with (for metadata).
   [[nodiscard]] virtual const std::string& uri() const noexcept = 0;
+
+  /// Which clock must run the loop. Default: the loop's real-time thread.
+  [[nodiscard]] virtual DeviceClocking clocking() const noexcept { return DeviceClocking::kHostRealTime; }
+  /// Device clock only: start calling `tick(context, now)` once per period from the device's
+  /// own thread; stopClock() returns once no call is running and none will follow. Throws
+  /// hattr::Error if the clock cannot start. Not on the servo thread.
+  virtual void startClock(DeviceTickFn tick, void* context);
+  virtual void stopClock() noexcept {}
+  /// Why the device last reported kFault or kDisconnected, for messages ("" if it has not).
+  /// Not on the servo thread; safe to call while the loop runs.
+  [[nodiscard]] virtual std::string faultReason() const { return {}; }
 };
 
 }  // namespace hattr::device

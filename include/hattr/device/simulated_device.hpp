@@ -33,6 +33,7 @@ class SimulatedDevice final : public Device {
   const DeviceLimits& limits() const noexcept override { return params_.limits; }
   DeviceCapabilities capabilities() const noexcept override { return {.tilt = true}; }
   const std::string& uri() const noexcept override { return uri_; }
+  DeviceClocking clocking() const noexcept override { return DeviceClocking::kSimulatable; }
 
   /// Replaces the hand (null: none). Not while the loop runs.
   void setHand(HandScript* hand) noexcept { hand_ = hand; }

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <string_view>
 #include <thread>
 
 #include "hattr/core/histogram.hpp"
@@ -43,6 +44,15 @@ struct ServoCommand {
 
 enum class TickStatus : std::uint8_t { kRunning, kFaulted, kStalled, kDeviceError };
 
+/// Which clock ran the loop (the statistics say so).
+enum class LoopClock : std::uint8_t {
+  kNone,       ///< not run yet
+  kSimulated,  ///< runSimulated(): simulated time, as fast as possible
+  kRealTime,   ///< start() on the loop's own real-time thread
+  kDevice,     ///< start() on a device-clocked device: the device calls the tick
+};
+std::string_view loopClockName(LoopClock clock) noexcept;
+
 /// Counters readable from any thread while the loop runs.
 struct LiveCounters {
   std::atomic<std::uint64_t> ticks{0};
@@ -51,6 +61,9 @@ struct LiveCounters {
   std::atomic<std::uint64_t> faults{0};
   std::atomic<std::uint64_t> stalls{0};
   std::atomic<std::uint64_t> consumer_stalls{0};
+  std::atomic<std::uint64_t> link_faults{0};  ///< times the device went from connected to disconnected
+  std::atomic<std::uint64_t> disconnected_ticks{0};  ///< ticks with the device disconnected (zero force)
+  std::atomic<bool> disconnected{false};             ///< the device is disconnected now
 };
 
 class ServoLoop {
@@ -79,10 +92,16 @@ class ServoLoop {
   /// Simulated time so far.
   [[nodiscard]] std::chrono::nanoseconds simulatedNow() const noexcept { return sim_now_; }
 
-  /// Real time: starts the servo thread (applies the real-time settings there; throws
-  /// hattr::Error if they are required and refused). stop() joins it.
+  /// Real time, on the clock the device declares (Device::clocking()): the loop's own
+  /// real-time thread (applies the real-time settings there; throws hattr::Error if they are
+  /// required and refused), or, for a device-clocked device, the device's thread calling the
+  /// tick at its rate (the loop then measures the period between calls and watches for a
+  /// device clock that stops: a gap beyond the stall threshold is counted as a stall).
+  /// stop() ends either.
   void start();
   void stop();
+  /// The clock of the current or last run.
+  [[nodiscard]] LoopClock clock() const noexcept { return clock_.load(std::memory_order_acquire); }
   [[nodiscard]] bool running() const noexcept { return running_.load(std::memory_order_acquire); }
   [[nodiscard]] const RealtimeReport& realtimeReport() const noexcept { return realtime_report_; }
 
@@ -107,6 +126,9 @@ class ServoLoop {
  private:
   void drainCommands() noexcept;
   void runRealtime();
+  void startDeviceClock();
+  static void deviceTick(void* context, std::chrono::nanoseconds now) noexcept;
+  void watchDeviceClock();
 
   device::Device& device_;
   ServoConfig config_;
@@ -129,6 +151,11 @@ class ServoLoop {
   std::atomic<bool> running_{false};
   std::atomic<bool> stop_requested_{false};
   std::thread thread_;
+  std::atomic<LoopClock> clock_{LoopClock::kNone};
+  bool link_down_ = false;
+  // Device clock: the wall time of the last device tick [ns of monotonicNow], for the watchdog.
+  std::atomic<std::int64_t> last_device_tick_ns_{0};
+  std::chrono::nanoseconds last_device_wall_{-1};
   RealtimeReport realtime_report_;
   std::exception_ptr start_error_;
 };

@@ -90,6 +90,9 @@ class StudyDatabase {
   void markRunning(std::int64_t trial_id, std::int64_t session_id);
   /// Stores a finished trial's profile and marks it completed, in one transaction.
   void completeTrial(std::int64_t trial_id, const HapticProfile& profile, const std::string& outcome);
+  /// A running trial that failed (device fault, lost link): interrupted, outcome "failed:
+  /// <reason>"; nothing of it is kept, and the next run repeats it. Completed trials are untouched.
+  void failTrial(std::int64_t trial_id, const std::string& reason);
 
   /// Key/value results of analyses (the analysis issue stores its tables here).
   void putResult(const std::string& key, const std::string& value);

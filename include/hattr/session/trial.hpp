@@ -17,6 +17,9 @@
 
 namespace hattr::session {
 
+/// The clock a trial asks for. kSimulated is honoured only by devices that can be simulated
+/// (sim://pen, the sim and replay plugins); any other device runs the trial in real time, on
+/// the loop's thread or the device's own clock (TrialResult::clock says which ran).
 enum class Clock { kSimulated, kRealTime };
 
 /// What stays the same from trial to trial: the device model, the paper (built once: the
@@ -65,6 +68,15 @@ struct TrialResult {
   std::uint64_t missed_samples = 0;
   std::uint64_t overruns = 0;
   std::uint64_t faults = 0;
+  std::uint64_t link_faults = 0;       ///< times the device (a network link) was lost
+  std::uint64_t stalls = 0;            ///< loop or device-clock stalls (force zeroed)
+  double max_period_error_s = 0.0;     ///< the largest |period − nominal| of a real-time run [s]
+  std::string clock;                   ///< the clock that ran it: simulated, real-time, device
+  /// Empty when the trial ran to its end; otherwise why it was stopped early (a device fault,
+  /// a lost link, a stalled device clock), with the device's own reason. The profile then
+  /// holds what was recorded up to the failure (empty if it failed while settling) and its
+  /// metadata says "failed".
+  std::string failure;
 };
 
 /// The hand during a trial's settle phase: the pen held lifted (at least 3 mm) above the
@@ -98,8 +110,10 @@ ProfileMetadata trialMetadata(ProfileMetadata base, const TrialEnvironment& envi
                               Clock clock);
 
 /// Runs one trial: the settle phase, then `duration_s` recorded. A simulated pen starts 3 mm
-/// above the hand's first target. Throws InputError for bad settings; hattr::Error if the
-/// recording is empty.
+/// above the hand's first target. On a real-time clock the trial ends early, with
+/// TrialResult::failure set, within a few ms of a device fault, a lost link or a stalled device
+/// clock (the loop has already commanded zero force). Throws InputError for bad settings;
+/// hattr::Error if the recording is empty.
 TrialResult runTrial(TrialEnvironment& environment, const TrialSetup& setup, device::HandScript& hand);
 
 /// The samples of `reference` resampled at the trial's rate, as the trainee's trial shows

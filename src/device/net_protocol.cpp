@@ -1,0 +1,456 @@
+#include "hattr/device/net_protocol.hpp"
+
+#include <fcntl.h>
+#include <sodium.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <bit>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <ctime>
+#include <fstream>
+#include <iterator>
+
+#include <fmt/format.h>
+
+#include "hattr/core/error.hpp"
+
+namespace hattr::device::net {
+namespace {
+
+// Sizes of each packet type: header + payload + MAC (docs/protocol.md has the layouts).
+constexpr std::size_t kHelloSize = kHeaderSize + kNonceSize + kMacSize;      // 80
+constexpr std::size_t kWelcomeSize = kHeaderSize + 152 + kMacSize;           // 216
+constexpr std::size_t kBusySize = kHeaderSize + kNonceSize + kMacSize;       // 80
+constexpr std::size_t kStateSize = kHeaderSize + 168 + kMacSize;             // 232
+constexpr std::size_t kCommandSize = kHeaderSize + 104 + kMacSize;           // 168
+constexpr std::size_t kByeSize = kHeaderSize + 8 + kMacSize;                 // 72
+static_assert(kStateSize == kMaxPacketSize);
+static_assert(crypto_auth_BYTES == kMacSize && crypto_auth_KEYBYTES == kKeySize);
+
+// Pen-state flags (STATE) and command flags (COMMAND).
+constexpr std::uint32_t kPenHasForce = 1u << 0;
+constexpr std::uint32_t kPenHasPressure = 1u << 1;
+constexpr std::uint32_t kPenHasTilt = 1u << 2;
+constexpr std::uint32_t kCommandHasHand = 1u << 0;
+constexpr std::uint32_t kCommandPenDown = 1u << 1;
+// Capability flags (WELCOME).
+constexpr std::uint32_t kCapForceSensor = 1u << 0;
+constexpr std::uint32_t kCapPressure = 1u << 1;
+constexpr std::uint32_t kCapTilt = 1u << 2;
+
+/// Little-endian writer over a packet buffer; the layout is explicit, never a struct's.
+class Writer {
+ public:
+  explicit Writer(std::uint8_t* data) noexcept : data_(data) {}
+  void u16(std::uint16_t v) noexcept { raw(v, 2); }
+  void u32(std::uint32_t v) noexcept { raw(v, 4); }
+  void u64(std::uint64_t v) noexcept { raw(v, 8); }
+  void i64(std::int64_t v) noexcept { raw(static_cast<std::uint64_t>(v), 8); }
+  void f64(double v) noexcept { raw(std::bit_cast<std::uint64_t>(v), 8); }
+  void vec3(const Vec3& v) noexcept { f64(v.x()); f64(v.y()); f64(v.z()); }
+  void bytes(const std::uint8_t* p, std::size_t n) noexcept { std::memcpy(data_ + at_, p, n); at_ += n; }
+  [[nodiscard]] std::size_t at() const noexcept { return at_; }
+
+ private:
+  void raw(std::uint64_t v, int n) noexcept {
+    for (int i = 0; i < n; ++i) data_[at_++] = static_cast<std::uint8_t>(v >> (8 * i));
+  }
+  std::uint8_t* data_;
+  std::size_t at_ = 0;
+};
+
+/// Little-endian reader; reports a non-finite double through `finite`.
+class Reader {
+ public:
+  explicit Reader(const std::uint8_t* data, std::size_t at = 0) noexcept : data_(data), at_(at) {}
+  std::uint16_t u16() noexcept { return static_cast<std::uint16_t>(raw(2)); }
+  std::uint32_t u32() noexcept { return static_cast<std::uint32_t>(raw(4)); }
+  std::uint64_t u64() noexcept { return raw(8); }
+  std::int64_t i64() noexcept { return static_cast<std::int64_t>(raw(8)); }
+  double f64() noexcept {
+    const double v = std::bit_cast<double>(raw(8));
+    finite_ = finite_ && std::isfinite(v);
+    return v;
+  }
+  Vec3 vec3() noexcept {
+    const double x = f64();
+    const double y = f64();
+    const double z = f64();
+    return {x, y, z};
+  }
+  void bytes(std::uint8_t* p, std::size_t n) noexcept { std::memcpy(p, data_ + at_, n); at_ += n; }
+  [[nodiscard]] bool finite() const noexcept { return finite_; }
+
+ private:
+  std::uint64_t raw(int n) noexcept {
+    std::uint64_t v = 0;
+    for (int i = 0; i < n; ++i) v |= static_cast<std::uint64_t>(data_[at_++]) << (8 * i);
+    return v;
+  }
+  const std::uint8_t* data_;
+  std::size_t at_;
+  bool finite_ = true;
+};
+
+PacketType typeOf(const Payload& payload) noexcept {
+  constexpr PacketType kTypes[] = {PacketType::kHello, PacketType::kWelcome, PacketType::kBusy,
+                                   PacketType::kState, PacketType::kCommand, PacketType::kBye};
+  return kTypes[payload.index()];
+}
+
+std::uint32_t statusCode(DeviceStatus s) noexcept {
+  return s == DeviceStatus::kOk ? 0u : s == DeviceStatus::kFault ? 1u : 2u;
+}
+
+// Payload writers, one per type, in the order of docs/protocol.md.
+void writePayload(Writer& w, const HelloPayload& p) noexcept { w.bytes(p.client_nonce.data(), kNonceSize); }
+void writePayload(Writer& w, const BusyPayload& p) noexcept { w.bytes(p.client_nonce.data(), kNonceSize); }
+void writePayload(Writer& w, const ByePayload& p) noexcept {
+  w.u32(p.reason);
+  w.u32(0);
+}
+void writePayload(Writer& w, const WelcomePayload& p) noexcept {
+  w.bytes(p.client_nonce.data(), kNonceSize);
+  w.f64(p.rate_hz);
+  w.i64(p.session_timeout_ns);
+  w.i64(p.command_timeout_ns);
+  w.u32((p.capabilities.force_sensor ? kCapForceSensor : 0u) | (p.capabilities.pressure ? kCapPressure : 0u) |
+        (p.capabilities.tilt ? kCapTilt : 0u));
+  w.u32(static_cast<std::uint32_t>(p.limits.degrees_of_freedom));
+  w.vec3(p.limits.workspace_min_m);
+  w.vec3(p.limits.workspace_max_m);
+  w.f64(p.limits.peak_force_N);
+  w.f64(p.limits.continuous_force_N);
+  w.f64(p.limits.max_stiffness_N_per_m);
+  w.f64(p.limits.max_damping_N_s_per_m);
+  w.f64(p.limits.nominal_rate_hz);
+  w.f64(p.limits.mass_kg);
+  w.f64(p.limits.damping_N_s_per_m);
+}
+void writePayload(Writer& w, const StatePayload& p) noexcept {
+  w.f64(p.pen.t_s);
+  w.vec3(p.pen.p_WT);
+  w.vec3(p.pen.v_WT);
+  w.vec3(p.pen.f_measured_W);
+  w.f64(p.pen.pressure_raw);
+  w.f64(p.pen.azimuth_rad);
+  w.f64(p.pen.altitude_rad);
+  w.vec3(p.f_applied_W);
+  w.i64(p.echo_sender_time_ns);
+  w.i64(p.hold_ns);
+  w.u64(p.echo_sequence);
+  w.u32(p.pen.buttons);
+  w.u32((p.pen.has_force ? kPenHasForce : 0u) | (p.pen.has_pressure ? kPenHasPressure : 0u) |
+        (p.pen.has_tilt ? kPenHasTilt : 0u));
+  w.u32(statusCode(p.device_status));
+  w.u32(p.server_flags);
+}
+void writePayload(Writer& w, const CommandPayload& p) noexcept {
+  w.vec3(p.f_on_pen_W);
+  w.vec3(p.hand.p_target_W);
+  w.vec3(p.hand.v_target_W);
+  w.f64(p.hand.press_N);
+  w.f64(p.hand.azimuth_rad);
+  w.f64(p.hand.altitude_rad);
+  w.u32((p.has_hand ? kCommandHasHand : 0u) | (p.hand.pen_down ? kCommandPenDown : 0u));
+  w.u32(0);
+}
+
+// Payload readers; false for a value out of range (non-finite numbers are checked by the caller).
+bool readPayload(Reader& r, PacketType type, Payload& out) noexcept {
+  switch (type) {
+    case PacketType::kHello: {
+      HelloPayload p;
+      r.bytes(p.client_nonce.data(), kNonceSize);
+      out = p;
+      return true;
+    }
+    case PacketType::kBusy: {
+      BusyPayload p;
+      r.bytes(p.client_nonce.data(), kNonceSize);
+      out = p;
+      return true;
+    }
+    case PacketType::kBye: {
+      ByePayload p;
+      p.reason = r.u32();
+      out = p;
+      return true;
+    }
+    case PacketType::kWelcome: {
+      WelcomePayload p;
+      r.bytes(p.client_nonce.data(), kNonceSize);
+      p.rate_hz = r.f64();
+      p.session_timeout_ns = r.i64();
+      p.command_timeout_ns = r.i64();
+      const std::uint32_t caps = r.u32();
+      p.capabilities = {.force_sensor = (caps & kCapForceSensor) != 0, .pressure = (caps & kCapPressure) != 0,
+                        .tilt = (caps & kCapTilt) != 0};
+      const std::uint32_t dof = r.u32();
+      p.limits.degrees_of_freedom = static_cast<int>(dof);
+      p.limits.workspace_min_m = r.vec3();
+      p.limits.workspace_max_m = r.vec3();
+      p.limits.peak_force_N = r.f64();
+      p.limits.continuous_force_N = r.f64();
+      p.limits.max_stiffness_N_per_m = r.f64();
+      p.limits.max_damping_N_s_per_m = r.f64();
+      p.limits.nominal_rate_hz = r.f64();
+      p.limits.mass_kg = r.f64();
+      p.limits.damping_N_s_per_m = r.f64();
+      out = p;
+      return dof >= 1 && dof <= 6 && p.rate_hz > 0.0 && p.session_timeout_ns > 0 && p.command_timeout_ns > 0;
+    }
+    case PacketType::kState: {
+      StatePayload p;
+      p.pen.t_s = r.f64();
+      p.pen.p_WT = r.vec3();
+      p.pen.v_WT = r.vec3();
+      p.pen.f_measured_W = r.vec3();
+      p.pen.pressure_raw = r.f64();
+      p.pen.azimuth_rad = r.f64();
+      p.pen.altitude_rad = r.f64();
+      p.f_applied_W = r.vec3();
+      p.echo_sender_time_ns = r.i64();
+      p.hold_ns = r.i64();
+      p.echo_sequence = r.u64();
+      p.pen.buttons = r.u32();
+      const std::uint32_t flags = r.u32();
+      p.pen.has_force = (flags & kPenHasForce) != 0;
+      p.pen.has_pressure = (flags & kPenHasPressure) != 0;
+      p.pen.has_tilt = (flags & kPenHasTilt) != 0;
+      const std::uint32_t status = r.u32();
+      p.device_status = status == 0 ? DeviceStatus::kOk : status == 1 ? DeviceStatus::kFault : DeviceStatus::kDisconnected;
+      p.server_flags = r.u32();
+      out = p;
+      return status <= 2 && p.hold_ns >= 0;
+    }
+    case PacketType::kCommand: {
+      CommandPayload p;
+      p.f_on_pen_W = r.vec3();
+      p.hand.p_target_W = r.vec3();
+      p.hand.v_target_W = r.vec3();
+      p.hand.press_N = r.f64();
+      p.hand.azimuth_rad = r.f64();
+      p.hand.altitude_rad = r.f64();
+      const std::uint32_t flags = r.u32();
+      p.has_hand = (flags & kCommandHasHand) != 0;
+      p.hand.pen_down = (flags & kCommandPenDown) != 0;
+      out = p;
+      return true;
+    }
+  }
+  return false;
+}
+
+bool isHex(char c) noexcept { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f') || (c >= 'A' && c <= 'F'); }
+std::uint8_t hexValue(char c) noexcept {
+  return static_cast<std::uint8_t>(c <= '9' ? c - '0' : (c | 0x20) - 'a' + 10);
+}
+
+}  // namespace
+
+void initCrypto() {
+  if (sodium_init() < 0) throw Error("libsodium could not be initialised (sodium_init failed)");
+}
+
+std::size_t packetSize(PacketType type) noexcept {
+  switch (type) {
+    case PacketType::kHello: return kHelloSize;
+    case PacketType::kWelcome: return kWelcomeSize;
+    case PacketType::kBusy: return kBusySize;
+    case PacketType::kState: return kStateSize;
+    case PacketType::kCommand: return kCommandSize;
+    case PacketType::kBye: return kByeSize;
+  }
+  return 0;
+}
+
+std::string_view dropReasonName(DropReason reason) noexcept {
+  switch (reason) {
+    case DropReason::kBadSize: return "bad_size";
+    case DropReason::kBadHeader: return "bad_header";
+    case DropReason::kUnknownType: return "unknown_type";
+    case DropReason::kBadMac: return "bad_mac";
+    case DropReason::kBadValue: return "bad_value";
+    case DropReason::kWrongSession: return "wrong_session";
+    case DropReason::kReplayed: return "replayed";
+    case DropReason::kOutOfOrder: return "out_of_order";
+    case DropReason::kUnexpected: return "unexpected";
+    case DropReason::kBusy: return "busy";
+    case DropReason::kCount: break;
+  }
+  return "unknown";
+}
+
+AuthKey::~AuthKey() { sodium_memzero(bytes_.data(), bytes_.size()); }
+
+// Exactly 64 hex characters and an optional newline; the message never shows key material.
+AuthKey readKeyFile(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  HATTR_THROW_UNLESS(in.good(), "key file {}: cannot open it for reading: {}", file.string(), std::strerror(errno));
+  std::string text;
+  char buffer[130];
+  in.read(buffer, sizeof buffer);
+  text.assign(buffer, static_cast<std::size_t>(in.gcount()));
+  const std::string_view expected = "expected 64 hexadecimal characters (a 32-byte key) and at most a newline";
+  std::string_view body(text);
+  if (body.ends_with('\n')) body.remove_suffix(1);
+  HATTR_THROW_UNLESS(text.size() < sizeof buffer, "key file {}: {}, got a longer file", file.string(), expected);
+  HATTR_THROW_UNLESS(body.size() == 2 * kKeySize, "key file {}: {}, got {} characters before the end or newline", file.string(),
+                     expected, body.size());
+  std::array<std::uint8_t, kKeySize> bytes{};
+  for (std::size_t i = 0; i < body.size(); ++i) {
+    HATTR_THROW_UNLESS(isHex(body[i]), "key file {}: {}, got a character that is not hexadecimal at position {}",
+                       file.string(), expected, i + 1);
+    bytes[i / 2] = static_cast<std::uint8_t>(bytes[i / 2] << 4 | hexValue(body[i]));
+  }
+  AuthKey key(bytes);
+  sodium_memzero(bytes.data(), bytes.size());
+  sodium_memzero(text.data(), text.size());
+  sodium_memzero(buffer, sizeof buffer);
+  return key;
+}
+
+AuthKey randomKey() {
+  initCrypto();
+  std::array<std::uint8_t, kKeySize> bytes{};
+  crypto_auth_keygen(bytes.data());
+  AuthKey key(bytes);
+  sodium_memzero(bytes.data(), bytes.size());
+  return key;
+}
+
+// O_EXCL unless overwriting; mode 0600 from creation on, and forced on a replaced file.
+void writeKeyFile(const std::filesystem::path& file, const AuthKey& key, bool overwrite) {
+  const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (overwrite ? O_TRUNC : O_EXCL);
+  const int fd = ::open(file.c_str(), flags, 0600);
+  if (fd < 0 && errno == EEXIST) {
+    throw InputError(fmt::format("key file {}: exists already; expected a new file name, or --force to replace it",
+                                 file.string()));
+  }
+  if (fd < 0) throw InputError(fmt::format("key file {}: cannot create it: {}", file.string(), std::strerror(errno)));
+  char hex[2 * kKeySize + 1];
+  sodium_bin2hex(hex, sizeof hex, key.bytes().data(), kKeySize);
+  hex[2 * kKeySize] = '\n';
+  const bool ok = ::fchmod(fd, 0600) == 0 && ::write(fd, hex, sizeof hex) == static_cast<ssize_t>(sizeof hex) &&
+                  ::fsync(fd) == 0;
+  const int error = errno;
+  sodium_memzero(hex, sizeof hex);
+  ::close(fd);
+  if (!ok) throw Error(fmt::format("key file {}: cannot write it: {}", file.string(), std::strerror(error)));
+}
+
+std::size_t encodePacket(const Packet& packet, const AuthKey& key, PacketBuffer& out) noexcept {
+  const PacketType type = typeOf(packet.payload);
+  Writer w(out.data());
+  w.bytes(kMagic.data(), kMagic.size());
+  w.u16(kProtocolVersion);
+  w.u16(static_cast<std::uint16_t>(type));
+  w.u64(packet.header.session_id);
+  w.u64(packet.header.sequence);
+  w.i64(packet.header.sender_time_ns);
+  std::visit([&w](const auto& p) { writePayload(w, p); }, packet.payload);
+  const std::size_t size = packetSize(type);
+  // Zero the reserved bytes (if any) up to the tag, then authenticate everything before it.
+  std::memset(out.data() + w.at(), 0, size - kMacSize - w.at());
+  crypto_auth(out.data() + size - kMacSize, out.data(), size - kMacSize, key.bytes().data());
+  return size;
+}
+
+bool verifyMac(std::span<const std::uint8_t> datagram, const AuthKey& key) noexcept {
+  if (datagram.size() < kHeaderSize + kMacSize) return false;
+  const std::size_t body = datagram.size() - kMacSize;
+  return crypto_auth_verify(datagram.data() + body, datagram.data(), body, key.bytes().data()) == 0;
+}
+
+bool decodePacket(std::span<const std::uint8_t> datagram, const AuthKey& key, Packet& out, DropReason& why) noexcept {
+  // The fixed header only: size, magic, version, type.
+  if (datagram.size() < kHeaderSize + kMacSize || datagram.size() > kMaxPacketSize) {
+    why = DropReason::kBadSize;
+    return false;
+  }
+  if (std::memcmp(datagram.data(), kMagic.data(), kMagic.size()) != 0) {
+    why = DropReason::kBadHeader;
+    return false;
+  }
+  Reader header(datagram.data(), kMagic.size());
+  if (header.u16() != kProtocolVersion) {
+    why = DropReason::kBadHeader;
+    return false;
+  }
+  const auto type = static_cast<PacketType>(header.u16());
+  const std::size_t size = packetSize(type);
+  if (size == 0) {
+    why = DropReason::kUnknownType;
+    return false;
+  }
+  if (datagram.size() != size) {
+    why = DropReason::kBadSize;
+    return false;
+  }
+  // Authentication before any further field is used.
+  if (!verifyMac(datagram, key)) {
+    why = DropReason::kBadMac;
+    return false;
+  }
+  out.header.type = type;
+  out.header.session_id = header.u64();
+  out.header.sequence = header.u64();
+  out.header.sender_time_ns = header.i64();
+  Reader payload(datagram.data(), kHeaderSize);
+  if (!readPayload(payload, type, out.payload) || !payload.finite()) {
+    why = DropReason::kBadValue;
+    return false;
+  }
+  return true;
+}
+
+bool SequenceCheck::accept(std::uint64_t sequence, DropReason& why) noexcept {
+  if (sequence > newest_) {
+    if (newest_ != 0) lost_ += sequence - newest_ - 1;
+    newest_ = sequence;
+    return true;
+  }
+  why = sequence == newest_ ? DropReason::kReplayed : DropReason::kOutOfOrder;
+  return false;
+}
+
+std::uint64_t DropCounters::total() const noexcept {
+  std::uint64_t sum = 0;
+  for (const auto& c : counts_) sum += c.load(std::memory_order_relaxed);
+  return sum;
+}
+
+RandomStream::RandomStream() {
+  initCrypto();
+  randombytes_buf(seed_.data(), seed_.size());
+}
+
+void RandomStream::fill(std::span<std::uint8_t> out) noexcept {
+  // A fresh 12-byte nonce per call keeps every output independent.
+  std::array<std::uint8_t, crypto_stream_chacha20_ietf_NONCEBYTES> nonce{};
+  ++counter_;
+  for (int i = 0; i < 8; ++i) nonce[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(counter_ >> (8 * i));
+  crypto_stream_chacha20_ietf(out.data(), out.size(), nonce.data(), seed_.data());
+}
+
+std::uint64_t RandomStream::nextNonZero() noexcept {
+  std::array<std::uint8_t, 8> bytes{};
+  std::uint64_t value = 0;
+  while (value == 0) {
+    fill(bytes);
+    std::memcpy(&value, bytes.data(), sizeof value);
+  }
+  return value;
+}
+
+std::int64_t monotonicNs() noexcept {
+  timespec ts{};
+  ::clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+}  // namespace hattr::device::net

@@ -1,0 +1,356 @@
+// Driver plugins through the real loader (dlopen): loading failures, the sim plugin against
+// sim://pen, device-clocked loops, the replay plugin, and the vendor adapter with a fake vendor.
+
+#include <dlfcn.h>
+
+#include <cmath>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "hattr/core/error.hpp"
+#include "hattr/device/device_uri.hpp"
+#include "hattr/device/plugin_device.hpp"
+#include "hattr/io/profile_csv.hpp"
+#include "hattr/servo/servo_loop.hpp"
+#include "hattr/session/study_runner.hpp"
+#include "hattr/session/trial.hpp"
+#include "support/no_allocation.hpp"
+#include "support/test_support.hpp"
+
+namespace hattr::device {
+namespace {
+
+using namespace std::chrono_literals;
+
+std::string uriOf(const char* path, const std::string& query = "") {
+  return "plugin:" + std::string(path) + (query.empty() ? "" : "?" + query);
+}
+
+/// The message of the InputError that opening `uri` throws ("" if none).
+std::string openError(const std::string& uri) {
+  try {
+    (void)openDevice(uri, nullptr);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(PluginLoading, MissingFileIsRefusedNamingThePath) {
+  const std::string message = openError("plugin:/nonexistent/libnothing.so");
+  EXPECT_NE(message.find("/nonexistent/libnothing.so: file not found"), std::string::npos) << message;
+}
+
+TEST(PluginLoading, FileThatIsNotASharedObjectIsRefused) {
+  const test::TempDir dir;
+  test::writeText(dir / "libfake.so", "this is text, not ELF\n");
+  const std::string message = openError(uriOf((dir / "libfake.so").c_str()));
+  EXPECT_NE(message.find("not a loadable shared object"), std::string::npos) << message;
+}
+
+TEST(PluginLoading, SharedObjectWithoutTheEntrySymbolIsRefused) {
+  const std::string message = openError(uriOf(HATTR_NO_ENTRY_PLUGIN));
+  EXPECT_NE(message.find("no entry symbol \"hattr_plugin_entry\": not a hattr driver plugin"), std::string::npos)
+      << message;
+}
+
+TEST(PluginLoading, AbiVersionMismatchNamesBothVersions) {
+  const std::string message = openError(uriOf(HATTR_ABI_MISMATCH_PLUGIN));
+  EXPECT_NE(message.find("plugin ABI mismatch: the plugin speaks version 99, this hattr speaks version 1"),
+            std::string::npos)
+      << message;
+}
+
+TEST(PluginLoading, FailedOpenCarriesThePluginsOwnMessage) {
+  const std::string message = openError(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "fail_open=no%20device%20on%20USB"));
+  EXPECT_NE(message.find("the plugin could not open the device: fake SDK: no device on USB"), std::string::npos)
+      << message;
+}
+
+TEST(PluginLoading, UnknownKeyIsRefusedListingTheAcceptedOnes) {
+  const std::string message = openError(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "colour=red"));
+  EXPECT_NE(message.find("unknown key \"colour\": expected one of max_force_N, paper_origin, clock"), std::string::npos)
+      << message;
+}
+
+TEST(PluginLoading, InspectReadsNameAndDescriptionWithoutOpening) {
+  const PluginInfo info = inspectPlugin(HATTR_SIM_PLUGIN);
+  EXPECT_EQ(info.name, "sim");
+  EXPECT_EQ(info.abi_version, 1u);
+  EXPECT_NE(info.description.find("simulated pen"), std::string::npos);
+}
+
+// ---- The sim plugin ---------------------------------------------------------------------
+
+session::TrialResult runCircleTrial(const std::string& device_uri, guidance::TrainingMode mode,
+                                    std::shared_ptr<const guidance::ReferenceTrajectory> reference) {
+  session::TrialEnvironment env(device_uri, render::WorldConfig{}, 1000.0);
+  CircleHand hand(Vec3(0.0, 0.0, 0.0), 0.012, 0.8, 1.0);
+  session::TrialSetup setup{.duration_s = 1.0};
+  setup.guidance.mode = mode;
+  setup.reference = std::move(reference);
+  return session::runTrial(env, setup, hand);
+}
+
+TEST(SimPlugin, TrialThroughThePluginIsBitIdenticalToSimPen) {
+  const auto direct = runCircleTrial("sim://pen?mass_kg=0.05", guidance::TrainingMode::kBasic, nullptr);
+  const auto plugged = runCircleTrial(uriOf(HATTR_SIM_PLUGIN, "mass_kg=0.05"), guidance::TrainingMode::kBasic, nullptr);
+  ASSERT_EQ(direct.profile.size(), plugged.profile.size());
+  EXPECT_TRUE(direct.profile.samples() == plugged.profile.samples());
+  EXPECT_GT(direct.profile.penDownCount(), 100u);  // the hand really wrote on the paper
+
+  // With guidance toward a reference, too.
+  const auto reference = std::make_shared<guidance::ReferenceTrajectory>(direct.profile, 1000.0);
+  const auto guided = runCircleTrial("sim://pen", guidance::TrainingMode::kPositionControl, reference);
+  const auto guided_plugged = runCircleTrial(uriOf(HATTR_SIM_PLUGIN), guidance::TrainingMode::kPositionControl, reference);
+  EXPECT_TRUE(guided.profile.samples() == guided_plugged.profile.samples());
+}
+
+TEST(SimPlugin, TickThroughThePluginNeverAllocates) {
+  CircleHand hand(Vec3::Zero(), 0.01, 1.0, 1.0);
+  const auto device = openDevice(uriOf(HATTR_SIM_PLUGIN), &hand);
+  servo::ServoLoop loop(*device, servo::ServoConfig{});
+  loop.runSimulated(10);
+  const test::NoAllocationScope scope;
+  loop.runSimulated(5000);
+  EXPECT_EQ(scope.allocations(), 0u);
+}
+
+TEST(SimPlugin, DeviceClockRunsTheLoopAtTheDevicesRate) {
+  CircleHand hand(Vec3::Zero(), 0.01, 1.0, 1.0);
+  const auto device = openDevice(uriOf(HATTR_SIM_PLUGIN, "clock=device&rate_hz=1000"), &hand);
+  ASSERT_EQ(device->clocking(), DeviceClocking::kDeviceClock);
+  servo::ServoLoop loop(*device, servo::ServoConfig{});
+  loop.start();
+  std::this_thread::sleep_for(300ms);
+  loop.stop();
+  EXPECT_EQ(loop.clock(), servo::LoopClock::kDevice);
+  EXPECT_EQ(servo::loopClockName(loop.clock()), "device");
+  const auto ticks = loop.counters().ticks.load();
+  EXPECT_GT(ticks, 200u);
+  EXPECT_LT(ticks, 400u);
+  EXPECT_EQ(loop.periodError().count(), ticks - 1);
+  // The pen followed the hand: the loop really read the device.
+  PenState pen;
+  (void)device->read(std::chrono::nanoseconds(0), pen);
+  EXPECT_EQ(loop.counters().faults.load(), 0u);
+}
+
+// ---- The replay plugin ------------------------------------------------------------------
+
+HapticProfile straightStroke() {
+  HapticProfile p;
+  for (int i = 0; i <= 100; ++i) {
+    Sample s;
+    s.t_s = 0.01 * i;
+    s.p_WT = Vec3(0.001 * i, 0.0, 0.0);
+    s.v_WT = Vec3(0.1, 0.0, 0.0);
+    s.f_user_W = Vec3(0.0, 0.0, -1.0);
+    s.pen_down = i >= 10;
+    p.append(s);
+  }
+  return p;
+}
+
+TEST(ReplayPlugin, MovesThePenAlongTheProfileAndKeepsTheForcesItWasSent) {
+  const test::TempDir dir;
+  io::writeProfileCsv(straightStroke(), dir / "stroke.csv");
+  const std::string uri = uriOf(HATTR_REPLAY_PLUGIN, "profile=" + (dir / "stroke.csv").string() + "&forces=" +
+                                                         (dir / "forces.csv").string());
+  {
+    const auto device = openDevice(uri, nullptr);
+    PenState pen;
+    for (int ms = 0; ms <= 500; ++ms) {
+      ASSERT_EQ(device->read(std::chrono::milliseconds(ms), pen), DeviceStatus::kOk);
+      ASSERT_EQ(device->write(Vec3(0.001 * ms, 0.0, 0.0)), DeviceStatus::kOk);
+    }
+    EXPECT_NEAR(pen.p_WT.x(), 0.05, 1e-12);
+    EXPECT_EQ(pen.buttons, 1u);
+    EXPECT_NEAR(pen.f_measured_W.z(), -1.0, 1e-12);
+  }
+  const HapticProfile kept = io::readProfileCsv(dir / "forces.csv");
+  ASSERT_EQ(kept.size(), 501u);
+  EXPECT_NEAR(kept[250].f_cmd_W.x(), 0.25, 1e-12);
+  EXPECT_NEAR(kept[250].p_WT.x(), 0.025, 1e-12);
+
+  // A second run may not replace the recording.
+  const std::string message = openError(uri);
+  EXPECT_NE(message.find("exists; choose another file"), std::string::npos) << message;
+}
+
+// ---- The vendor adapter, with the fake vendor --------------------------------------------
+
+/// The fake vendor's last force in its own frame, through its test hook.
+Vec3 fakeVendorForce() {
+  void* lib = dlopen(HATTR_FAKE_VENDOR_PLUGIN, RTLD_NOW | RTLD_NOLOAD);
+  EXPECT_NE(lib, nullptr);
+  void* symbol = dlsym(lib, "fake_vendor_last_force_D");
+  void (*hook)(double*) = nullptr;
+  std::memcpy(&hook, &symbol, sizeof(hook));
+  double f[3];
+  hook(f);
+  dlclose(lib);
+  return {f[0], f[1], f[2]};
+}
+
+TEST(VendorAdapter, ConvertsMillimetresAndTheSdkFrameBothWays) {
+  const auto device = openDevice(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=host&start_mm=10,-40,5"), nullptr);
+  PenState pen;
+  ASSERT_EQ(device->read(1ms, pen), DeviceStatus::kOk);
+  // D: x right, y up, z toward the user; the paper's origin at y_D = -60 mm.
+  EXPECT_NEAR(pen.p_WT.x(), 0.010, 1e-9);
+  EXPECT_NEAR(pen.p_WT.y(), -0.005, 1e-9);
+  EXPECT_NEAR(pen.p_WT.z(), 0.020, 1e-9);
+  ASSERT_EQ(device->write(Vec3(0.1, 0.2, 0.3)), DeviceStatus::kOk);
+  const Vec3 f_D = fakeVendorForce();
+  EXPECT_NEAR(f_D.x(), 0.1, 1e-12);
+  EXPECT_NEAR(f_D.y(), 0.3, 1e-12);   // up
+  EXPECT_NEAR(f_D.z(), -0.2, 1e-12);  // away from the user
+}
+
+TEST(VendorAdapter, ReportsTheSdksLimitsInSiAndLowersThemOnRequest) {
+  const auto device = openDevice(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=host"), nullptr);
+  const DeviceLimits& l = device->limits();
+  EXPECT_NEAR(l.max_stiffness_N_per_m, 1260.0, 1e-9);
+  EXPECT_NEAR(l.workspace_min_m.x(), -0.08, 1e-12);
+  EXPECT_NEAR(l.workspace_min_m.y(), -0.05, 1e-12);
+  EXPECT_NEAR(l.workspace_min_m.z(), 0.0, 1e-12);
+  EXPECT_NEAR(l.workspace_max_m.z(), 0.12, 1e-12);
+  EXPECT_DOUBLE_EQ(l.peak_force_N, 3.3);
+  EXPECT_DOUBLE_EQ(l.continuous_force_N, 0.88);
+
+  const auto gentle = openDevice(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=host&max_force_N=0.5"), nullptr);
+  EXPECT_DOUBLE_EQ(gentle->limits().peak_force_N, 0.5);
+  EXPECT_DOUBLE_EQ(gentle->limits().continuous_force_N, 0.5);
+  const std::string message = openError(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=host&max_force_N=5"));
+  EXPECT_NE(message.find("max_force_N: expected (0, 3.3] N"), std::string::npos) << message;
+}
+
+TEST(VendorAdapter, ClampsTheForceToThePeakAsTheLastLineOfDefence) {
+  const auto device = openDevice(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=host"), nullptr);
+  ASSERT_EQ(device->write(Vec3(0.0, 0.0, 10.0)), DeviceStatus::kOk);
+  EXPECT_NEAR(fakeVendorForce().norm(), 3.3, 1e-12);
+  EXPECT_EQ(device->write(Vec3(std::nan(""), 0.0, 0.0)), DeviceStatus::kFault);
+  EXPECT_EQ(fakeVendorForce().norm(), 0.0);
+}
+
+TEST(VendorAdapter, SdkErrorBecomesAFaultWithTheSdksText) {
+  const auto device = openDevice(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=host&error_after=3"), nullptr);
+  PenState pen;
+  for (int i = 0; i < 3; ++i) ASSERT_EQ(device->read(std::chrono::milliseconds(i), pen), DeviceStatus::kOk);
+  EXPECT_EQ(device->read(3ms, pen), DeviceStatus::kFault);
+  const std::string reason = device->faultReason();
+  EXPECT_NE(reason.find("fake SDK: amplifier fault (SDK error 513)"), std::string::npos) << reason;
+}
+
+TEST(VendorAdapter, DeviceClockedLoopRunsInsideTheSdksFrames) {
+  const auto device = openDevice(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=device"), nullptr);
+  servo::ServoLoop loop(*device, servo::ServoConfig{});
+  loop.start();
+  std::this_thread::sleep_for(200ms);
+  loop.stop();
+  EXPECT_EQ(loop.clock(), servo::LoopClock::kDevice);
+  EXPECT_GT(loop.counters().ticks.load(), 120u);
+  EXPECT_EQ(loop.counters().faults.load(), 0u);
+  EXPECT_EQ(loop.counters().stalls.load(), 0u);
+}
+
+TEST(VendorAdapter, NonFiniteReadingLatchesAFaultAndZeroForce) {
+  const auto device = openDevice(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=device&nan_after=50"), nullptr);
+  servo::ServoLoop loop(*device, servo::ServoConfig{});
+  loop.start();
+  std::this_thread::sleep_for(150ms);
+  loop.stop();
+  EXPECT_EQ(loop.safety().fault(), servo::SafetyFault::kDeviceError);
+  EXPECT_EQ(fakeVendorForce().norm(), 0.0);
+  EXPECT_NE(device->faultReason().find("non-finite"), std::string::npos) << device->faultReason();
+}
+
+TEST(VendorAdapter, StalledSdkClockIsCountedAsAStall) {
+  const auto device = openDevice(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=device&stall_after=40"), nullptr);
+  servo::ServoLoop loop(*device, servo::ServoConfig{});
+  loop.start();
+  std::this_thread::sleep_for(150ms);
+  loop.stop();
+  EXPECT_GE(loop.counters().stalls.load(), 1u);
+  EXPECT_LE(loop.counters().ticks.load(), 40u);
+}
+
+// ---- A device fault during a trial and during a study --------------------------------
+
+TEST(DeviceFault, EndsTheTrialEarlyWithTheDevicesReasonAndKeepsWhatWasRecorded) {
+  session::TrialEnvironment env(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=device&error_after=500"), render::WorldConfig{},
+                                1000.0);
+  StillHand hand(HandCommand{.p_target_W = Vec3(0.0, 0.0, 0.005)});
+  session::TrialSetup setup{.duration_s = 2.0};
+  const auto started = std::chrono::steady_clock::now();
+  const session::TrialResult result = session::runTrial(env, setup, hand);
+  const double took_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  EXPECT_NE(result.failure.find("error_after=500: plugin:fake-vendor: reading the device: fake SDK: amplifier fault"),
+            std::string::npos)
+      << result.failure;
+  EXPECT_EQ(result.clock, "device");
+  EXPECT_LT(took_s, 1.0);  // stopped at the fault (0.5 s), not after the 2.3 s it was set for
+  EXPECT_GT(result.profile.size(), 100u);
+  EXPECT_EQ(result.profile.metadata().extra.at("failed"), result.failure);
+  EXPECT_EQ(fakeVendorForce().norm(), 0.0);
+}
+
+TEST(DeviceFault, ADeviceClockThatStopsEndsTheTrial) {
+  session::TrialEnvironment env(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=device&stall_after=500"), render::WorldConfig{},
+                                1000.0);
+  StillHand hand(HandCommand{.p_target_W = Vec3(0.0, 0.0, 0.005)});
+  const session::TrialResult result = session::runTrial(env, {.duration_s = 2.0}, hand);
+  EXPECT_EQ(result.failure, "the device's clock stopped calling the servo loop");
+  EXPECT_GE(result.stalls, 1u);
+  EXPECT_LT(result.profile.duration_s(), 0.3);
+}
+
+TEST(DeviceFault, InAStudyMarksTheTrialFailedAndKeepsEveryCompletedTrial) {
+  const test::TempDir dir;
+  HapticProfile expert({.subject = "expert", .skill = "dash", .nominal_rate_hz = 100.0});
+  for (int i = 0; i <= 20; ++i) {
+    Sample s;
+    s.t_s = i * 0.01;
+    s.p_WT = Vec3(0.001 * i, 0.0, 0.0);
+    s.f_user_W = Vec3(0.0, 0.0, -1.0);
+    s.pen_down = true;
+    expert.append(s);
+  }
+  io::writeProfileCsv(expert, dir / "expert.csv");
+  // Each trial: 0.3 s settling + 0.25 s; the device fails in the third trial. Each trial opens
+  // (and closes) the plugin: the test holds it loaded so the fake's read count spans them all.
+  void* held = dlopen(HATTR_FAKE_VENDOR_PLUGIN, RTLD_NOW | RTLD_LOCAL);
+  ASSERT_NE(held, nullptr);
+  test::writeText(dir / "study.json",
+                  fmt::format(R"({{"name": "faulty", "skill": "dash", "experts": {{"dash": "expert.csv"}},
+    "device": "{}", "modes": ["basic"],
+    "protocol": {{"training_trials": 2, "recall_trials": 2, "rest_s": 0, "tail_s": 0.05}},
+    "world": {{"relief": {{"kind": "flat"}}}}, "subjects": {{"count": 1, "participant": "script"}}}})",
+                              uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=device&error_after_total=1450")));
+  auto db = session::StudyDatabase::create(dir / "study.sqlite", session::loadStudy(dir / "study.json"));
+  db = session::StudyDatabase::open(dir / "study.sqlite", session::OpenMode::kRunner);
+  session::StudyRunner runner(db, &session::makeScriptParticipant);
+  std::string message;
+  try {
+    (void)runner.run(session::RunOptions{.clock = session::Clock::kRealTime});
+  } catch (const Error& e) {
+    message = e.what();
+  }
+  EXPECT_NE(message.find("subject S01: recall trial 1 with BASIC failed: device fault:"), std::string::npos)
+      << "message: " << message;
+  const auto trials = db.trials();
+  ASSERT_EQ(trials.size(), 4u);
+  EXPECT_EQ(trials[0].status, session::TrialStatus::kCompleted);
+  EXPECT_EQ(trials[1].status, session::TrialStatus::kCompleted);
+  EXPECT_EQ(trials[2].status, session::TrialStatus::kInterrupted);
+  EXPECT_NE(trials[2].outcome.find("failed: device fault:"), std::string::npos) << trials[2].outcome;
+  EXPECT_EQ(trials[3].status, session::TrialStatus::kPending);
+  EXPECT_GE(db.trialProfile(trials[0].id).size(), 200u);  // 0.25 s at 1 kHz, less skipped late ticks
+  EXPECT_GE(db.trialProfile(trials[1].id).size(), 200u);
+  dlclose(held);
+}
+
+}  // namespace
+}  // namespace hattr::device

@@ -1,0 +1,223 @@
+// Runs the real `hattr device serve` as a subprocess on loopback (127.0.0.1 only) and the real
+// `hattr` clients against it: keygen, servo-check over udp://, record over udp://, kill -9.
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <thread>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "support/test_support.hpp"
+
+extern char** environ;
+
+namespace hattr {
+namespace {
+
+using ::testing::HasSubstr;
+
+struct RunResult {
+  int exit_code;
+  std::string out;
+  std::string err;
+};
+
+RunResult runHattr(const test::TempDir& dir, const std::string& args, const std::string& tag = "run") {
+  const auto out = dir / (tag + ".out");
+  const auto err = dir / (tag + ".err");
+  const std::string command = std::string(HATTR_CLI_PATH) + " " + args + " >" + out.string() + " 2>" + err.string();
+  const int status = std::system(command.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, test::readText(out), test::readText(err)};
+}
+
+/// `hattr device serve` in the background, its stdout on a pipe.
+class ServeProcess {
+ public:
+  ServeProcess(const test::TempDir& dir, const std::string& key, const std::vector<std::string>& extra = {}) {
+    std::vector<std::string> args = {HATTR_CLI_PATH, "device", "serve", "--device", "sim://pen",
+                                     "--listen", "127.0.0.1:0", "--key", key, "--json", "--realtime", "skip"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    int fds[2];
+    if (::pipe(fds) != 0) throw std::runtime_error("pipe failed");
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
+    posix_spawn_file_actions_addclose(&actions, fds[0]);
+    const std::string err = (dir / "serve.err").string();
+    posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int rc = posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    ::close(fds[1]);
+    out_ = fds[0];
+    if (rc != 0) throw std::runtime_error("posix_spawn failed");
+    first_line_ = readLine(std::chrono::seconds(5));
+  }
+  ~ServeProcess() {
+    if (pid_ > 0) {
+      ::kill(pid_, SIGKILL);
+      (void)wait();
+    }
+    ::close(out_);
+  }
+  [[nodiscard]] const std::string& firstLine() const { return first_line_; }
+  /// "127.0.0.1:PORT" from "listening on 127.0.0.1:PORT".
+  [[nodiscard]] std::string address() const {
+    const std::string prefix = "listening on ";
+    return first_line_.starts_with(prefix) ? first_line_.substr(prefix.size()) : std::string{};
+  }
+  void signal(int number) const { ::kill(pid_, number); }
+  /// Waits for the exit; returns the exit code (or 128 + signal).
+  int wait() {
+    int status = 0;
+    ::waitpid(pid_, &status, 0);
+    pid_ = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+  std::string readRest() {
+    std::string text;
+    char buffer[4096];
+    for (ssize_t n; (n = ::read(out_, buffer, sizeof buffer)) > 0;) text.append(buffer, static_cast<std::size_t>(n));
+    return text;
+  }
+
+ private:
+  std::string readLine(std::chrono::milliseconds timeout) {
+    std::string line;
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < deadline) {
+      pollfd p{out_, POLLIN, 0};
+      if (::poll(&p, 1, 50) <= 0) continue;
+      char c = 0;
+      if (::read(out_, &c, 1) != 1) break;
+      if (c == '\n') break;
+      line += c;
+    }
+    return line;
+  }
+  pid_t pid_ = -1;
+  int out_ = -1;
+  std::string first_line_;
+};
+
+std::string makeKey(const test::TempDir& dir) {
+  const auto key = (dir / "shared.key").string();
+  const RunResult r = runHattr(dir, "device keygen --out " + key, "keygen");
+  if (r.exit_code != 0) throw std::runtime_error("keygen failed: " + r.err);
+  return key;
+}
+
+TEST(DeviceServeCli, KeygenWritesAnOwnerOnlyKeyAndRefusesToOverwriteWithoutForce) {
+  test::TempDir dir;
+  const auto key = dir / "k.key";
+  const RunResult first = runHattr(dir, "device keygen --out " + key.string());
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  struct stat info {};
+  ASSERT_EQ(::stat(key.c_str(), &info), 0);
+  EXPECT_EQ(info.st_mode & 0777, 0600u);
+  const std::string text = test::readText(key);
+  EXPECT_EQ(text.size(), 65u);
+  EXPECT_EQ(text.find_first_not_of("0123456789abcdef"), 64u);
+  const RunResult again = runHattr(dir, "device keygen --out " + key.string());
+  EXPECT_EQ(again.exit_code, 2);
+  EXPECT_THAT(again.err, HasSubstr("exists already"));
+  EXPECT_EQ(test::readText(key), text);
+  EXPECT_EQ(runHattr(dir, "devices keygen --force --out " + key.string()).exit_code, 0);
+  EXPECT_NE(test::readText(key), text);
+}
+
+TEST(DeviceServeCli, BadKeyFilesAndAddressesExitTwoWithTheReason) {
+  test::TempDir dir;
+  test::writeText(dir / "short.key", "abcd\n");
+  const RunResult bad_key = runHattr(dir, "device serve --listen 127.0.0.1:0 --key " + (dir / "short.key").string());
+  EXPECT_EQ(bad_key.exit_code, 2);
+  EXPECT_THAT(bad_key.err, HasSubstr("short.key: expected 64 hexadecimal characters"));
+  const std::string key = makeKey(dir);
+  const RunResult bad_host = runHattr(dir, "device serve --listen nowhere:0 --key " + key);
+  EXPECT_EQ(bad_host.exit_code, 2);
+  EXPECT_THAT(bad_host.err, HasSubstr("expected an IPv4 address"));
+}
+
+TEST(DeviceServeCli, ServoCheckOverUdpReportsTheLinkAndTheServerPrintsItsCountersOnSigterm) {
+  test::TempDir dir;
+  const std::string key = makeKey(dir);
+  ServeProcess server(dir, key);
+  ASSERT_THAT(server.firstLine(), HasSubstr("listening on 127.0.0.1:"));
+  const std::string uri = "udp://" + server.address() + "?key=" + key;
+
+  const RunResult check = runHattr(dir, "servo-check --realtime skip --seconds 0.3 --json --device '" + uri + "'");
+  ASSERT_EQ(check.exit_code, 0) << check.err;
+  const auto json = nlohmann::json::parse(check.out);
+  const auto& link = json["link"];
+  EXPECT_GT(link["rtt_us"]["count"].get<int>(), 100);
+  EXPECT_GT(link["rtt_us"]["p50"].get<double>(), 0.0);
+  EXPECT_GT(link["states_received"].get<int>(), 150);
+  EXPECT_EQ(link["drops"]["bad_mac"].get<int>(), 0);
+  EXPECT_EQ(link["reconnects"].get<int>(), 0);
+  EXPECT_EQ(json["loop"]["faults"].get<int>(), 0) << link["fault"];
+
+  server.signal(SIGTERM);
+  EXPECT_EQ(server.wait(), 0);
+  const auto stats = nlohmann::json::parse(server.readRest());
+  EXPECT_GE(stats["sessions"].get<int>(), 1);
+  EXPECT_GT(stats["commands_applied"].get<int>(), 150);
+  EXPECT_EQ(stats["drops"]["bad_mac"].get<int>(), 0);
+  EXPECT_EQ(stats["busy_refusals"].get<int>(), 0);
+}
+
+TEST(DeviceServeCli, RecordOverUdpWritesTheProfileTheServersPenDrew) {
+  test::TempDir dir;
+  const std::string key = makeKey(dir);
+  ServeProcess server(dir, key);
+  ASSERT_THAT(server.firstLine(), HasSubstr("listening on 127.0.0.1:"));
+  test::writeText(dir / "hand.csv",
+                  "t_s,x_m,y_m,z_m,fx_N,fy_N,fz_N,pen_down_bool\n"
+                  "0,0,0,0,0,0,-1,1\n0.1,0.005,0,0,0,0,-1,1\n0.2,0.01,0.002,0,0,0,-1,1\n");
+  const std::string uri = "udp://" + server.address() + "?key=" + key;
+  const RunResult r = runHattr(dir, "record --clock real --tail 0.1 --json --hand " + (dir / "hand.csv").string() +
+                                        " -o " + (dir / "out.csv").string() + " --device '" + uri + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto json = nlohmann::json::parse(r.out);
+  EXPECT_GT(json["samples"].get<int>(), 100);
+  server.signal(SIGTERM);
+  EXPECT_EQ(server.wait(), 0);
+}
+
+TEST(DeviceServeCli, KillingTheServerWithSigkillFaultsTheClientWithTheLinkReason) {
+  test::TempDir dir;
+  const std::string key = makeKey(dir);
+  ServeProcess server(dir, key);
+  ASSERT_THAT(server.firstLine(), HasSubstr("listening on 127.0.0.1:"));
+  const std::string uri = "udp://" + server.address() + "?key=" + key;
+  // servo-check measures the floor for 1 s, then runs the loop over the link for 1 s; the
+  // server dies in the middle of the loop's run.
+  std::thread killer([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+    server.signal(SIGKILL);
+  });
+  const RunResult check = runHattr(dir, "servo-check --realtime skip --seconds 1 --json --device '" + uri + "'");
+  killer.join();
+  EXPECT_EQ(server.wait(), 128 + SIGKILL);
+  ASSERT_EQ(check.exit_code, 0) << check.err;
+  const auto json = nlohmann::json::parse(check.out);
+  EXPECT_THAT(json["link"]["fault"].get<std::string>(),
+              HasSubstr("link lost: no state from " + server.address() + " for"));
+  EXPECT_GT(json["link"]["disconnected_reads"].get<int>(), 50);
+  EXPECT_GE(json["loop"]["link_faults"].get<int>(), 1);
+  EXPECT_GT(json["loop"]["disconnected_ticks"].get<int>(), 50);
+}
+
+}  // namespace
+}  // namespace hattr

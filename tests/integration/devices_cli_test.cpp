@@ -1,0 +1,142 @@
+// `hattr devices`, `hattr devices check` and trials on plugin devices, through the real binary.
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "hattr/io/profile_csv.hpp"
+#include "support/test_support.hpp"
+
+namespace hattr {
+namespace {
+
+using ::testing::HasSubstr;
+
+struct RunResult {
+  int exit_code;
+  std::string out;
+  std::string err;
+};
+
+/// Runs hattr with `args` (shell-quoted by the caller), stdin from `input`.
+RunResult run(const test::TempDir& dir, const std::string& args, const std::string& input = "") {
+  test::writeText(dir / "stdin.txt", input);
+  const std::string command = std::string(HATTR_CLI_PATH) + " " + args + " <" + (dir / "stdin.txt").string() + " >" +
+                              (dir / "out.txt").string() + " 2>" + (dir / "err.txt").string();
+  const int status = std::system(command.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, test::readText(dir / "out.txt"), test::readText(dir / "err.txt")};
+}
+
+std::string quoted(const std::string& text) { return "'" + text + "'"; }
+
+TEST(DevicesCli, ListsTheThreeDeviceKindsTheFoundPluginsAndTheDefaults) {
+  test::TempDir dir;
+  const RunResult r = run(dir, "devices");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("sim://pen"));
+  EXPECT_THAT(r.out, HasSubstr("plugin:/path/libX.so"));
+  EXPECT_THAT(r.out, HasSubstr("udp://HOST:PORT?key=FILE"));
+  EXPECT_THAT(r.out, HasSubstr("mass_kg                  apparent mass at the tip [kg] in [0.001, 10], default 0.045"));
+  EXPECT_THAT(r.out, HasSubstr("libhattr_sim_plugin.so"));
+  EXPECT_THAT(r.out, HasSubstr("libhattr_replay_plugin.so"));
+  EXPECT_EQ(run(dir, "device").out, r.out);  // the alias
+}
+
+TEST(DevicesCli, CheckOnTheSimulatedPenReportsLimitsJitterAndTheGentleForce) {
+  test::TempDir dir;
+  const RunResult r = run(dir, "devices check sim://pen --no-confirm --seconds 0.3 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto json = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(json["ok"].get<bool>());
+  EXPECT_EQ(json["loop_clock"], "real-time");
+  EXPECT_DOUBLE_EQ(json["limits"]["continuous_force_N"].get<double>(), 1.75);
+  EXPECT_NEAR(json["force_test"]["commanded_N"].get<double>(), 0.2, 1e-6);
+  EXPECT_GT(json["force_test"]["pen_rise_m"].get<double>(), 3e-4);  // held by a 300 N/m hand: ≈ 0.67 mm
+  EXPECT_TRUE(json["force_test"]["confirmed"].is_null());
+  EXPECT_GT(json["period_error_us"]["count"].get<int>(), 1000);
+}
+
+TEST(DevicesCli, CheckRunsADeviceClockedPluginOnItsOwnClock) {
+  test::TempDir dir;
+  const RunResult r = run(dir, "devices check " + quoted(std::string("plugin:") + HATTR_SIM_PLUGIN + "?clock=device") +
+                                   " --no-confirm --seconds 0.3 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto json = nlohmann::json::parse(r.out);
+  EXPECT_EQ(json["clocking"], "device");
+  EXPECT_EQ(json["loop_clock"], "device");
+}
+
+TEST(DevicesCli, ThePersonSayingNoFailsTheCheck) {
+  test::TempDir dir;
+  const RunResult r = run(dir, "devices check sim://pen --seconds 0.2", "n\n");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.out, HasSubstr("person: did NOT feel it"));
+  EXPECT_THAT(r.out, HasSubstr("check FAILED"));
+  EXPECT_THAT(r.err, HasSubstr("Did you feel a gentle upward push? [y/n]"));
+  const RunResult yes = run(dir, "devices check sim://pen --seconds 0.2", "y\n");
+  EXPECT_EQ(yes.exit_code, 0) << yes.out << yes.err;
+  EXPECT_THAT(yes.out, HasSubstr("person: felt it"));
+}
+
+TEST(DevicesCli, EveryPluginLoadingFailureExitsTwoWithItsMessage) {
+  test::TempDir dir;
+  test::writeText(dir / "libtext.so", "not ELF");
+  const std::pair<std::string, std::string> cases[] = {
+      {"plugin:/no/such/libx.so", "file not found"},
+      {"plugin:" + (dir / "libtext.so").string(), "not a loadable shared object"},
+      {std::string("plugin:") + HATTR_NO_ENTRY_PLUGIN, "no entry symbol \"hattr_plugin_entry\""},
+      {std::string("plugin:") + HATTR_ABI_MISMATCH_PLUGIN, "the plugin speaks version 99, this hattr speaks version 1"},
+      {std::string("plugin:") + HATTR_FAKE_VENDOR_PLUGIN + "?fail_open=unplugged",
+       "the plugin could not open the device: fake SDK: unplugged"},
+      {"plugin:nosuchname", "no libhattr_nosuchname_plugin.so in the plugin search path"},
+  };
+  for (const auto& [uri, expected] : cases) {
+    const RunResult r = run(dir, "devices check " + quoted(uri) + " --no-confirm");
+    EXPECT_EQ(r.exit_code, 2) << uri;
+    EXPECT_THAT(r.err, HasSubstr(expected)) << uri;
+  }
+}
+
+TEST(DevicesCli, TrainOnTheSimPluginWritesTheSameSamplesAsOnSimPen) {
+  test::TempDir dir;
+  // An expert recorded on sim://pen, then the same training trial on both devices.
+  test::writeText(dir / "hand.csv",
+                  "t_s,x_m,y_m,z_m,fx_N,fy_N,fz_N,pen_down_bool\n0,0,0,0,0,0,-1,1\n0.2,0.01,0,0,0,0,-1,1\n"
+                  "0.4,0.01,0.01,0,0,0,-1,1\n");
+  ASSERT_EQ(run(dir, "record --hand " + (dir / "hand.csv").string() + " -o " + (dir / "expert.csv").string()).exit_code, 0);
+  const std::string common = " --mode alpha --hand " + (dir / "hand.csv").string() + " --reference " +
+                             (dir / "expert.csv").string() + " -o ";
+  const RunResult direct = run(dir, "train --device sim://pen" + common + (dir / "direct.csv").string());
+  ASSERT_EQ(direct.exit_code, 0) << direct.err;
+  const RunResult plugged =
+      run(dir, "train --device plugin:sim" + common + (dir / "plugged.csv").string() + " --json");
+  ASSERT_EQ(plugged.exit_code, 0) << plugged.err;
+  EXPECT_EQ(nlohmann::json::parse(plugged.out)["clock"], "simulated");
+  const HapticProfile a = io::readProfileCsv(dir / "direct.csv");
+  const HapticProfile b = io::readProfileCsv(dir / "plugged.csv");
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_TRUE(a.samples() == b.samples());
+  EXPECT_EQ(b.metadata().device, "plugin:sim");
+}
+
+TEST(DevicesCli, ADeviceFaultMidTrialExitsOneAndKeepsWhatWasRecorded) {
+  test::TempDir dir;
+  test::writeText(dir / "hand.csv", "t_s,x_m,y_m,z_m,fx_N,fy_N,fz_N,pen_down_bool\n0,0,0,0,0,0,-1,1\n2,0.01,0,0,0,0,-1,1\n");
+  const std::string uri = std::string("plugin:") + HATTR_FAKE_VENDOR_PLUGIN + "?clock=device&error_after=600";
+  const RunResult r = run(dir, "record --device " + quoted(uri) + " --hand " + (dir / "hand.csv").string() + " -o " +
+                                   (dir / "partial.csv").string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("the trial failed after"));
+  EXPECT_THAT(r.err, HasSubstr("fake SDK: amplifier fault (SDK error 513)"));
+  const HapticProfile partial = io::readProfileCsv(dir / "partial.csv");
+  EXPECT_GT(partial.size(), 200u);
+  EXPECT_LT(partial.duration_s(), 0.5);
+  EXPECT_THAT(partial.metadata().extra.at("failed"), HasSubstr("amplifier fault"));
+}
+
+}  // namespace
+}  // namespace hattr

@@ -1,0 +1,432 @@
+// The device server and the udp:// client in one process, on loopback (127.0.0.1 only).
+
+#include "hattr/net/device_server.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "hattr/core/error.hpp"
+#include "hattr/device/udp_device.hpp"
+#include "support/no_allocation.hpp"
+#include "support/test_support.hpp"
+
+namespace hattr::net {
+namespace {
+
+using device::DeviceStatus;
+using device::net::DropReason;
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+
+using Clock = std::chrono::steady_clock;
+
+/// A key file in a temporary folder, and servers and clients that use it.
+struct Rig {
+  test::TempDir dir;
+  std::filesystem::path key_file = dir / "shared.key";
+  Rig() { device::net::writeKeyFile(key_file, device::net::randomKey(), false); }
+
+  DeviceServerConfig config(std::string device_uri = "sim://pen", std::string listen = "127.0.0.1:0") const {
+    DeviceServerConfig c;
+    c.device_uri = std::move(device_uri);
+    c.listen = std::move(listen);
+    c.key = device::net::readKeyFile(key_file);
+    c.realtime.policy = servo::RealtimePolicy::kSkip;
+    return c;
+  }
+  std::string uri(const DeviceServer& server, const std::string& extra = "") const {
+    return "udp://" + server.endpoint().text() + "?key=" + key_file.string() + extra;
+  }
+  std::unique_ptr<device::UdpDevice> client(const DeviceServer& server, device::HandScript* hand = nullptr,
+                                            const std::string& extra = "") const {
+    const std::string text = uri(server, extra);
+    return std::make_unique<device::UdpDevice>(device::udpDeviceParams(device::parseDeviceUri(text)), text, hand);
+  }
+};
+
+std::chrono::nanoseconds sinceStart(Clock::time_point start) { return Clock::now() - start; }
+
+/// Polls read()+write() every 0.5 ms until `until` says stop or `limit` passes; returns
+/// the time it took and the last status.
+template <typename Until>
+std::pair<std::chrono::nanoseconds, DeviceStatus> poll(device::UdpDevice& client, Until until,
+                                                       std::chrono::milliseconds limit, Vec3 force = Vec3::Zero()) {
+  const auto start = Clock::now();
+  DeviceStatus status = DeviceStatus::kOk;
+  PenState pen;
+  while (Clock::now() - start < limit) {
+    status = client.read(sinceStart(start), pen);
+    (void)client.write(force);
+    if (until(status)) break;
+    std::this_thread::sleep_for(std::chrono::microseconds(500));
+  }
+  return {Clock::now() - start, status};
+}
+
+TEST(DeviceServer, ClientReadsThePenAndTheServerClampsTheForceToItsDeviceLimits) {
+  Rig rig;
+  DeviceServer server(rig.config("sim://pen?continuous_force_N=0.5"));
+  server.start();
+  auto client = rig.client(server);
+  EXPECT_DOUBLE_EQ(client->limits().continuous_force_N, 0.5);
+  EXPECT_DOUBLE_EQ(client->serverRate_hz(), 1000.0);
+  EXPECT_EQ(client->clocking(), device::DeviceClocking::kHostRealTime);
+  EXPECT_TRUE(client->capabilities().tilt);
+
+  // 50 N asked for, beyond any limit: the server's safety path gives at most 0.5 N.
+  double largest_applied = 0.0;
+  const auto [took, status] = poll(
+      *client,
+      [&](DeviceStatus) {
+        largest_applied = std::max(largest_applied, server.appliedForce().norm());
+        return false;
+      },
+      std::chrono::milliseconds(400), Vec3(50.0, 0.0, 0.0));
+  EXPECT_EQ(status, DeviceStatus::kOk);
+  EXPECT_DOUBLE_EQ(server.commandedForce().x(), 50.0);
+  EXPECT_LE(largest_applied, 0.5 + 1e-12);
+  EXPECT_GT(largest_applied, 0.4);  // after the 0.25 s ramp
+  PenState pen;
+  ASSERT_EQ(client->read(std::chrono::nanoseconds(0), pen), DeviceStatus::kOk);
+  EXPECT_GT(pen.p_WT.x(), 0.0);  // pushed along +x
+  const DeviceServerStats stats = server.stats();
+  EXPECT_EQ(stats.sessions, 1u);
+  EXPECT_GT(stats.commands_applied, 100u);
+  EXPECT_EQ(stats.drops[static_cast<std::size_t>(DropReason::kBadMac)], 0u);
+  EXPECT_GT(client->linkStats().rtt.count(), 100u);
+}
+
+TEST(DeviceServer, ASecondClientIsRefusedWithBusyAndAClearMessage) {
+  Rig rig;
+  DeviceServer server(rig.config());
+  server.start();
+  auto first = rig.client(server);
+  try {
+    auto second = rig.client(server);
+    ADD_FAILURE() << "a second client was served";
+  } catch (const InputError& e) {
+    const std::string address = server.endpoint().text();
+    EXPECT_THAT(e.what(), HasSubstr("udp://" + address + ": the device server at " + address +
+                                    " already serves another client"));
+  }
+  EXPECT_EQ(server.stats().busy_refusals, 1u);
+  EXPECT_EQ(server.stats().sessions, 1u);
+  // The first client is still served; after its BYE the next one is.
+  EXPECT_EQ(poll(*first, [](DeviceStatus) { return true; }, std::chrono::milliseconds(5)).second, DeviceStatus::kOk);
+  first.reset();
+  auto third = rig.client(server);
+  EXPECT_EQ(server.stats().sessions, 2u);
+  EXPECT_EQ(server.stats().byes, 1u);
+}
+
+TEST(DeviceServer, AWrongKeyLooksLikeNoAnswerAndTheServerCountsABadMac) {
+  Rig rig;
+  DeviceServer server(rig.config());
+  server.start();
+  const auto other_key = rig.dir / "other.key";
+  device::net::writeKeyFile(other_key, device::net::randomKey(), false);
+  const std::string text = "udp://" + server.endpoint().text() + "?key=" + other_key.string() + "&timeout_s=0.15";
+  try {
+    (void)device::openDevice(text, nullptr);
+    ADD_FAILURE() << "opened with the wrong key";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), AllOf(HasSubstr("udp://" + server.endpoint().text() +
+                                          ": no answer from a hattr device server within 0.15 s"),
+                                HasSubstr("a wrong key file looks like this")));
+  }
+  EXPECT_GE(server.stats().drops[static_cast<std::size_t>(DropReason::kBadMac)], 1u);
+  EXPECT_EQ(server.stats().sessions, 0u);
+}
+
+TEST(DeviceServer, NothingListeningIsReportedAsRefused) {
+  Rig rig;
+  std::string address;
+  {
+    DeviceServer gone(rig.config());
+    address = gone.endpoint().text();
+  }
+  try {
+    (void)device::openDevice("udp://" + address + "?key=" + rig.key_file.string() + "&timeout_s=0.1", nullptr);
+    ADD_FAILURE() << "opened a closed port";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("nothing listens on that port"));
+  }
+}
+
+/// A hand-made client: the test writes the packets itself and ticks the server by hand.
+struct RawClient {
+  const Rig& rig;
+  DeviceServer& server;
+  device::net::AuthKey key = device::net::readKeyFile(rig.key_file);
+  device::net::UdpSocket socket = device::net::UdpSocket::connected(server.endpoint());
+  std::uint64_t session_id = 0;
+  std::chrono::nanoseconds now{0};
+
+  void tick() {
+    now += server.loop().period();
+    (void)server.loop().tick(now);
+  }
+  void sendRaw(std::span<const std::uint8_t> bytes) { ASSERT_TRUE(socket.send(bytes)); }
+  std::vector<std::uint8_t> encode(const device::net::Packet& packet, const device::net::AuthKey& with) {
+    device::net::PacketBuffer buffer{};
+    const std::size_t size = device::net::encodePacket(packet, with, buffer);
+    return {buffer.begin(), buffer.begin() + static_cast<std::ptrdiff_t>(size)};
+  }
+  std::vector<std::uint8_t> command(std::uint64_t sequence, Vec3 force, std::uint64_t session) {
+    device::net::CommandPayload c;
+    c.f_on_pen_W = force;
+    return encode({{.session_id = session, .sequence = sequence, .sender_time_ns = device::net::monotonicNs()}, c},
+                  key);
+  }
+  void handshake() {
+    sendRaw(encode({{.sequence = 1}, device::net::HelloPayload{{1, 2, 3}}}, key));
+    tick();
+    device::net::PacketBuffer buffer{};
+    device::net::Received rx;
+    ASSERT_EQ(socket.receive(buffer, rx), device::net::ReceiveStatus::kPacket);
+    device::net::Packet welcome;
+    DropReason why{};
+    ASSERT_TRUE(device::net::decodePacket(std::span(buffer.data(), rx.size), key, welcome, why));
+    ASSERT_EQ(welcome.header.type, device::net::PacketType::kWelcome);
+    session_id = welcome.header.session_id;
+  }
+};
+
+TEST(DeviceServer, HostilePacketsAreDroppedCountedByReasonAndChangeNothing) {
+  Rig rig;
+  DeviceServer server(rig.config());
+  RawClient client{rig, server};
+  client.handshake();
+  const Vec3 good(0.3, -0.2, 0.1);
+  const auto accepted = client.command(5, good, client.session_id);
+  client.sendRaw(accepted);
+  client.tick();
+  ASSERT_EQ(server.commandedForce(), good);
+  const DeviceServerStats before = server.stats();
+
+  // One of each: replayed, late, wrong session, wrong key, wrong size, garbage, bad magic, NaN.
+  const Vec3 evil(9.0, 9.0, 9.0);
+  client.sendRaw(accepted);
+  client.sendRaw(client.command(3, evil, client.session_id));
+  client.sendRaw(client.command(6, evil, client.session_id + 1));
+  const device::net::AuthKey other = device::net::randomKey();
+  device::net::CommandPayload c;
+  c.f_on_pen_W = evil;
+  client.sendRaw(client.encode({{.session_id = client.session_id, .sequence = 7}, c}, other));
+  auto truncated = client.command(8, evil, client.session_id);
+  truncated.pop_back();
+  client.sendRaw(truncated);
+  const std::vector<std::uint8_t> garbage(300, 0x5a);
+  client.sendRaw(garbage);
+  auto bad_magic = client.command(9, evil, client.session_id);
+  bad_magic[0] = 'X';
+  client.sendRaw(bad_magic);
+  c.f_on_pen_W = Vec3(std::nan(""), 0.0, 0.0);
+  client.sendRaw(client.encode({{.session_id = client.session_id, .sequence = 10}, c}, client.key));
+  client.tick();
+
+  const DeviceServerStats after = server.stats();
+  const auto dropped = [&](DropReason r) {
+    return after.drops[static_cast<std::size_t>(r)] - before.drops[static_cast<std::size_t>(r)];
+  };
+  EXPECT_EQ(dropped(DropReason::kReplayed), 1u);
+  EXPECT_EQ(dropped(DropReason::kOutOfOrder), 1u);
+  EXPECT_EQ(dropped(DropReason::kWrongSession), 1u);
+  EXPECT_EQ(dropped(DropReason::kBadMac), 1u);
+  EXPECT_EQ(dropped(DropReason::kBadSize), 2u);
+  EXPECT_EQ(dropped(DropReason::kBadHeader), 1u);
+  EXPECT_EQ(dropped(DropReason::kBadValue), 1u);
+  EXPECT_EQ(after.commands_applied, before.commands_applied);
+  EXPECT_EQ(server.commandedForce(), good);
+  EXPECT_LT(server.appliedForce().norm(), 1.0);  // never the evil 15.6 N, and ramping in
+
+  // A replayed HELLO of this session's nonce from another address gets no session either.
+  device::net::UdpSocket intruder = device::net::UdpSocket::connected(server.endpoint());
+  ASSERT_TRUE(intruder.send(client.encode({{.sequence = 1}, device::net::HelloPayload{{1, 2, 3}}}, client.key)));
+  client.tick();
+  EXPECT_EQ(server.stats().sessions, 1u);
+  EXPECT_EQ(server.stats().drops[static_cast<std::size_t>(DropReason::kReplayed)] -
+                before.drops[static_cast<std::size_t>(DropReason::kReplayed)],
+            2u);
+}
+
+TEST(DeviceServer, TheClientFaultsWithin20msOfASilentServerAndRecoversWhenItReturns) {
+  Rig rig;
+  DeviceServer server(rig.config());
+  server.start();
+  auto client = rig.client(server);
+  ASSERT_EQ(poll(*client, [](DeviceStatus) { return false; }, std::chrono::milliseconds(30)).second,
+            DeviceStatus::kOk);
+
+  // The server's loop stops without a word, as if the process had been killed.
+  server.loop().stop();
+  const auto [took, status] =
+      poll(*client, [](DeviceStatus s) { return s == DeviceStatus::kDisconnected; }, std::chrono::milliseconds(200));
+  ASSERT_EQ(status, DeviceStatus::kDisconnected);
+  EXPECT_LE(took, std::chrono::milliseconds(20));
+  EXPECT_THAT(client->faultReason(), HasSubstr("link lost: no state from " + server.endpoint().text() + " for "));
+
+  // It stays away long enough for the client to give up on the session (50 ms), then comes
+  // back: the client's new hello is answered and it is served again.
+  (void)poll(*client, [](DeviceStatus) { return false; }, std::chrono::milliseconds(80));
+  server.loop().start();
+  const auto back = poll(*client, [](DeviceStatus s) { return s == DeviceStatus::kOk; }, std::chrono::seconds(1));
+  EXPECT_EQ(back.second, DeviceStatus::kOk);
+  // The old session's states come first; the answer to the hello queued behind a backlog of
+  // commands follows within a few server ticks.
+  (void)poll(*client, [](DeviceStatus) { return false; }, std::chrono::milliseconds(30));
+  EXPECT_EQ(client->linkStats().reconnects, 1u);
+  EXPECT_GE(client->linkStats().disconnected_reads, 1u);
+
+}
+
+TEST(DeviceServer, AStoppedServerEndsTheSessionAndANewServerOnThePortServesTheClientAgain) {
+  Rig rig;
+  auto server = std::make_unique<DeviceServer>(rig.config());
+  server->start();
+  const std::string address = server->endpoint().text();
+  auto client = rig.client(*server);
+  ASSERT_EQ(poll(*client, [](DeviceStatus) { return false; }, std::chrono::milliseconds(10)).second,
+            DeviceStatus::kOk);
+  server.reset();  // says BYE
+  const auto [took, status] =
+      poll(*client, [](DeviceStatus s) { return s == DeviceStatus::kDisconnected; }, std::chrono::milliseconds(200));
+  ASSERT_EQ(status, DeviceStatus::kDisconnected);
+  EXPECT_LE(took, std::chrono::milliseconds(20));
+  EXPECT_EQ(client->faultReason(), "link lost: the device server at " + address + " ended the session");
+
+  server = std::make_unique<DeviceServer>(rig.config("sim://pen", address));
+  server->start();
+  const auto back = poll(*client, [](DeviceStatus s) { return s == DeviceStatus::kOk; }, std::chrono::seconds(1));
+  EXPECT_EQ(back.second, DeviceStatus::kOk);
+  EXPECT_EQ(server->stats().sessions, 1u);
+}
+
+TEST(DeviceServer, WithoutCommandsTheForceDropsToZeroAndASilentSessionEnds) {
+  Rig rig;
+  DeviceServerConfig config = rig.config();
+  config.session_timeout = std::chrono::milliseconds(60);
+  DeviceServer server(config);
+  server.start();
+  auto client = rig.client(server);
+  (void)poll(*client, [](DeviceStatus) { return false; }, std::chrono::milliseconds(300), Vec3(0.4, 0.0, 0.0));
+  EXPECT_GT(server.appliedForce().x(), 0.0);
+  const std::uint64_t timeouts_before = server.stats().command_timeouts;
+  // The client goes quiet: after 10 ms zero force, after 60 ms no session.
+  std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  EXPECT_EQ(server.appliedForce(), Vec3::Zero());
+  EXPECT_EQ(server.stats().command_timeouts, timeouts_before + 1);
+  EXPECT_TRUE(server.sessionLive());
+  std::this_thread::sleep_for(std::chrono::milliseconds(80));
+  EXPECT_FALSE(server.sessionLive());
+  EXPECT_EQ(server.stats().session_timeouts, 1u);
+}
+
+/// Asks for a constant force, whatever the pen does.
+class ConstantPush final : public GuidanceController {
+ public:
+  explicit ConstantPush(Vec3 force) : force_(std::move(force)) {}
+  Vec3 compute(const PenState&, const ContactForces&, double) noexcept override { return force_; }
+
+ private:
+  Vec3 force_;
+};
+
+TEST(DeviceServer, EndToEndTheClientsHandWritesCirclesOnTheServersPenThroughBothSafetyPaths) {
+  Rig rig;
+  DeviceServer server(rig.config("sim://pen?continuous_force_N=0.5"));
+  server.start();
+  const Vec3 centre(0.0, 0.0, 0.005);
+  device::CircleHand hand(centre, 0.015, 2.0, 0.0);
+  auto client = rig.client(server, &hand, "&hold_ms=20");
+  servo::ServoLoop loop(*client, servo::ServoConfig{.rate_hz = 1000.0,
+                                                     .realtime = {.policy = servo::RealtimePolicy::kSkip}});
+  ConstantPush push(Vec3(3.0, 0.0, 0.0));  // beyond the 0.5 N the server's pen takes
+  loop.setGuidance(&push);
+  loop.start();
+  double largest_applied = 0.0;
+  const auto start = Clock::now();
+  while (Clock::now() - start < std::chrono::milliseconds(700)) {
+    largest_applied = std::max(largest_applied, server.appliedForce().norm());
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  loop.stop();
+  EXPECT_EQ(loop.counters().faults.load(), 0u) << client->faultReason();
+
+  // The pen goes round the hand's circle (the 0.5 N push shifts it by under 2 mm).
+  TickSample s;
+  double radius_sum = 0.0;
+  int n = 0;
+  double turned = 0.0;
+  double last_angle = 0.0;
+  bool first = true;
+  while (loop.samples().tryPop(s)) {
+    if (s.sample.t_s < 0.35) continue;
+    const Vec3 d = s.sample.p_WT - centre;
+    radius_sum += d.head<2>().norm();
+    ++n;
+    const double angle = std::atan2(d.y(), d.x());
+    if (!first) turned += std::remainder(angle - last_angle, 2.0 * 3.141592653589793);
+    last_angle = angle;
+    first = false;
+  }
+  ASSERT_GT(n, 200);
+  EXPECT_NEAR(radius_sum / n, 0.015, 0.004);
+  EXPECT_GT(turned, 3.0);  // more than half a turn, counter-clockwise like the hand
+  // Both safety paths clamp to the server's device: 0.5 N, and it got there.
+  EXPECT_DOUBLE_EQ(client->limits().continuous_force_N, 0.5);
+  EXPECT_LE(largest_applied, 0.5 + 1e-12);
+  EXPECT_GT(largest_applied, 0.45);
+  EXPECT_GT(client->linkStats().states_received, 500u);
+}
+
+TEST(DeviceServer, TheServerTickAndTheClientsReadAndWriteNeverAllocateNorLock) {
+  Rig rig;
+  DeviceServer server(rig.config());
+  // The handshake needs the server's ticks: a helper ticks it while the client opens.
+  std::atomic<bool> opened{false};
+  std::chrono::nanoseconds now{0};
+  std::thread ticker([&] {
+    while (!opened.load()) {
+      now += server.loop().period();
+      (void)server.loop().tick(now);
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+  });
+  device::CircleHand hand(Vec3::Zero(), 0.01, 1.0, 0.5);
+  std::unique_ptr<device::UdpDevice> client;
+  try {
+    client = rig.client(server, &hand);
+  } catch (...) {
+    opened = true;
+    ticker.join();
+    throw;
+  }
+  opened = true;
+  ticker.join();
+
+  PenState pen;
+  const auto bad = std::vector<std::uint8_t>(100, 1);
+  device::net::UdpSocket noise = device::net::UdpSocket::connected(server.endpoint());
+  const test::NoAllocationScope scope;
+  for (int i = 0; i < 2000; ++i) {
+    now += server.loop().period();
+    (void)server.loop().tick(now);
+    (void)client->read(now, pen);
+    (void)client->write(Vec3(0.1, 0.0, 0.0));
+    if (i % 100 == 0) (void)noise.send(bad);  // drops are counted without allocating too
+  }
+  EXPECT_EQ(scope.allocations(), 0u);
+  if (test::lockHookActive()) {
+    EXPECT_EQ(scope.locks(), 0u);
+  }
+  EXPECT_GT(server.stats().commands_applied, 1000u);
+  EXPECT_GE(server.stats().drops[static_cast<std::size_t>(DropReason::kBadHeader)], 20u);
+}
+
+}  // namespace
+}  // namespace hattr::net
