@@ -34,6 +34,7 @@ void registerStudyCommands(CLI::App& app);
 void registerAnalysisCommands(CLI::App& app);
 void registerSimCommands(CLI::App& app);
 void registerDevicesCommands(CLI::App& app);
+void registerMentorCommands(CLI::App& app);
 /// `serve` and `keygen` under the `devices` (alias `device`) command: the network device server.
 void registerDeviceServeCommands(CLI::App& devices);
 

@@ -103,6 +103,7 @@ int runCheck(const CheckOptions& opt) {
   TestForce force;
   servo::ServoLoop loop(*device, servo::ServoConfig{.rate_hz = rate_hz});
   loop.setGuidance(&force);
+  loop.start();
   std::atomic<bool> draining{true};
   std::thread drain([&] {
     TickSample s;
@@ -117,7 +118,6 @@ int runCheck(const CheckOptions& opt) {
     draining = false;
     drain.join();
   };
-  loop.start();
   std::this_thread::sleep_for(std::chrono::duration<double>(opt.seconds));
   Sample before;
   (void)loop.latest().read(before);
@@ -127,9 +127,14 @@ int runCheck(const CheckOptions& opt) {
   std::optional<bool> confirmed;
   if (!opt.no_confirm) std::cerr << fmt::format("Hold the pen lightly: a {} N upward force follows for 1 s.\n", opt.force_N);
   (void)loop.post({servo::ServoCommand::Type::kSetGuidanceParameter, 0, opt.force_N});
-  std::this_thread::sleep_for(std::chrono::milliseconds(1000));
+  // The force reached while held: the largest commanded (a stall restarts the ramp, so one
+  // instant could miss it), and the pen's rise at that moment.
   Sample during;
-  (void)loop.latest().read(during);
+  for (int i = 0; i < 100; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    Sample now;
+    if (loop.latest().read(now) && now.f_cmd_W.z() >= during.f_cmd_W.z()) during = now;
+  }
   (void)loop.post({servo::ServoCommand::Type::kSetGuidanceParameter, 0, 0.0});
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   stop_all();

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   registerImportCommands(app);
   registerServoCheckCommand(app);
   registerDevicesCommands(app);
+  registerMentorCommands(app);
   registerWorldCommands(app);
   registerRecordTrainCommands(app);
   registerStudyCommands(app);

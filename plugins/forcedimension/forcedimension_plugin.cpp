@@ -47,7 +47,11 @@ class ForceDimensionBackend final : public VendorBackend {
     d.nominal_rate_hz = numberOr(params, "rate_hz", 1000.0);
     id_ = static_cast<char>(dhdOpen());
     if (id_ < 0) throw Error(std::string("dhdOpen: ") + dhdErrorGetLastStr());
-    if (dhdEnableForce(DHD_ON, id_) < 0) throw Error(std::string("dhdEnableForce: ") + dhdErrorGetLastStr());
+    if (dhdEnableForce(DHD_ON, id_) < 0) {
+      const std::string why = dhdErrorGetLastStr();
+      close();
+      throw Error("dhdEnableForce: " + why);
+    }
 
     // DHD works in SI: metres and newtons; its frame: x toward the user, y right, z up.
     d.model = dhdGetSystemName(id_) ? dhdGetSystemName(id_) : "Force Dimension device";

@@ -91,7 +91,8 @@ class OpenHapticsBackend final : public VendorBackend {
 
   void stopScheduler() noexcept override {
     hdStopScheduler();
-    hdUnschedule(callback_);
+    if (callback_ != 0) hdUnschedule(callback_);
+    callback_ = 0;
   }
 
   void close() noexcept override {

@@ -157,10 +157,10 @@ class ReplayDevice final : public Device {
 };
 
 std::unique_ptr<Device> openReplay(const DeviceUri& uri, HandScript* /*host_hand*/) {
-  constexpr std::string_view kKeys = "profile, forces, clock, rate_hz";
+  constexpr std::string_view kKeys[] = {"profile", "forces", "clock", "rate_hz"};
   for (const auto& [key, value] : uri.query) {
-    HATTR_THROW_UNLESS(kKeys.find(key) != std::string_view::npos && !key.empty() && key.find(',') == std::string::npos,
-                       "replay plugin: unknown key \"{}\": expected one of {}", key, kKeys);
+    HATTR_THROW_UNLESS(std::find(std::begin(kKeys), std::end(kKeys), key) != std::end(kKeys),
+                       "replay plugin: unknown key \"{}\": expected one of profile, forces, clock, rate_hz", key);
   }
   const auto profile_it = uri.query.find("profile");
   HATTR_THROW_UNLESS(profile_it != uri.query.end(), "replay plugin: key profile=FILE is required (the profile to replay)");

@@ -86,7 +86,12 @@ std::unique_ptr<Device> openSim(const DeviceUri& uri, HandScript* hand) {
                        "sim plugin: key rate_hz: expected a number in [100, 10000], got \"{}\"", it->second);
     pen_uri.query.erase(it);
   }
-  SimulatedPenParams params = simulatedPenParams(pen_uri);
+  SimulatedPenParams params;
+  try {
+    params = simulatedPenParams(pen_uri);
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("sim plugin (keys: clock, rate_hz and those of sim://pen): {}", e.what()));
+  }
   params.limits.nominal_rate_hz = rate_hz;
   // Start where the hand starts, lifted, as a trial on sim://pen does.
   if (hand) {

@@ -27,6 +27,7 @@ constexpr std::size_t kBusySize = kHeaderSize + kNonceSize + kMacSize;       // 
 constexpr std::size_t kStateSize = kHeaderSize + 168 + kMacSize;             // 232
 constexpr std::size_t kCommandSize = kHeaderSize + 104 + kMacSize;           // 168
 constexpr std::size_t kByeSize = kHeaderSize + 8 + kMacSize;                 // 72
+constexpr std::size_t kPeerSize = kHeaderSize + 144 + kMacSize;              // 208
 static_assert(kStateSize == kMaxPacketSize);
 static_assert(crypto_auth_BYTES == kMacSize && crypto_auth_KEYBYTES == kKeySize);
 
@@ -97,7 +98,8 @@ class Reader {
 
 PacketType typeOf(const Payload& payload) noexcept {
   constexpr PacketType kTypes[] = {PacketType::kHello, PacketType::kWelcome, PacketType::kBusy,
-                                   PacketType::kState, PacketType::kCommand, PacketType::kBye};
+                                   PacketType::kState, PacketType::kCommand, PacketType::kBye,
+                                   PacketType::kPeer};
   return kTypes[payload.index()];
 }
 
@@ -157,6 +159,20 @@ void writePayload(Writer& w, const CommandPayload& p) noexcept {
   w.f64(p.hand.altitude_rad);
   w.u32((p.has_hand ? kCommandHasHand : 0u) | (p.hand.pen_down ? kCommandPenDown : 0u));
   w.u32(0);
+}
+
+void writePayload(Writer& w, const PeerPayload& p) noexcept {
+  w.f64(p.t_s);
+  w.vec3(p.p_WT);
+  w.vec3(p.v_WT);
+  w.vec3(p.f_user_W);
+  w.vec3(p.f_coupling_W);
+  w.f64(p.energy_in_J);
+  w.f64(p.energy_out_J);
+  w.i64(p.echo_sender_time_ns);
+  w.i64(p.hold_ns);
+  w.u32(p.coupling);
+  w.u32(p.flags);
 }
 
 // Payload readers; false for a value out of range (non-finite numbers are checked by the caller).
@@ -227,6 +243,22 @@ bool readPayload(Reader& r, PacketType type, Payload& out) noexcept {
       out = p;
       return status <= 2 && p.hold_ns >= 0;
     }
+    case PacketType::kPeer: {
+      PeerPayload p;
+      p.t_s = r.f64();
+      p.p_WT = r.vec3();
+      p.v_WT = r.vec3();
+      p.f_user_W = r.vec3();
+      p.f_coupling_W = r.vec3();
+      p.energy_in_J = r.f64();
+      p.energy_out_J = r.f64();
+      p.echo_sender_time_ns = r.i64();
+      p.hold_ns = r.i64();
+      p.coupling = r.u32();
+      p.flags = r.u32();
+      out = p;
+      return p.energy_in_J >= 0.0 && p.energy_out_J >= 0.0 && p.hold_ns >= 0 && p.coupling <= 3;
+    }
     case PacketType::kCommand: {
       CommandPayload p;
       p.f_on_pen_W = r.vec3();
@@ -264,6 +296,7 @@ std::size_t packetSize(PacketType type) noexcept {
     case PacketType::kState: return kStateSize;
     case PacketType::kCommand: return kCommandSize;
     case PacketType::kBye: return kByeSize;
+    case PacketType::kPeer: return kPeerSize;
   }
   return 0;
 }

@@ -49,11 +49,13 @@ class PluginLibrary {
       throw InputError(fmt::format("plugin:{}: plugin ABI mismatch: the plugin speaks {}, this hattr speaks version {}",
                                    path, theirs, HATTR_PLUGIN_ABI_VERSION));
     }
-    HATTR_THROW_UNLESS(table_->open && table_->close && table_->get_limits && table_->get_info && table_->read_state &&
-                           table_->write_force && table_->last_error,
-                       "plugin:{}: its table lacks a required function (open, close, get_limits, get_info, "
-                       "read_state, write_force, last_error)",
-                       path);
+    if (!(table_->open && table_->close && table_->get_limits && table_->get_info && table_->read_state &&
+          table_->write_force && table_->last_error)) {
+      dlclose(handle_);
+      throw InputError(fmt::format("plugin:{}: its table lacks a required function (open, close, get_limits, get_info, "
+                                   "read_state, write_force, last_error)",
+                                   path));
+    }
   }
   ~PluginLibrary() {
     if (handle_) dlclose(handle_);
@@ -100,7 +102,12 @@ class PluginDevice final : public Device {
                                    plugin_.last_error(nullptr)));
     }
     if (hand_) hand_->rewind();  // the plugin may have asked the hand where to start
-    readDescription();
+    try {
+      readDescription();
+    } catch (...) {
+      plugin_.close(device_);  // never leave an opened device behind (nor unload its code under it)
+      throw;
+    }
   }
   ~PluginDevice() override { plugin_.close(device_); }
 

@@ -77,13 +77,20 @@ UdpDevice::UdpDevice(const UdpDeviceParams& params, std::string uri_text, HandSc
   const std::int64_t start = net::monotonicNs();
   const std::int64_t deadline = start + static_cast<std::int64_t>(std::llround(params_.handshake_timeout_s * 1e9));
   std::int64_t next_hello = start;
+  std::int64_t next_command = start;
   bool refused = false;
   for (std::int64_t now = start; now < deadline && state_arrival_ns_ < 0; now = net::monotonicNs()) {
     if (session_id_ == 0 && now >= next_hello) {
       sendHello(now);
       next_hello = now + kHelloRetryNs;
     }
-    (void)socket_.waitReadable(std::min(deadline, next_hello) - now);
+    // Welcomed: a zero force proves the session; the server streams states only after one.
+    if (session_id_ != 0 && now >= next_command) {
+      (void)write(Vec3::Zero());
+      next_command = now + kHelloRetryNs / 10;
+    }
+    const std::int64_t wake = session_id_ != 0 ? std::min(deadline, next_command) : std::min(deadline, next_hello);
+    (void)socket_.waitReadable(std::max<std::int64_t>(0, wake - now));
     net::Received rx;
     for (std::size_t i = 0; i < kMaxDrain; ++i) {
       const auto status = socket_.receive(rx_buffer_, rx);
@@ -110,7 +117,24 @@ UdpDevice::UdpDevice(const UdpDeviceParams& params, std::string uri_text, HandSc
     throw Error(fmt::format("{}: the device server welcomed this client but sent no pen state within {} s", where,
                             params_.handshake_timeout_s));
   }
+  checkLimits(where);
   resume_ns_ = state_arrival_ns_;
+}
+
+// The server's limits size this side's safety path and gain clamps: checked like a file.
+void UdpDevice::checkLimits(const std::string& where) const {
+  const DeviceLimits& l = welcome_.limits;
+  const auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
+  const auto nonneg = [](double v) { return std::isfinite(v) && v >= 0.0; };
+  HATTR_THROW_UNLESS(positive(l.peak_force_N) && positive(l.continuous_force_N) && l.continuous_force_N <= l.peak_force_N &&
+                         positive(l.max_stiffness_N_per_m) && nonneg(l.max_damping_N_s_per_m) &&
+                         positive(l.nominal_rate_hz) && positive(l.mass_kg) && nonneg(l.damping_N_s_per_m) &&
+                         l.workspace_min_m.allFinite() && l.workspace_max_m.allFinite() &&
+                         (l.workspace_min_m.array() < l.workspace_max_m.array()).all(),
+                     "{}: the device server reports invalid limits (expected finite positive forces, stiffness, rate "
+                     "and mass, continuous <= peak force, a workspace box with min < max; got peak {} N, continuous {} "
+                     "N, stiffness {} N/m, rate {} Hz, mass {} kg)",
+                     where, l.peak_force_N, l.continuous_force_N, l.max_stiffness_N_per_m, l.nominal_rate_hz, l.mass_kg);
 }
 
 UdpDevice::~UdpDevice() {
@@ -167,6 +191,17 @@ void UdpDevice::handle(const net::Packet& packet, const net::Received& rx) noexc
         welcome_ = welcome;
       } else {
         bump(reconnects_);
+        // A reconnection to a server whose device differs would leave this side's safety
+        // path sized for the old one: refused, as a fault.
+        if (!(welcome.limits.peak_force_N == welcome_.limits.peak_force_N &&
+              welcome.limits.continuous_force_N == welcome_.limits.continuous_force_N &&
+              welcome.limits.max_stiffness_N_per_m == welcome_.limits.max_stiffness_N_per_m &&
+              welcome.limits.max_damping_N_s_per_m == welcome_.limits.max_damping_N_s_per_m &&
+              welcome.limits.nominal_rate_hz == welcome_.limits.nominal_rate_hz &&
+              welcome.limits.workspace_min_m == welcome_.limits.workspace_min_m &&
+              welcome.limits.workspace_max_m == welcome_.limits.workspace_max_m)) {
+          limits_changed_ = true;
+        }
       }
       session_id_ = h.session_id;
       send_sequence_ = 0;
@@ -274,6 +309,14 @@ DeviceStatus UdpDevice::read(std::chrono::nanoseconds now, PenState& out) noexce
   if (offset_window_ > 0) {
     state_age_.record(mono - (state_sent_ns_ - clock_offset_ns_.load(std::memory_order_relaxed)));
   }
+  if (limits_changed_) {
+    setFault(Fault::kServerLimitsChanged, 0.0);
+    return DeviceStatus::kFault;
+  }
+  if ((state_.server_flags & net::kServerSafetyFault) != 0) {
+    setFault(Fault::kServerSafetyFault, 0.0);
+    return DeviceStatus::kFault;
+  }
   if (state_.device_status != DeviceStatus::kOk) {
     setFault(state_.device_status == DeviceStatus::kFault ? Fault::kServerDeviceFault
                                                           : Fault::kServerDeviceDisconnected,
@@ -309,6 +352,10 @@ std::string UdpDevice::faultReason() const {
     case Fault::kServerDeviceFault: return fmt::format("the device server at {} reports a fault of its device", server);
     case Fault::kServerDeviceDisconnected:
       return fmt::format("the device server at {} reports its device disconnected", server);
+    case Fault::kServerSafetyFault:
+      return fmt::format("the device server at {} latched a fault in its safety path (zero force there)", server);
+    case Fault::kServerLimitsChanged:
+      return fmt::format("the device server at {} came back with a device of other limits; reopen the device", server);
   }
   return {};
 }

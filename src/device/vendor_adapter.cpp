@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <optional>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -79,10 +81,23 @@ VendorDevice::VendorDevice(std::unique_ptr<VendorBackend> backend, const DeviceU
       throw InputError(fmt::format("{}: unknown key \"{}\": expected one of {}", uri_, key, accepted));
     }
   }
+  // The adapter's own values are checked before the SDK opens anything.
+  const double cap = max_force.empty() ? 0.0 : parseNumber("max_force_N", max_force);
+  const std::optional<Vec3> origin =
+      paper_origin.empty() ? std::nullopt : std::optional<Vec3>(parseTriple("paper_origin", paper_origin));
   description_ = backend_->open(backend_params);
-  if (!paper_origin.empty()) description_.paper_origin_D = parseTriple("paper_origin", paper_origin);
+  try {
+    if (origin) description_.paper_origin_D = *origin;
+    describeInSi(cap, max_force);
+  } catch (...) {
+    backend_->close();  // an SDK device opened with force output is never left behind
+    throw;
+  }
+  force_limit_N_ = limits_.peak_force_N;
+}
 
-  // The SDK's numbers in SI and W, checked like any input.
+// The SDK's numbers in SI and W, checked like any input; `cap` lowers the force limit (0: none).
+void VendorDevice::describeInSi(double cap, const std::string& cap_text) {
   const VendorDescription& d = description_;
   const double unit = d.length_unit_m;
   HATTR_THROW_UNLESS(std::isfinite(unit) && unit > 0.0 && d.peak_force_N > 0.0 && d.continuous_force_N > 0.0 &&
@@ -99,15 +114,13 @@ VendorDevice::VendorDevice(std::unique_ptr<VendorBackend> backend, const DeviceU
   limits_.nominal_rate_hz = d.nominal_rate_hz;
   limits_.mass_kg = d.mass_kg;
   limits_.damping_N_s_per_m = d.damping_N_s_per_m;
-  if (!max_force.empty()) {
-    const double cap = parseNumber("max_force_N", max_force);
+  if (!cap_text.empty()) {
     HATTR_THROW_UNLESS(cap > 0.0 && cap <= d.peak_force_N,
                        "{}: key max_force_N: expected (0, {}] N (the device's peak force; it can only be lowered), got {}",
-                       uri_, d.peak_force_N, max_force);
+                       uri_, d.peak_force_N, cap_text);
     limits_.peak_force_N = std::min(limits_.peak_force_N, cap);
     limits_.continuous_force_N = std::min(limits_.continuous_force_N, cap);
   }
-  force_limit_N_ = limits_.peak_force_N;
 }
 
 VendorDevice::~VendorDevice() {
@@ -148,9 +161,15 @@ DeviceStatus VendorDevice::write(const Vec3& f_on_pen_W) noexcept {
   return code == 0 ? DeviceStatus::kOk : fail(kWriteError, code);
 }
 
-// Inside the SDK's frame: the host's tick reads and writes; a frame it did not write gets zero.
+// Inside the SDK's frame: the host's tick reads and writes; a frame it did not write gets zero,
+// and so does every frame once stopping.
 void VendorDevice::onFrame(void* context) noexcept {
   auto* self = static_cast<VendorDevice*>(context);
+  if (self->stopping_.load(std::memory_order_acquire)) {
+    (void)self->backend_->write(Vec3::Zero());
+    self->frames_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
   self->wrote_in_frame_ = false;
   self->tick_(self->tick_context_, monotonicNow() - self->clock_start_);
   if (!self->wrote_in_frame_) {
@@ -165,12 +184,25 @@ void VendorDevice::startClock(DeviceTickFn tick, void* context) {
   tick_ = tick;
   tick_context_ = context;
   clock_start_ = monotonicNow();
-  backend_->startScheduler(&VendorDevice::onFrame, this);
+  stopping_.store(false, std::memory_order_release);
+  try {
+    backend_->startScheduler(&VendorDevice::onFrame, this);
+  } catch (...) {
+    backend_->stopScheduler();  // nothing of a half-started scheduler may call us later
+    throw;
+  }
   clock_running_ = true;
 }
 
+// Zero force in the SDK's own frames first (writes are valid only there), then stop it.
 void VendorDevice::stopClock() noexcept {
   if (!clock_running_) return;
+  stopping_.store(true, std::memory_order_release);
+  const std::uint64_t seen = frames_.load();
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(50);
+  while (frames_.load() < seen + 2 && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
   backend_->stopScheduler();
   clock_running_ = false;
 }

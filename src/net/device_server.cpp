@@ -132,6 +132,7 @@ class DeviceServer::Impl final : public GuidanceController {
   // Session state (servo thread).
   std::atomic<bool> live_{false};
   std::uint64_t session_id_ = 0;
+  bool confirmed_ = false;  // an authentic COMMAND of this session arrived: STATEs may flow
   device::net::Nonce session_nonce_{};
   device::net::UdpEndpoint client_;
   device::net::SequenceCheck client_sequence_;
@@ -221,7 +222,9 @@ Vec3 DeviceServer::Impl::compute(const PenState& pen, const ContactForces& /*con
     timed_out_ = true;
     bump(command_timeouts_);
   }
-  sendState(pen, no_command);
+  // No stream before the client proves the session with a COMMAND: a replayed HELLO (from any
+  // address) gets one WELCOME, never a stream of STATEs.
+  if (confirmed_) sendState(pen, no_command);
   return force;
 }
 
@@ -252,6 +255,7 @@ void DeviceServer::Impl::handle(const device::net::Packet& packet, const device:
     return;
   }
   const auto& command = std::get<device::net::CommandPayload>(packet.payload);
+  confirmed_ = true;
   command_force_ = command.f_on_pen_W;
   commanded_.store(command_force_);
   have_command_ = true;
@@ -297,7 +301,10 @@ void DeviceServer::Impl::startSession(const device::net::Nonce& nonce, const dev
   timed_out_ = false;
   last_heard_ns_ = rx.arrival_ns;
   live_.store(true, std::memory_order_release);
+  confirmed_ = false;
   bump(sessions_);
+  // A new session starts clean: a fault latched in an earlier one is cleared, forces ramp in.
+  (void)loop_.post({.type = servo::ServoCommand::Type::kClearFault});
   (void)loop_.post({.type = servo::ServoCommand::Type::kRestartRamp});
   sendWelcome();
 }

@@ -24,6 +24,10 @@ ForceSafety::ForceSafety(const SafetyConfig& config, const device::DeviceLimits&
   check(config.wall_stiffness_N_per_m, "wall_stiffness_N_per_m");
   HATTR_THROW_UNLESS(config.max_rate_N_per_s > 0.0, "safety: max_rate_N_per_s: expected > 0, got {}",
                      config.max_rate_N_per_s);
+  // The clamp divides by the limit: a device that declares no force is refused here.
+  HATTR_THROW_UNLESS(std::isfinite(max_force_N_) && max_force_N_ > 0.0,
+                     "safety: the device's force limit must be a finite number > 0 N, got {} (continuous {} N, peak {} N)",
+                     max_force_N_, limits.continuous_force_N, limits.peak_force_N);
 }
 
 Vec3 ForceSafety::softWallForce(const Vec3& p_WT) const noexcept {

@@ -191,7 +191,13 @@ void ServoLoop::stop() {
 }
 
 // The device calls the tick from its own thread; the loop measures the period between calls.
+// Its rate is the device's: gains and passivity bounds were sized for the configured rate, so a
+// device clock at another rate is refused.
 void ServoLoop::startDeviceClock() {
+  const double device_hz = device_.limits().nominal_rate_hz;
+  HATTR_THROW_UNLESS(std::abs(device_hz - config_.rate_hz) <= 0.01 * device_hz,
+                     "{}: the device's clock runs at {} Hz, the servo loop was set up for {} Hz: use --rate {}",
+                     device_.uri(), device_hz, config_.rate_hz, device_hz);
   clock_.store(LoopClock::kDevice, std::memory_order_release);
   last_device_tick_ns_.store(monotonicNow().count(), std::memory_order_release);
   running_.store(true, std::memory_order_release);
@@ -206,6 +212,11 @@ void ServoLoop::startDeviceClock() {
 
 void ServoLoop::deviceTick(void* context, std::chrono::nanoseconds now) noexcept {
   auto* self = static_cast<ServoLoop*>(context);
+  // Stopping: the device's thread gets zero force until its clock has stopped.
+  if (self->stop_requested_.load(std::memory_order_acquire)) {
+    (void)self->device_.write(Vec3::Zero());
+    return;
+  }
   const auto wall = monotonicNow();
   if (self->last_device_wall_.count() >= 0) {
     self->period_error_.record(std::abs((wall - self->last_device_wall_ - self->period_).count()));

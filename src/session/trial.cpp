@@ -1,7 +1,6 @@
 #include "hattr/session/trial.hpp"
 
 #include <cmath>
-#include <optional>
 #include <thread>
 
 #include <fmt/format.h>
@@ -43,7 +42,8 @@ std::string waitUnlessFailed(const servo::ServoLoop& loop, const device::Device&
   using Clock = std::chrono::steady_clock;
   const auto until = Clock::now() + std::chrono::duration<double>(seconds);
   const auto& c = loop.counters();
-  std::optional<Clock::time_point> lost_since;
+  bool lost = false;
+  Clock::time_point lost_since{};
   std::uint64_t last_ticks = c.ticks.load();
   auto last_tick_seen = Clock::now();
   while (Clock::now() < until) {
@@ -55,10 +55,11 @@ std::string waitUnlessFailed(const servo::ServoLoop& loop, const device::Device&
     }
     // Lost: disconnected without a break for the give-up time.
     if (!c.disconnected.load()) {
-      lost_since.reset();
-    } else if (!lost_since) {
+      lost = false;
+    } else if (!lost) {
+      lost = true;
       lost_since = now;
-    } else if (now - *lost_since > kGiveUpAfter) {
+    } else if (now - lost_since > kGiveUpAfter) {
       const std::string reason = device.faultReason();
       return fmt::format("device lost: {}", reason.empty() ? "the device disconnected" : reason);
     }

@@ -81,8 +81,21 @@ std::vector<Packet> everyPacketType() {
   command.hand.altitude_rad = 0.9;
   command.hand.pen_down = true;
 
+  PeerPayload peer;
+  peer.t_s = 12.5;
+  peer.p_WT = Vec3(0.01, -0.02, 0.001);
+  peer.v_WT = Vec3(0.1, 0.05, -0.002);
+  peer.f_user_W = Vec3(0.2, -0.1, -1.3);
+  peer.f_coupling_W = Vec3(-0.4, 0.3, 0.0);
+  peer.energy_in_J = 0.125;
+  peer.energy_out_J = 0.0625;
+  peer.echo_sender_time_ns = 123456789;
+  peer.hold_ns = 4321;
+  peer.coupling = 3;
+  peer.flags = kPeerPenDown | kPeerLinkUp;
+
   return {{header, HelloPayload{nonce}}, {header, welcome}, {header, BusyPayload{nonce}},
-          {header, state},              {header, command}, {header, ByePayload{7}}};
+          {header, state},              {header, command}, {header, ByePayload{7}}, {header, peer}};
 }
 
 bool samePen(const PenState& a, const PenState& b) {
@@ -105,6 +118,13 @@ bool samePayload(const Payload& a, const Payload& b) {
   if (const auto* x = std::get_if<HelloPayload>(&a)) return x->client_nonce == std::get<HelloPayload>(b).client_nonce;
   if (const auto* x = std::get_if<BusyPayload>(&a)) return x->client_nonce == std::get<BusyPayload>(b).client_nonce;
   if (const auto* x = std::get_if<ByePayload>(&a)) return x->reason == std::get<ByePayload>(b).reason;
+  if (const auto* x = std::get_if<PeerPayload>(&a)) {
+    const auto& y = std::get<PeerPayload>(b);
+    return x->t_s == y.t_s && x->p_WT == y.p_WT && x->v_WT == y.v_WT && x->f_user_W == y.f_user_W &&
+           x->f_coupling_W == y.f_coupling_W && x->energy_in_J == y.energy_in_J && x->energy_out_J == y.energy_out_J &&
+           x->echo_sender_time_ns == y.echo_sender_time_ns && x->hold_ns == y.hold_ns && x->coupling == y.coupling &&
+           x->flags == y.flags;
+  }
   if (const auto* x = std::get_if<WelcomePayload>(&a)) {
     const auto& y = std::get<WelcomePayload>(b);
     return x->client_nonce == y.client_nonce && x->rate_hz == y.rate_hz &&
@@ -152,6 +172,7 @@ TEST(NetProtocol, PacketsHaveFixedSizesAndAnExplicitLittleEndianHeader) {
   EXPECT_EQ(packetSize(PacketType::kState), 232u);
   EXPECT_EQ(packetSize(PacketType::kCommand), 168u);
   EXPECT_EQ(packetSize(PacketType::kBye), 72u);
+  EXPECT_EQ(packetSize(PacketType::kPeer), 208u);
   EXPECT_EQ(packetSize(static_cast<PacketType>(99)), 0u);
 
   const Packet command = everyPacketType()[4];
@@ -268,8 +289,8 @@ TEST(KeyFile, AnythingElseIsRefusedNamingTheFileWithoutShowingTheKey) {
       {hex.substr(0, 63), "got 63 characters"},
       {hex + "0", "got 65 characters"},
       {hex + "\n\n", "got 65 characters"},
-      {" " + hex.substr(1), "not hexadecimal at position 1"},
-      {hex.substr(0, 40) + "g" + hex.substr(41), "not hexadecimal at position 41"},
+      {std::string(" ").append(hex, 1), "not hexadecimal at position 1"},
+      {std::string(hex, 0, 40).append("g").append(hex, 41), "not hexadecimal at position 41"},
       {hex + hex + hex, "got a longer file"},
   };
   for (const auto& [text, message] : cases) {

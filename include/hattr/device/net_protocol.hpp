@@ -42,6 +42,7 @@ enum class PacketType : std::uint16_t {
   kState = 4,    ///< server → client (or station → station): the pen
   kCommand = 5,  ///< client → server: the force on the pen, optionally a simulated hand
   kBye = 6,      ///< either way: the session ends
+  kPeer = 7,     ///< station ↔ station (live mentoring): a pen, its person's force, the coupling's energy
 };
 
 /// The fixed size of a packet of this type [bytes] (0 for an unknown type).
@@ -112,11 +113,29 @@ struct CommandPayload {
   HandCommand hand;
 };
 
+/// Live mentoring (docs/mentoring.md): what one station tells the other once per tick.
+struct PeerPayload {
+  double t_s = 0.0;                        ///< the sender's loop time [s]
+  Vec3 p_WT = Vec3::Zero();                ///< its pen tip [m, W]
+  Vec3 v_WT = Vec3::Zero();                ///< [m/s]
+  Vec3 f_user_W = Vec3::Zero();            ///< the force its person exerts on the paper [N]
+  Vec3 f_coupling_W = Vec3::Zero();        ///< the coupling force it applied to its pen [N]
+  double energy_in_J = 0.0;                ///< energy that entered the coupling at its port so far [J] (≥ 0, non-decreasing)
+  double energy_out_J = 0.0;               ///< energy the coupling gave its person so far [J] (≥ 0)
+  std::int64_t echo_sender_time_ns = 0;    ///< sender time of the newest PEER received (0: none)
+  std::int64_t hold_ns = 0;                ///< from its arrival to this packet's sending
+  std::uint32_t coupling = 0;              ///< the coupling the sender runs (net::Coupling as a number)
+  std::uint32_t flags = 0;                 ///< kPeerPenDown, kPeerLinkUp
+};
+inline constexpr std::uint32_t kPeerPenDown = 1u << 0;  ///< its pen touches the paper
+inline constexpr std::uint32_t kPeerLinkUp = 1u << 1;   ///< it hears the other station
+
 struct ByePayload {
   std::uint32_t reason = 0;  ///< 0: normal close
 };
 
-using Payload = std::variant<HelloPayload, WelcomePayload, BusyPayload, StatePayload, CommandPayload, ByePayload>;
+using Payload =
+    std::variant<HelloPayload, WelcomePayload, BusyPayload, StatePayload, CommandPayload, ByePayload, PeerPayload>;
 
 struct Packet {
   PacketHeader header;  ///< header.type is set from the payload when encoding

@@ -3,8 +3,9 @@
  *
  * A plugin is a shared object that exports one symbol, HATTR_PLUGIN_ENTRY_SYMBOL, of type
  * hattr_plugin_entry_fn. The host calls it once after dlopen() and reads the returned table:
- * its first two fields are the ABI version and the table's size, so a newer host can read an
- * older plugin and refuse one it does not understand with both versions in the message.
+ * its first two fields are the ABI version and the table's size. This host accepts version 1
+ * only and refuses any other with both versions in the message; the size field lets a later
+ * version append functions that an older plugin's table does not have.
  *
  * Rules across the line (as CLAP and OpenXR layers have them):
  *   - no C++ types, no exceptions, no allocator mixing: memory is freed by whoever allocated it;
@@ -138,13 +139,16 @@ typedef struct hattr_plugin {
   /* [servo-thread] The pen at host loop time now_ns (since the loop started; for a
    * device-clocked plugin, the now_ns it passed to tick()). */
   int32_t (*read_state)(void* device, int64_t now_ns, hattr_pen_state* out);
-  /* [servo-thread] Commands the force on the pen [N, W] until the next write. The plugin drops
-   * the force to zero by itself when no write arrives for a few periods. */
+  /* [servo-thread] Commands the force on the pen [N, W] until the next write. A plugin whose
+   * device can should drop the force to zero by itself when no write arrives for a few periods
+   * (a hardware watchdog, or, for a device clock, every frame without a write: the vendor
+   * adapter does that). */
   int32_t (*write_force)(void* device, const hattr_vec3* force_N);
   /* [main-thread] Device clock only (HATTR_CLOCK_DEVICE): start calling tick(tick_context,
    * now_ns) once per period from the device's thread. NULL for other devices. */
   int32_t (*start_clock)(void* device, hattr_tick_fn tick, void* tick_context);
-  /* [main-thread] Stop calling tick; returns once no call is running. Zero the force. */
+  /* [main-thread] Stop calling tick; returns once no call is running and the device's force is
+   * zero (the vendor adapter writes zero in the device's last frames before stopping). */
   void (*stop_clock)(void* device);
   /* [any-thread] The last error on this device, or of the last failed open when device is
    * NULL. Never NULL: "" when there is none. */

@@ -81,12 +81,16 @@ class UdpDevice final : public Device {
   [[nodiscard]] LinkStats linkStats() const;
 
  private:
-  enum class Fault : int { kNone, kLinkLost, kServerClosed, kServerBusy, kServerDeviceFault, kServerDeviceDisconnected };
+  enum class Fault : int {
+    kNone, kLinkLost, kServerClosed, kServerBusy, kServerDeviceFault, kServerDeviceDisconnected, kServerSafetyFault,
+    kServerLimitsChanged
+  };
 
   void sendHello(std::int64_t now_ns) noexcept;
   void drain() noexcept;
   void handle(const net::Packet& packet, const net::Received& rx) noexcept;
   void setFault(Fault fault, double gap_ms) noexcept;
+  void checkLimits(const std::string& where) const;
   std::uint64_t bump(std::atomic<std::uint64_t>& counter) noexcept {
     return counter.fetch_add(1, std::memory_order_relaxed);
   }
@@ -110,6 +114,7 @@ class UdpDevice final : public Device {
   std::int64_t last_hello_ns_ = 0;
   bool server_closed_ = false;
   bool server_busy_ = false;
+  bool limits_changed_ = false;  // a reconnection found a device of other limits
 
   // The newest state and the link's timing.
   net::StatePayload state_;

@@ -109,6 +109,7 @@ class VendorDevice final : public Device {
   [[nodiscard]] std::uint64_t unwrittenFrames() const noexcept { return unwritten_frames_.load(); }
 
  private:
+  void describeInSi(double cap, const std::string& cap_text);
   static void onFrame(void* context) noexcept;
   DeviceStatus fail(int kind, int code) noexcept;
 
@@ -123,6 +124,7 @@ class VendorDevice final : public Device {
   std::chrono::nanoseconds clock_start_{0};
   bool wrote_in_frame_ = false;
   bool clock_running_ = false;
+  std::atomic<bool> stopping_{false};  // the last frames write zero, without the host's tick
   std::atomic<std::uint64_t> frames_{0};
   std::atomic<std::uint64_t> unwritten_frames_{0};
   std::atomic<int> fault_kind_{0};

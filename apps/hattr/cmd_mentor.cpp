@@ -1,0 +1,320 @@
+// hattr mentor lead | follow | simulate: live mentoring between two stations over the network
+// (docs/mentoring.md), and the two-station simulation that measures the couplings under delay.
+
+#include <csignal>
+#include <optional>
+#include <iostream>
+#include <sstream>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "cli_common.hpp"
+#include "hattr/core/error.hpp"
+#include "hattr/io/profile_csv.hpp"
+#include "hattr/net/mentor_station.hpp"
+#include "hattr/sim/expert.hpp"
+#include "hattr/sim/data_dir.hpp"
+#include "hattr/sim/glyph.hpp"
+
+namespace hattr::cli {
+namespace {
+
+volatile std::sig_atomic_t g_mentor_stop = 0;
+extern "C" void onMentorStop(int) { g_mentor_stop = 1; }
+
+/// How long the link may stay down before the session is given up (the force is zero from
+/// the first missing hold already).
+constexpr double kGiveUpAfter_s = 0.25;
+
+struct MentorOptions {
+  std::string address;       // lead: --listen; follow: --connect
+  std::string key;
+  std::string device = "sim://pen";
+  std::string coupling = "observe";
+  std::string hand;          // a profile the simulated hand writes once the link is up
+  std::string record;
+  double seconds = 0.0;      // 0: the hand script's length + 0.5 s, or until interrupted
+  double wait_s = 30.0;
+  bool no_passivity = false;
+  bool force = false;
+  bool json = false;
+};
+
+// One station, live: wait for the other, release the hand, record, stop on a lost link.
+void runStation(const MentorOptions& opt, net::MentorRole role) {
+  net::MentorConfig mentor{.role = role, .coupling = net::parseCoupling(opt.coupling), .passivity = !opt.no_passivity,
+                           .key = device::net::readKeyFile(opt.key)};
+  auto socket = device::net::UdpSocket::bound(
+      role == net::MentorRole::kLeader ? device::net::parseUdpEndpoint(opt.address, "--listen", 0)
+                                       : device::net::UdpEndpoint{.address = 0, .port = 0});
+  if (role == net::MentorRole::kFollower) mentor.leader = device::net::parseUdpEndpoint(opt.address, "--connect");
+  net::UdpDatagramLink link(std::move(socket));
+  if (!opt.record.empty() && !opt.force) {
+    HATTR_THROW_UNLESS(!std::filesystem::exists(opt.record), "--record {}: the file exists; use --force to replace it",
+                       opt.record);
+  }
+
+  // The simulated hand (if any) waits, lifted, until both stations are linked.
+  std::optional<HapticProfile> script;
+  std::unique_ptr<device::ProfileHandScript> script_hand;
+  std::unique_ptr<net::HeldHand> hand;
+  if (!opt.hand.empty()) {
+    script = io::readProfileCsv(opt.hand);
+    script_hand = std::make_unique<device::ProfileHandScript>(*script);
+    hand = std::make_unique<net::HeldHand>(*script_hand);
+  }
+  net::StationConfig config{.device_uri = opt.device, .mentor = mentor};
+  config.metadata.subject = role == net::MentorRole::kLeader ? "expert" : "trainee";
+  net::MentorStation station(config, link, hand.get());
+  for (const auto& c : station.clamps()) std::cerr << "hattr: clamped: " << c << '\n';
+
+  std::signal(SIGINT, onMentorStop);
+  std::signal(SIGTERM, onMentorStop);
+  station.loop().requireConsumer(&station.recorder().consumerTime());
+  station.recorder().startThread();
+  station.loop().start();
+  if (role == net::MentorRole::kLeader) {
+    std::cout << "listening on " << link.localEndpoint().text() << std::endl;
+  } else {
+    std::cout << "connecting to " << opt.address << std::endl;
+  }
+
+  // Wait for the other station.
+  const auto loop_time = [&] {
+    Sample s;
+    (void)station.loop().latest().read(s);
+    return s.t_s;
+  };
+  using Clock = std::chrono::steady_clock;
+  const auto wait_until = Clock::now() + std::chrono::duration<double>(opt.wait_s);
+  std::string failure;
+  while (!station.coupling().stats().link_up && !g_mentor_stop) {
+    if (station.coupling().stats().refused_busy) {
+      failure = fmt::format("the leader at {} already mentors another follower", opt.address);
+      break;
+    }
+    if (Clock::now() > wait_until) {
+      failure = fmt::format("no other station within {} s (a wrong key looks like this too: packets are dropped "
+                            "unanswered)", opt.wait_s);
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+
+  // Linked: the hands start together (after the coupling's fade-in) and both sides record.
+  if (failure.empty() && !g_mentor_stop) {
+    std::cout << "linked: coupling " << opt.coupling << std::endl;
+    const double start_s = loop_time() + mentor.ramp_s;
+    if (hand) hand->release(start_s);
+    station.recorder().start();
+    const double duration_s =
+        opt.seconds > 0.0 ? opt.seconds : (script ? script->duration_s() + mentor.ramp_s + 0.5 : 1e9);
+    const auto end = Clock::now() + std::chrono::duration<double>(duration_s);
+    bool down = false;
+    Clock::time_point down_since{};
+    while (Clock::now() < end && !g_mentor_stop) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      const net::MentorStats s = station.coupling().stats();
+      if (s.link_up) {
+        down = false;
+      } else if (!down) {
+        down = true;
+        down_since = Clock::now();
+      } else if (Clock::now() - down_since > std::chrono::duration<double>(kGiveUpAfter_s)) {
+        failure = fmt::format("link lost: nothing from the other station for {:.0f} ms (its force went to zero after "
+                              "{:.0f} ms)",
+                              kGiveUpAfter_s * 1e3, mentor.hold_s * 1e3);
+        break;
+      }
+    }
+  }
+  station.loop().stop();
+  station.recorder().stopThread();
+  station.coupling().close(static_cast<std::int64_t>(loop_time() * 1e9));
+
+  // Whatever was recorded is kept, failure or not.
+  HapticProfile recorded = station.takeRecording();
+  if (!failure.empty()) recorded.metadata().extra["failed"] = failure;
+  const net::MentorStats s = station.coupling().stats();
+  if (!opt.record.empty() && !recorded.empty()) {
+    io::writeProfileCsv(recorded, opt.record, opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
+  }
+  if (opt.json) {
+    nlohmann::json drops = nlohmann::json::object();
+    for (std::size_t i = 0; i < s.drops.size(); ++i) {
+      if (s.drops[i]) drops[std::string(device::net::dropReasonName(static_cast<device::net::DropReason>(i)))] = s.drops[i];
+    }
+    printJson({{"role", std::string(net::roleName(role))},
+               {"coupling", opt.coupling},
+               {"samples", recorded.size()},
+               {"peers_received", s.peers_received},
+               {"peers_sent", s.peers_sent},
+               {"lost", s.lost},
+               {"link_faults", s.link_faults},
+               {"busy_refusals", s.busy_refusals},
+               {"drops", drops},
+               {"energy_in_J", s.energy_in_J},
+               {"energy_out_J", s.energy_out_J},
+               {"dissipated_J", s.dissipated_J},
+               {"rtt_ms", s.rtt_s * 1e3},
+               {"failure", failure}});
+  } else {
+    std::cout << fmt::format("{}: {} samples recorded, {} packets in, {} out, {} lost, {} link faults, energy in {:.4f} J "
+                             "out {:.4f} J\n",
+                             net::roleName(role), recorded.size(), s.peers_received, s.peers_sent, s.lost, s.link_faults,
+                             s.energy_in_J, s.energy_out_J);
+  }
+  if (!failure.empty()) throw Error(failure + (opt.record.empty() ? "" : "; what was recorded is in " + opt.record));
+}
+
+struct SimulateOptions {
+  std::string couplings = "observe,position,force,bilateral";
+  std::string rtt_ms = "0,10,50,100,200";
+  std::string loss_percent = "0,5";
+  std::string passivity = "both";
+  double seconds = 0.0;
+  std::string glyph = "na";
+  std::uint64_t seed = 1;
+  std::string expert_device = "sim://pen";
+  std::string trainee_device = "sim://pen?hand_stiffness_N_per_m=80";
+  bool json = false;
+};
+
+std::vector<double> numberList(const std::string& text, const char* option) {
+  std::vector<double> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    char* end = nullptr;
+    const double v = std::strtod(item.c_str(), &end);
+    HATTR_THROW_UNLESS(!item.empty() && end && *end == '\0' && std::isfinite(v) && v >= 0.0,
+                       "{}: expected comma-separated numbers >= 0, got \"{}\"", option, item);
+    out.push_back(v);
+  }
+  return out;
+}
+
+/// A trainee whose plan lags the expert's by 150 ms and sits 3 mm off it (docs/mentoring.md).
+class LaggingHand final : public device::HandScript {
+ public:
+  explicit LaggingHand(const HapticProfile& plan) : plan_(plan) {}
+  device::HandCommand command(double t_s) noexcept override {
+    device::HandCommand c = plan_.command(std::max(0.0, t_s - 0.15));
+    c.p_target_W += Vec3(0.003, -0.002, 0.0);
+    return c;
+  }
+  void rewind() noexcept override { plan_.rewind(); }
+
+ private:
+  device::ProfileHandScript plan_;
+};
+
+// The table of docs/mentoring.md: coupling × round trip × loss, with the passivity method on and off.
+void runSimulate(const SimulateOptions& opt) {
+  const sim::Glyph glyph = sim::loadGlyph(sim::defaultDataDir() / "glyphs" / (opt.glyph + ".json"));
+  const HapticProfile plan = sim::expertScript(glyph);
+  std::vector<bool> passivity_settings;
+  if (opt.passivity != "off") passivity_settings.push_back(true);
+  if (opt.passivity != "on") passivity_settings.push_back(false);
+  nlohmann::json rows = nlohmann::json::array();
+  if (!opt.json) {
+    std::cout << fmt::format("{:<10} {:>7} {:>6} {:>10} {:>14} {:>11} {:>13} {:>14} {:>11}\n", "coupling", "rtt_ms",
+                             "loss", "passivity", "tracking_mm", "force_N", "energy_J", "dissipated_J", "peak_N");
+  }
+  std::stringstream couplings(opt.couplings);
+  std::string name;
+  while (std::getline(couplings, name, ',')) {
+    const net::Coupling coupling = net::parseCoupling(name);
+    for (const double rtt : numberList(opt.rtt_ms, "--rtt-ms")) {
+      for (const double loss : numberList(opt.loss_percent, "--loss-percent")) {
+        for (const bool passivity : passivity_settings) {
+          if (!passivity && coupling != net::Coupling::kBilateral) continue;  // it acts on bilateral only
+          device::ProfileHandScript expert(plan);
+          LaggingHand trainee(plan);
+          const net::MentoredRun run = net::runMentoredSimulation(
+              {.coupling = coupling, .passivity = passivity, .round_trip_s = rtt * 1e-3, .loss = loss / 100.0,
+               .seed = opt.seed, .duration_s = opt.seconds > 0.0 ? opt.seconds : plan.duration_s() + 0.3,
+               .settle_s = 0.8, .leader_device = opt.expert_device, .follower_device = opt.trainee_device},
+              expert, trainee);
+          rows.push_back({{"coupling", name}, {"rtt_ms", rtt}, {"loss_percent", loss}, {"passivity", passivity},
+                          {"tracking_rms_mm", run.tracking_rms_m * 1e3}, {"force_rms_N", run.force_rms_N},
+                          {"energy_generated_J", run.energy_generated_J}, {"dissipated_J", run.dissipated_J},
+                          {"peak_coupling_force_N", run.peak_coupling_force_N}, {"faults", run.faults},
+                          {"link_faults", run.link_faults}});
+          if (!opt.json) {
+            std::cout << fmt::format("{:<10} {:>7g} {:>5g}% {:>10} {:>14.2f} {:>11.3f} {:>+13.4f} {:>14.4f} {:>11.2f}\n",
+                                     name, rtt, loss, passivity ? "on" : "off", run.tracking_rms_m * 1e3,
+                                     run.force_rms_N, run.energy_generated_J, run.dissipated_J,
+                                     run.peak_coupling_force_N)
+                      << std::flush;
+          }
+        }
+      }
+    }
+  }
+  if (opt.json) printJson({{"glyph", opt.glyph}, {"seed", opt.seed}, {"rows", rows}});
+}
+
+void addStationOptions(CLI::App& cmd, MentorOptions& opt) {
+  cmd.add_option("--key", opt.key, "Shared key file (`hattr device keygen --out FILE`)")->required();
+  cmd.add_option("--device", opt.device, "This station's device URI (see `hattr devices`)")->capture_default_str();
+  cmd.add_option("--hand", opt.hand, "A profile a simulated hand writes on a simulated pen, from when the link is up");
+  cmd.add_option("--record", opt.record, "Write this station's haptic profile here (kept on failure, marked failed)");
+  cmd.add_option("--seconds", opt.seconds, "Record this long once linked (default: the hand script's length, or until "
+                                           "interrupted)")
+      ->check(CLI::Range(0.0, 36000.0));
+  cmd.add_option("--wait", opt.wait_s, "Wait this long for the other station [s]")->check(CLI::Range(0.1, 3600.0))->capture_default_str();
+  cmd.add_flag("--no-passivity", opt.no_passivity, "Turn the passivity observer/controller off (bilateral; for experiments)");
+  cmd.add_flag("--force", opt.force, "Replace the --record file if it exists");
+  cmd.add_flag("--json", opt.json, "Print a JSON summary: samples, packets, lost, link_faults, drops, energy, rtt_ms, failure");
+}
+
+}  // namespace
+
+void registerMentorCommands(CLI::App& app) {
+  auto* mentor = app.add_subcommand("mentor", "Live mentoring: an expert's station leads a trainee's over the network "
+                                              "(docs/mentoring.md)");
+  mentor->require_subcommand(1);
+
+  auto lead_opt = std::make_shared<MentorOptions>();
+  auto* lead = mentor->add_subcommand("lead", "The expert's station: listen for one trainee and share the pen");
+  lead->add_option("--listen", lead_opt->address, "HOST:PORT to listen on (port 0: any free port, printed)")->required();
+  addStationOptions(*lead, *lead_opt);
+  lead->callback([lead_opt] { runStation(*lead_opt, net::MentorRole::kLeader); });
+
+  auto follow_opt = std::make_shared<MentorOptions>();
+  auto* follow = mentor->add_subcommand("follow", "The trainee's station: connect to the expert's and be coupled");
+  follow->add_option("--connect", follow_opt->address, "The leader's HOST:PORT")->required();
+  follow->add_option("--coupling", follow_opt->coupling, "observe, position, force or bilateral")
+      ->check(CLI::IsMember({"observe", "position", "force", "bilateral"}))
+      ->capture_default_str();
+  addStationOptions(*follow, *follow_opt);
+  follow->callback([follow_opt] { runStation(*follow_opt, net::MentorRole::kFollower); });
+
+  auto sim_opt = std::make_shared<SimulateOptions>();
+  auto* simulate = mentor->add_subcommand(
+      "simulate", "Two simulated stations on an emulated link, in simulated time: the simulated expert writes the "
+                  "glyph, a lagging trainee is coupled; tracking error, force error and the couplings' energy per "
+                  "coupling × round trip × loss, with the passivity method on and off");
+  simulate->add_option("--couplings", sim_opt->couplings, "Comma-separated couplings")->capture_default_str();
+  simulate->add_option("--rtt-ms", sim_opt->rtt_ms, "Comma-separated round trips [ms]")->capture_default_str();
+  simulate->add_option("--loss-percent", sim_opt->loss_percent, "Comma-separated loss rates [%]")->capture_default_str();
+  simulate->add_option("--passivity", sim_opt->passivity, "on, off or both (off rows for bilateral only)")
+      ->check(CLI::IsMember({"on", "off", "both"}))
+      ->capture_default_str();
+  simulate->add_option("--seconds", sim_opt->seconds, "Recorded time per run (default: the glyph's length + 0.3 s)")
+      ->check(CLI::Range(0.1, 600.0));
+  simulate->add_option("--glyph", sim_opt->glyph, "The glyph the expert writes")->capture_default_str();
+  simulate->add_option("--seed", sim_opt->seed, "Link emulator seed")->capture_default_str();
+  simulate->add_option("--expert-device", sim_opt->expert_device, "The expert's simulated pen and hand (sim:// keys)")
+      ->capture_default_str();
+  simulate->add_option("--trainee-device", sim_opt->trainee_device,
+                       "The trainee's simulated pen and hand (default: a compliant grip, 80 N/m)")
+      ->capture_default_str();
+  simulate->add_flag("--json", sim_opt->json, "Print JSON: rows of coupling, rtt_ms, loss_percent, passivity, "
+                                              "tracking_rms_mm, force_rms_N, energy_generated_J, dissipated_J, ...");
+  simulate->callback([sim_opt] { runSimulate(*sim_opt); });
+}
+
+}  // namespace hattr::cli

@@ -1,0 +1,135 @@
+// Live mentoring: the couplings, the passivity controller, the two-station simulation under
+// delay and loss, and the handshake's refusals.
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "hattr/analysis/dtw.hpp"
+#include "hattr/core/error.hpp"
+#include "hattr/net/mentor_station.hpp"
+#include "support/no_allocation.hpp"
+
+namespace hattr::net {
+namespace {
+
+constexpr double kPi = 3.141592653589793;
+
+/// What the expert writes: a loop and a stroke over 2.4 s, pressing 1.2 N.
+HapticProfile expertScript() {
+  HapticProfile p;
+  for (int i = 0; i <= 240; ++i) {
+    Sample s;
+    s.t_s = i * 0.01;
+    const double w = 2.0 * kPi / 2.4;
+    s.p_WT = Vec3(0.02 * std::sin(w * s.t_s), 0.012 * std::sin(2.0 * w * s.t_s), 0.0);
+    s.v_WT = Vec3(0.02 * w * std::cos(w * s.t_s), 0.024 * w * std::cos(2.0 * w * s.t_s), 0.0);
+    s.f_user_W = Vec3(0.0, 0.0, -1.2);
+    s.pen_down = true;
+    p.append(s);
+  }
+  return p;
+}
+
+/// A trainee whose plan lags the expert's and sits a little off it.
+class LaggingHand final : public device::HandScript {
+ public:
+  LaggingHand(const HapticProfile& script, double lag_s, Vec3 offset_W) : base_(script), lag_s_(lag_s), offset_W_(offset_W) {}
+  device::HandCommand command(double t_s) noexcept override {
+    device::HandCommand c = base_.command(std::max(0.0, t_s - lag_s_));
+    c.p_target_W += offset_W_;
+    return c;
+  }
+  void rewind() noexcept override { base_.rewind(); }
+
+ private:
+  device::ProfileHandScript base_;
+  double lag_s_;
+  Vec3 offset_W_;
+};
+
+/// The follower's pen: held by a compliant hand, so guidance can move it.
+constexpr const char* kTraineePen = "sim://pen?hand_stiffness_N_per_m=80";
+
+MentoredRun mentored(Coupling coupling, double rtt_s, double loss, bool passivity = true, double duration_s = 2.4) {
+  const HapticProfile script = expertScript();
+  device::ProfileHandScript expert(script);
+  LaggingHand trainee(script, 0.15, Vec3(0.003, -0.002, 0.0));
+  MentoredSetup setup{.coupling = coupling, .passivity = passivity, .round_trip_s = rtt_s, .loss = loss, .seed = 11,
+                      .duration_s = duration_s, .settle_s = 0.8, .follower_device = kTraineePen};
+  return runMentoredSimulation(setup, expert, trainee);
+}
+
+double trajectoryDtw(const HapticProfile& a, const HapticProfile& b) {
+  double sum = 0.0;
+  for (const char* axis : {"x", "y"}) sum += analysis::dtwDistance(a.channel(axis), b.channel(axis));
+  return sum / static_cast<double>(a.size());
+}
+
+TEST(Mentoring, EveryCouplingIsStableAt100MsAnd5PercentLossAndGuidanceBringsTheTraineeCloser) {
+  const MentoredRun alone = mentored(Coupling::kObserve, 0.1, 0.05);
+  const double unguided = trajectoryDtw(alone.leader, alone.follower);
+  for (const Coupling c : {Coupling::kObserve, Coupling::kPosition, Coupling::kForce, Coupling::kBilateral}) {
+    const MentoredRun run = mentored(c, 0.1, 0.05);
+    const double dtw = trajectoryDtw(run.leader, run.follower);
+    std::printf("%-9s tracking %.2f mm, force %.3f N, energy %+.4f J, dissipated %.4f J, peak %.2f N, DTW %.3f mm "
+                "(unguided %.3f mm), link faults %llu\n",
+                std::string(couplingName(c)).c_str(), run.tracking_rms_m * 1e3, run.force_rms_N, run.energy_generated_J,
+                run.dissipated_J, run.peak_coupling_force_N, dtw * 1e3, unguided * 1e3,
+                static_cast<unsigned long long>(run.link_faults));
+    EXPECT_EQ(run.faults, 0u) << couplingName(c);
+    EXPECT_EQ(run.link_faults, 0u) << couplingName(c);
+    EXPECT_GT(run.follower.size(), 2300u);
+    // Bounded: the couplings' net work stays within what one pen's coupling could do in a stroke.
+    EXPECT_LT(std::abs(run.energy_generated_J), 0.5) << couplingName(c);
+    if (c == Coupling::kPosition || c == Coupling::kBilateral) {
+      EXPECT_LT(dtw, 0.7 * unguided) << couplingName(c);
+    }
+    if (c == Coupling::kBilateral) {
+      EXPECT_LE(run.energy_generated_J, 1e-9);
+    }
+    if (c == Coupling::kObserve) {
+      EXPECT_EQ(run.peak_coupling_force_N, 0.0);
+    }
+  }
+}
+
+TEST(Mentoring, WithoutThePassivityControllerLooselyHeldPensGoUnstableUnderDelayWithItTheyDoNot) {
+  // Both people hold their pens loosely (no grip stiffness, little damping): the bilateral
+  // spring closes a loop over a 200 ms round trip.
+  constexpr const char* kLoose = "sim://pen?hand_stiffness_N_per_m=0&hand_damping_N_s_per_m=0.2";
+  const HapticProfile script = expertScript();
+  const auto run = [&](bool passivity) {
+    device::ProfileHandScript expert(script);
+    LaggingHand trainee(script, 0.15, Vec3(0.003, -0.002, 0.0));
+    return runMentoredSimulation({.coupling = Coupling::kBilateral, .passivity = passivity, .round_trip_s = 0.2,
+                                  .seed = 3, .duration_s = 2.4, .settle_s = 0.8, .leader_device = kLoose,
+                                  .follower_device = kLoose},
+                                 expert, trainee);
+  };
+  const MentoredRun off = run(false);
+  const MentoredRun on = run(true);
+  std::printf("passivity off: energy %+.3f J, tracking %.2f mm; on: energy %+.6f J, tracking %.2f mm, dissipated %.4f J\n",
+              off.energy_generated_J, off.tracking_rms_m * 1e3, on.energy_generated_J, on.tracking_rms_m * 1e3,
+              on.dissipated_J);
+  EXPECT_GT(off.energy_generated_J, 1.0);
+  EXPECT_GT(off.tracking_rms_m, 0.005);
+  EXPECT_LE(on.energy_generated_J, 1e-9);
+  EXPECT_LT(on.tracking_rms_m, 0.002);
+  EXPECT_GT(on.dissipated_J, 0.0);
+}
+
+TEST(Mentoring, CouplingNamesRoundTripAndBadOnesAreRefused) {
+  for (const Coupling c : {Coupling::kObserve, Coupling::kPosition, Coupling::kForce, Coupling::kBilateral}) {
+    EXPECT_EQ(parseCoupling(couplingName(c)), c);
+  }
+  try {
+    (void)parseCoupling("telepathy");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "coupling: expected observe, position, force or bilateral, got \"telepathy\"");
+  }
+}
+
+}  // namespace
+}  // namespace hattr::net
