@@ -195,21 +195,6 @@ std::vector<double> numberList(const std::string& text, const char* option) {
   return out;
 }
 
-/// A trainee whose plan lags the expert's by 150 ms and sits 3 mm off it (docs/mentoring.md).
-class LaggingHand final : public device::HandScript {
- public:
-  explicit LaggingHand(const HapticProfile& plan) : plan_(plan) {}
-  device::HandCommand command(double t_s) noexcept override {
-    device::HandCommand c = plan_.command(std::max(0.0, t_s - 0.15));
-    c.p_target_W += Vec3(0.003, -0.002, 0.0);
-    return c;
-  }
-  void rewind() noexcept override { plan_.rewind(); }
-
- private:
-  device::ProfileHandScript plan_;
-};
-
 // The table of docs/mentoring.md: coupling × round trip × loss, with the passivity method on and off.
 void runSimulate(const SimulateOptions& opt) {
   const sim::Glyph glyph = sim::loadGlyph(sim::defaultDataDir() / "glyphs" / (opt.glyph + ".json"));
@@ -231,7 +216,7 @@ void runSimulate(const SimulateOptions& opt) {
         for (const bool passivity : passivity_settings) {
           if (!passivity && coupling != net::Coupling::kBilateral) continue;  // it acts on bilateral only
           device::ProfileHandScript expert(plan);
-          LaggingHand trainee(plan);
+          net::LaggingHand trainee(plan);
           const net::MentoredRun run = net::runMentoredSimulation(
               {.coupling = coupling, .passivity = passivity, .round_trip_s = rtt * 1e-3, .loss = loss / 100.0,
                .seed = opt.seed, .duration_s = opt.seconds > 0.0 ? opt.seconds : plan.duration_s() + 0.3,

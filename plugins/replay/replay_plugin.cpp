@@ -14,14 +14,13 @@
 #include <atomic>
 #include <cmath>
 #include <filesystem>
-#include <thread>
 
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
 #include "hattr/device/plugin_export.hpp"
 #include "hattr/io/profile_csv.hpp"
-#include "hattr/servo/realtime.hpp"
+#include "common/clock_thread.hpp"
 
 namespace {
 
@@ -34,7 +33,7 @@ class ReplayDevice final : public Device {
       : profile_(std::move(profile)),
         forces_out_(std::move(forces_out)),
         own_clock_(own_clock),
-        period_(std::llround(1e9 / rate_hz)),
+        clock_(std::chrono::nanoseconds(std::llround(1e9 / rate_hz))),
         uri_("plugin:replay") {
     limits_.nominal_rate_hz = rate_hz;
     // Room for every write of the profile's length plus a minute, so write() never allocates.
@@ -99,22 +98,10 @@ class ReplayDevice final : public Device {
   }
 
   void startClock(DeviceTickFn tick, void* context) override {
-    HATTR_DEMAND(own_clock_ && !thread_.joinable(), "clock already running or not device-clocked");
-    stop_.store(false);
-    thread_ = std::thread([this, tick, context] {
-      const auto start = servo::monotonicNow();
-      auto deadline = start;
-      while (!stop_.load(std::memory_order_acquire)) {
-        tick(context, servo::monotonicNow() - start);
-        deadline += period_;
-        servo::sleepUntil(deadline, std::chrono::nanoseconds(0));
-      }
-    });
+    HATTR_DEMAND(own_clock_, "startClock on a plugin:replay without clock=device");
+    clock_.start(tick, context);
   }
-  void stopClock() noexcept override {
-    stop_.store(true, std::memory_order_release);
-    if (thread_.joinable()) thread_.join();
-  }
+  void stopClock() noexcept override { clock_.stop(); }
 
  private:
   // The kept forces as a haptic profile (positions as replayed, f_cmd as received).
@@ -145,15 +132,13 @@ class ReplayDevice final : public Device {
   HapticProfile profile_;
   std::filesystem::path forces_out_;
   bool own_clock_;
-  std::chrono::nanoseconds period_;
+  plugins::ClockThread clock_;
   std::string uri_;
   DeviceLimits limits_;
   std::size_t cursor_ = 0;
   PenState last_;
   std::vector<Sample> forces_;
   std::atomic<std::uint64_t> dropped_{0};
-  std::atomic<bool> stop_{false};
-  std::thread thread_;
 };
 
 std::unique_ptr<Device> openReplay(const DeviceUri& uri, HandScript* /*host_hand*/) {

@@ -5,16 +5,14 @@
 // its own 1 kHz thread that calls the host's tick, as vendor schedulers do.
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <thread>
 
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
 #include "hattr/device/plugin_export.hpp"
 #include "hattr/device/simulated_device.hpp"
-#include "hattr/servo/realtime.hpp"
+#include "common/clock_thread.hpp"
 
 namespace {
 
@@ -28,7 +26,9 @@ constexpr double kLiftHeight_m = 0.003;
 class SimPluginDevice final : public Device {
  public:
   SimPluginDevice(const SimulatedPenParams& params, HandScript* hand, bool own_clock, double rate_hz)
-      : pen_(params, hand, "plugin:sim"), own_clock_(own_clock), period_(std::llround(1e9 / rate_hz)) {}
+      : pen_(params, hand, "plugin:sim"),
+        own_clock_(own_clock),
+        clock_(std::chrono::nanoseconds(std::llround(1e9 / rate_hz))) {}
   ~SimPluginDevice() override { stopClock(); }
 
   DeviceStatus read(std::chrono::nanoseconds now, PenState& out) noexcept override { return pen_.read(now, out); }
@@ -40,32 +40,17 @@ class SimPluginDevice final : public Device {
     return own_clock_ ? DeviceClocking::kDeviceClock : DeviceClocking::kSimulatable;
   }
 
-  // The device's thread: absolute deadlines at its rate, its own time since the start.
+  // The device's own thread at its rate; the force is zero when it stops.
   void startClock(DeviceTickFn tick, void* context) override {
-    HATTR_DEMAND(own_clock_ && !thread_.joinable(), "clock already running or not device-clocked");
-    stop_.store(false);
-    thread_ = std::thread([this, tick, context] {
-      const auto start = servo::monotonicNow();
-      auto deadline = start;
-      while (!stop_.load(std::memory_order_acquire)) {
-        tick(context, servo::monotonicNow() - start);
-        deadline += period_;
-        servo::sleepUntil(deadline, std::chrono::nanoseconds(0));
-      }
-      (void)pen_.write(Vec3::Zero());
-    });
+    HATTR_DEMAND(own_clock_, "startClock on a plugin:sim without clock=device");
+    clock_.start(tick, context, [this] { (void)pen_.write(Vec3::Zero()); });
   }
-  void stopClock() noexcept override {
-    stop_.store(true, std::memory_order_release);
-    if (thread_.joinable()) thread_.join();
-  }
+  void stopClock() noexcept override { clock_.stop(); }
 
  private:
   SimulatedDevice pen_;
   bool own_clock_;
-  std::chrono::nanoseconds period_;
-  std::atomic<bool> stop_{false};
-  std::thread thread_;
+  plugins::ClockThread clock_;
 };
 
 std::unique_ptr<Device> openSim(const DeviceUri& uri, HandScript* hand) {

@@ -17,6 +17,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "hattr/io/profile_csv.hpp"
 #include "support/test_support.hpp"
 
 extern char** environ;
@@ -193,6 +194,32 @@ TEST(DeviceServeCli, RecordOverUdpWritesTheProfileTheServersPenDrew) {
   EXPECT_GT(json["samples"].get<int>(), 100);
   server.signal(SIGTERM);
   EXPECT_EQ(server.wait(), 0);
+}
+
+TEST(DeviceServeCli, KillingTheServerMidTrialFailsTheTrialWithTheReasonAndKeepsWhatWasRecorded) {
+  test::TempDir dir;
+  const std::string key = makeKey(dir);
+  ServeProcess server(dir, key);
+  ASSERT_THAT(server.firstLine(), HasSubstr("listening on 127.0.0.1:"));
+  test::writeText(dir / "hand.csv",
+                  "t_s,x_m,y_m,z_m,fx_N,fy_N,fz_N,pen_down_bool\n0,0,0,0,0,0,-1,1\n3,0.01,0.01,0,0,0,-1,1\n");
+  const std::string uri = "udp://" + server.address() + "?key=" + key;
+  // The trial: 0.3 s settling, then 3 s; the server dies 1.3 s in.
+  std::thread killer([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1300));
+    server.signal(SIGKILL);
+  });
+  const RunResult r = runHattr(dir, "record --clock real --hand " + (dir / "hand.csv").string() + " -o " +
+                                        (dir / "partial.csv").string() + " --device '" + uri + "'");
+  killer.join();
+  EXPECT_EQ(server.wait(), 128 + SIGKILL);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("the trial failed after"));
+  EXPECT_THAT(r.err, HasSubstr("device lost: link lost: no state from " + server.address()));
+  const HapticProfile partial = io::readProfileCsv(dir / "partial.csv");
+  EXPECT_GT(partial.duration_s(), 0.5);
+  EXPECT_LT(partial.duration_s(), 2.5);
+  EXPECT_THAT(partial.metadata().extra.at("failed"), HasSubstr("link lost"));
 }
 
 TEST(DeviceServeCli, KillingTheServerWithSigkillFaultsTheClientWithTheLinkReason) {

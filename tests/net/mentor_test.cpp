@@ -8,45 +8,14 @@
 #include "hattr/analysis/dtw.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/net/mentor_station.hpp"
+#include "net/writing_script.hpp"
 #include "support/no_allocation.hpp"
 
 namespace hattr::net {
 namespace {
 
-constexpr double kPi = 3.141592653589793;
-
 /// What the expert writes: a loop and a stroke over 2.4 s, pressing 1.2 N.
-HapticProfile expertScript() {
-  HapticProfile p;
-  for (int i = 0; i <= 240; ++i) {
-    Sample s;
-    s.t_s = i * 0.01;
-    const double w = 2.0 * kPi / 2.4;
-    s.p_WT = Vec3(0.02 * std::sin(w * s.t_s), 0.012 * std::sin(2.0 * w * s.t_s), 0.0);
-    s.v_WT = Vec3(0.02 * w * std::cos(w * s.t_s), 0.024 * w * std::cos(2.0 * w * s.t_s), 0.0);
-    s.f_user_W = Vec3(0.0, 0.0, -1.2);
-    s.pen_down = true;
-    p.append(s);
-  }
-  return p;
-}
-
-/// A trainee whose plan lags the expert's and sits a little off it.
-class LaggingHand final : public device::HandScript {
- public:
-  LaggingHand(const HapticProfile& script, double lag_s, Vec3 offset_W) : base_(script), lag_s_(lag_s), offset_W_(offset_W) {}
-  device::HandCommand command(double t_s) noexcept override {
-    device::HandCommand c = base_.command(std::max(0.0, t_s - lag_s_));
-    c.p_target_W += offset_W_;
-    return c;
-  }
-  void rewind() noexcept override { base_.rewind(); }
-
- private:
-  device::ProfileHandScript base_;
-  double lag_s_;
-  Vec3 offset_W_;
-};
+HapticProfile expertScript() { return test::figureEightScript(2.4); }
 
 /// The follower's pen: held by a compliant hand, so guidance can move it.
 constexpr const char* kTraineePen = "sim://pen?hand_stiffness_N_per_m=80";
@@ -54,7 +23,7 @@ constexpr const char* kTraineePen = "sim://pen?hand_stiffness_N_per_m=80";
 MentoredRun mentored(Coupling coupling, double rtt_s, double loss, bool passivity = true, double duration_s = 2.4) {
   const HapticProfile script = expertScript();
   device::ProfileHandScript expert(script);
-  LaggingHand trainee(script, 0.15, Vec3(0.003, -0.002, 0.0));
+  LaggingHand trainee(script);
   MentoredSetup setup{.coupling = coupling, .passivity = passivity, .round_trip_s = rtt_s, .loss = loss, .seed = 11,
                       .duration_s = duration_s, .settle_s = 0.8, .follower_device = kTraineePen};
   return runMentoredSimulation(setup, expert, trainee);
@@ -101,7 +70,7 @@ TEST(Mentoring, WithoutThePassivityControllerLooselyHeldPensGoUnstableUnderDelay
   const HapticProfile script = expertScript();
   const auto run = [&](bool passivity) {
     device::ProfileHandScript expert(script);
-    LaggingHand trainee(script, 0.15, Vec3(0.003, -0.002, 0.0));
+    LaggingHand trainee(script);
     return runMentoredSimulation({.coupling = Coupling::kBilateral, .passivity = passivity, .round_trip_s = 0.2,
                                   .seed = 3, .duration_s = 2.4, .settle_s = 0.8, .leader_device = kLoose,
                                   .follower_device = kLoose},

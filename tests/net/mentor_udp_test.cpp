@@ -10,41 +10,15 @@
 
 #include "hattr/analysis/dtw.hpp"
 #include "hattr/net/mentor_station.hpp"
+#include "net/writing_script.hpp"
 
 namespace hattr::net {
 namespace {
 
 using namespace std::chrono_literals;
-constexpr double kPi = 3.141592653589793;
 
-HapticProfile expertScript() {
-  HapticProfile p;
-  for (int i = 0; i <= 200; ++i) {
-    Sample s;
-    s.t_s = i * 0.01;
-    const double w = 2.0 * kPi / 2.0;
-    s.p_WT = Vec3(0.02 * std::sin(w * s.t_s), 0.012 * std::sin(2.0 * w * s.t_s), 0.0);
-    s.v_WT = Vec3(0.02 * w * std::cos(w * s.t_s), 0.024 * w * std::cos(2.0 * w * s.t_s), 0.0);
-    s.f_user_W = Vec3(0.0, 0.0, -1.2);
-    s.pen_down = true;
-    p.append(s);
-  }
-  return p;
-}
+HapticProfile expertScript() { return test::figureEightScript(2.0); }
 
-class LaggingHand final : public device::HandScript {
- public:
-  explicit LaggingHand(const HapticProfile& script) : base_(script) {}
-  device::HandCommand command(double t_s) noexcept override {
-    device::HandCommand c = base_.command(std::max(0.0, t_s - 0.15));
-    c.p_target_W += Vec3(0.003, -0.002, 0.0);
-    return c;
-  }
-  void rewind() noexcept override { base_.rewind(); }
-
- private:
-  device::ProfileHandScript base_;
-};
 
 /// A live station on its own real-time loop, its simulated hand released once linked.
 struct LiveStation {

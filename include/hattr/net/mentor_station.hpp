@@ -7,6 +7,7 @@
 ///
 /// Threads: setup and the run functions are main-thread code; the loop runs the coupling.
 
+#include <algorithm>
 #include <memory>
 #include <string>
 
@@ -35,6 +36,25 @@ class HeldHand final : public device::HandScript {
   device::HandScript& script_;
   device::HandCommand lifted_;
   std::atomic<double> start_s_{std::numeric_limits<double>::infinity()};
+};
+
+/// The simulated trainee of the mentoring tests and table (docs/mentoring.md): plays the
+/// expert's plan `lag_s` late and `offset_W` off it. Servo thread: noexcept, no allocation.
+class LaggingHand final : public device::HandScript {
+ public:
+  LaggingHand(const HapticProfile& plan, double lag_s = 0.15, Vec3 offset_W = Vec3(0.003, -0.002, 0.0))
+      : plan_(plan), lag_s_(lag_s), offset_W_(offset_W) {}
+  device::HandCommand command(double t_s) noexcept override {
+    device::HandCommand c = plan_.command(std::max(0.0, t_s - lag_s_));
+    c.p_target_W += offset_W_;
+    return c;
+  }
+  void rewind() noexcept override { plan_.rewind(); }
+
+ private:
+  device::ProfileHandScript plan_;
+  double lag_s_;
+  Vec3 offset_W_;
 };
 
 struct StationConfig {

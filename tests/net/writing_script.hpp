@@ -1,0 +1,28 @@
+#pragma once
+// The expert's writing in the network tests: a figure of eight (20 mm wide, 12 mm high) written
+// once in `period_s`, pressing 1.2 N, sampled every 10 ms.
+
+#include <cmath>
+
+#include "hattr/core/haptic_profile.hpp"
+
+namespace hattr::test {
+
+inline HapticProfile figureEightScript(double period_s) {
+  constexpr double kPi = 3.141592653589793;
+  HapticProfile p;
+  const int n = static_cast<int>(std::lround(period_s * 100.0));
+  for (int i = 0; i <= n; ++i) {
+    Sample s;
+    s.t_s = i * 0.01;
+    const double w = 2.0 * kPi / period_s;
+    s.p_WT = Vec3(0.02 * std::sin(w * s.t_s), 0.012 * std::sin(2.0 * w * s.t_s), 0.0);
+    s.v_WT = Vec3(0.02 * w * std::cos(w * s.t_s), 0.024 * w * std::cos(2.0 * w * s.t_s), 0.0);
+    s.f_user_W = Vec3(0.0, 0.0, -1.2);
+    s.pen_down = true;
+    p.append(s);
+  }
+  return p;
+}
+
+}  // namespace hattr::test
