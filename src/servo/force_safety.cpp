@@ -2,10 +2,21 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "hattr/core/error.hpp"
 
 namespace hattr::servo {
+namespace {
+
+/// No stage or wall ever asks for this much force on a hand-held pen: above it the request is
+/// a broken computation, not a force, and the path latches a fault instead of clamping (the
+/// clamp's arithmetic would overflow far above it, near 1e154 N).
+constexpr double kAbsurdForce_N = 1e6;
+
+bool sane(const Vec3& force) noexcept { return force.allFinite() && force.cwiseAbs().maxCoeff() <= kAbsurdForce_N; }
+
+}  // namespace
 
 ForceSafety::ForceSafety(const SafetyConfig& config, const device::DeviceLimits& limits)
     : config_(config),
@@ -37,9 +48,10 @@ Vec3 ForceSafety::softWallForce(const Vec3& p_WT) const noexcept {
 }
 
 Vec3 ForceSafety::filter(const Vec3& world_W, const Vec3& guidance_W, const Vec3& p_WT, double dt_s) noexcept {
-  // A latched fault, or a bad number now: zero force at once (no rate limit on stopping).
-  if (fault_ == SafetyFault::kNone &&
-      !(world_W.allFinite() && guidance_W.allFinite() && p_WT.allFinite() && std::isfinite(dt_s))) {
+  // A latched fault, or a bad number now (non-finite, or absurdly large): zero force at once
+  // (no rate limit on stopping). Walls far outside the workspace count as absurd too.
+  const Vec3 world = sane(world_W) && p_WT.allFinite() ? Vec3(world_W + softWallForce(p_WT)) : Vec3(Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
+  if (fault_ == SafetyFault::kNone && !(sane(world) && sane(guidance_W) && std::isfinite(dt_s))) {
     latchFault(SafetyFault::kNonFiniteForce);
   }
   if (fault_ != SafetyFault::kNone) {
@@ -51,7 +63,6 @@ Vec3 ForceSafety::filter(const Vec3& world_W, const Vec3& guidance_W, const Vec3
   // Soft walls with the world's force, then the magnitude clamp: the guidance is scaled down
   // first (the largest s in [0, 1] with |W + s·G| <= max), the world's force only if it alone
   // exceeds the limit.
-  const Vec3 world = world_W + softWallForce(p_WT);
   Vec3 force = world + guidance_W;
   if (force.norm() > max_force_N_) {
     ++clamps_;
@@ -60,8 +71,9 @@ Vec3 ForceSafety::filter(const Vec3& world_W, const Vec3& guidance_W, const Vec3
       force = world * (max_force_N_ / std::sqrt(w2));
     } else {
       const double a = guidance_W.squaredNorm(), b = 2.0 * world.dot(guidance_W), c = w2 - m2;
-      const double s = (-b + std::sqrt(b * b - 4.0 * a * c)) / (2.0 * a);  // c < 0: one positive root
-      force = world + std::clamp(s, 0.0, 1.0) * guidance_W;
+      // c < 0: one positive root; a guidance too small to square (denormal) gives way entirely.
+      const double s = a > 0.0 ? (-b + std::sqrt(std::max(0.0, b * b - 4.0 * a * c))) / (2.0 * a) : 0.0;
+      force = world + std::clamp(std::isfinite(s) ? s : 0.0, 0.0, 1.0) * guidance_W;
     }
   }
 
@@ -75,6 +87,8 @@ Vec3 ForceSafety::filter(const Vec3& world_W, const Vec3& guidance_W, const Vec3
   const double max_step = config_.max_rate_N_per_s * dt;
   const double step_norm = step.norm();
   last_W_ += step_norm > max_step ? Vec3(step * (max_step / step_norm)) : step;
+  // Total by construction; checked anyway, since a device must never see anything else.
+  if (!last_W_.allFinite() || last_W_.norm() > max_force_N_ * (1.0 + 1e-9)) latchFault(SafetyFault::kNonFiniteForce);
   return last_W_;
 }
 
