@@ -76,8 +76,17 @@ void runServe(const ServeOptions& opt) {
   std::cout << "listening on " << server.endpoint().text() << std::endl;
   const auto start = std::chrono::steady_clock::now();
   const auto limit = std::chrono::duration<double>(opt.seconds);
+  // Say on stderr when a client's session opens and ends (stdout stays the report).
+  std::uint64_t sessions_told = 0;
+  bool live_told = false;
   while (g_stop_signal == 0 && (opt.seconds <= 0.0 || std::chrono::steady_clock::now() - start < limit)) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    const bool live = server.sessionLive();
+    const std::uint64_t sessions = server.stats().sessions;
+    if (sessions != sessions_told && live) std::cerr << fmt::format("hattr: session {} opened", sessions) << std::endl;
+    if (live_told && !live) std::cerr << "hattr: session ended" << std::endl;
+    sessions_told = live ? sessions : sessions_told;
+    live_told = live;
   }
   server.stop();
 

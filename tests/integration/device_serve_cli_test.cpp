@@ -80,6 +80,17 @@ class ServeProcess {
     return first_line_.starts_with(prefix) ? first_line_.substr(prefix.size()) : std::string{};
   }
   void signal(int number) const { ::kill(pid_, number); }
+  /// Waits (up to `timeout`) until the server says on stderr that the client's `n`-th session
+  /// opened (a client command first opens the device once to read its limits: session 1).
+  bool waitForSession(const test::TempDir& dir, int n, std::chrono::milliseconds timeout) const {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    const std::string line = "session " + std::to_string(n) + " opened";
+    while (std::chrono::steady_clock::now() < deadline) {
+      if (test::readText(dir / "serve.err").find(line) != std::string::npos) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return false;
+  }
   /// Waits for the exit; returns the exit code (or 128 + signal).
   int wait() {
     int status = 0;
@@ -204,10 +215,9 @@ TEST(DeviceServeCli, KillingTheServerMidTrialFailsTheTrialWithTheReasonAndKeepsW
   test::writeText(dir / "hand.csv",
                   "t_s,x_m,y_m,z_m,fx_N,fy_N,fz_N,pen_down_bool\n0,0,0,0,0,0,-1,1\n6,0.01,0.01,0,0,0,-1,1\n");
   const std::string uri = "udp://" + server.address() + "?key=" + key;
-  // The trial: 0.3 s settling, then 6 s; the server dies 3 s after the client was started
-  // (slow starts under the sanitizers included, well inside the recording).
+  // The trial: 0.3 s settling, then 6 s; the server dies 1.3 s after the client's session opened.
   std::thread killer([&] {
-    std::this_thread::sleep_for(std::chrono::milliseconds(3000));
+    if (server.waitForSession(dir, 2, std::chrono::seconds(20))) std::this_thread::sleep_for(std::chrono::milliseconds(1300));
     server.signal(SIGKILL);
   });
   const RunResult r = runHattr(dir, "record --clock real --hand " + (dir / "hand.csv").string() + " -o " +
@@ -229,13 +239,13 @@ TEST(DeviceServeCli, KillingTheServerWithSigkillFaultsTheClientWithTheLinkReason
   ServeProcess server(dir, key);
   ASSERT_THAT(server.firstLine(), HasSubstr("listening on 127.0.0.1:"));
   const std::string uri = "udp://" + server.address() + "?key=" + key;
-  // servo-check measures the floor for 2.5 s, then runs the loop over the link for 2.5 s; the
-  // server dies at 3.5 s, in the loop's run even when the program starts slowly (sanitizers).
+  // servo-check measures the floor for 1 s, then opens the device and runs the loop over the
+  // link for 1 s; the server dies 0.5 s after the client's session opened.
   std::thread killer([&] {
-    std::this_thread::sleep_for(std::chrono::milliseconds(3500));
+    if (server.waitForSession(dir, 2, std::chrono::seconds(20))) std::this_thread::sleep_for(std::chrono::milliseconds(500));
     server.signal(SIGKILL);
   });
-  const RunResult check = runHattr(dir, "servo-check --realtime skip --seconds 2.5 --json --device '" + uri + "'");
+  const RunResult check = runHattr(dir, "servo-check --realtime skip --seconds 1 --json --device '" + uri + "'");
   killer.join();
   EXPECT_EQ(server.wait(), 128 + SIGKILL);
   ASSERT_EQ(check.exit_code, 0) << check.err;

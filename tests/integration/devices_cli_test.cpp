@@ -133,7 +133,7 @@ TEST(DevicesCli, ADeviceFaultMidTrialExitsOneAndKeepsWhatWasRecorded) {
   EXPECT_THAT(r.err, HasSubstr("the trial failed after"));
   EXPECT_THAT(r.err, HasSubstr("fake SDK: amplifier fault (SDK error 513)"));
   const HapticProfile partial = io::readProfileCsv(dir / "partial.csv");
-  EXPECT_GT(partial.size(), 200u);
+  EXPECT_GT(partial.duration_s(), 0.15);
   EXPECT_LT(partial.duration_s(), 0.5);
   EXPECT_THAT(partial.metadata().extra.at("failed"), HasSubstr("amplifier fault"));
 }

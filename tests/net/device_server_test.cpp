@@ -85,7 +85,7 @@ TEST(DeviceServer, ClientReadsThePenAndTheServerClampsTheForceToItsDeviceLimits)
         largest_applied = std::max(largest_applied, server.appliedForce().norm());
         return false;
       },
-      std::chrono::milliseconds(400), Vec3(50.0, 0.0, 0.0));
+      std::chrono::milliseconds(1000), Vec3(50.0, 0.0, 0.0));
   EXPECT_EQ(status, DeviceStatus::kOk);
   EXPECT_DOUBLE_EQ(server.commandedForce().x(), 50.0);
   EXPECT_LE(largest_applied, 0.5 + 1e-12);

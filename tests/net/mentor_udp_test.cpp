@@ -114,7 +114,7 @@ TEST(MentoringOverUdp, EveryCouplingIsStableAt100MsAnd5PercentLossAndGuidanceHel
                 static_cast<unsigned long long>(s.follower_stats.lost),
                 static_cast<unsigned long long>(s.follower_stats.link_faults + s.leader_stats.link_faults));
     EXPECT_EQ(s.faults, 0u) << couplingName(c);
-    EXPECT_GT(s.follower.size(), 1500u);
+    EXPECT_GT(s.follower.duration_s(), 2.0);
     EXPECT_NEAR(s.follower_stats.rtt_s, 0.1, 0.03) << couplingName(c);
     EXPECT_GT(s.follower_stats.lost, 0u);  // the emulator's loss was seen
     EXPECT_LT(std::abs(energy), 0.5) << couplingName(c);
@@ -157,7 +157,7 @@ TEST(MentoringOverUdp, KillingEitherStationZeroesTheOthersForceWithin20Ms) {
     EXPECT_GE(survivor.station->coupling().stats().link_faults, 1u);
     // Nothing recorded is lost: the survivor's recording is whole, every tick's sample in it.
     const HapticProfile kept = survivor.stop();
-    EXPECT_GT(kept.size(), 100u);
+    EXPECT_GT(kept.duration_s(), 0.3);
     EXPECT_EQ(kept.metadata().extra.at("missed_samples"), "0");
   }
 }
