@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <optional>
 #include <thread>
 
 #include <fmt/format.h>
@@ -83,11 +82,11 @@ VendorDevice::VendorDevice(std::unique_ptr<VendorBackend> backend, const DeviceU
   }
   // The adapter's own values are checked before the SDK opens anything.
   const double cap = max_force.empty() ? 0.0 : parseNumber("max_force_N", max_force);
-  const std::optional<Vec3> origin =
-      paper_origin.empty() ? std::nullopt : std::optional<Vec3>(parseTriple("paper_origin", paper_origin));
+  const bool has_origin = !paper_origin.empty();
+  const Vec3 origin = has_origin ? parseTriple("paper_origin", paper_origin) : Vec3(Vec3::Zero());
   description_ = backend_->open(backend_params);
   try {
-    if (origin) description_.paper_origin_D = *origin;
+    if (has_origin) description_.paper_origin_D = origin;
     describeInSi(cap, max_force);
   } catch (...) {
     backend_->close();  // an SDK device opened with force output is never left behind
