@@ -178,19 +178,8 @@ class PluginDevice final : public Device {
     hattr_device_info info{};
     HATTR_THROW_UNLESS(plugin_.get_limits(device_, &l) == HATTR_PLUGIN_OK && plugin_.get_info(device_, &info) == HATTR_PLUGIN_OK,
                        "plugin:{}: could not read the device's limits: {}", library_->path(), plugin_.last_error(device_));
-    const auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
-    const auto nonneg = [](double v) { return std::isfinite(v) && v >= 0.0; };
     const Vec3 lo = toVec3(l.workspace_min_m);
     const Vec3 hi = toVec3(l.workspace_max_m);
-    HATTR_THROW_UNLESS(positive(l.peak_force_N) && positive(l.continuous_force_N) && positive(l.max_stiffness_N_per_m) &&
-                           nonneg(l.max_damping_N_s_per_m) && positive(l.nominal_rate_hz) && positive(l.mass_kg) &&
-                           nonneg(l.damping_N_s_per_m) && lo.allFinite() && hi.allFinite() && (lo.array() < hi.array()).all() &&
-                           l.continuous_force_N <= l.peak_force_N,
-                       "plugin:{}: the device reports invalid limits (expected finite positive forces, stiffness, "
-                       "rate and mass, continuous <= peak force, a workspace box with min < max; got peak {} N, "
-                       "continuous {} N, stiffness {} N/m, rate {} Hz, mass {} kg)",
-                       library_->path(), l.peak_force_N, l.continuous_force_N, l.max_stiffness_N_per_m, l.nominal_rate_hz,
-                       l.mass_kg);
     limits_ = DeviceLimits{.degrees_of_freedom = l.degrees_of_freedom,
                            .workspace_min_m = lo,
                            .workspace_max_m = hi,
@@ -201,6 +190,7 @@ class PluginDevice final : public Device {
                            .nominal_rate_hz = l.nominal_rate_hz,
                            .mass_kg = l.mass_kg,
                            .damping_N_s_per_m = l.damping_N_s_per_m};
+    checkReportedLimits(limits_, fmt::format("plugin:{}: the device", library_->path()));
     capabilities_ = {.force_sensor = info.force_sensor != 0, .pressure = info.pressure != 0, .tilt = info.tilt != 0};
     switch (info.clocking) {
       case HATTR_CLOCK_HOST: clocking_ = DeviceClocking::kHostRealTime; break;

@@ -117,24 +117,9 @@ UdpDevice::UdpDevice(const UdpDeviceParams& params, std::string uri_text, HandSc
     throw Error(fmt::format("{}: the device server welcomed this client but sent no pen state within {} s", where,
                             params_.handshake_timeout_s));
   }
-  checkLimits(where);
+  // The server's limits size this side's safety path and gain clamps: checked like a file.
+  checkReportedLimits(welcome_.limits, where + ": the device server");
   resume_ns_ = state_arrival_ns_;
-}
-
-// The server's limits size this side's safety path and gain clamps: checked like a file.
-void UdpDevice::checkLimits(const std::string& where) const {
-  const DeviceLimits& l = welcome_.limits;
-  const auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
-  const auto nonneg = [](double v) { return std::isfinite(v) && v >= 0.0; };
-  HATTR_THROW_UNLESS(positive(l.peak_force_N) && positive(l.continuous_force_N) && l.continuous_force_N <= l.peak_force_N &&
-                         positive(l.max_stiffness_N_per_m) && nonneg(l.max_damping_N_s_per_m) &&
-                         positive(l.nominal_rate_hz) && positive(l.mass_kg) && nonneg(l.damping_N_s_per_m) &&
-                         l.workspace_min_m.allFinite() && l.workspace_max_m.allFinite() &&
-                         (l.workspace_min_m.array() < l.workspace_max_m.array()).all(),
-                     "{}: the device server reports invalid limits (expected finite positive forces, stiffness, rate "
-                     "and mass, continuous <= peak force, a workspace box with min < max; got peak {} N, continuous {} "
-                     "N, stiffness {} N/m, rate {} Hz, mass {} kg)",
-                     where, l.peak_force_N, l.continuous_force_N, l.max_stiffness_N_per_m, l.nominal_rate_hz, l.mass_kg);
 }
 
 UdpDevice::~UdpDevice() {

@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <string>
+#include <string_view>
 
 #include "hattr/core/device_limits.hpp"
 #include "hattr/core/pen_state.hpp"
@@ -57,5 +58,11 @@ class Device {
   /// Not on the servo thread; safe to call while the loop runs.
   [[nodiscard]] virtual std::string faultReason() const { return {}; }
 };
+
+/// Checks the limits a device reports about itself (a driver plugin, a device server) as input:
+/// finite positive forces, stiffness, rate and mass, non-negative damping, continuous <= peak
+/// force, a workspace box with min < max. Throws InputError starting with `who` ("plugin:/x.so:
+/// the device", "udp://H:P: the device server").
+void checkReportedLimits(const DeviceLimits& limits, std::string_view who);
 
 }  // namespace hattr::device

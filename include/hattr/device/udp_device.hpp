@@ -90,7 +90,6 @@ class UdpDevice final : public Device {
   void drain() noexcept;
   void handle(const net::Packet& packet, const net::Received& rx) noexcept;
   void setFault(Fault fault, double gap_ms) noexcept;
-  void checkLimits(const std::string& where) const;
   std::uint64_t bump(std::atomic<std::uint64_t>& counter) noexcept {
     return counter.fetch_add(1, std::memory_order_relaxed);
   }
