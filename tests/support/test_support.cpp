@@ -3,10 +3,17 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <sstream>
+
+#include <fmt/format.h>
+#include <gtest/gtest-spi.h>
+#include <gtest/gtest.h>
+
+#include "support/host_stalls.hpp"
 
 namespace hattr::test {
 
@@ -80,6 +87,51 @@ HapticProfile randomProfile(std::mt19937_64& rng, std::size_t samples, RawChanne
 std::uint64_t testSeed(std::uint64_t default_seed) {
   const char* env = std::getenv("HATTR_TEST_SEED");
   return env ? std::strtoull(env, nullptr, 10) : default_seed;
+}
+
+}  // namespace hattr::test
+
+// ---- real-time attempts (host_stalls.hpp) ----
+
+namespace hattr::test {
+
+bool passesUnlessTheHostStalls(const RealTimeAttempt& attempt, int tries) {
+  std::string last_failures;
+  std::uint64_t last_stalls = 0;
+  for (int k = 1; k <= tries; ++k) {
+    // Capture this attempt's failures instead of reporting them.
+    ::testing::TestPartResultArray results;
+    std::uint64_t stalls = 0;
+    {
+      ::testing::ScopedFakeTestPartResultReporter capture(
+          ::testing::ScopedFakeTestPartResultReporter::INTERCEPT_ONLY_CURRENT_THREAD, &results);
+      attempt(stalls);
+    }
+    std::string failures;
+    for (int i = 0; i < results.size(); ++i) {
+      const auto& r = results.GetTestPartResult(i);
+      if (!r.failed()) continue;
+      failures += fmt::format("{}:{}: {}\n", r.file_name() ? r.file_name() : "?", r.line_number(), r.message());
+    }
+    if (failures.empty()) return true;
+    // A failure no stall explains is the test's own: report it as it was.
+    if (stalls == 0) {
+      for (int i = 0; i < results.size(); ++i) {
+        const auto& r = results.GetTestPartResult(i);
+        if (r.failed()) ADD_FAILURE_AT(r.file_name() ? r.file_name() : "?", r.line_number()) << r.message();
+      }
+      return false;
+    }
+    std::printf("attempt %d of %d: the host stalled the loops %llu times; it failed with:\n%s", k, tries,
+                static_cast<unsigned long long>(stalls), failures.c_str());
+    last_failures = std::move(failures);
+    last_stalls = stalls;
+  }
+  [&] {
+    GTEST_SKIP() << "the host stalled every attempt (" << last_stalls << " stalls in the last), so its real-time "
+                 << "expectations could not be checked; the last attempt's failures:\n" << last_failures;
+  }();
+  return false;
 }
 
 }  // namespace hattr::test
