@@ -8,6 +8,7 @@
 #include "cli_common.hpp"
 #include "hattr/analysis/anova.hpp"
 #include "hattr/analysis/dtw.hpp"
+#include "hattr/analysis/trial_score.hpp"
 #include "hattr/analysis/preprocess.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
@@ -24,6 +25,7 @@ struct DtwCommandOptions {
   std::string cost = "abs";
   std::string preprocess = "paper";
   bool path = false;
+  bool score = false;
   bool json = false;
 };
 
@@ -42,9 +44,33 @@ std::vector<std::string> splitList(const std::string& text) {
   return out;
 }
 
+/// --score: the paper's two scores through the one scorer the report and the studio use.
+void runScore(const DtwCommandOptions& opt, const HapticProfile& expert, const HapticProfile& trial) {
+  const analysis::TrialScorer scorer(expert, {.normalization = parseNormalization(opt.preprocess),
+                                              .cost = opt.cost == "sq" ? analysis::DtwCost::kSquared
+                                                                       : analysis::DtwCost::kAbsolute,
+                                              .band_fraction = opt.band});
+  const analysis::TrialScore s = scorer.score(trial);
+  const analysis::TimeSpan span = analysis::writingSpan(trial);
+  const nlohmann::json json = {
+      {"a", opt.a}, {"b", opt.b}, {"cost_fn", opt.cost}, {"preprocess", opt.preprocess},
+      {"band", opt.band < 0.0 || opt.band >= 1.0 ? nlohmann::json(nullptr) : nlohmann::json(opt.band)},
+      {"samples", scorer.expertSamples()}, {"trial_span_s", {span.begin_s, span.end_s}},
+      {"cost", {{"x", s.x}, {"y", s.y}, {"z", s.z}, {"fx", s.fx}, {"fy", s.fy}, {"fz", s.fz}}},
+      {"shape", s.shape()}, {"height", s.z}, {"force", s.force()}};
+  if (opt.json) return printJson(json);
+  std::cout << fmt::format("shape  {:.6g}  (x {:.6g}, y {:.6g})\nheight {:.6g}  (z, not part of the shape)\n"
+                           "force  {:.6g}  (fx {:.6g}, fy {:.6g}, fz {:.6g})\n",
+                           s.shape(), s.x, s.y, s.z, s.force(), s.fx, s.fy, s.fz);
+}
+
 void runDtw(const DtwCommandOptions& opt) {
   const HapticProfile a = io::readProfileCsv(opt.a);
   const HapticProfile b = io::readProfileCsv(opt.b);
+  if (opt.score) {
+    HATTR_THROW_UNLESS(!opt.path, "--path: not with --score (the scores have no single path)");
+    return runScore(opt, a, b);
+  }
   const std::vector<std::string> channels = splitList(opt.channels);
   HATTR_THROW_UNLESS(!channels.empty(), "--channels: expected a comma-separated list such as x,y,z,fx,fy,fz, got \"{}\"",
                      opt.channels);
@@ -151,6 +177,9 @@ void registerAnalysisCommands(CLI::App& app) {
       ->check(CLI::IsMember({"paper", "zscore", "none"}))
       ->capture_default_str();
   dtw->add_flag("--path", dtw_opt->path, "Also return each channel's warping path");
+  dtw->add_flag("--score", dtw_opt->score,
+                "The paper's scores as the study report computes them: shape (x + y), height (z, on its own) and "
+                "force (fx + fy + fz), over each profile's writing span");
   dtw->add_flag("--json", dtw_opt->json, "Print JSON: cost {channel: value}, cost_fn, band, and path when asked");
   dtw->callback([dtw_opt] { runDtw(*dtw_opt); });
 

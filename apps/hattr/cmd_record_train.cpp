@@ -1,5 +1,6 @@
 // hattr record | train: one trial through the whole pipeline, written as a haptic profile.
 
+#include <algorithm>
 #include <iostream>
 
 #include <fmt/format.h>
@@ -22,6 +23,8 @@ struct TrialOptions {
   std::string subject;
   std::string skill;
   double tail_s = 0.3;
+  double pen_up_end_s = 0.0;
+  double max_duration_s = 0.0;
   bool force = false;
   bool json = false;
   // train only
@@ -49,6 +52,15 @@ void addCommonOptions(CLI::App& cmd, TrialOptions& opt) {
   cmd.add_option("--tail", opt.tail_s, "Keep recording this long after the script ends [s]")
       ->check(CLI::Range(0.0, 10.0))
       ->capture_default_str();
+  cmd.add_option("--pen-up-end", opt.pen_up_end_s,
+                 "End the trial once the pen has been up this long after writing began [s] (0: the script's "
+                 "length plus --tail, as before)")
+      ->check(CLI::Range(0.0, 60.0))
+      ->capture_default_str();
+  cmd.add_option("--max-duration", opt.max_duration_s,
+                 "With --pen-up-end: the longest the trial may last [s] (0: 3 x the script's length)")
+      ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str();
   cmd.add_flag("--force", opt.force, "Replace the output file if it exists");
   cmd.add_flag("--json", opt.json, "Print a JSON summary: the profile summary plus clamps, missed_samples, overruns, faults");
 }
@@ -60,6 +72,10 @@ void runTrialCommand(const TrialOptions& opt, bool training) {
 
   session::TrialSetup setup;
   setup.duration_s = hand.duration_s() + opt.tail_s;
+  if (opt.pen_up_end_s > 0.0) {  // the trial ends when the writer is done
+    setup.pen_up_end_s = opt.pen_up_end_s;
+    setup.duration_s = opt.max_duration_s > 0.0 ? opt.max_duration_s : std::min(3.0 * hand.duration_s(), 3600.0);
+  }
   setup.clock = opt.clock == "sim" ? session::Clock::kSimulated : session::Clock::kRealTime;
   setup.metadata.subject = opt.subject.empty() ? (training ? "trainee" : "expert") : opt.subject;
   setup.metadata.skill = opt.skill.empty() ? script.metadata().skill : opt.skill;
@@ -95,6 +111,7 @@ void runTrialCommand(const TrialOptions& opt, bool training) {
     json["link_faults"] = result.link_faults;
     json["stalls"] = result.stalls;
     json["clock"] = result.clock;
+    json["end_reason"] = result.end_reason;
     printJson(json);
     return;
   }

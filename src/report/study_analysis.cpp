@@ -1,7 +1,8 @@
 #include "hattr/report/study_analysis.hpp"
 
 #include <algorithm>
-#include <thread>
+#include <map>
+#include <set>
 
 #include <fmt/format.h>
 
@@ -10,16 +11,6 @@
 
 namespace hattr::report {
 namespace {
-
-constexpr std::array<Channel, 3> kPositionChannels{Channel::kX, Channel::kY, Channel::kZ};
-constexpr std::array<Channel, 3> kForceChannels{Channel::kFx, Channel::kFy, Channel::kFz};
-
-/// The recall trials to analyze, each with its profile's channels preprocessed onto the
-/// expert's time steps.
-struct Prepared {
-  TrialCost cost;
-  std::array<std::vector<double>, 6> series;
-};
 
 MetricResult analyzeMetric(const std::string& name, const std::vector<TrialCost>& costs, bool trajectory) {
   MetricResult r;
@@ -77,71 +68,73 @@ MetricResult analyzeMetric(const std::string& name, const std::vector<TrialCost>
 
 StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptions& options) {
   const session::StudyDefinition& study = db.study();
-  const HapticProfile expert = db.expert(study.skill);
-  const std::vector<double> expert_t = expert.channel(Channel::kTime);
+  StudyAnalysis out;
+  out.options = options;
+  out.analyzed_recall_trials = session::analyzedRecallTrials(study.protocol);
+  out.disturbed_policy = std::string(session::disturbedPolicyName(study.protocol.disturbed));
+  const std::set<int> analyzed(out.analyzed_recall_trials.begin(), out.analyzed_recall_trials.end());
+  const bool exclude_disturbed = study.protocol.disturbed == session::DisturbedPolicy::kExclude;
 
-  // The expert's series, normalized once.
-  std::array<std::vector<double>, 6> expert_series;
-  for (std::size_t k = 0; k < 6; ++k) {
-    const Channel c = k < 3 ? kPositionChannels[k] : kForceChannels[k - 3];
-    expert_series[k] = analysis::normalize(expert.channel(c), options.normalization);
-  }
-
-  // Every completed recall trial, preprocessed onto the expert's time steps.
-  std::vector<Prepared> prepared;
+  // The analyzed recall trials (all must be completed); disturbed ones flagged. With the
+  // "exclude" policy a disturbed trial is left out and a clean recall trial outside the
+  // analyzed set of the same subject and mode (a spare, lowest number first) takes its place
+  // and its trial number, so the design stays balanced.
+  std::map<std::pair<std::string, std::string>, std::vector<const session::TrialRecord*>> spares;
+  std::map<std::pair<std::string, std::string>, std::vector<int>> excluded;
+  const std::vector<session::TrialRecord> records = db.trials();
   std::vector<std::string> missing;
-  for (const session::TrialRecord& t : db.trials()) {
+  for (const session::TrialRecord& t : records) {
     if (t.plan.phase != session::Phase::kRecall) continue;
-    if (t.status != session::TrialStatus::kCompleted) {
-      missing.push_back(fmt::format("{} {} recall {}", t.plan.subject, guidance::modeName(t.plan.mode), t.plan.index));
+    const std::string mode(guidance::modeName(t.plan.mode));
+    const bool done = t.status == session::TrialStatus::kCompleted;
+    if (!analyzed.contains(t.plan.index)) {
+      if (done && t.disturbed.empty()) spares[{t.plan.subject, mode}].push_back(&t);
       continue;
     }
-    const HapticProfile trial = db.trialProfile(t.id);
-    Prepared p;
-    p.cost = {t.id, t.plan.subject, std::string(guidance::modeName(t.plan.mode)), t.plan.index, {}, {}};
-    const std::vector<double> trial_t = trial.channel(Channel::kTime);
-    for (std::size_t k = 0; k < 6; ++k) {
-      const Channel c = k < 3 ? kPositionChannels[k] : kForceChannels[k - 3];
-      p.series[k] = analysis::preprocessTrial(trial_t, trial.channel(c), expert_t, options.normalization);
+    if (!done) {
+      missing.push_back(fmt::format("{} {} recall {}", t.plan.subject, mode, t.plan.index));
+      continue;
     }
-    prepared.push_back(std::move(p));
+    const bool keep = t.disturbed.empty() || !exclude_disturbed;
+    if (!t.disturbed.empty()) {
+      out.flagged.push_back({t.id, t.plan.subject, mode, t.plan.index, t.disturbed, t.disturbed_attempts, keep});
+    }
+    if (keep) {
+      out.costs.push_back({t.id, t.plan.subject, mode, t.plan.index, {}, t.disturbed});
+    } else {
+      excluded[{t.plan.subject, mode}].push_back(t.plan.index);
+    }
   }
   HATTR_THROW_UNLESS(missing.empty(), "{}: {} recall trial{} not completed yet ({}{}); run the study first",
                      db.file().string(), missing.size(), missing.size() == 1 ? " is" : "s are", missing.front(),
                      missing.size() > 1 ? ", ..." : "");
-  HATTR_THROW_UNLESS(!prepared.empty(), "{}: the study has no recall trials to analyze", db.file().string());
-
-  // DTW per channel, all trials of a channel as one batch, the channels shared by the threads.
-  const analysis::DtwOptions dtw{.cost = options.cost, .band_fraction = options.band_fraction};
-  std::array<std::vector<double>, 6> costs;
-  const auto channelCosts = [&](std::size_t k) {
-    std::vector<std::vector<double>> a(prepared.size(), expert_series[k]);
-    std::vector<std::vector<double>> b;
-    b.reserve(prepared.size());
-    for (const auto& p : prepared) b.push_back(p.series[k]);
-    costs[k] = analysis::dtwBatch(a, b, dtw);
-  };
-  {
-    std::vector<std::thread> workers;
-    const unsigned threads = std::max(1u, options.threads);
-    for (unsigned w = 0; w < threads; ++w) {
-      workers.emplace_back([&, w] {
-        for (std::size_t k = w; k < 6; k += threads) channelCosts(k);
-      });
+  for (const auto& [cell, places] : excluded) {
+    const auto& candidates = spares[cell];
+    const int count = static_cast<int>(places.size());
+    HATTR_THROW_UNLESS(static_cast<int>(candidates.size()) >= count,
+                       "{}: subject {} {}: {} disturbed recall trial{} excluded (protocol.disturbed_trials \"exclude\") "
+                       "but {} clean spare{} outside the analyzed trials; the balanced design needs every cell: use "
+                       "\"repeat\" or \"flag\", or analyze fewer recall trials",
+                       db.file().string(), cell.first, cell.second, count, count == 1 ? " is" : "s are",
+                       candidates.size(), candidates.size() == 1 ? "" : "s");
+    for (int k = 0; k < count; ++k) {
+      const session::TrialRecord& t = *candidates[static_cast<std::size_t>(k)];
+      out.costs.push_back({t.id, t.plan.subject, cell.second, places[static_cast<std::size_t>(k)], {}, ""});
+      out.spares_used.push_back(t.id);
     }
-    for (auto& t : workers) t.join();
   }
+  HATTR_THROW_UNLESS(!out.costs.empty(), "{}: the study has no recall trials to analyze", db.file().string());
+  std::vector<HapticProfile> profiles;
+  for (const TrialCost& c : out.costs) profiles.push_back(db.trialProfile(c.trial_id));
 
-  StudyAnalysis out;
-  out.options = options;
-  for (std::size_t i = 0; i < prepared.size(); ++i) {
-    TrialCost c = prepared[i].cost;
-    for (std::size_t k = 0; k < 3; ++k) {
-      c.position[k] = costs[k][i];
-      c.force[k] = costs[k + 3][i];
-    }
-    out.costs.push_back(c);
-  }
+  // One scorer, as `hattr dtw --score` and the studio use it.
+  const analysis::TrialScorer scorer(db.expert(study.skill), {.normalization = options.normalization,
+                                                              .cost = options.cost,
+                                                              .band_fraction = options.band_fraction});
+  std::vector<const HapticProfile*> pointers;
+  for (const auto& p : profiles) pointers.push_back(&p);
+  const std::vector<analysis::TrialScore> scores = scorer.scoreAll(pointers, options.threads);
+  for (std::size_t i = 0; i < scores.size(); ++i) out.costs[i].score = scores[i];
   out.trajectory = analyzeMetric("trajectory", out.costs, true);
   out.force = analyzeMetric("force", out.costs, false);
   return out;
@@ -187,9 +180,16 @@ nlohmann::json analysisToJson(const StudyAnalysis& a) {
   nlohmann::json costs = nlohmann::json::array();
   for (const auto& c : a.costs) {
     costs.push_back({{"trial_id", c.trial_id}, {"subject", c.subject}, {"mode", c.mode}, {"trial", c.trial},
-                     {"x", c.position[0]}, {"y", c.position[1]}, {"z", c.position[2]}, {"fx", c.force[0]},
-                     {"fy", c.force[1]}, {"fz", c.force[2]}, {"trajectory", c.trajectory()},
-                     {"force", c.forceProfile()}});
+                     {"x", c.score.x}, {"y", c.score.y}, {"z", c.score.z}, {"fx", c.score.fx},
+                     {"fy", c.score.fy}, {"fz", c.score.fz}, {"trajectory", c.trajectory()},
+                     {"force", c.forceProfile()}, {"disturbed", c.disturbed}});
+  }
+  nlohmann::json flagged = nlohmann::json::array();
+  const nlohmann::json spares = a.spares_used;
+  for (const auto& f : a.flagged) {
+    flagged.push_back({{"trial_id", f.trial_id}, {"subject", f.subject}, {"mode", f.mode}, {"trial", f.trial},
+                       {"disturbed", f.disturbed}, {"disturbed_attempts", f.disturbed_attempts},
+                       {"analyzed", f.analyzed}});
   }
   const char* norm = a.options.normalization == analysis::Normalization::kPaper    ? "paper"
                      : a.options.normalization == analysis::Normalization::kZScore ? "zscore"
@@ -197,6 +197,10 @@ nlohmann::json analysisToJson(const StudyAnalysis& a) {
   return {{"options",
            {{"normalization", norm}, {"cost_fn", a.options.cost == analysis::DtwCost::kAbsolute ? "abs" : "sq"},
             {"band", number(a.options.band_fraction < 0 ? NAN : a.options.band_fraction)}}},
+          {"analyzed_recall_trials", a.analyzed_recall_trials},
+          {"disturbed_policy", a.disturbed_policy},
+          {"flagged_trials", flagged},
+          {"spare_trials_used", spares},
           {"recall_costs", costs},
           {"trajectory", metricJson(a.trajectory)},
           {"force", metricJson(a.force)}};
@@ -206,12 +210,14 @@ void storeAnalysis(session::StudyDatabase& db, const StudyAnalysis& a) { db.putR
 
 void writeAnalysisCsv(const StudyAnalysis& a, const std::filesystem::path& dir) {
   std::filesystem::create_directories(dir);
-  io::Table costs{{"trial_id", "subject", "mode", "trial", "x", "y", "z", "fx", "fy", "fz", "trajectory", "force"}, {}, ""};
+  io::Table costs{{"trial_id", "subject", "mode", "trial", "x", "y", "z", "fx", "fy", "fz", "trajectory", "force", "disturbed"},
+                  {}, ""};
   for (const auto& c : a.costs) {
+    const analysis::TrialScore& s = c.score;
     costs.rows.push_back({fmt::format("{}", c.trial_id), c.subject, c.mode, fmt::format("{}", c.trial),
-                          fmt::format("{}", c.position[0]), fmt::format("{}", c.position[1]), fmt::format("{}", c.position[2]),
-                          fmt::format("{}", c.force[0]), fmt::format("{}", c.force[1]), fmt::format("{}", c.force[2]),
-                          fmt::format("{}", c.trajectory()), fmt::format("{}", c.forceProfile())});
+                          fmt::format("{}", s.x), fmt::format("{}", s.y), fmt::format("{}", s.z),
+                          fmt::format("{}", s.fx), fmt::format("{}", s.fy), fmt::format("{}", s.fz),
+                          fmt::format("{}", c.trajectory()), fmt::format("{}", c.forceProfile()), c.disturbed});
   }
   io::writeTable(costs, dir / "recall_costs.csv", true);
 

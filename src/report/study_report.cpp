@@ -108,7 +108,8 @@ class Document {
 };
 
 std::string metricUnit(const std::string& metric) {
-  return metric == "trajectory" ? "DTW cost of x + y + z (normalized units)" : "DTW cost of fx + fy + fz (normalized units)";
+  return metric == "trajectory" ? "DTW cost of x + y, the shape on the paper (normalized units)"
+                                : "DTW cost of fx + fy + fz (normalized units)";
 }
 
 }  // namespace
@@ -173,6 +174,32 @@ std::filesystem::path writeStudyReport(const session::StudyDatabase& db, const S
     orders.rows.push_back({s.id, s.spec.participant, fmt::format("{}", fmt::join(names, " → "))});
   }
   doc.table(orders);
+
+  // Which recall trials went in, and the trials the loop disturbed.
+  doc.paragraph(fmt::format(
+      "Analyzed: recall trials {} of each mode ({} of {}; the paper used 10 of its 11 and does not say which it left "
+      "out, hattr leaves out the first by default: protocol.analyzed_recall_trials). The pen height z is scored on its "
+      "own (mean DTW cost {:.4g}) and is not part of the shape.",
+      fmt::join(a.analyzed_recall_trials, ", "), a.analyzed_recall_trials.size(), study.protocol.recall_trials,
+      [&a] {
+        double sum = 0.0;
+        for (const auto& c : a.costs) sum += c.score.z;
+        return a.costs.empty() ? 0.0 : sum / static_cast<double>(a.costs.size());
+      }()));
+  doc.heading("Disturbed trials", 3);
+  if (a.flagged.empty()) {
+    doc.paragraph(fmt::format("No analyzed recall trial was disturbed by the servo loop (policy \"{}\").",
+                              a.disturbed_policy));
+  } else {
+    Table flagged{{"subject", "mode", "recall trial", "disturbance", "earlier disturbed attempts", "analyzed"}, {}};
+    for (const auto& f : a.flagged) {
+      flagged.rows.push_back({f.subject, f.mode, fmt::format("{}", f.trial), f.disturbed,
+                              fmt::format("{}", f.disturbed_attempts), f.analyzed ? "yes, flagged" : "no, excluded"});
+    }
+    doc.paragraph(fmt::format("Policy \"{}\"; {} spare trial{} stood in for excluded ones.", a.disturbed_policy,
+                              a.spares_used.size(), a.spares_used.size() == 1 ? "" : "s"));
+    doc.table(flagged);
+  }
 
   // Conclusions first, then the numbers behind them.
   doc.heading("Conclusions");

@@ -28,7 +28,7 @@ void Recorder::take(const TickSample& item) {
   // Start and stop.
   const bool armed = armed_.load(std::memory_order_acquire);
   if (config_.trigger == RecordTrigger::kCommand) {
-    recording_ = armed;
+    recording_ = armed && !finished_;
   } else if (!armed) {
     recording_ = false;
   } else if (!recording_ && !finished_ && sample.pen_down) {
@@ -51,7 +51,29 @@ void Recorder::take(const TickSample& item) {
     profile_.append(kept);  // checks finiteness and increasing time
   } catch (const InputError&) {
     ++rejected_;
+    return;
   }
+
+  // Writing: from the first pen-down; over once the pen has stayed up long enough.
+  last_kept_s_ = kept.t_s;
+  if (kept.pen_down) {
+    if (writing_begin_s_ < 0.0) writing_begin_s_ = kept.t_s;
+    writing_up_since_s_ = -1.0;
+  } else if (writing_begin_s_ >= 0.0 && writing_up_since_s_ < 0.0) {
+    writing_up_since_s_ = kept.t_s;
+  }
+  const double half_tick = 0.5 * config_.nominal_period_s;
+  if (config_.end_after_pen_up_s > 0.0 && writing_up_since_s_ >= 0.0 &&
+      kept.t_s - writing_up_since_s_ >= config_.end_after_pen_up_s - half_tick) {
+    recording_ = false;
+    finished_ = true;
+    writing_over_.store(true, std::memory_order_release);
+  }
+}
+
+double Recorder::writingEnd_s() const noexcept {
+  if (writing_begin_s_ < 0.0) return -1.0;
+  return writing_up_since_s_ >= 0.0 ? writing_up_since_s_ : last_kept_s_;
 }
 
 std::size_t Recorder::drain() {

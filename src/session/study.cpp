@@ -51,6 +51,28 @@ void readNumber(const json& object, const char* key, T& value, double lo, double
   value = it->get<T>();
 }
 
+/// protocol.analyzed_recall_trials: distinct trial numbers within recall_trials (checked
+/// after recall_trials is read).
+void readAnalyzedRecall(const json& protocol, Protocol& p, Problems& problems) {
+  const auto it = protocol.find("analyzed_recall_trials");
+  if (it == protocol.end()) return;
+  const std::string expected =
+      fmt::format("protocol.analyzed_recall_trials: expected a list of distinct recall trial numbers in [1, {}]",
+                  p.recall_trials);
+  if (!it->is_array() || it->empty()) {
+    problems.add(fmt::format("{}, got {}", expected, it->dump()));
+    return;
+  }
+  std::set<int> seen;
+  for (const auto& v : *it) {
+    if (!v.is_number_integer() || v.get<int>() < 1 || v.get<int>() > p.recall_trials || !seen.insert(v.get<int>()).second) {
+      problems.add(fmt::format("{}, got {}", expected, v.dump()));
+      return;
+    }
+  }
+  p.analyzed_recall_trials.assign(seen.begin(), seen.end());
+}
+
 void readPhaseView(const json& object, const char* key, PhaseView& view, Problems& problems) {
   const auto it = object.find(key);
   if (it == object.end()) return;
@@ -67,6 +89,32 @@ void readPhaseView(const json& object, const char* key, PhaseView& view, Problem
     } else {
       *target = item.value().get<bool>();
     }
+  }
+}
+
+/// protocol.trial_end {"pen_up_s": s, "max_s": s}; absent (or null) with tail_s present: the
+/// old fixed window (Protocol::fixed_window).
+void readTrialEnd(const json& protocol, Protocol& p, Problems& problems) {
+  const auto it = protocol.find("trial_end");
+  if (it == protocol.end() || it->is_null()) {
+    p.fixed_window = protocol.contains("tail_s");
+    return;
+  }
+  if (!it->is_object()) {
+    problems.add(fmt::format("protocol.trial_end: expected an object {{\"pen_up_s\": seconds, \"max_s\": seconds}}, got {}",
+                             it->dump()));
+    return;
+  }
+  for (const auto& item : it->items()) {
+    if (item.key() != "pen_up_s" && item.key() != "max_s") {
+      problems.add(fmt::format("protocol.trial_end: unknown key \"{}\": expected pen_up_s, max_s", item.key()));
+    }
+  }
+  readNumber(*it, "pen_up_s", p.trial_end.pen_up_s, 0.05, 60.0, "protocol.trial_end.", problems);
+  readNumber(*it, "max_s", p.trial_end.max_s, 0.0, 3600.0, "protocol.trial_end.", problems);
+  if (p.trial_end.max_s > 0.0 && p.trial_end.max_s <= p.trial_end.pen_up_s) {
+    problems.add(fmt::format("protocol.trial_end.max_s: expected 0 (3 × the expert's duration) or more than pen_up_s = {}, got {}",
+                             p.trial_end.pen_up_s, p.trial_end.max_s));
   }
 }
 
@@ -146,7 +194,10 @@ StudyDefinition parseStudy(std::string_view json_text, std::string_view source, 
     if (!it->is_object()) {
       problems.add("protocol: expected an object");
     } else {
-      static const std::set<std::string> kProtocolKeys{"training_trials", "recall_trials", "rest_s", "tail_s", "training", "recall"};
+      static const std::set<std::string> kProtocolKeys{"training_trials", "recall_trials", "rest_s",  "tail_s",
+                                                       "training",        "recall",        "analyzed_recall_trials",
+                                                       "disturbed_trials", "max_repeats",  "show_scores",
+                                                       "trial_end"};
       for (const auto& item : it->items()) {
         if (!kProtocolKeys.contains(item.key())) problems.add(fmt::format("protocol: unknown key \"{}\"", item.key()));
       }
@@ -155,8 +206,22 @@ StudyDefinition parseStudy(std::string_view json_text, std::string_view source, 
       readNumber(*it, "recall_trials", p.recall_trials, 0, 1000, "protocol.", problems);
       readNumber(*it, "rest_s", p.rest_s, 0.0, 3600.0, "protocol.", problems);
       readNumber(*it, "tail_s", p.tail_s, 0.0, 60.0, "protocol.", problems);
+      readTrialEnd(*it, p, problems);
       readPhaseView(*it, "training", p.training, problems);
       readPhaseView(*it, "recall", p.recall, problems);
+      readAnalyzedRecall(*it, p, problems);
+      readNumber(*it, "max_repeats", p.max_repeats, 0, 10, "protocol.", problems);
+      if (const auto d = it->find("disturbed_trials"); d != it->end()) {
+        const std::string policy = d->is_string() ? d->get<std::string>() : d->dump();
+        if (policy == "repeat") p.disturbed = DisturbedPolicy::kRepeat;
+        else if (policy == "flag") p.disturbed = DisturbedPolicy::kFlag;
+        else if (policy == "exclude") p.disturbed = DisturbedPolicy::kExclude;
+        else problems.add(fmt::format("protocol.disturbed_trials: expected \"repeat\", \"flag\" or \"exclude\", got {}", d->dump()));
+      }
+      if (const auto v = it->find("show_scores"); v != it->end()) {
+        if (v->is_boolean()) p.show_scores = v->get<bool>();
+        else problems.add(fmt::format("protocol.show_scores: expected true or false, got {}", v->dump()));
+      }
       if (p.training_trials + p.recall_trials == 0) problems.add("protocol: zero trials per mode (training_trials + recall_trials)");
     }
   }
@@ -247,14 +312,37 @@ nlohmann::json studyToJson(const StudyDefinition& s) {
             {"recall_trials", s.protocol.recall_trials},
             {"rest_s", s.protocol.rest_s},
             {"tail_s", s.protocol.tail_s},
+            {"trial_end", s.protocol.fixed_window ? json(nullptr)
+                                                  : json{{"pen_up_s", s.protocol.trial_end.pen_up_s},
+                                                         {"max_s", s.protocol.trial_end.max_s}}},
             {"training", view(s.protocol.training)},
-            {"recall", view(s.protocol.recall)}}},
+            {"recall", view(s.protocol.recall)},
+            {"analyzed_recall_trials", analyzedRecallTrials(s.protocol)},
+            {"disturbed_trials", std::string(disturbedPolicyName(s.protocol.disturbed))},
+            {"max_repeats", s.protocol.max_repeats},
+            {"show_scores", s.protocol.show_scores}}},
           {"order", {{"kind", order}, {"seed", s.order_seed}}},
           {"device", s.device},
           {"world", s.world},
           {"rate_hz", s.rate_hz},
           {"indexing", std::string(guidance::indexingName(s.indexing))},
           {"subjects", subjects}};
+}
+
+std::string_view disturbedPolicyName(DisturbedPolicy policy) {
+  switch (policy) {
+    case DisturbedPolicy::kRepeat: return "repeat";
+    case DisturbedPolicy::kFlag: return "flag";
+    case DisturbedPolicy::kExclude: return "exclude";
+  }
+  return "?";
+}
+
+std::vector<int> analyzedRecallTrials(const Protocol& protocol) {
+  if (!protocol.analyzed_recall_trials.empty()) return protocol.analyzed_recall_trials;
+  std::vector<int> trials;
+  for (int i = protocol.recall_trials >= 2 ? 2 : 1; i <= protocol.recall_trials; ++i) trials.push_back(i);
+  return trials;
 }
 
 std::string exampleStudyJson() {
@@ -268,9 +356,13 @@ std::string exampleStudyJson() {
     "training_trials": 11,
     "recall_trials": 11,
     "rest_s": 10,
-    "tail_s": 0.5,
+    "trial_end": {"pen_up_s": 1.0, "max_s": 0},
     "training": {"show_reference": true, "guidance": true},
-    "recall": {"show_reference": false, "guidance": false}
+    "recall": {"show_reference": false, "guidance": false},
+    "analyzed_recall_trials": [2, 3, 4, 5, 6, 7, 8, 9, 10, 11],
+    "disturbed_trials": "repeat",
+    "max_repeats": 2,
+    "show_scores": false
   },
   "order": {"kind": "latin-square"},
   "device": "sim://pen",

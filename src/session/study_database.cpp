@@ -38,6 +38,7 @@ class Statement {
   Statement& bind(int i, std::string_view v) {
     return check(sqlite3_bind_text(stmt_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT));
   }
+  Statement& bindNull(int i) { return check(sqlite3_bind_null(stmt_, i)); }
   Statement& bindBlob(int i, std::string_view v) {
     return check(sqlite3_bind_blob64(stmt_, i, v.data(), v.size(), SQLITE_TRANSIENT));
   }
@@ -128,7 +129,17 @@ ALTER TABLE trials ADD COLUMN interruptions INTEGER NOT NULL DEFAULT 0;
 CREATE TABLE results (key TEXT PRIMARY KEY, value TEXT NOT NULL, updated_utc TEXT NOT NULL);
 )";
 
-constexpr std::string_view kMigrations[] = {kMigrationV1ToV2};
+/// Migration 2 -> 3: a trial the loop disturbed says how; a disturbed attempt that was run
+/// again is kept whole.
+constexpr std::string_view kMigrationV2ToV3 = R"(
+ALTER TABLE trials ADD COLUMN disturbed TEXT;
+CREATE TABLE disturbed_attempts (id INTEGER PRIMARY KEY, trial INTEGER NOT NULL REFERENCES trials(id),
+                                 reason TEXT NOT NULL, ended_utc TEXT NOT NULL, metadata TEXT NOT NULL,
+                                 raw_pressure INTEGER NOT NULL, raw_tilt INTEGER NOT NULL,
+                                 sample_count INTEGER NOT NULL, data BLOB NOT NULL);
+)";
+
+constexpr std::string_view kMigrations[] = {kMigrationV1ToV2, kMigrationV2ToV3};
 
 void migrate(sqlite3* db, int from_version) {
   for (int v = from_version; v < kStudySchemaVersion; ++v) {
@@ -384,7 +395,9 @@ std::vector<TrialRecord> StudyDatabase::trials(const std::string& subject) const
   Statement s(db_,
               "SELECT t.id, t.subject, t.sequence, t.mode, t.phase, t.trial_index, t.show_reference, t.guidance, "
               "t.status, t.attempts, t.interruptions, t.started_utc, t.ended_utc, t.outcome, "
-              "COALESCE(s.sample_count, 0) FROM trials t LEFT JOIN samples s ON s.trial = t.id "
+              "COALESCE(s.sample_count, 0), COALESCE(t.disturbed, ''), "
+              "(SELECT COUNT(*) FROM disturbed_attempts d WHERE d.trial = t.id) "
+              "FROM trials t LEFT JOIN samples s ON s.trial = t.id "
               "WHERE ?1 = '' OR t.subject = ?1 ORDER BY t.subject, t.sequence");
   s.bind(1, subject);
   while (s.step()) {
@@ -400,6 +413,8 @@ std::vector<TrialRecord> StudyDatabase::trials(const std::string& subject) const
     r.ended_utc = s.text(12);
     r.outcome = s.text(13);
     r.sample_count = s.integer(14);
+    r.disturbed = s.text(15);
+    r.disturbed_attempts = static_cast<int>(s.integer(16));
     out.push_back(std::move(r));
   }
   return out;
@@ -448,20 +463,43 @@ void StudyDatabase::markRunning(std::int64_t trial_id, std::int64_t session_id) 
   s.bind(1, session_id).bind(2, utcNowIso8601()).bind(3, trial_id).run();
 }
 
-void StudyDatabase::completeTrial(std::int64_t trial_id, const HapticProfile& profile, const std::string& outcome) {
-  const ProfileMetadata& m = profile.metadata();
-  const json meta = {{"subject", m.subject}, {"skill", m.skill},   {"device", m.device},
-                     {"source", m.source},   {"created_utc", m.created_utc}, {"rate_hz", m.nominal_rate_hz},
-                     {"extra", m.extra}};
+namespace {
+
+json metadataJson(const ProfileMetadata& m) {
+  return {{"subject", m.subject}, {"skill", m.skill},   {"device", m.device},
+          {"source", m.source},   {"created_utc", m.created_utc}, {"rate_hz", m.nominal_rate_hz},
+          {"extra", m.extra}};
+}
+
+}  // namespace
+
+void StudyDatabase::completeTrial(std::int64_t trial_id, const HapticProfile& profile, const std::string& outcome,
+                                  const std::string& disturbed) {
   const std::string data = encodeSamples(profile);
   Transaction t(db_);
   Statement samples(db_,
                     "INSERT OR REPLACE INTO samples (trial, raw_pressure, raw_tilt, sample_count, data) VALUES (?, ?, ?, ?, ?)");
   samples.bind(1, trial_id).bind(2, profile.rawChannels().pressure ? 1 : 0).bind(3, profile.rawChannels().tilt ? 1 : 0)
       .bind(4, static_cast<std::int64_t>(profile.size())).bindBlob(5, data).run();
-  Statement trial(db_, "UPDATE trials SET status = 'completed', ended_utc = ?, outcome = ?, metadata = ? WHERE id = ?");
-  trial.bind(1, utcNowIso8601()).bind(2, outcome).bind(3, meta.dump()).bind(4, trial_id).run();
+  Statement trial(db_, "UPDATE trials SET status = 'completed', ended_utc = ?, outcome = ?, metadata = ?, disturbed = ? "
+                       "WHERE id = ?");
+  trial.bind(1, utcNowIso8601()).bind(2, outcome).bind(3, metadataJson(profile.metadata()).dump());
+  if (disturbed.empty()) {
+    trial.bindNull(4);
+  } else {
+    trial.bind(4, disturbed);
+  }
+  trial.bind(5, trial_id).run();
   t.commit();
+}
+
+void StudyDatabase::keepDisturbedAttempt(std::int64_t trial_id, const HapticProfile& profile, const std::string& reason) {
+  Statement s(db_,
+              "INSERT INTO disturbed_attempts (trial, reason, ended_utc, metadata, raw_pressure, raw_tilt, sample_count, "
+              "data) VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
+  s.bind(1, trial_id).bind(2, reason).bind(3, utcNowIso8601()).bind(4, metadataJson(profile.metadata()).dump())
+      .bind(5, profile.rawChannels().pressure ? 1 : 0).bind(6, profile.rawChannels().tilt ? 1 : 0)
+      .bind(7, static_cast<std::int64_t>(profile.size())).bindBlob(8, encodeSamples(profile)).run();
 }
 
 void StudyDatabase::failTrial(std::int64_t trial_id, const std::string& reason) {

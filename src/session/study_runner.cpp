@@ -33,6 +33,37 @@ class ScriptParticipant final : public Participant {
 
 }  // namespace
 
+std::string noteLoopCounters(TrialResult& result) {
+  const std::string disturbed = disturbanceOf(result);
+  auto& extra = result.profile.metadata().extra;
+  extra["loop_ticks"] = fmt::format("{}", result.ticks);
+  extra["loop_overruns"] = fmt::format("{}", result.overruns);
+  extra["loop_stalls"] = fmt::format("{}", result.stalls);
+  extra["missed_samples"] = fmt::format("{}", result.missed_samples);
+  extra["safety_faults"] = fmt::format("{}", result.faults);
+  extra["device_link_faults"] = fmt::format("{}", result.link_faults);
+  if (!disturbed.empty()) extra["disturbed"] = disturbed;
+  return disturbed;
+}
+
+bool repeatDisturbedTrial(const Protocol& protocol, const std::string& disturbed, int repeats_so_far) {
+  return !disturbed.empty() && protocol.disturbed == DisturbedPolicy::kRepeat && repeats_so_far < protocol.max_repeats;
+}
+
+std::string disturbanceOf(const TrialResult& r) {
+  std::vector<std::string> parts;
+  const auto add = [&parts](std::uint64_t n, const char* one, const char* many) {
+    if (n > 0) parts.push_back(fmt::format("{} {}", n, n == 1 ? one : many));
+  };
+  add(r.stalls, "stall (force zeroed)", "stalls (force zeroed)");
+  add(r.missed_samples, "missed sample", "missed samples");
+  add(r.faults, "safety fault", "safety faults");
+  add(r.link_faults, "lost device link", "lost device links");
+  std::string text;
+  for (const auto& p : parts) text += (text.empty() ? "" : " · ") + p;
+  return text;
+}
+
 std::unique_ptr<Participant> makeScriptParticipant(const SubjectRecord& subject, const HapticProfile& expert) {
   const auto& options = subject.spec.options;
   HapticProfile script = options.contains("hand") ? io::readProfileCsv(options["hand"].get<std::string>()) : expert;
@@ -95,7 +126,14 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
     setup.guidance.mode = plan.view.guidance ? plan.mode : guidance::TrainingMode::kBasic;
     setup.guidance.playback.indexing = study.indexing;
     setup.reference = reference_;
-    setup.duration_s = reference_->duration_s() + study.protocol.tail_s;
+    // The trial ends when the subject is done (pen up long enough) or at the maximum; an old
+    // study file without trial_end keeps its fixed window.
+    if (study.protocol.fixed_window) {
+      setup.duration_s = reference_->duration_s() + study.protocol.tail_s;
+    } else {
+      setup.duration_s = study.protocol.trial_end.maxDuration_s(reference_->duration_s());
+      setup.pen_up_end_s = study.protocol.trial_end.pen_up_s;
+    }
     setup.clock = options.clock;
     setup.metadata.subject = subject.id;
     setup.metadata.skill = study.skill;
@@ -106,23 +144,35 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
     setup.metadata.extra["sequence"] = fmt::format("{}", plan.sequence);
     setup.metadata.extra["reference_shown"] = plan.view.show_reference ? "yes" : "no";
 
-    db_.markRunning(record.id, session);
-    TrialResult result = runTrial(*environment_, setup, participant->handForTrial(plan));
-    // A trial the device broke off is not data: mark it, keep everything stored, and stop.
-    if (!result.failure.empty()) {
-      db_.failTrial(record.id, result.failure);
-      db_.endSession(session);
-      throw Error(fmt::format("subject {}: {} trial {} with {} failed: {}; completed trials are kept, and `study run` "
-                              "repeats this one",
-                              subject.id, phaseName(plan.phase), plan.index, guidance::modeName(plan.mode),
-                              result.failure));
+    // The trial; a disturbed one is kept and run again while the policy says so.
+    TrialResult result;
+    std::string disturbed;
+    for (int attempt = 0;; ++attempt) {
+      setup.inject_stall_at_s = options.inject_stall_at_s ? options.inject_stall_at_s(plan, attempt) : -1.0;
+      db_.markRunning(record.id, session);
+      result = runTrial(*environment_, setup, participant->handForTrial(plan));
+      // A trial the device broke off is not data: mark it, keep everything stored, and stop.
+      if (!result.failure.empty()) {
+        db_.failTrial(record.id, result.failure);
+        db_.endSession(session);
+        throw Error(fmt::format("subject {}: {} trial {} with {} failed: {}; completed trials are kept, and `study "
+                                "run` repeats this one",
+                                subject.id, phaseName(plan.phase), plan.index, guidance::modeName(plan.mode),
+                                result.failure));
+      }
+      // Nothing in the profile may depend on when it ran, so a resumed study is bit-identical.
+      result.profile.metadata().created_utc = "";
+      disturbed = noteLoopCounters(result);
+      if (!repeatDisturbedTrial(study.protocol, disturbed, attempt)) break;
+      db_.keepDisturbedAttempt(record.id, result.profile, disturbed);
+      participant->prompt(fmt::format("That trial was disturbed ({}): once more", disturbed));
     }
-    // Nothing in the profile may depend on when it ran, so a resumed study is bit-identical.
-    result.profile.metadata().created_utc = "";
     db_.completeTrial(record.id, result.profile,
-                      fmt::format("ok: {} samples, {} missed, {} faults", result.profile.size(), result.missed_samples,
-                                  result.faults));
+                      fmt::format("ok: {} samples, {} missed, {} faults{}", result.profile.size(),
+                                  result.missed_samples, result.faults, disturbed.empty() ? "" : "; disturbed"),
+                      disturbed);
     participant->trialCompleted(plan, result.profile);
+    if (study.protocol.show_scores && options.score_text) participant->prompt(options.score_text(plan, result.profile));
     ++ran;
     if (options.progress) {
       TrialRecord done = record;

@@ -35,10 +35,18 @@ device::HandCommand lifted(device::HandCommand command) noexcept {
 /// force, ramp in again and are counted in the trial's result and metadata.
 constexpr auto kGiveUpAfter = std::chrono::milliseconds(50);
 
+/// How a real-time wait ended: a failure (why), the end rule, a stop request, or the time ran out.
+struct WaitEnd {
+  std::string failure;
+  bool writing_over = false;
+  bool stopped = false;
+};
+
 /// Waits `seconds` of a real-time run, watching every 2 ms for what ends a trial early: a
 /// latched fault, a device lost for longer than kGiveUpAfter, a clock that stopped ticking for
-/// as long. Returns why it ended early, or "".
-std::string waitUnlessFailed(const servo::ServoLoop& loop, const device::Device& device, double seconds) {
+/// as long; and, when given, the recorder's end rule and a stop request.
+WaitEnd waitForEnd(const servo::ServoLoop& loop, const device::Device& device, double seconds,
+                   const Recorder* recorder = nullptr, const TrialStop* stop = nullptr) {
   using Clock = std::chrono::steady_clock;
   const auto until = Clock::now() + std::chrono::duration<double>(seconds);
   const auto& c = loop.counters();
@@ -51,8 +59,10 @@ std::string waitUnlessFailed(const servo::ServoLoop& loop, const device::Device&
     const auto now = Clock::now();
     if (c.faults.load() > 0) {
       const std::string reason = device.faultReason();
-      return fmt::format("device fault: {}", reason.empty() ? "the safety path latched a fault" : reason);
+      return {fmt::format("device fault: {}", reason.empty() ? "the safety path latched a fault" : reason)};
     }
+    if (recorder != nullptr && recorder->writingOver()) return {.writing_over = true};
+    if (stop != nullptr && stop->requested()) return {.stopped = true};
     // Lost: disconnected without a break for the give-up time.
     if (!c.disconnected.load()) {
       lost = false;
@@ -61,18 +71,18 @@ std::string waitUnlessFailed(const servo::ServoLoop& loop, const device::Device&
       lost_since = now;
     } else if (now - lost_since > kGiveUpAfter) {
       const std::string reason = device.faultReason();
-      return fmt::format("device lost: {}", reason.empty() ? "the device disconnected" : reason);
+      return {fmt::format("device lost: {}", reason.empty() ? "the device disconnected" : reason)};
     }
     // Stopped: no tick for the give-up time.
     if (const std::uint64_t ticks = c.ticks.load(); ticks != last_ticks) {
       last_ticks = ticks;
       last_tick_seen = now;
     } else if (now - last_tick_seen > kGiveUpAfter) {
-      return loop.clock() == servo::LoopClock::kDevice ? "the device's clock stopped calling the servo loop"
-                                                        : "the servo loop stopped ticking";
+      return {loop.clock() == servo::LoopClock::kDevice ? "the device's clock stopped calling the servo loop"
+                                                         : "the servo loop stopped ticking"};
     }
   }
-  return "";
+  return {};
 }
 
 }  // namespace
@@ -144,9 +154,27 @@ guidance::WorldImpedance TrialEnvironment::impedance() const noexcept {
           .tangential_stiffness_N_per_m = world_.paper.tangential_stiffness_N_per_m};
 }
 
+void noteTrialEnd(TrialResult& result, Recorder& recorder, bool stopped) {
+  result.end_reason = std::string(!result.failure.empty() ? kEndFailed
+                                  : recorder.writingOver() ? kEndPenLifted
+                                  : stopped               ? kEndStopped
+                                                          : kEndMaximumDuration);
+  result.writing_begin_s = recorder.writingBegin_s();
+  result.writing_end_s = recorder.writingEnd_s();
+  result.profile = recorder.takeProfile();
+  auto& extra = result.profile.metadata().extra;
+  extra["end_reason"] = result.end_reason;
+  if (result.writing_begin_s >= 0.0) {
+    extra["writing_begin_s"] = fmt::format("{}", result.writing_begin_s);
+    extra["writing_end_s"] = fmt::format("{}", result.writing_end_s);
+  }
+}
+
 TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::HandScript& hand) {
   HATTR_THROW_UNLESS(std::isfinite(setup.duration_s) && setup.duration_s > 0.0 && setup.duration_s <= 3600.0,
                      "trial duration: expected (0, 3600] s, got {}", setup.duration_s);
+  HATTR_THROW_UNLESS(std::isfinite(setup.pen_up_end_s) && setup.pen_up_end_s >= 0.0 && setup.pen_up_end_s <= 60.0,
+                     "trial end: pen-up time: expected [0, 60] s (0: off), got {}", setup.pen_up_end_s);
   const double ramp_s = servo::SafetyConfig{}.ramp_time_s;
   HATTR_THROW_UNLESS(std::isfinite(setup.settle_s) && setup.settle_s >= ramp_s && setup.settle_s <= 60.0,
                      "trial settle time: expected [{}, 60] s (at least the safety ramp), got {}", ramp_s, setup.settle_s);
@@ -171,31 +199,47 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
   if (clock == Clock::kRealTime && device->clocking() == device::DeviceClocking::kDeviceClock) {
     metadata.extra["clock"] = "device";
   }
-  Recorder recorder(loop.samples(),
-                    RecorderConfig{.trigger = setup.trigger, .nominal_period_s = 1.0 / env.rate_hz()}, metadata);
+  RecorderConfig recorder_config{.trigger = setup.trigger, .nominal_period_s = 1.0 / env.rate_hz()};
+  recorder_config.end_after_pen_up_s = setup.pen_up_end_s;
+  if (setup.pen_up_end_s > 0.0) recorder_config.pen_up_stop_s = setup.pen_up_end_s;
+  Recorder recorder(loop.samples(), recorder_config, metadata);
 
   const auto settle_ticks = static_cast<std::size_t>(std::llround(setup.settle_s * env.rate_hz()));
   const auto ticks = static_cast<std::size_t>(std::llround(setup.duration_s * env.rate_hz()));
+  // The end: the recorder decides the end rule sample by sample (it stops recording with the
+  // sample that ends the trial); between chunks, or every 2 ms in real time, we stop the loop.
+  bool stopped = false;
   if (clock == Clock::kSimulated) {
     constexpr std::size_t kChunk = 64;  // drain well before the ring could fill
     const auto run = [&](std::size_t count) {
-      for (std::size_t done = 0; done < count; done += kChunk) {
+      for (std::size_t done = 0; done < count && !recorder.writingOver(); done += kChunk) {
         loop.runSimulated(std::min(kChunk, count - done));
         recorder.drain();
       }
     };
     run(settle_ticks);
     recorder.start();
-    run(ticks);
+    // A host stall injected at its time (rehearsing a study's policy), else straight through.
+    const auto stall_tick = setup.inject_stall_at_s >= 0.0
+                                ? std::min(ticks, static_cast<std::size_t>(std::llround(setup.inject_stall_at_s * env.rate_hz())))
+                                : ticks;
+    run(stall_tick);
+    if (stall_tick < ticks) {
+      loop.delaySimulated(std::chrono::nanoseconds(std::llround(setup.injected_stall_s * 1e9)));
+      run(ticks - stall_tick);
+    }
   } else {
     loop.requireConsumer(&recorder.consumerTime());
     recorder.startThread();
     loop.start();
-    result.failure = waitUnlessFailed(loop, *device, setup.settle_s);
+    result.failure = waitForEnd(loop, *device, setup.settle_s).failure;
     if (result.failure.empty()) {
       recorder.start();
-      result.failure = waitUnlessFailed(loop, *device, setup.duration_s);
+      const WaitEnd end = waitForEnd(loop, *device, setup.duration_s, &recorder, setup.stop);
+      result.failure = end.failure;
+      stopped = end.stopped;
     }
+    recorder.stop();  // nothing after the end (a stop request) is recorded
     loop.stop();
     recorder.stopThread();
   }
@@ -210,7 +254,7 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
   result.max_period_error_s = static_cast<double>(loop.periodError().max_ns()) * 1e-9;
   result.clock = std::string(servo::loopClockName(loop.clock()));
   result.missed_samples = recorder.missed();
-  result.profile = recorder.takeProfile();
+  noteTrialEnd(result, recorder, stopped);
   if (!result.failure.empty()) result.profile.metadata().extra["failed"] = result.failure;
   if (result.link_faults > 0) {
     result.profile.metadata().extra["link_faults"] =

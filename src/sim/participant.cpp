@@ -18,18 +18,22 @@ class SimulatedParticipant final : public session::Participant {
   }
 
   device::HandScript& handForTrial(const session::TrialPlan& plan) override {
-    // Common random numbers: the same noise for the same trial number in every mode.
-    const std::uint64_t trial_seed = seed_ * 1'000'003ULL + (plan.phase == session::Phase::kTraining ? 0ULL : 500ULL) +
-                                     static_cast<std::uint64_t>(plan.index);
-    hand_ = trainee_.handForTrial(trial_seed);
+    hand_ = trainee_.handForTrial(trialSeed(plan));
     return *hand_;
   }
 
   void trialCompleted(const session::TrialPlan& plan, const HapticProfile& recorded) override {
-    trainee_.learn(recorded, plan.view.show_reference);
+    // The trial's pace comes from its seed, so a resumed study relearns exactly as it learned.
+    trainee_.learn(recorded, plan.view.show_reference, trainee_.paceFactor(trialSeed(plan)));
   }
 
  private:
+  /// Common random numbers: the same noise and pace for the same trial number in every mode.
+  [[nodiscard]] std::uint64_t trialSeed(const session::TrialPlan& plan) const {
+    return seed_ * 1'000'003ULL + (plan.phase == session::Phase::kTraining ? 0ULL : 500ULL) +
+           static_cast<std::uint64_t>(plan.index);
+  }
+
   std::uint64_t seed_;
   SimulatedTrainee trainee_;
   std::unique_ptr<device::HandScript> hand_;

@@ -16,6 +16,7 @@ namespace {
 constexpr std::uint64_t kDeviationStream = 0x446576696174696FULL;   // "Deviatio"
 constexpr std::uint64_t kPerceptionStream = 0x5065726365707469ULL;  // "Percepti"
 constexpr std::uint64_t kTrialNoiseStream = 0x547269616C4E6F69ULL;  // "TrialNoi"
+constexpr std::uint64_t kPaceStream = 0x547269616C506163ULL;        // "TrialPac"
 
 /// device::HandCommand's and device::ProfileHandScript's altitude when a profile has no tilt.
 constexpr double kDefaultAltitude_rad = 1.0471975511965976;
@@ -139,7 +140,7 @@ SimulatedTrainee::Series SimulatedTrainee::series(const PlanWeights& weights) co
   return s;
 }
 
-HapticProfile SimulatedTrainee::profileOf(const Series& s, const std::string& source) const {
+HapticProfile SimulatedTrainee::profileOf(const Series& s, const std::string& source, double pace_factor) const {
   ProfileMetadata metadata = metadata_;
   metadata.source = source;
   HapticProfile profile(std::move(metadata), RawChannels{.tilt = true});
@@ -147,12 +148,12 @@ HapticProfile SimulatedTrainee::profileOf(const Series& s, const std::string& so
   for (std::size_t i = 0; i < t_s_.size(); ++i) {
     const auto r = static_cast<Eigen::Index>(i);
     Sample sample;
-    sample.t_s = t_s_[i];
+    sample.t_s = t_s_[i] * pace_factor;
     sample.p_WT = Vec3(s.p_xy(r, 0), s.p_xy(r, 1), template_z_(r));
     // No vertical target velocity: pen up, the hand holds the pen at least 3 mm high whatever
     // the template's height (a recorded template falls onto the paper just before contact, and
     // its speed would drive the pen into it); pen down, the hand only presses.
-    sample.v_WT = Vec3(s.v_xy(r, 0), s.v_xy(r, 1), 0.0);
+    sample.v_WT = Vec3(s.v_xy(r, 0) / pace_factor, s.v_xy(r, 1) / pace_factor, 0.0);
     sample.pen_down = pen_down_[i] != 0;
     sample.in_contact = sample.pen_down;
     sample.f_user_W = Vec3(0.0, 0.0, -s.axial_N(r) * std::sin(altitude_rad_(r)));
@@ -182,8 +183,15 @@ std::unique_ptr<device::HandScript> SimulatedTrainee::handForTrial(std::uint64_t
     noise(k, kPlanY) = position_sd * normal.normal();
     noise(k, kPlanAxialForce) = traits_.force_noise_coefficient * mean_force(k) * normal.normal();
   }
-  const HapticProfile trial = profileOf(series(weights + noise), "sim:trainee-hand");
+  const HapticProfile trial = profileOf(series(weights + noise), "sim:trainee-hand", paceFactor(trial_seed));
   return std::make_unique<device::ProfileHandScript>(trial);
+}
+
+double SimulatedTrainee::paceFactor(std::uint64_t trial_seed) const {
+  // The whole movement faster or slower, its relative timing kept (homothety, Viviani &
+  // Terzuolo 1980); the size of the variation is data/sim/trainee_model.json's pace_cv.
+  detail::NormalSource normal(detail::streamSeed(detail::streamSeed(seed_, kPaceStream), trial_seed));
+  return std::clamp(std::exp(traits_.pace_cv * normal.normal()), 0.5, 2.0);
 }
 
 Eigen::MatrixXd SimulatedTrainee::project(const Eigen::MatrixXd& values, const std::vector<char>& mask) const {
@@ -198,10 +206,15 @@ Eigen::MatrixXd SimulatedTrainee::project(const Eigen::MatrixXd& values, const s
   return gram.ldlt().solve(rhs);
 }
 
-void SimulatedTrainee::learn(const HapticProfile& recorded, bool template_shown) {
+void SimulatedTrainee::learn(const HapticProfile& recorded, bool template_shown, double pace_factor) {
   HATTR_THROW_UNLESS(recorded.size() >= 2, "simulated trainee: learn: expected a recorded trial of at least two samples, got {}",
                      recorded.size());
-  const Resampled rec = resample(recorded, t_s_);  // both start at 0: they always overlap
+  HATTR_THROW_UNLESS(std::isfinite(pace_factor) && pace_factor >= 0.5 && pace_factor <= 2.0,
+                     "simulated trainee: learn: pace factor: expected [0.5, 2], got {}", pace_factor);
+  // The recording at the same points of the movement as the template's grid.
+  std::vector<double> t_recorded(t_s_.size());
+  for (std::size_t i = 0; i < t_s_.size(); ++i) t_recorded[i] = t_s_[i] * pace_factor;
+  const Resampled rec = resample(recorded, t_recorded);  // both start at 0: they always overlap
   const auto k = static_cast<Eigen::Index>(basis_.size());
   PlanWeights error = PlanWeights::Zero(k, 3);
 

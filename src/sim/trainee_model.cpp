@@ -50,6 +50,7 @@ constexpr std::array kSpecs{
                   &TraineeModel::deviation_rms_m},
     ParameterSpec{"force_scale", "1", 0.0, 5.0, 1.0, false, &TraineeModel::force_scale},
     ParameterSpec{"force_offset_N", "N", -2.0, 2.0, 1.0, false, &TraineeModel::force_offset_N},
+    ParameterSpec{"pace_cv", "1", 0.0, 0.5, 1.0, false, &TraineeModel::pace_cv},
 };
 
 constexpr std::array kTopKeys{"format", "version", "description", "units_note", "per_subject_note", "parameters"};
@@ -250,7 +251,8 @@ SubjectTraits populationTraits(const TraineeModel& m) {
           .force_noise_coefficient = m.force_noise_coefficient.value,
           .deviation_rms_m = m.deviation_rms_m.value,
           .force_scale = m.force_scale.value,
-          .force_offset_N = m.force_offset_N.value};
+          .force_offset_N = m.force_offset_N.value,
+          .pace_cv = m.pace_cv.value};
 }
 
 SubjectTraits drawSubject(const TraineeModel& m, std::uint64_t seed) {
@@ -273,6 +275,7 @@ SubjectTraits drawSubject(const TraineeModel& m, std::uint64_t seed) {
   t.deviation_rms_m = drawValue(m.deviation_rms_m, normal);
   t.force_scale = drawValue(m.force_scale, normal);
   t.force_offset_N = drawValue(m.force_offset_N, normal);
+  t.pace_cv = drawValue(m.pace_cv, normal);  // drawn last: the other traits keep their draws
   return t;
 }
 
@@ -292,6 +295,7 @@ void validateTraits(const SubjectTraits& t) {
   check(t.deviation_rms_m, 0.0, 0.02, "deviation_rms_m");
   check(t.force_scale, 0.0, 5.0, "force_scale");
   check(t.force_offset_N, -2.0, 2.0, "force_offset_N");
+  check(t.pace_cv, 0.0, 0.5, "pace_cv");
   HATTR_THROW_UNLESS(t.fast_retention <= t.slow_retention,
                      "subject traits: fast_retention: expected at most slow_retention = {}, got {}", t.slow_retention,
                      t.fast_retention);

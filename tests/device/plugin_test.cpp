@@ -367,7 +367,7 @@ TEST(DeviceFault, InAStudyMarksTheTrialFailedAndKeepsEveryCompletedTrial) {
   test::writeText(dir / "study.json",
                   fmt::format(R"({{"name": "faulty", "skill": "dash", "experts": {{"dash": "expert.csv"}},
     "device": "{}", "modes": ["basic"],
-    "protocol": {{"training_trials": 2, "recall_trials": 2, "rest_s": 0, "tail_s": 0.05}},
+    "protocol": {{"training_trials": 2, "recall_trials": 2, "rest_s": 0, "tail_s": 0.05, "disturbed_trials": "flag"}},
     "world": {{"relief": {{"kind": "flat"}}}}, "subjects": {{"count": 1, "participant": "script"}}}})",
                               uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=device&error_after_total=1450")));
   auto db = session::StudyDatabase::create(dir / "study.sqlite", session::loadStudy(dir / "study.json"));
@@ -383,8 +383,8 @@ TEST(DeviceFault, InAStudyMarksTheTrialFailedAndKeepsEveryCompletedTrial) {
       << "message: " << message;
   const auto trials = db.trials();
   ASSERT_EQ(trials.size(), 4u);
-  EXPECT_EQ(trials[0].status, session::TrialStatus::kCompleted);
-  EXPECT_EQ(trials[1].status, session::TrialStatus::kCompleted);
+  EXPECT_EQ(trials[0].status, session::TrialStatus::kCompleted) << trials[0].disturbed;
+  EXPECT_EQ(trials[1].status, session::TrialStatus::kCompleted) << trials[1].disturbed;
   EXPECT_EQ(trials[2].status, session::TrialStatus::kInterrupted);
   EXPECT_NE(trials[2].outcome.find("failed: device fault:"), std::string::npos) << trials[2].outcome;
   EXPECT_EQ(trials[3].status, session::TrialStatus::kPending);

@@ -276,6 +276,17 @@ TEST(Cli, StudyCommandsReportStatusAndRefuseBadInputWithExitTwo) {
   EXPECT_THAT(not_db.err, HasSubstr("not a hattr study database"));
 }
 
+TEST(Cli, StudyInitRefusesABadTrialEndWithExitTwo) {
+  test::TempDir dir;
+  test::writeText(dir / "expert.csv", handScript());
+  test::writeText(dir / "study.json", R"({"name": "cli", "skill": "loop", "experts": {"loop": "expert.csv"},
+      "protocol": {"trial_end": {"pen_up_s": -1, "max_s": 0}}, "subjects": {"count": 1}})");
+  const RunResult r = runHattr(dir, "study init " + (dir / "study.json").string() + " --db " + (dir / "s.sqlite").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("protocol.trial_end.pen_up_s: expected a number in [0.05, 60], got -1"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "s.sqlite"));
+}
+
 // R's warpbreaks, as write.csv(warpbreaks, row.names = FALSE) writes it (quoted fields).
 constexpr const char* kWarpbreaks = "\"breaks\",\"wool\",\"tension\"\n26,\"A\",\"L\"\n30,\"A\",\"L\"\n54,\"A\",\"L\"\n25,\"A\",\"L\"\n70,\"A\",\"L\"\n52,\"A\",\"L\"\n51,\"A\",\"L\"\n26,\"A\",\"L\"\n67,\"A\",\"L\"\n18,\"A\",\"M\"\n21,\"A\",\"M\"\n29,\"A\",\"M\"\n17,\"A\",\"M\"\n12,\"A\",\"M\"\n18,\"A\",\"M\"\n35,\"A\",\"M\"\n30,\"A\",\"M\"\n36,\"A\",\"M\"\n36,\"A\",\"H\"\n21,\"A\",\"H\"\n24,\"A\",\"H\"\n18,\"A\",\"H\"\n10,\"A\",\"H\"\n43,\"A\",\"H\"\n28,\"A\",\"H\"\n15,\"A\",\"H\"\n26,\"A\",\"H\"\n27,\"B\",\"L\"\n14,\"B\",\"L\"\n29,\"B\",\"L\"\n19,\"B\",\"L\"\n29,\"B\",\"L\"\n31,\"B\",\"L\"\n41,\"B\",\"L\"\n20,\"B\",\"L\"\n44,\"B\",\"L\"\n42,\"B\",\"M\"\n26,\"B\",\"M\"\n19,\"B\",\"M\"\n16,\"B\",\"M\"\n39,\"B\",\"M\"\n28,\"B\",\"M\"\n21,\"B\",\"M\"\n39,\"B\",\"M\"\n29,\"B\",\"M\"\n20,\"B\",\"H\"\n21,\"B\",\"H\"\n24,\"B\",\"H\"\n17,\"B\",\"H\"\n13,\"B\",\"H\"\n15,\"B\",\"H\"\n15,\"B\",\"H\"\n16,\"B\",\"H\"\n28,\"B\",\"H\"\n";
 

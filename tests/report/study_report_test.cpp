@@ -8,6 +8,7 @@
 
 #include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
+#include "hattr/analysis/trial_score.hpp"
 #include "hattr/session/study_runner.hpp"
 #include "support/test_support.hpp"
 
@@ -19,7 +20,8 @@ using ::testing::HasSubstr;
 /// A completed small study: 3 scripted subjects (each trial offset at random), 3 modes,
 /// 1 training + 3 recall trials each.
 struct CompletedStudy {
-  CompletedStudy() {
+  /// `protocol_extra`: more protocol keys (JSON, each followed by a comma); `options`: the run's.
+  explicit CompletedStudy(const std::string& protocol_extra = "", session::RunOptions options = {}) {
     HapticProfile expert({.subject = "expert", .skill = "curve", .nominal_rate_hz = 100.0});
     for (int i = 0; i <= 40; ++i) {
       Sample s;
@@ -31,31 +33,54 @@ struct CompletedStudy {
     }
     io::writeProfileCsv(expert, dir / "expert.csv");
     test::writeText(dir / "study.json", R"({"name": "report test", "skill": "curve", "experts": {"curve": "expert.csv"},
-        "protocol": {"training_trials": 1, "recall_trials": 3, "rest_s": 0, "tail_s": 0.05},
+        "protocol": {)" + protocol_extra + R"("training_trials": 1, "recall_trials": 3, "rest_s": 0, "tail_s": 0.05},
         "world": {"relief": {"kind": "flat"}},
         "subjects": {"count": 3, "participant": "script", "options": {"jitter_mm": 2.0}}})");
     { (void)session::StudyDatabase::create(dir / "s.sqlite", session::loadStudy(dir / "study.json")); }
     session::StudyDatabase db = session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kRunner);
-    session::StudyRunner(db, session::makeScriptParticipant).run({});
+    session::StudyRunner(db, session::makeScriptParticipant).run(options);
   }
   test::TempDir dir;
 };
 
-TEST(StudyAnalysis, CostsEveryRecallTrialAsDirectDtwWould) {
+/// A profile's times and one channel within its writing span (as the scorer takes them).
+std::pair<std::vector<double>, std::vector<double>> spanOf(const HapticProfile& p, Channel channel) {
+  const analysis::TimeSpan span = analysis::writingSpan(p);
+  std::vector<double> t, v;
+  for (const Sample& s : p.samples()) {
+    if (s.t_s < span.begin_s || s.t_s > span.end_s) continue;
+    t.push_back(s.t_s);
+    v.push_back(p.channel(channel)[static_cast<std::size_t>(&s - p.samples().data())]);
+  }
+  return {t, v};
+}
+
+TEST(StudyAnalysis, CostsTheAnalyzedRecallTrialsAsDirectDtwWould) {
   CompletedStudy study;
   const auto db = session::StudyDatabase::open(study.dir / "s.sqlite", session::OpenMode::kReadOnly);
   const StudyAnalysis a = analyzeStudy(db);
-  ASSERT_EQ(a.costs.size(), 3u * 3u * 3u);
-  // One trial by hand: the paper's preprocessing, then plain full-matrix DTW on y.
+  // 10 of 11 in the paper; here 2 of 3: the first recall trial of each mode is left out.
+  EXPECT_EQ(a.analyzed_recall_trials, (std::vector<int>{2, 3}));
+  ASSERT_EQ(a.costs.size(), 3u * 3u * 2u);
+  for (const auto& c : a.costs) EXPECT_NE(c.trial, 1);
+  // One trial by hand: its writing span, the paper's preprocessing, then plain full-matrix DTW.
   const TrialCost& c = a.costs[4];
   const HapticProfile expert = db.expert("curve");
   const HapticProfile trial = db.trialProfile(c.trial_id);
-  const auto e = analysis::normalize(expert.channel(Channel::kY), analysis::Normalization::kPaper);
-  const auto t = analysis::preprocessTrial(trial.channel(Channel::kTime), trial.channel(Channel::kY),
-                                           expert.channel(Channel::kTime), analysis::Normalization::kPaper);
-  EXPECT_NEAR(c.position[1], analysis::dtwReference(e, t), 1e-9 * std::max(1.0, c.position[1]));
-  // The balanced designs: mode × subject with 3 replicates; per mode 3 trials × 3 subjects.
-  EXPECT_EQ(a.trajectory.overall.replicates, 3u);
+  const auto by_hand = [&](Channel channel) {
+    const auto [et, ev] = spanOf(expert, channel);
+    const auto [tt, tv] = spanOf(trial, channel);
+    const auto e = analysis::normalize(ev, analysis::Normalization::kPaper);
+    const auto t = analysis::preprocessTrial(tt, tv, et, analysis::Normalization::kPaper);
+    return analysis::dtwReference(e, t);
+  };
+  EXPECT_NEAR(c.score.y, by_hand(Channel::kY), 1e-9 * std::max(1.0, c.score.y));
+  EXPECT_NEAR(c.score.fz, by_hand(Channel::kFz), 1e-9 * std::max(1.0, c.score.fz));
+  // The shape is the paper plane: x + y, never z.
+  EXPECT_DOUBLE_EQ(c.trajectory(), c.score.x + c.score.y);
+  EXPECT_DOUBLE_EQ(c.forceProfile(), c.score.fx + c.score.fy + c.score.fz);
+  // The balanced designs: mode × subject with 2 replicates; per mode 2 trials × 3 subjects.
+  EXPECT_EQ(a.trajectory.overall.replicates, 2u);
   EXPECT_EQ(a.trajectory.overall.row("mode").error_term, "mode:subject");
   EXPECT_EQ(a.force.per_mode.size(), 3u);
   EXPECT_EQ(a.trajectory.best_mode.size(), 3u);
@@ -119,6 +144,103 @@ TEST(StudyAnalysis, RefusesAnUnfinishedStudyNamingWhatIsMissing) {
     FAIL();
   } catch (const InputError& e) {
     EXPECT_THAT(e.what(), HasSubstr("6 recall trials are not completed yet"));
+  }
+}
+
+
+/// A 30 ms host stall, 0.2 s into the first attempt of S01's recall trial 2 in every mode.
+session::RunOptions stallInS01Recall2() {
+  session::RunOptions options;
+  options.inject_stall_at_s = [](const session::TrialPlan& plan, int attempt) {
+    return plan.subject == "S01" && plan.phase == session::Phase::kRecall && plan.index == 2 && attempt == 0 ? 0.2 : -1.0;
+  };
+  return options;
+}
+
+std::vector<session::TrialRecord> s01Recall2(const session::StudyDatabase& db) {
+  std::vector<session::TrialRecord> out;
+  for (const auto& t : db.trials("S01")) {
+    if (t.plan.phase == session::Phase::kRecall && t.plan.index == 2) out.push_back(t);
+  }
+  return out;
+}
+
+TEST(DisturbedTrials, RepeatKeepsTheDisturbedAttemptAndAnalyzesTheCleanOne) {
+  CompletedStudy study("", stallInS01Recall2());  // "repeat" is the default
+  const auto db = session::StudyDatabase::open(study.dir / "s.sqlite", session::OpenMode::kReadOnly);
+  const auto trials = s01Recall2(db);
+  ASSERT_EQ(trials.size(), 3u);
+  for (const auto& t : trials) {
+    EXPECT_EQ(t.disturbed, "");
+    EXPECT_EQ(t.disturbed_attempts, 1);
+    EXPECT_EQ(t.attempts, 2);
+    EXPECT_EQ(db.trialProfile(t.id).metadata().extra.at("loop_stalls"), "0");
+  }
+  const StudyAnalysis a = analyzeStudy(db);
+  EXPECT_TRUE(a.flagged.empty());
+  EXPECT_EQ(a.costs.size(), 3u * 3u * 2u);
+}
+
+TEST(DisturbedTrials, FlagKeepsThemInTheAnalysisAndTheReportListsThem) {
+  CompletedStudy study(R"("disturbed_trials": "flag",)", stallInS01Recall2());
+  auto db = session::StudyDatabase::open(study.dir / "s.sqlite", session::OpenMode::kReadWrite);
+  for (const auto& t : s01Recall2(db)) {
+    EXPECT_EQ(t.disturbed, "1 stall (force zeroed)");
+    EXPECT_EQ(t.disturbed_attempts, 0);
+    const HapticProfile p = db.trialProfile(t.id);
+    EXPECT_EQ(p.metadata().extra.at("loop_stalls"), "1");
+    EXPECT_EQ(p.metadata().extra.at("disturbed"), "1 stall (force zeroed)");
+  }
+  const StudyAnalysis a = analyzeStudy(db);
+  ASSERT_EQ(a.flagged.size(), 3u);
+  for (const auto& f : a.flagged) EXPECT_TRUE(f.analyzed);
+  EXPECT_EQ(a.costs.size(), 3u * 3u * 2u);
+  const auto html = test::readText(writeStudyReport(db, a, study.dir / "report"));
+  EXPECT_THAT(html, HasSubstr("Disturbed trials"));
+  EXPECT_THAT(html, HasSubstr("1 stall (force zeroed)"));
+}
+
+TEST(DisturbedTrials, ExcludeReplacesThemWithTheSpareRecallTrial) {
+  CompletedStudy study(R"("disturbed_trials": "exclude",)", stallInS01Recall2());
+  const auto db = session::StudyDatabase::open(study.dir / "s.sqlite", session::OpenMode::kReadOnly);
+  const StudyAnalysis a = analyzeStudy(db);
+  ASSERT_EQ(a.flagged.size(), 3u);
+  for (const auto& f : a.flagged) EXPECT_FALSE(f.analyzed);
+  // Still balanced: S01's recall trial 1 (the spare) stands in for trial 2 in each mode.
+  EXPECT_EQ(a.costs.size(), 3u * 3u * 2u);
+  ASSERT_EQ(a.spares_used.size(), 3u);
+  for (const auto& t : db.trials("S01")) {
+    const bool spare = std::find(a.spares_used.begin(), a.spares_used.end(), t.id) != a.spares_used.end();
+    EXPECT_EQ(spare, t.plan.phase == session::Phase::kRecall && t.plan.index == 1) << t.id;
+  }
+  EXPECT_EQ(a.trajectory.overall.replicates, 2u);
+}
+
+TEST(DisturbedTrials, ExcludeWithoutASpareSaysWhatToDo) {
+  CompletedStudy study(R"("disturbed_trials": "exclude", "analyzed_recall_trials": [1, 2, 3],)", stallInS01Recall2());
+  const auto db = session::StudyDatabase::open(study.dir / "s.sqlite", session::OpenMode::kReadOnly);
+  try {
+    (void)analyzeStudy(db);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("subject S01 "));
+    EXPECT_THAT(e.what(), HasSubstr(": 1 disturbed recall trial is excluded"));
+    EXPECT_THAT(e.what(), HasSubstr("use \"repeat\" or \"flag\""));
+  }
+}
+
+TEST(OneScorer, TheReportHattrDtwAndTheStudioAgreeOnEveryScore) {
+  CompletedStudy study;
+  const auto db = session::StudyDatabase::open(study.dir / "s.sqlite", session::OpenMode::kReadOnly);
+  const StudyAnalysis a = analyzeStudy(db);
+  const HapticProfile expert = db.expert("curve");
+  const analysis::TrialScorer scorer(expert);
+  for (const TrialCost& c : a.costs) {
+    const analysis::TrialScore one = scorer.score(db.trialProfile(c.trial_id));
+    for (const auto& [report, single] : {std::pair{c.score.x, one.x}, {c.score.y, one.y}, {c.score.z, one.z},
+                                         {c.score.fx, one.fx}, {c.score.fy, one.fy}, {c.score.fz, one.fz}}) {
+      EXPECT_NEAR(report, single, 1e-12 * std::max(1.0, std::abs(single)));
+    }
   }
 }
 

@@ -131,17 +131,19 @@ TEST(StudyDatabase, RefusesFilesThatAreNotStudiesOrAreNewer) {
     (void)StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kReadWrite);
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("study schema version 99 is newer than this build of hattr reads (1 to 2)"));
+    EXPECT_THAT(e.what(), HasSubstr("study schema version 99 is newer than this build of hattr reads (1 to 3)"));
   }
 }
 
 TEST(StudyDatabase, MigratesTheFirstReleasedSchema) {
   StudyFolder folder;
   { (void)StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json")); }
-  // Turn it back into a version-1 file: what 1 -> 2 added goes away.
+  // Turn it back into a version-1 file: what 1 -> 2 and 2 -> 3 added goes away.
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open((folder.dir / "s.sqlite").c_str(), &db), SQLITE_OK);
-  ASSERT_EQ(sqlite3_exec(db, "DROP TABLE results; ALTER TABLE trials DROP COLUMN interruptions; PRAGMA user_version = 1;",
+  ASSERT_EQ(sqlite3_exec(db,
+                         "DROP TABLE disturbed_attempts; ALTER TABLE trials DROP COLUMN disturbed; DROP TABLE results; "
+                         "ALTER TABLE trials DROP COLUMN interruptions; PRAGMA user_version = 1;",
                          nullptr, nullptr, nullptr),
             SQLITE_OK);
   sqlite3_close(db);
@@ -150,6 +152,8 @@ TEST(StudyDatabase, MigratesTheFirstReleasedSchema) {
   reopened.putResult("k", "v");
   EXPECT_EQ(reopened.result("k"), "v");
   EXPECT_EQ(reopened.trials().front().interruptions, 0);
+  EXPECT_EQ(reopened.trials().front().disturbed, "");
+  EXPECT_EQ(reopened.trials().front().disturbed_attempts, 0);
 }
 
 TEST(StudyDatabase, ASecondRunnerGetsAClearError) {

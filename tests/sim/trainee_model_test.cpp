@@ -53,7 +53,7 @@ std::vector<const ModelParameter*> allParameters(const TraineeModel& m) {
           &m.fast_retention,  &m.fast_rate,         &m.slow_retention,
           &m.slow_rate,       &m.weber_fraction,    &m.felt_force_stiffness_N_per_m,
           &m.position_noise_coefficient, &m.force_noise_coefficient, &m.deviation_rms_m,
-          &m.force_scale,     &m.force_offset_N};
+          &m.force_scale,     &m.force_offset_N,    &m.pace_cv};
 }
 
 TEST(TraineeModelFile, TheShippedModelStatesEveryParameterWithARangeAndASource) {

@@ -61,6 +61,7 @@ SubjectTraits quietTraits() {
   t.position_noise_coefficient = 0.0;
   t.force_noise_coefficient = 0.0;
   t.weber_fraction = 0.0;
+  t.pace_cv = 0.0;  // every trial at the plan's pace, so a trial and its plan share one clock
   return t;
 }
 
@@ -376,6 +377,7 @@ TEST(SimulatedTraineeOnThePen, TheRecordedTrialFollowsThePlanAndSeeingItHelps) {
   PenFixture f;
   SubjectTraits traits = populationTraits(shippedModel());
   traits.deviation_rms_m = 0.003;
+  traits.pace_cv = 0.0;  // compared with the plan sample by sample
   const std::uint64_t seed = test::testSeed(3);
   SCOPED_TRACE(::testing::Message() << "seed " << seed);
   SimulatedTrainee trainee(shippedModel(), traits, f.script, seed);
@@ -393,6 +395,7 @@ TEST(SimulatedTraineeOnThePen, PositionGuidanceFeltWithTheTemplateHiddenPullsThe
   PenFixture f;
   SubjectTraits traits = populationTraits(shippedModel());
   traits.deviation_rms_m = 0.003;
+  traits.pace_cv = 0.0;  // compared with the template sample by sample
   SimulatedTrainee trainee(shippedModel(), traits, f.script, 8);
   const double before = PenFixture::penDownRms(trainee.plan(), f.script);
   const HapticProfile recorded = f.trial(trainee, guidance::TrainingMode::kPositionControl, 1);

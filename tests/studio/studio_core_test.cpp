@@ -289,15 +289,15 @@ class StudioCoreTest : public QObject {
   // ---- Scoring ----
   void scoringATrialAgainstItselfGivesZero() {
     const HapticProfile p = test::figureEightScript(1.0);
-    const TrialScores s = scoreTrial(p, p);
-    QCOMPARE(s.shape, 0.0);
-    QCOMPARE(s.force, 0.0);
-    QCOMPARE(s.expert_samples, p.size());
+    const analysis::TrialScore s = scoreTrial(p, p);
+    QCOMPARE(s.shape(), 0.0);
+    QCOMPARE(s.force(), 0.0);
+    QCOMPARE(s.z, 0.0);
   }
   void scoringIsWhatHattrDtwComputes() {
     const HapticProfile expert = test::figureEightScript(1.0, 0.8);
     const HapticProfile trial = test::figureEightScript(1.3, 1.1, Vec3(0.004, -0.002, 0.0));
-    const TrialScores s = scoreTrial(expert, trial);
+    const analysis::TrialScore s = scoreTrial(expert, trial);
     // The CLI's computation (apps/hattr/cmd_analysis.cpp runDtw), channel by channel.
     const auto cli = [&](const char* name) {
       const auto a = analysis::normalize(expert.channel(name), analysis::Normalization::kPaper);
@@ -308,8 +308,8 @@ class StudioCoreTest : public QObject {
     QCOMPARE(s.x, cli("x"));
     QCOMPARE(s.y, cli("y"));
     QCOMPARE(s.fz, cli("fz"));
-    QCOMPARE(s.shape, s.x + s.y);
-    QCOMPARE(s.force, s.fx + s.fy + s.fz);
+    QCOMPARE(s.shape(), s.x + s.y);
+    QCOMPARE(s.force(), s.fx + s.fy + s.fz);
   }
   void scoringADifferentShapeCostsMore() {
     const HapticProfile expert = test::figureEightScript(1.0);
@@ -319,7 +319,7 @@ class StudioCoreTest : public QObject {
       circle.append(s);
     }
     const HapticProfile similar = test::figureEightScript(1.1, 0.8, Vec3(0.001, 0.0, 0.0));
-    QVERIFY(scoreTrial(expert, circle).shape > 2.0 * scoreTrial(expert, similar).shape);
+    QVERIFY(scoreTrial(expert, circle).shape() > 2.0 * scoreTrial(expert, similar).shape());
   }
   void scoringRefusesATooShortTrialSayingWhich() {
     const HapticProfile expert = test::figureEightScript(1.0);
@@ -329,7 +329,7 @@ class StudioCoreTest : public QObject {
       (void)scoreTrial(expert, one);
       QFAIL("no error");
     } catch (const InputError& e) {
-      QVERIFY2(QString(e.what()).contains("the trial needs at least 2 samples, got 1"), e.what());
+      QVERIFY2(QString(e.what()).contains("the trial has 1 samples in its writing span"), e.what());
     }
   }
 

@@ -113,7 +113,7 @@ class StudioSmokeTest : public QObject {
     QVERIFY(w.lastTrial()->size() > 1000);
     QVERIFY(w.lastTrial()->penDownCount() > 500);
     QVERIFY(w.lastScores().has_value());
-    QVERIFY(w.lastScores()->shape > 0.0);
+    QVERIFY(w.lastScores()->shape() > 0.0);
     QCOMPARE(w.lastTrial()->metadata().extra.at("mode"), std::string("PCONTROL"));
 
     // Let a few frames draw, then the screenshot.

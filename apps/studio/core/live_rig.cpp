@@ -175,7 +175,9 @@ session::TrialResult LiveRig::finish() {
   result.overruns = loop_->counters().overruns.load();
   result.faults = loop_->counters().faults.load();
   result.missed_samples = recorder_->missed();
-  result.profile = recorder_->takeProfile();
+  result.stalls = loop_->counters().stalls.load();
+  result.link_faults = loop_->counters().link_faults.load();
+  session::noteTrialEnd(result, *recorder_, false);
 
   // Tear down in dependency order: the recorder reads the relay, the loop drives the device.
   recorder_.reset();

@@ -4,6 +4,7 @@
 
 #include "hattr/core/error.hpp"
 #include "hattr/render/world_config.hpp"
+#include "hattr/session/study_runner.hpp"
 
 namespace hattr::studio {
 
@@ -120,7 +121,7 @@ void StudySession::beginTrial() {
   state_ = State::kRunning;
 }
 
-void StudySession::completeTrial(session::TrialResult result, double now_s) {
+std::string StudySession::completeTrial(session::TrialResult result, double now_s) {
   HATTR_DEMAND(state_ == State::kRunning, "study: completeTrial() in state {}", stateName(state_));
   if (result.profile.empty()) {
     state_ = State::kReady;
@@ -129,14 +130,23 @@ void StudySession::completeTrial(session::TrialResult result, double now_s) {
   // Nothing in the profile may depend on when it ran (the runner's rule).
   result.profile.metadata().created_utc = "";
   const session::TrialRecord& record = trials_[next_];
+  const std::string disturbed = session::noteLoopCounters(result);
   try {
+    if (session::repeatDisturbedTrial(db_.study().protocol, disturbed, repeats_)) {
+      db_.keepDisturbedAttempt(record.id, result.profile, disturbed);
+      ++repeats_;
+      state_ = State::kReady;  // the same trial again
+      return disturbed;
+    }
     db_.completeTrial(record.id, result.profile,
-                      fmt::format("ok: {} samples, {} missed, {} faults", result.profile.size(), result.missed_samples,
-                                  result.faults));
+                      fmt::format("ok: {} samples, {} missed, {} faults{}", result.profile.size(), result.missed_samples,
+                                  result.faults, disturbed.empty() ? "" : "; disturbed"),
+                      disturbed);
   } catch (...) {
     state_ = State::kReady;  // not stored: the trial stays running in the database, to be run again
     throw;
   }
+  repeats_ = 0;
   trials_[next_].status = session::TrialStatus::kCompleted;
   ++completed_;
   ++next_;
@@ -148,6 +158,7 @@ void StudySession::completeTrial(session::TrialResult result, double now_s) {
     state_ = State::kResting;
     rest_until_s_ = now_s + db_.study().protocol.rest_s;
   }
+  return disturbed;
 }
 
 void StudySession::abandonTrial() {

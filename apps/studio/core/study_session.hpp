@@ -82,14 +82,18 @@ class StudySession {
   /// Stores the finished trial (profile and status in one transaction) and moves on: to a
   /// rest before the next trial, or to finished (the session ends). Throws hattr::Error
   /// for an empty recording or when the database refuses the write; either way the state
-  /// goes back to ready and the trial (still marked running) can be run again.
-  void completeTrial(session::TrialResult result, double now_s);
+  /// goes back to ready and the trial (still marked running) can be run again. A trial the
+  /// loop disturbed is handled by the protocol's policy: with "repeat" it is kept as a
+  /// disturbed attempt and the state goes back to ready for the same trial. Returns the
+  /// disturbance ("" when clean).
+  std::string completeTrial(session::TrialResult result, double now_s);
   /// The person abandoned the trial: it stays marked running until run again (each run
   /// counts an attempt; a crash leaves it to be marked interrupted). Back to ready.
   void abandonTrial();
 
  private:
   session::StudyDatabase db_;
+  int repeats_ = 0;  ///< disturbed attempts of the current trial run again so far
   HapticProfile expert_;
   std::unique_ptr<session::TrialEnvironment> environment_;
   std::shared_ptr<const guidance::ReferenceTrajectory> reference_;

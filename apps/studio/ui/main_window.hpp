@@ -101,7 +101,7 @@ class MainWindow final : public QMainWindow {
 
   [[nodiscard]] Activity activity() const { return activity_; }
   [[nodiscard]] guidance::TrainingMode mode() const { return mode_; }
-  [[nodiscard]] const std::optional<TrialScores>& lastScores() const { return last_scores_; }
+  [[nodiscard]] const std::optional<analysis::TrialScore>& lastScores() const { return last_scores_; }
   [[nodiscard]] const std::optional<HapticProfile>& lastTrial() const { return last_trial_; }
   [[nodiscard]] const std::optional<HapticProfile>& take() const { return take_; }
   [[nodiscard]] StudySession* study() const { return study_.get(); }
@@ -177,7 +177,7 @@ class MainWindow final : public QMainWindow {
   std::optional<HapticProfile> last_trial_;
   std::optional<HapticProfile> last_trial_expert_;
   bool last_trial_saved_ = true;
-  std::optional<TrialScores> last_scores_;
+  std::optional<analysis::TrialScore> last_scores_;
   const HapticProfile* trial_expert_ = nullptr;  // the reference of the running trial
   bool trial_shows_reference_ = true;
 

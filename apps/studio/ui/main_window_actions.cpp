@@ -225,15 +225,26 @@ void MainWindow::finishTrial() {
   if (was == Activity::kStudyTrial && study_) {
     scores_label = study_scores_;
     try {
-      study_->completeTrial(std::move(result), now_s());
+      const std::string disturbed = study_->completeTrial(std::move(result), now_s());
       last_trial_saved_ = true;
-      statusBar()->showMessage(tr("Trial stored in the study database."), 5000);
+      const bool again = !disturbed.empty() && study_->state() == StudySession::State::kReady;
+      statusBar()->showMessage(again ? tr("The trial was disturbed (%1): it is kept, and runs again.").arg(qs(disturbed))
+                               : disturbed.empty() ? tr("Trial stored in the study database.")
+                                                   : tr("Trial stored, flagged as disturbed (%1).").arg(qs(disturbed)),
+                               8000);
     } catch (const std::exception& e) {
       showError(tr("The trial could not be stored in the study database"),
                 what(e) + tr("\n\nThe trial is kept: save it with File → Save last trial… (Ctrl+Shift+S); "
                              "the study will run this trial again."));
     }
     refreshStudyPanel();
+    // The subject sees no score during a study unless the study file asks (the paper showed none).
+    if (!study_->study().protocol.show_scores) {
+      last_scores_.reset();
+      scores_label->setText(tr("Trial stored. No score is shown during the study (protocol.show_scores)."));
+      refreshButtons();
+      return;
+    }
   }
   showScores(*last_trial_expert_, *last_trial_, scores_label);
   if (was == Activity::kTrial) {
@@ -248,19 +259,21 @@ void MainWindow::finishTrial() {
 
 void MainWindow::showScores(const HapticProfile& expert, const HapticProfile& trial, QLabel* where) {
   try {
-    const TrialScores scores = scoreTrial(expert, trial);
+    const analysis::TrialScorer scorer(expert);
+    const analysis::TrialScore scores = scorer.score(trial);
     last_scores_ = scores;
     where->setText(tr("<b>Shape</b> (DTW x + y): %1 &nbsp; <b>Force</b> (DTW fx + fy + fz): %2<br>"
-                      "<small>x %3 · y %4 · fx %5 · fy %6 · fz %7 — the paper's normalization, on the expert's %8 "
-                      "time steps; lower is closer</small>")
-                       .arg(scores.shape, 0, 'g', 4)
-                       .arg(scores.force, 0, 'g', 4)
+                      "<small>x %3 · y %4 · fx %5 · fy %6 · fz %7 · pen height z %9 (not in the shape) — the "
+                      "paper's normalization, on the expert's %8 time steps; lower is closer</small>")
+                       .arg(scores.shape(), 0, 'g', 4)
+                       .arg(scores.force(), 0, 'g', 4)
                        .arg(scores.x, 0, 'g', 4)
                        .arg(scores.y, 0, 'g', 4)
                        .arg(scores.fx, 0, 'g', 4)
                        .arg(scores.fy, 0, 'g', 4)
                        .arg(scores.fz, 0, 'g', 4)
-                       .arg(scores.expert_samples));
+                       .arg(scorer.expertSamples())
+                       .arg(scores.z, 0, 'g', 4));
   } catch (const std::exception& e) {
     last_scores_.reset();
     where->setText(tr("Not scored: %1").arg(what(e).toHtmlEscaped()));
@@ -550,6 +563,11 @@ void MainWindow::refreshStudyPanel() {
   if (const session::TrialRecord* t = study_->currentTrial(); t != nullptr && state != StudySession::State::kFinished) {
     prompt += t->plan.view.show_reference ? tr("<br><small>the reference is shown</small>")
                                           : tr("<br><small>from memory: the reference is hidden</small>");
+    // Recall is recall: the reference is gone from the moment its trial is announced, rest included.
+    if (!t->plan.view.show_reference && activity_ != Activity::kStudyTrial) {
+      paper_->setReferenceShown(false);
+      plot_->setExpert(ForceSeries{});
+    }
   }
   study_prompt_->setText(prompt);
   const bool free = activity_ == Activity::kFree || activity_ == Activity::kPlayback;

@@ -1,7 +1,8 @@
 #pragma once
-/// The paper's evaluation of a study (its sections 5.1 and 6): for every recall trial, the
-/// DTW cost against the expert of the trajectory (x, y, z) and of the haptic profile
-/// (fx, fy, fz), after the paper's preprocessing; per metric, an ANOVA per mode with factors
+/// The paper's evaluation of a study (its sections 5.1 and 6): for the analyzed recall trials
+/// (10 of the 11 by default, protocol.analyzed_recall_trials), the DTW cost against the expert
+/// of the shape (x, y; z reported on its own) and of the haptic profile (fx, fy, fz), from
+/// analysis::TrialScorer; per metric, an ANOVA per mode with factors
 /// trial and subject (the "effect of training" and the "difference between subjects"), the
 /// overall mode × subject ANOVA (subject random: mode tested against mode × subject), Tukey
 /// HSD between modes, per-mode mean and variance, inter-subject variance, and each subject's
@@ -17,6 +18,7 @@
 #include "hattr/analysis/anova.hpp"
 #include "hattr/analysis/dtw.hpp"
 #include "hattr/analysis/preprocess.hpp"
+#include "hattr/analysis/trial_score.hpp"
 #include "hattr/session/study_database.hpp"
 
 namespace hattr::report {
@@ -28,16 +30,27 @@ struct AnalysisOptions {
   unsigned threads = 2;
 };
 
-/// One recall trial's costs against the expert.
+/// One recall trial's costs against the expert (analysis::TrialScorer).
 struct TrialCost {
   std::int64_t trial_id = 0;
   std::string subject;
   std::string mode;          ///< "BASIC", "PCONTROL", "ALPHA"
-  int trial = 0;             ///< recall trial number, from 1
-  std::array<double, 3> position{};  ///< DTW cost of x, y, z
-  std::array<double, 3> force{};     ///< DTW cost of fx, fy, fz
-  [[nodiscard]] double trajectory() const { return position[0] + position[1] + position[2]; }
-  [[nodiscard]] double forceProfile() const { return force[0] + force[1] + force[2]; }
+  int trial = 0;             ///< recall trial number, from 1 (a spare: the number of the trial it replaces)
+  analysis::TrialScore score;
+  std::string disturbed;     ///< how the loop disturbed it ("" when clean)
+  [[nodiscard]] double trajectory() const { return score.shape(); }     ///< x + y
+  [[nodiscard]] double forceProfile() const { return score.force(); }   ///< fx + fy + fz
+};
+
+/// A recall trial the loop disturbed, and whether the analysis kept it.
+struct FlaggedTrial {
+  std::int64_t trial_id = 0;
+  std::string subject;
+  std::string mode;
+  int trial = 0;
+  std::string disturbed;
+  int disturbed_attempts = 0;  ///< earlier attempts kept and run again
+  bool analyzed = false;
 };
 
 /// Everything computed for one metric.
@@ -54,7 +67,11 @@ struct MetricResult {
 
 struct StudyAnalysis {
   AnalysisOptions options;
-  std::vector<TrialCost> costs;
+  std::vector<int> analyzed_recall_trials;  ///< the recall trial numbers used (the protocol's)
+  std::string disturbed_policy;             ///< the protocol's: repeat, flag, exclude
+  std::vector<FlaggedTrial> flagged;        ///< disturbed recall trials, analyzed or not
+  std::vector<std::int64_t> spares_used;    ///< trials analyzed in place of excluded ones
+  std::vector<TrialCost> costs;             ///< the analyzed trials
   MetricResult trajectory;
   MetricResult force;
 };

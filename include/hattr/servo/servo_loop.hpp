@@ -91,6 +91,9 @@ class ServoLoop {
   void runSimulated(std::size_t ticks) noexcept;
   /// Simulated time so far.
   [[nodiscard]] std::chrono::nanoseconds simulatedNow() const noexcept { return sim_now_; }
+  /// Simulated time: the next tick comes `gap` late, as after a stall of the host (to rehearse
+  /// what a study does with a disturbed trial). A gap beyond the stall threshold is a stall.
+  void delaySimulated(std::chrono::nanoseconds gap) noexcept { sim_now_ += gap; }
 
   /// Real time, on the clock the device declares (Device::clocking()): the loop's own
   /// real-time thread (applies the real-time settings there; throws hattr::Error if they are

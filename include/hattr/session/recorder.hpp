@@ -23,6 +23,10 @@ struct RecorderConfig {
   RecordTrigger trigger = RecordTrigger::kCommand;
   double nominal_period_s = 1e-3;   ///< the servo period (the profile's nominal rate)
   double pen_up_stop_s = 1.0;       ///< kPenDown: stop after the pen is up this long
+  /// > 0: writing is over once the pen has been up this long [s] after writing began (the
+  /// recording's first pen-down sample); recording stops with that sample and writingOver()
+  /// becomes true. 0: off. Decided per sample, so the same samples give the same end.
+  double end_after_pen_up_s = 0.0;
 };
 
 class Recorder {
@@ -48,6 +52,13 @@ class Recorder {
   [[nodiscard]] std::uint64_t missed() const noexcept { return missed_; }
   [[nodiscard]] std::uint64_t rejected() const noexcept { return rejected_; }
   [[nodiscard]] bool recording() const noexcept { return recording_; }
+  /// True once writing is over (RecorderConfig::end_after_pen_up_s). Any thread.
+  [[nodiscard]] bool writingOver() const noexcept { return writing_over_.load(std::memory_order_acquire); }
+  /// The profile times [s] of the first pen-down sample recorded and of the last pen-up (the
+  /// first pen-up sample after the last pen-down; the last sample's time if the pen was still
+  /// down); negative if the pen never went down. After stopThread(), or from the consumer thread.
+  [[nodiscard]] double writingBegin_s() const noexcept { return writing_begin_s_; }
+  [[nodiscard]] double writingEnd_s() const noexcept;
   [[nodiscard]] const HapticProfile& profile() const noexcept { return profile_; }
   /// The recorded profile, its times starting at 0 (the loop time of its first sample is in
   /// metadata `t_origin_s`), with `missed_samples` and `rejected_samples` in its metadata.
@@ -67,6 +78,10 @@ class Recorder {
   bool have_tick_ = false;
   std::uint64_t last_tick_ = 0;
   double pen_up_since_s_ = -1.0;
+  double writing_begin_s_ = -1.0;   // profile time of the first pen-down sample
+  double writing_up_since_s_ = -1.0;  // profile time the pen last went up after writing began
+  double last_kept_s_ = -1.0;
+  std::atomic<bool> writing_over_{false};
   double t_origin_s_ = 0.0;
   std::uint64_t missed_ = 0;
   std::uint64_t rejected_ = 0;

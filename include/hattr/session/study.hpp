@@ -5,6 +5,7 @@
 /// (docs/studies.md gives the format and an example); validation names every problem at
 /// once.
 
+#include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -31,11 +32,40 @@ struct PhaseView {
 /// How mode orders are assigned to subjects.
 enum class OrderKind { kLatinSquare, kFixed, kRandom };
 
+/// What a study does with a trial its servo loop disturbed (a stall that zeroed the force,
+/// missed samples, a safety fault or a lost device link): run it again (the disturbed
+/// attempt is kept in the database), keep it flagged, or keep it flagged and out of the
+/// analysis.
+enum class DisturbedPolicy { kRepeat, kFlag, kExclude };
+std::string_view disturbedPolicyName(DisturbedPolicy policy);  ///< "repeat", "flag", "exclude"
+
+/// When a study trial ends (docs/studies.md): once the pen has been up for pen_up_s after
+/// writing began (the first pen-down), or at the maximum duration.
+struct TrialEndRule {
+  double pen_up_s = 1.0;  ///< [s]
+  double max_s = 0.0;     ///< the longest a trial may last [s]; 0: 3 × the expert's duration
+  /// The maximum duration [s] for an expert reference lasting `expert_duration_s`, at most 3600 s.
+  [[nodiscard]] double maxDuration_s(double expert_duration_s) const noexcept {
+    return std::min(max_s > 0.0 ? max_s : 3.0 * expert_duration_s, 3600.0);
+  }
+};
+
 struct Protocol {
   int training_trials = 11;
   int recall_trials = 11;
+  /// The recall trials the analysis uses (numbers from 1). Empty: all but the first — hattr's
+  /// reading of the paper's "10 of the 11 recall trials" (it does not say which it dropped;
+  /// the first recall trial follows the switch from assisted training, docs/replication.md).
+  std::vector<int> analyzed_recall_trials;
+  DisturbedPolicy disturbed = DisturbedPolicy::kRepeat;
+  int max_repeats = 2;        ///< a disturbed trial is run at most this many extra times, then kept flagged
+  bool show_scores = false;   ///< show the subject a score after each trial (the paper showed none)
   double rest_s = 10.0;       ///< between trials
-  double tail_s = 0.5;        ///< each trial lasts the expert's duration plus this
+  double tail_s = 0.5;        ///< only with fixed_window: each trial lasts the expert's duration plus this
+  TrialEndRule trial_end;     ///< when a trial ends (the subject is done)
+  /// An old study file (tail_s and no trial_end): every trial lasts the expert's duration plus
+  /// tail_s, as before the end rule, so a study begun that way resumes unchanged.
+  bool fixed_window = false;
   PhaseView training{true, true};
   PhaseView recall{false, false};
 };
@@ -62,6 +92,9 @@ struct StudyDefinition {
   guidance::Indexing indexing = guidance::Indexing::kTime;
   std::vector<SubjectSpec> subjects;
 };
+
+/// The recall trials the analysis uses: protocol.analyzed_recall_trials, or all but the first.
+std::vector<int> analyzedRecallTrials(const Protocol& protocol);
 
 /// Parses and validates a study file's text. Relative expert paths resolve against
 /// `base_dir`; with `check_files`, each must exist. Throws InputError listing every problem

@@ -26,7 +26,7 @@ struct sqlite3;
 namespace hattr::session {
 
 /// The schema this build writes; it reads every version from 1 up to this one.
-inline constexpr int kStudySchemaVersion = 2;
+inline constexpr int kStudySchemaVersion = 3;
 /// SQLite application_id of hattr study files ("hatt").
 inline constexpr std::int32_t kStudyApplicationId = 0x68617474;
 
@@ -44,6 +44,8 @@ struct TrialRecord {
   std::string ended_utc;
   std::string outcome;
   std::int64_t sample_count = 0;
+  std::string disturbed;        ///< how the loop disturbed the kept attempt ("" when clean)
+  int disturbed_attempts = 0;   ///< disturbed attempts kept and run again (policy "repeat")
 };
 
 struct SubjectRecord {
@@ -88,8 +90,12 @@ class StudyDatabase {
   void endSession(std::int64_t session_id);
   /// Marks a trial running (its own transaction).
   void markRunning(std::int64_t trial_id, std::int64_t session_id);
-  /// Stores a finished trial's profile and marks it completed, in one transaction.
-  void completeTrial(std::int64_t trial_id, const HapticProfile& profile, const std::string& outcome);
+  /// Stores a finished trial's profile and marks it completed, in one transaction;
+  /// `disturbed` says how the loop disturbed it ("" when clean).
+  void completeTrial(std::int64_t trial_id, const HapticProfile& profile, const std::string& outcome,
+                     const std::string& disturbed = "");
+  /// Keeps a disturbed attempt of a running trial (samples and metadata) before it is run again.
+  void keepDisturbedAttempt(std::int64_t trial_id, const HapticProfile& profile, const std::string& reason);
   /// A running trial that failed (device fault, lost link): interrupted, outcome "failed:
   /// <reason>"; nothing of it is kept, and the next run repeats it. Completed trials are untouched.
   void failTrial(std::int64_t trial_id, const std::string& reason);

@@ -50,7 +50,27 @@ struct RunOptions {
   Clock clock = Clock::kSimulated;
   std::function<void(const RunProgress&)> progress;   ///< after each trial
   int max_trials = -1;                                ///< stop after this many trials (-1: all)
+  /// A score for the subject after each trial, shown (as a prompt) only when the study's
+  /// protocol.show_scores asks; the app supplies it (the runner does not score).
+  std::function<std::string(const TrialPlan&, const HapticProfile&)> score_text;
+  /// Rehearsing the disturbed-trial policy on the simulator: the trial time at which a host
+  /// stall is injected into an attempt (attempt 0 is the first), negative for none.
+  std::function<double(const TrialPlan&, int attempt)> inject_stall_at_s;
 };
+
+/// How the servo loop disturbed a trial, for people ("2 stalls (force zeroed) · 3 missed
+/// samples"); empty when it ran clean. Stalls, missed samples, safety faults and lost device
+/// links disturb a trial; overruns alone (late ticks) do not, and are stored all the same.
+std::string disturbanceOf(const TrialResult& result);
+
+/// Writes the loop's counters of a trial (ticks, overruns, stalls, missed samples, safety
+/// faults, lost links) and its disturbance into its recording's metadata; returns the
+/// disturbance (disturbanceOf).
+std::string noteLoopCounters(TrialResult& result);
+
+/// Whether a study runs a disturbed trial again: the policy is "repeat" and it has been
+/// repeated fewer than protocol.max_repeats times.
+bool repeatDisturbedTrial(const Protocol& protocol, const std::string& disturbed, int repeats_so_far);
 
 class StudyRunner {
  public:

@@ -4,8 +4,10 @@
 /// loop on either clock, and the recorder. The same code records an expert and runs a
 /// trainee's trial; `hattr record`, `hattr train` and the study runner call it.
 
+#include <atomic>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "hattr/core/haptic_profile.hpp"
@@ -48,17 +50,50 @@ class TrialEnvironment {
   std::unique_ptr<render::PaperRenderer> paper_;
 };
 
+/// A request to end a trial from another thread (the studio's stop key): request() may be
+/// called from any thread, at any time; a real-time trial watching it ends within a few ms
+/// with TrialResult::end_reason "stopped". A simulated trial ignores it (its end must depend
+/// on its samples alone). Must outlive the trial that watches it.
+class TrialStop {
+ public:
+  void request() noexcept { requested_.store(true, std::memory_order_release); }
+  void reset() noexcept { requested_.store(false, std::memory_order_release); }
+  [[nodiscard]] bool requested() const noexcept { return requested_.load(std::memory_order_acquire); }
+
+ private:
+  std::atomic<bool> requested_{false};
+};
+
+/// Why a trial ended (TrialResult::end_reason and the profile's metadata `end_reason`).
+inline constexpr std::string_view kEndPenLifted = "pen lifted";
+inline constexpr std::string_view kEndMaximumDuration = "maximum duration";
+inline constexpr std::string_view kEndStopped = "stopped";
+inline constexpr std::string_view kEndFailed = "failed";
+
 struct TrialSetup {
   guidance::GuidanceConfig guidance;                            ///< mode, gains, indexing
   std::shared_ptr<const guidance::ReferenceTrajectory> reference;  ///< null for BASIC without one
   ProfileMetadata metadata;                                     ///< subject, skill, ...; mode etc. are added
-  double duration_s = 1.0;                                      ///< how long the trial runs (recorded)
+  /// The maximum duration [s]: the trial ends here at the latest (recorded). Without an end
+  /// rule (pen_up_end_s = 0) every trial lasts exactly this long.
+  double duration_s = 1.0;
+  /// The end rule: > 0, the trial ends once the pen has been up (out of contact with the paper)
+  /// for this long [s] after writing began (the first pen-down); the recording ends with that
+  /// sample. 0: off. Decided sample by sample, so a simulated trial ends at the same tick
+  /// whatever the loop's chunking.
+  double pen_up_end_s = 0.0;
+  /// Real-time trials only: ends the trial when requested (null: nothing to watch).
+  const TrialStop* stop = nullptr;
   /// Before the trial: the loop runs this long with the hand holding the pen 3 mm above its
   /// first point, so the safety path's ramp-in is complete before the pen meets the paper.
   /// Not recorded; the trial's clock starts after it. Must be at least the ramp time.
   double settle_s = 0.3;
   Clock clock = Clock::kSimulated;
   RecordTrigger trigger = RecordTrigger::kCommand;
+  /// Simulated clock: a host stall of `injected_stall_s` at this time of the trial's clock
+  /// (rehearsing a study's disturbed-trial policy); negative: none.
+  double inject_stall_at_s = -1.0;
+  double injected_stall_s = 0.03;
 };
 
 struct TrialResult {
@@ -72,6 +107,14 @@ struct TrialResult {
   std::uint64_t stalls = 0;            ///< loop or device-clock stalls (force zeroed)
   double max_period_error_s = 0.0;     ///< the largest |period − nominal| of a real-time run [s]
   std::string clock;                   ///< the clock that ran it: simulated, real-time, device
+  /// Why it ended: "pen lifted", "maximum duration", "stopped" or "failed" (kEnd...). Also in
+  /// the profile's metadata as `end_reason`, with `writing_begin_s` and `writing_end_s`: the
+  /// profile times [s] of the first pen-down and of the last pen-up (the last sample's time if
+  /// the pen was still down), written with "{}" so they read back exactly; both absent when the
+  /// pen never touched the paper.
+  std::string end_reason;
+  double writing_begin_s = -1.0;       ///< profile time of the first pen-down [s]; < 0: none
+  double writing_end_s = -1.0;         ///< profile time of the last pen-up [s]; < 0: none
   /// Empty when the trial ran to its end; otherwise why it was stopped early (a device fault,
   /// a lost link, a stalled device clock), with the device's own reason. The profile then
   /// holds what was recorded up to the failure (empty if it failed while settling) and its
@@ -109,7 +152,13 @@ ProfileMetadata trialMetadata(ProfileMetadata base, const TrialEnvironment& envi
                               const guidance::GuidanceConfig& config, const std::vector<std::string>& clamps,
                               Clock clock);
 
-/// Runs one trial: the settle phase, then `duration_s` recorded. A simulated pen starts 3 mm
+/// After the recorder stopped: the trial's end reason (failed, pen lifted, `stopped`, or the
+/// maximum duration), its writing span, and the recording, with these in its metadata
+/// (end_reason, writing_begin_s, writing_end_s). runTrial and the studio's live rig use it.
+void noteTrialEnd(TrialResult& result, Recorder& recorder, bool stopped);
+
+/// Runs one trial: the settle phase, then recorded until the end rule (pen_up_end_s), the
+/// stop request (real time) or `duration_s`, whichever comes first. A simulated pen starts 3 mm
 /// above the hand's first target. On a real-time clock the trial ends early, with
 /// TrialResult::failure set, within a few ms of a device fault, a lost link or a stalled device
 /// clock (the loop has already commanded zero force). Throws InputError for bad settings;

@@ -60,7 +60,14 @@ class SimulatedTrainee {
   /// noise of SD force_noise_coefficient × the planned force in the window. The script runs on
   /// the trial's clock from t = 0 (a device::ProfileHandScript over the noisy plan; it holds the
   /// last point after the end). Not for the servo thread; the returned script's command() is.
+  /// The trial is played at the trial's pace (paceFactor): its clock stretched by that factor,
+  /// its velocities divided by it.
   [[nodiscard]] std::unique_ptr<device::HandScript> handForTrial(std::uint64_t trial_seed) const;
+
+  /// The pace of the trial drawn with `trial_seed` (its own stream): the factor by which the
+  /// trial lasts longer than the plan, exp(traits.pace_cv × N(0, 1)) kept within [0.5, 2].
+  /// The same seed gives the same factor (a resumed study replays its trials). Pure.
+  [[nodiscard]] double paceFactor(std::uint64_t trial_seed) const;
 
   /// Updates the plan after a trial (times from 0, as session::runTrial records them):
   ///   e = [visual error if template_shown] + [felt guidance force, perceived and converted],
@@ -71,7 +78,9 @@ class SimulatedTrainee {
   /// ignored. With the template hidden (recall) there is no visual error: the trainee has only
   /// what it felt, and with no guidance both states decay by their retention factors. Throws
   /// InputError for a recording of fewer than two samples. Not for the servo thread.
-  void learn(const HapticProfile& recorded_trial, bool template_shown);
+  /// `pace_factor`: the trial's paceFactor; the trainee compares the template with its own
+  /// trace at the same point of the movement (recorded time / pace_factor), not of the clock.
+  void learn(const HapticProfile& recorded_trial, bool template_shown, double pace_factor = 1.0);
 
   /// What the trainee sees as the template in training trials (default: the template script
   /// itself), e.g. the expert's recording the study displays. Its path and pen-down flags are
@@ -103,7 +112,7 @@ class SimulatedTrainee {
     Eigen::VectorXd axial_N;  // planned axial force (0 with the pen up) [N]
   };
   [[nodiscard]] Series series(const PlanWeights& weights) const;
-  [[nodiscard]] HapticProfile profileOf(const Series& s, const std::string& source) const;
+  [[nodiscard]] HapticProfile profileOf(const Series& s, const std::string& source, double pace_factor = 1.0) const;
   [[nodiscard]] PlanWeights planWeights() const { return deviation_ + fast_ + slow_; }
   /// Least-squares weights of `values` (N × c) over the masked samples.
   [[nodiscard]] Eigen::MatrixXd project(const Eigen::MatrixXd& values, const std::vector<char>& mask) const;

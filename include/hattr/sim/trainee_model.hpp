@@ -51,6 +51,7 @@ struct TraineeModel {
   ModelParameter deviation_rms_m;               ///< initial plan deviation, RMS [m] (file: mm)
   ModelParameter force_scale;                   ///< personal force scale [1]
   ModelParameter force_offset_N;                ///< personal force offset [N]
+  ModelParameter pace_cv;                       ///< trial-to-trial variability of the pace [1]
 };
 
 /// Parses a trainee model file's text; `source_name` names it in messages. Throws InputError
@@ -79,6 +80,9 @@ struct SubjectTraits {
   double deviation_rms_m = 0.0;               ///< RMS of the initial plan's offset from the template [m]
   double force_scale = 1.0;                   ///< axial force plan = scale × template + offset
   double force_offset_N = 0.0;                ///< [N]
+  /// Trial-to-trial variability of the pace: each trial plays the plan uniformly slower or
+  /// faster by a factor exp(pace_cv × N(0, 1)) (SD of its log; about its coefficient of variation).
+  double pace_cv = 0.0;
   friend bool operator==(const SubjectTraits&, const SubjectTraits&) = default;
 };
 

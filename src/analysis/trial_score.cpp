@@ -1,0 +1,122 @@
+#include "hattr/analysis/trial_score.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <exception>
+#include <string>
+#include <thread>
+
+#include "hattr/core/error.hpp"
+
+namespace hattr::analysis {
+namespace {
+
+constexpr std::array<Channel, 6> kScoredChannels{Channel::kX,  Channel::kY,  Channel::kZ,
+                                                 Channel::kFx, Channel::kFy, Channel::kFz};
+
+/// A metadata number [s]; false when absent or not a finite number.
+bool readSeconds(const HapticProfile& profile, const char* key, double& value) {
+  const auto& extra = profile.metadata().extra;
+  const auto it = extra.find(key);
+  if (it == extra.end()) return false;
+  const std::string& text = it->second;
+  double v = 0.0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ec != std::errc() || end != text.data() + text.size() || !std::isfinite(v)) return false;
+  value = v;
+  return true;
+}
+
+/// The scored channels of a profile within its writing span, and their times.
+struct Cropped {
+  std::vector<double> t_s;
+  std::array<std::vector<double>, 6> series;
+};
+
+Cropped crop(const HapticProfile& profile, const char* who) {
+  const TimeSpan span = writingSpan(profile);
+  const std::vector<double> t = profile.channel(Channel::kTime);
+  const auto first = std::lower_bound(t.begin(), t.end(), span.begin_s) - t.begin();
+  const auto last = std::upper_bound(t.begin(), t.end(), span.end_s) - t.begin();
+  HATTR_THROW_UNLESS(last - first >= 2, "scoring: the {} has {} samples in its writing span [{}, {}] s, expected at least 2",
+                     who, std::max<std::ptrdiff_t>(0, last - first), span.begin_s, span.end_s);
+  Cropped c;
+  c.t_s.assign(t.begin() + first, t.begin() + last);
+  for (std::size_t k = 0; k < kScoredChannels.size(); ++k) {
+    const std::vector<double> all = profile.channel(kScoredChannels[k]);
+    c.series[k].assign(all.begin() + first, all.begin() + last);
+  }
+  return c;
+}
+
+}  // namespace
+
+TimeSpan writingSpan(const HapticProfile& profile) {
+  TimeSpan span{-INFINITY, INFINITY};
+  if (!profile.empty()) span = {profile.samples().front().t_s, profile.samples().back().t_s};
+  double begin = 0.0;
+  double end = 0.0;
+  if (readSeconds(profile, "writing_begin_s", begin) && readSeconds(profile, "writing_end_s", end) && end > begin) {
+    span = {begin, end};
+  }
+  return span;
+}
+
+TrialScorer::TrialScorer(const HapticProfile& expert, ScoreOptions options) : options_(options) {
+  Cropped c = crop(expert, "expert profile");
+  expert_t_ = std::move(c.t_s);
+  for (std::size_t k = 0; k < kScoredChannels.size(); ++k) expert_series_[k] = normalize(c.series[k], options_.normalization);
+}
+
+TrialScore TrialScorer::score(const HapticProfile& trial) const {
+  const HapticProfile* one[] = {&trial};
+  return scoreAll(one, 1).front();
+}
+
+std::vector<TrialScore> TrialScorer::scoreAll(std::span<const HapticProfile* const> trials, unsigned threads) const {
+  // Each trial's span preprocessed onto the expert's time steps.
+  std::array<std::vector<std::vector<double>>, 6> prepared;
+  for (const HapticProfile* trial : trials) {
+    const Cropped c = crop(*trial, "trial");
+    for (std::size_t k = 0; k < kScoredChannels.size(); ++k) {
+      prepared[k].push_back(preprocessTrial(c.t_s, c.series[k], expert_t_, options_.normalization));
+    }
+  }
+
+  // DTW per channel, each channel's trials as one batch, the channels shared by the threads.
+  const DtwOptions dtw{.cost = options_.cost, .band_fraction = options_.band_fraction};
+  std::array<std::vector<double>, 6> costs;
+  const auto channelCosts = [&](std::size_t k) {
+    const std::vector<std::vector<double>> expert(trials.size(), expert_series_[k]);
+    costs[k] = dtwBatch(expert, prepared[k], dtw);
+  };
+  const unsigned workers_wanted = std::clamp(threads, 1u, 6u);
+  if (workers_wanted == 1) {
+    for (std::size_t k = 0; k < 6; ++k) channelCosts(k);
+  } else {
+    std::vector<std::thread> workers;
+    std::vector<std::exception_ptr> errors(workers_wanted);
+    for (unsigned w = 0; w < workers_wanted; ++w) {
+      workers.emplace_back([&, w] {
+        try {
+          for (std::size_t k = w; k < 6; k += workers_wanted) channelCosts(k);
+        } catch (...) {
+          errors[w] = std::current_exception();
+        }
+      });
+    }
+    for (auto& t : workers) t.join();
+    for (const auto& e : errors) {
+      if (e) std::rethrow_exception(e);
+    }
+  }
+
+  std::vector<TrialScore> scores(trials.size());
+  for (std::size_t i = 0; i < trials.size(); ++i) {
+    scores[i] = {costs[0][i], costs[1][i], costs[2][i], costs[3][i], costs[4][i], costs[5][i]};
+  }
+  return scores;
+}
+
+}  // namespace hattr::analysis
