@@ -49,11 +49,13 @@ HapticProfile recordExpert(session::TrialEnvironment& environment, double durati
 
 std::string smallStudyJson(const std::string& modes, double rest_s, const std::string& subjects,
                            const std::string& relief) {
-  // Kept out of the test files: moc does not parse raw string literals.
+  // Kept out of the test files: moc does not parse raw string literals. Disturbed trials are
+  // flagged, not repeated: the studio's real-time trials run on whatever load the host has, and
+  // the policies have tests of their own (DisturbedTrials.*).
   return R"({"format": "hattr-study/1", "name": "studio test", "skill": "eight",)"
          R"("experts": {"eight": "expert.csv"}, "modes": )" +
          modes + R"(, "protocol": {"training_trials": 1, "recall_trials": 1, "rest_s": )" + std::to_string(rest_s) +
-         R"(, "tail_s": 0.2}, "order": {"kind": "fixed"}, "device": "sim://pen",)"
+         R"(, "tail_s": 0.2, "disturbed_trials": "flag"}, "order": {"kind": "fixed"}, "device": "sim://pen",)"
          R"("world": {"relief": {"kind": ")" +
          relief +
          R"("}}, "rate_hz": 1000, "indexing": "time",)"
