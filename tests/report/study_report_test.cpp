@@ -46,11 +46,13 @@ struct CompletedStudy {
 /// A profile's times and one channel within its writing span (as the scorer takes them).
 std::pair<std::vector<double>, std::vector<double>> spanOf(const HapticProfile& p, Channel channel) {
   const analysis::TimeSpan span = analysis::writingSpan(p);
+  const std::vector<double> all_t = p.channel(Channel::kTime);
+  const std::vector<double> all_v = p.channel(channel);
   std::vector<double> t, v;
-  for (const Sample& s : p.samples()) {
-    if (s.t_s < span.begin_s || s.t_s > span.end_s) continue;
-    t.push_back(s.t_s);
-    v.push_back(p.channel(channel)[static_cast<std::size_t>(&s - p.samples().data())]);
+  for (std::size_t i = 0; i < all_t.size(); ++i) {
+    if (all_t[i] < span.begin_s || all_t[i] > span.end_s) continue;
+    t.push_back(all_t[i]);
+    v.push_back(all_v[i]);
   }
   return {t, v};
 }
