@@ -35,6 +35,11 @@ device::HandCommand lifted(device::HandCommand command) noexcept {
 /// force, ramp in again and are counted in the trial's result and metadata.
 constexpr auto kGiveUpAfter = std::chrono::milliseconds(50);
 
+/// A loop on hattr's own real-time thread that misses ticks was held up (the host descheduled
+/// it, an SDK call hung): the loop counts that as a stall, zeroes the force and ramps in
+/// again. Only a loop stuck this long ends the trial.
+constexpr auto kOwnLoopStuckAfter = std::chrono::seconds(1);
+
 /// How a real-time wait ended: a failure (why), the end rule, a stop request, or the time ran out.
 struct WaitEnd {
   std::string failure;
@@ -42,9 +47,14 @@ struct WaitEnd {
   bool stopped = false;
 };
 
+/// A watcher that itself woke this late was frozen with the process (a host stall): it saw
+/// nothing of that time, so the lost and stopped timers start again instead of blaming the
+/// device or the loop for the host's pause (the loop counts the stall itself).
+constexpr auto kWatcherLate = std::chrono::milliseconds(10);
+
 /// Waits `seconds` of a real-time run, watching every 2 ms for what ends a trial early: a
-/// latched fault, a device lost for longer than kGiveUpAfter, a clock that stopped ticking for
-/// as long; and, when given, the recorder's end rule and a stop request.
+/// latched fault, a device lost for longer than kGiveUpAfter, a device clock that stopped
+/// calling for as long, our own loop stuck for kOwnLoopStuckAfter; and, when given, the recorder's end rule and a stop request.
 WaitEnd waitForEnd(const servo::ServoLoop& loop, const device::Device& device, double seconds,
                    const Recorder* recorder = nullptr, const TrialStop* stop = nullptr) {
   using Clock = std::chrono::steady_clock;
@@ -54,9 +64,19 @@ WaitEnd waitForEnd(const servo::ServoLoop& loop, const device::Device& device, d
   Clock::time_point lost_since{};
   std::uint64_t last_ticks = c.ticks.load();
   auto last_tick_seen = Clock::now();
+  auto last_wake = last_tick_seen;
+  const auto stopped_after = loop.clock() == servo::LoopClock::kDevice
+                                 ? std::chrono::duration_cast<Clock::duration>(kGiveUpAfter)
+                                 : std::chrono::duration_cast<Clock::duration>(kOwnLoopStuckAfter);
   while (Clock::now() < until) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
     const auto now = Clock::now();
+    // Frozen with the process: judge only time this watcher was awake for.
+    if (now - last_wake > kWatcherLate) {
+      last_tick_seen = now;
+      lost_since = now;
+    }
+    last_wake = now;
     if (c.faults.load() > 0) {
       const std::string reason = device.faultReason();
       return {fmt::format("device fault: {}", reason.empty() ? "the safety path latched a fault" : reason)};
@@ -73,11 +93,11 @@ WaitEnd waitForEnd(const servo::ServoLoop& loop, const device::Device& device, d
       const std::string reason = device.faultReason();
       return {fmt::format("device lost: {}", reason.empty() ? "the device disconnected" : reason)};
     }
-    // Stopped: no tick for the give-up time.
+    // Stopped: no tick for the give-up time (the device's clock) or the stuck time (our own).
     if (const std::uint64_t ticks = c.ticks.load(); ticks != last_ticks) {
       last_ticks = ticks;
       last_tick_seen = now;
-    } else if (now - last_tick_seen > kGiveUpAfter) {
+    } else if (now - last_tick_seen > stopped_after) {
       return {loop.clock() == servo::LoopClock::kDevice ? "the device's clock stopped calling the servo loop"
                                                          : "the servo loop stopped ticking"};
     }

@@ -8,7 +8,8 @@
 //       error_after_total=N (the same, counting the reads of every device opened with this key
 //       in the process: a fault in the middle of a study), nan_after=N (reads after which
 //       positions are NaN), stall_after=N (frames after which
-//       the scheduler stops calling).
+//       the scheduler stops calling), block_read_at=N&block_read_ms=M (read N blocks for M ms,
+//       once: an SDK call that hangs for a while on the loop's own thread).
 // Test hooks (extern "C"): fake_vendor_last_force_D, fake_vendor_frames.
 
 #include <atomic>
@@ -35,7 +36,8 @@ std::atomic<std::int64_t> g_total_reads{0};
 class FakeVendor final : public VendorBackend {
  public:
   std::vector<std::string> keys() const override {
-    return {"clock", "rate_hz", "start_mm", "fail_open", "error_after", "error_after_total", "nan_after", "stall_after"};
+    return {"clock", "rate_hz", "start_mm", "fail_open", "error_after", "error_after_total", "nan_after", "stall_after",
+            "block_read_at", "block_read_ms"};
   }
 
   VendorDescription open(const std::map<std::string, std::string>& params) override {
@@ -52,6 +54,8 @@ class FakeVendor final : public VendorBackend {
     error_after_total_ = static_cast<std::int64_t>(number("error_after_total", -1));
     nan_after_ = static_cast<std::int64_t>(number("nan_after", -1));
     stall_after_ = static_cast<std::int64_t>(number("stall_after", -1));
+    block_read_at_ = static_cast<std::int64_t>(number("block_read_at", -1));
+    block_read_ms_ = number("block_read_ms", 0.0);
     if (auto it = params.find("start_mm"); it != params.end()) {
       std::sscanf(it->second.c_str(), "%lf,%lf,%lf", &p_mm_[0], &p_mm_[1], &p_mm_[2]);
     }
@@ -81,6 +85,7 @@ class FakeVendor final : public VendorBackend {
     const std::int64_t n = reads_++;
     if (error_after_ >= 0 && n >= error_after_) return kFakeDeviceFault;
     if (error_after_total_ >= 0 && g_total_reads.fetch_add(1) >= error_after_total_) return kFakeDeviceFault;
+    if (n == block_read_at_) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(block_read_ms_));
     const double h = 1.0 / rate_hz_;
     for (int i = 0; i < 3; ++i) {
       const double a = (force_D_[i] - 0.5 * v_mm_s_[i] * 1e-3) / 0.05;  // [m/s²]
@@ -131,6 +136,8 @@ class FakeVendor final : public VendorBackend {
   bool device_clock_ = true;
   double rate_hz_ = 1000.0;
   std::int64_t error_after_ = -1, error_after_total_ = -1, nan_after_ = -1, stall_after_ = -1, reads_ = 0;
+  std::int64_t block_read_at_ = -1;
+  double block_read_ms_ = 0.0;
   double p_mm_[3] = {0.0, -55.0, 0.0};
   double v_mm_s_[3] = {0.0, 0.0, 0.0};
   double force_D_[3] = {0.0, 0.0, 0.0};

@@ -2,6 +2,10 @@
 // sim://pen, device-clocked loops, the replay plugin, and the vendor adapter with a fake vendor.
 
 #include <dlfcn.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <thread>
@@ -336,6 +340,53 @@ TEST(DeviceFault, EndsTheTrialEarlyWithTheDevicesReasonAndKeepsWhatWasRecorded) 
   EXPECT_EQ(result.profile.metadata().extra.at("failed"), result.failure);
   // From the fault on, the loop commanded zero: the last recorded command is zero.
   EXPECT_EQ(result.profile.samples().back().f_cmd_W.norm(), 0.0);
+}
+
+TEST(DeviceFault, AReadThatHangsOnTheLoopsOwnThreadIsAStallNotTheEndOfTheTrial) {
+  // A host-clocked loop is hattr's own thread: a gap in its ticks (an SDK call hanging 200 ms,
+  // or a host that descheduled it) is counted as a stall and the force ramps in again; only a
+  // loop stuck for a second ends the trial.
+  session::TrialEnvironment env(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=host&block_read_at=600&block_read_ms=200"),
+                                render::WorldConfig{}, 1000.0);
+  StillHand hand(HandCommand{.p_target_W = Vec3(0.0, 0.0, 0.005)});
+  const session::TrialResult result = session::runTrial(env, {.duration_s = 1.0}, hand);
+  EXPECT_EQ(result.failure, "");
+  EXPECT_EQ(result.clock, "real-time");
+  EXPECT_GE(result.stalls, 1u);
+}
+
+/// Freezes this whole process `times` times for `frozen_ms`, `every_ms` apart, from a child
+/// process (as a host that deschedules the machine does); the child only sleeps and signals.
+pid_t freezeThisProcess(int times, long frozen_ms, long every_ms) {
+  const pid_t parent = getpid();
+  const pid_t child = fork();
+  if (child != 0) return child;
+  const auto sleepMs = [](long ms) {
+    timespec t{ms / 1000, (ms % 1000) * 1000000L};
+    while (nanosleep(&t, &t) != 0) {
+    }
+  };
+  for (int i = 0; i < times; ++i) {
+    sleepMs(every_ms - frozen_ms);
+    kill(parent, SIGSTOP);
+    sleepMs(frozen_ms);
+    kill(parent, SIGCONT);
+  }
+  _exit(0);
+}
+
+TEST(DeviceFault, ADeviceClockFrozenWithTheWholeProcessIsAStallNotTheEndOfTheTrial) {
+  // The trial's watcher is frozen with the device's scheduler: it must not take the host's
+  // pause for a device clock that stopped calling (which ends the trial); the loop counts it.
+  session::TrialEnvironment env(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=device"), render::WorldConfig{}, 1000.0);
+  StillHand hand(HandCommand{.p_target_W = Vec3(0.0, 0.0, 0.005)});
+  const pid_t freezer = freezeThisProcess(4, 120, 300);
+  ASSERT_GT(freezer, 0);
+  const session::TrialResult r = session::runTrial(env, {.duration_s = 1.6}, hand);
+  int status = 0;
+  waitpid(freezer, &status, 0);
+  EXPECT_EQ(r.failure, "");
+  EXPECT_GE(r.stalls, 1u);
 }
 
 TEST(DeviceFault, ADeviceClockThatStopsEndsTheTrial) {
