@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "cli_common.hpp"
+#include "hattr/report/paper_comparison.hpp"
 #include "hattr/report/study_report.hpp"
 #include "hattr/sim/in_silico.hpp"
 
@@ -51,6 +52,8 @@ void runDemo(const DemoOptions& opt) {
   const std::uint64_t ticks = r.servo_ticks + static_cast<std::uint64_t>(r.trials) * 300;  // + each trial's settle
 
   const auto& a = r.analysis;
+  const session::StudyDatabase db = session::StudyDatabase::open(r.database, session::OpenMode::kReadOnly);
+  const report::PaperComparison paper = report::compareWithPaper(db.study(), db.subjects().size(), a);
   if (opt.json) {
     nlohmann::json json = report::analysisToJson(a);
     json.erase("recall_costs");
@@ -59,6 +62,7 @@ void runDemo(const DemoOptions& opt) {
     json["trials"] = r.trials;
     json["servo_ticks"] = ticks;
     json["seconds"] = seconds;
+    json["paper_comparison"] = report::comparisonToJson(paper);
     return printJson(json);
   }
   // Table 1 and the ANOVA p-values.
@@ -81,6 +85,8 @@ void runDemo(const DemoOptions& opt) {
   }
   std::cout << "\nConclusions\n";
   for (const auto& line : report::conclusions(a)) std::cout << "  - " << line << '\n';
+  std::cout << '\n';
+  for (const auto& line : report::comparisonText(paper)) std::cout << line << '\n';
   std::cout << fmt::format("\n{} trials, {:.2f} M servo ticks, {:.1f} s.\nReport: {}\nStudy database: {}\n", r.trials,
                            static_cast<double>(ticks) * 1e-6, seconds, r.report_html.string(), r.database.string());
 }

@@ -7,6 +7,7 @@
 #include "cli_common.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/session/study_export.hpp"
+#include "hattr/report/paper_comparison.hpp"
 #include "hattr/report/study_report.hpp"
 #include "hattr/session/study_runner.hpp"
 #include "hattr/sim/participant.hpp"
@@ -142,6 +143,8 @@ void runReport(const StudyOptions& opt) {
   report::writeAnalysisCsv(analysis, opt.out);
   const auto html = report::writeStudyReport(db, analysis, opt.out);
   std::cout << fmt::format("report: {} (and report.md, figures/, CSV tables beside it)\n", html.string());
+  const report::PaperComparison paper = report::compareWithPaper(db.study(), db.subjects().size(), analysis);
+  for (const auto& line : report::comparisonText(paper)) std::cout << line << '\n';
 }
 
 void runImport(const StudyOptions& opt) {

@@ -7,6 +7,7 @@
 
 #include "hattr/core/units.hpp"
 #include "hattr/io/profile_csv.hpp"
+#include "hattr/report/paper_comparison.hpp"
 #include "svg_plot_internal.hpp"
 
 namespace hattr::report {
@@ -204,6 +205,26 @@ std::filesystem::path writeStudyReport(const session::StudyDatabase& db, const S
   // Conclusions first, then the numbers behind them.
   doc.heading("Conclusions");
   doc.list(conclusions(a));
+
+  // The paper's findings beside this study's.
+  const PaperComparison paper = compareWithPaper(study, subjects.size(), a);
+  if (paper.applicable) {
+    doc.heading("The paper next to this study");
+    doc.paragraph(fmt::format(
+        "What Srimathveeravalli & Kesavadas report (section 6, Table 1, section 7, the abstract) and what this study "
+        "measured, point by point: {} agree, {} differ, {} could not be measured. A point agrees when the statement is "
+        "the same (significant or not at α = {}, the same mode); the paper gives no F values, and Table 1 is compared "
+        "as counts (these subjects are not the paper's people).",
+        paper.count(Agreement::kAgrees), paper.count(Agreement::kDiffers), paper.count(Agreement::kNotMeasured),
+        paper.alpha));
+    if (!paper.protocol_differences.empty()) {
+      doc.paragraph("This study's protocol differs from the paper's: " +
+                    fmt::format("{}", fmt::join(paper.protocol_differences, "; ")) + ".");
+    }
+    Table t{{"point", "source", "the paper", "this study", ""}, {}};
+    for (const auto& r : paper.rows) t.rows.push_back({r.point, r.source, r.paper, r.hattr, std::string(agreementName(r.agreement))});
+    doc.table(t);
+  }
 
   // Table 1.
   doc.heading("Table 1: each subject's best mode");

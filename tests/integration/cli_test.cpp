@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <sstream>
 
 #include <fmt/format.h>
 
@@ -285,6 +286,47 @@ TEST(Cli, StudyInitRefusesABadTrialEndWithExitTwo) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr("protocol.trial_end.pen_up_s: expected a number in [0.05, 60], got -1"));
   EXPECT_FALSE(std::filesystem::exists(dir / "s.sqlite"));
+}
+
+TEST(Cli, StudyReportSetsThePaperBesideTheStudyAndHattrDtwScoresItsTrialsAlike) {
+  test::TempDir dir;
+  test::writeText(dir / "expert.csv", handScript());
+  test::writeText(dir / "study.json", R"({"name": "cli", "skill": "loop", "experts": {"loop": "expert.csv"},
+      "protocol": {"training_trials": 1, "recall_trials": 3, "rest_s": 0}, "world": {"relief": {"kind": "flat"}},
+      "subjects": {"count": 3, "participant": "script", "options": {"jitter_mm": 2.0}}})");
+  const std::string db = (dir / "s.sqlite").string();
+  ASSERT_EQ(runHattr(dir, "study init " + (dir / "study.json").string() + " --db " + db).exit_code, 0);
+  ASSERT_EQ(runHattr(dir, "study run --quiet --db " + db).exit_code, 0);
+
+  // The report prints the paper's findings beside the study's, and the protocol's differences.
+  const RunResult report = runHattr(dir, "study report --db " + db + " --out " + (dir / "report").string());
+  ASSERT_EQ(report.exit_code, 0) << report.err;
+  EXPECT_THAT(report.out, HasSubstr("The paper next to this study: "));
+  EXPECT_THAT(report.out, HasSubstr("protocol differs from the paper's: 3 subjects (the paper: 10)"));
+  EXPECT_THAT(report.out, HasSubstr("shape: subjects whose best mode it is — Table 1"));
+  EXPECT_THAT(report.out, HasSubstr("paper: BASIC 2, PCONTROL 1, ALPHA 7 of 10"));
+  EXPECT_THAT(test::readText(dir / "report" / "report.md"), HasSubstr("## The paper next to this study"));
+
+  // hattr dtw --score on an exported trial gives the analysis's costs for it, to 1e-12.
+  const RunResult analyzed = runHattr(dir, "study analyze --json --db " + db);
+  ASSERT_EQ(analyzed.exit_code, 0) << analyzed.err;
+  const auto costs = nlohmann::json::parse(analyzed.out)["recall_costs"];
+  ASSERT_FALSE(costs.empty());
+  const auto& first = costs.front();
+  ASSERT_EQ(runHattr(dir, "study export --db " + db + " --out " + (dir / "export").string()).exit_code, 0);
+  std::string trial_file;
+  std::istringstream trials(test::readText(dir / "export" / "trials.csv"));
+  for (std::string line; std::getline(trials, line);) {
+    if (line.starts_with(fmt::format("{},", first["trial_id"].get<std::int64_t>()))) trial_file = line.substr(line.rfind(',') + 1);
+  }
+  ASSERT_FALSE(trial_file.empty());
+  const RunResult scored = runHattr(dir, "dtw --score --json " + (dir / "export" / "experts" / "loop.csv").string() + " " +
+                                             (dir / "export" / trial_file).string());
+  ASSERT_EQ(scored.exit_code, 0) << scored.err;
+  const auto score = nlohmann::json::parse(scored.out);
+  EXPECT_NEAR(score["shape"].get<double>(), first["trajectory"].get<double>(), 1e-12);
+  EXPECT_NEAR(score["force"].get<double>(), first["force"].get<double>(), 1e-12);
+  EXPECT_NEAR(score["height"].get<double>(), first["z"].get<double>(), 1e-12);
 }
 
 // R's warpbreaks, as write.csv(warpbreaks, row.names = FALSE) writes it (quoted fields).
