@@ -46,6 +46,34 @@ std::string noteLoopCounters(TrialResult& result) {
   return disturbed;
 }
 
+TrialSetup studyTrialSetup(const StudyDefinition& study, const TrialPlan& plan,
+                           std::shared_ptr<const guidance::ReferenceTrajectory> reference) {
+  HATTR_THROW_UNLESS(reference != nullptr, "study \"{}\", subject {}, trial {}: expected the expert's reference "
+                     "trajectory, got none", study.name, plan.subject, plan.sequence);
+  // The mode's guidance in training, none (BASIC) in recall.
+  TrialSetup setup;
+  setup.guidance.mode = plan.view.guidance ? plan.mode : guidance::TrainingMode::kBasic;
+  setup.guidance.playback.indexing = study.indexing;
+  // The trial ends when the subject is done (pen up long enough) or at the maximum; an old
+  // study file without trial_end keeps its fixed window.
+  if (study.protocol.fixed_window) {
+    setup.duration_s = reference->duration_s() + study.protocol.tail_s;
+  } else {
+    setup.duration_s = study.protocol.trial_end.maxDuration_s(reference->duration_s());
+    setup.pen_up_end_s = study.protocol.trial_end.pen_up_s;
+  }
+  setup.reference = std::move(reference);
+  setup.metadata.subject = plan.subject;
+  setup.metadata.skill = study.skill;
+  setup.metadata.source = fmt::format("study:{}", study.name);
+  setup.metadata.extra["study_mode"] = std::string(guidance::modeName(plan.mode));
+  setup.metadata.extra["phase"] = std::string(phaseName(plan.phase));
+  setup.metadata.extra["trial"] = fmt::format("{}", plan.index);
+  setup.metadata.extra["sequence"] = fmt::format("{}", plan.sequence);
+  setup.metadata.extra["reference_shown"] = plan.view.show_reference ? "yes" : "no";
+  return setup;
+}
+
 bool repeatDisturbedTrial(const Protocol& protocol, const std::string& disturbed, int repeats_so_far) {
   return !disturbed.empty() && protocol.disturbed == DisturbedPolicy::kRepeat && repeats_so_far < protocol.max_repeats;
 }
@@ -121,28 +149,9 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
                                     plan.phase == Phase::kTraining ? study.protocol.training_trials
                                                                    : study.protocol.recall_trials));
 
-    // The trial: the mode's guidance in training, none (BASIC) in recall.
-    TrialSetup setup;
-    setup.guidance.mode = plan.view.guidance ? plan.mode : guidance::TrainingMode::kBasic;
-    setup.guidance.playback.indexing = study.indexing;
-    setup.reference = reference_;
-    // The trial ends when the subject is done (pen up long enough) or at the maximum; an old
-    // study file without trial_end keeps its fixed window.
-    if (study.protocol.fixed_window) {
-      setup.duration_s = reference_->duration_s() + study.protocol.tail_s;
-    } else {
-      setup.duration_s = study.protocol.trial_end.maxDuration_s(reference_->duration_s());
-      setup.pen_up_end_s = study.protocol.trial_end.pen_up_s;
-    }
+    // The trial, set up as every app sets up a study trial; the runner's clock.
+    TrialSetup setup = studyTrialSetup(study, plan, reference_);
     setup.clock = options.clock;
-    setup.metadata.subject = subject.id;
-    setup.metadata.skill = study.skill;
-    setup.metadata.source = fmt::format("study:{}", study.name);
-    setup.metadata.extra["study_mode"] = std::string(guidance::modeName(plan.mode));
-    setup.metadata.extra["phase"] = std::string(phaseName(plan.phase));
-    setup.metadata.extra["trial"] = fmt::format("{}", plan.index);
-    setup.metadata.extra["sequence"] = fmt::format("{}", plan.sequence);
-    setup.metadata.extra["reference_shown"] = plan.view.show_reference ? "yes" : "no";
 
     // The trial; a disturbed one is kept and run again while the policy says so.
     TrialResult result;

@@ -42,11 +42,18 @@ bool sameButCreationTime(HapticProfile a, HapticProfile b) {
   return a == b;
 }
 
-std::string studyJson() {
+/// The end rule of the studies below (an old file's fixed window is smallStudyJson's default).
+const char* const kPenUpEnd = "\"trial_end\": {\"pen_up_s\": 0.4, \"max_s\": 0}";
+
+/// The studio's test study; `trial_end` as smallStudyJson's; P01's scripted hand (when the
+/// runner plays P01) is `hand_file`, or the expert when empty.
+std::string studyJson(const std::string& trial_end = "\"tail_s\": 0.2", const std::string& hand_file = "") {
+  const std::string options = hand_file.empty() ? "" : ", \"options\": {\"hand\": \"" + hand_file + "\"}";
   return test::smallStudyJson("[\"basic\", \"pcontrol\"]", 2.0,
-                              "[{\"id\": \"P01\", \"participant\": \"person\"}, "
-                              "{\"id\": \"S01\", \"participant\": \"script\", \"seed\": 3}]",
-                              "flat");
+                              "[{\"id\": \"P01\", \"participant\": \"person\"" + options +
+                                  "}, "
+                                  "{\"id\": \"S01\", \"participant\": \"script\", \"seed\": 3}]",
+                              "flat", trial_end);
 }
 
 }  // namespace
@@ -63,31 +70,126 @@ class StudioRigTest : public QObject {
   }
 
   // ---- LiveRig ----
+  void liveRigRecordsWhatRunTrialRecordsBitForBit_data() {
+    QTest::addColumn<bool>("end_rule");
+    QTest::newRow("fixed window") << false;
+    QTest::newRow("pen-up end rule") << true;
+  }
+
+  // Without an end rule the trial lasts its duration; with one, the hand lifts the pen after
+  // writing and the trial ends pen_up_end_s later, at the same sample and tick in both.
   void liveRigRecordsWhatRunTrialRecordsBitForBit() {
+    QFETCH(bool, end_rule);
+    const HapticProfile script = end_rule ? test::writeThenLift(expert_, 1.0) : expert_;
     for (const auto mode : {guidance::TrainingMode::kBasic, guidance::TrainingMode::kPositionControl,
                             guidance::TrainingMode::kForceControl}) {
       session::TrialSetup setup;
       setup.guidance.mode = mode;
       setup.reference = reference_;
-      setup.duration_s = reference_->duration_s() + 0.3;
+      setup.duration_s = reference_->duration_s() + (end_rule ? 3.0 : 0.3);
+      setup.pen_up_end_s = end_rule ? 0.4 : 0.0;
       setup.metadata.subject = "T1";
       setup.metadata.skill = "eight";
-      device::ProfileHandScript hand_a(expert_, 1.0471975511965976, Vec3(0.002, -0.001, 0.0));
+      device::ProfileHandScript hand_a(script, 1.0471975511965976, Vec3(0.002, -0.001, 0.0));
       const session::TrialResult a = session::runTrial(*environment_, setup, hand_a);
+      QCOMPARE(a.end_reason, std::string(end_rule ? session::kEndPenLifted : session::kEndMaximumDuration));
 
-      device::ProfileHandScript hand_b(expert_, 1.0471975511965976, Vec3(0.002, -0.001, 0.0));
+      device::ProfileHandScript hand_b(script, 1.0471975511965976, Vec3(0.002, -0.001, 0.0));
       LiveRig rig;
-      rig.start(*environment_, trialRunSpec(setup, false), hand_b, session::Clock::kSimulated);
+      const RunSpec spec = trialRunSpec(setup, false);
+      QCOMPARE(spec.pen_up_end_s, setup.pen_up_end_s);
+      rig.start(*environment_, spec, hand_b, session::Clock::kSimulated);
       rig.advanceSimulated(setup.settle_s);
       rig.advanceSimulated(setup.duration_s);
       QVERIFY(rig.status().window_done);
+      QCOMPARE(rig.status().writing_over, end_rule);
       const session::TrialResult b = rig.finish();
       QVERIFY(!rig.active());
       QCOMPARE(b.profile.size(), a.profile.size());
       QVERIFY2(sameButCreationTime(a.profile, b.profile), guidance::modeName(mode).data());
+      QCOMPARE(b.end_reason, a.end_reason);
+      QCOMPARE(b.profile.metadata().extra.at("end_reason"), a.end_reason);
+      QCOMPARE(b.writing_begin_s, a.writing_begin_s);
+      QCOMPARE(b.writing_end_s, a.writing_end_s);
+      // The loop stopped with the same chunk (a study stores the tick count).
+      QCOMPARE(b.ticks, a.ticks);
       QCOMPARE(b.clamps, a.clamps);
       QCOMPARE(b.missed_samples, std::uint64_t{0});
     }
+  }
+
+  // The stop key: a real-time trial (an end rule, a 30 s maximum, the pen held down) ends
+  // when asked, "stopped", with nothing recorded after the request.
+  void liveRigStopRequestEndsARealTimeRunAsStopped() {
+    const test::RealTimeOutcome outcome = test::passesUnlessTheHostStalls([this](std::uint64_t& host_stalls) {
+      MouseHand hand;
+      hand.setInput({.x_m = 0.0, .y_m = 0.0, .pen_down = false, .press_N = 1.2});
+      RunSpec spec;
+      spec.record = RecordMode::kWindow;
+      spec.settle_s = 0.3;
+      spec.duration_s = 30.0;
+      spec.pen_up_end_s = 1.0;
+      LiveRig rig;
+      rig.start(*environment_, spec, hand, session::Clock::kRealTime);
+      const auto begin = std::chrono::steady_clock::now();
+      const auto elapsed_s = [&begin] {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+      };
+      Sample latest;
+      // Write until 0.3 s of the trial are recorded.
+      while (rig.status().recorded_samples < 300 && elapsed_s() < 10.0) {
+        hand.setInput({.x_m = 0.01 * elapsed_s(), .y_m = 0.0, .pen_down = true, .press_N = 1.2});
+        (void)rig.readLatest(latest);
+        std::this_thread::sleep_for(std::chrono::milliseconds(16));
+      }
+      rig.requestStop();
+      (void)rig.readLatest(latest);  // the newest sample the loop had published at the request
+      const double requested_at_s = latest.t_s;
+      // The loop runs on (the pen still down); the recording does not.
+      const auto asked = std::chrono::steady_clock::now();
+      while (!rig.status().stopped && std::chrono::steady_clock::now() - asked < std::chrono::seconds(2)) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      const bool stopped_status = rig.status().stopped;
+      const bool window_done = rig.status().window_done;
+      const session::TrialResult r = rig.finish();
+      host_stalls = r.stalls;
+      std::string failures;
+      const auto check = [&failures](bool ok, const std::string& what) {
+        if (!ok) failures += what + "; ";
+      };
+      check(stopped_status, "the rig's status does not say stopped");
+      check(!window_done, "the window ended by itself");
+      check(r.end_reason == session::kEndStopped, "end_reason: expected stopped, got " + r.end_reason);
+      check(!r.profile.empty() && r.profile.metadata().extra.at("end_reason") == "stopped",
+            "the profile's metadata end_reason is not stopped");
+      check(r.profile.size() >= 300, "recorded " + std::to_string(r.profile.size()) + " samples, expected >= 300");
+      if (!r.profile.empty()) {
+        const double last_s = r.profile.samples().back().t_s + std::stod(r.profile.metadata().extra.at("t_origin_s"));
+        check(last_s <= requested_at_s + 0.002, "recorded until loop time " + std::to_string(last_s) +
+                                                    " s, after the request at " + std::to_string(requested_at_s) +
+                                                    " s");
+      }
+      check(r.writing_begin_s >= 0.0, "no writing recorded");
+      return failures;
+    });
+    if (outcome.every_attempt_stalled) QSKIP(("the host stalled every attempt: " + outcome.failures).c_str());
+    QVERIFY2(outcome.passed, outcome.failures.c_str());
+  }
+
+  void liveRigRefusesABadPenUpTimeSayingWhy() {
+    MouseHand hand;
+    LiveRig rig;
+    RunSpec spec;
+    spec.pen_up_end_s = -1.0;
+    try {
+      rig.start(*environment_, spec, hand, session::Clock::kSimulated);
+      QFAIL("no error");
+    } catch (const InputError& e) {
+      QVERIFY2(QString(e.what()).contains("trial end: pen-up time: expected [0, 60] s (0: off), got -1"), e.what());
+    }
+    QVERIFY(!rig.active());
   }
 
   void liveRigSwitchesModeThroughTheMailbox() {
@@ -195,9 +297,23 @@ class StudioRigTest : public QObject {
   }
 
   // ---- StudySession ----
+  void studySessionStoresWhatTheStudyRunnerStoresBitForBit_data() {
+    QTest::addColumn<bool>("end_rule");
+    QTest::newRow("fixed window (old file)") << false;
+    QTest::newRow("trial_end") << true;
+  }
+
+  // With trial_end, P01's hand lifts the pen after writing: every trial ends by the end rule,
+  // at the same sample and tick in both (the loop's tick count is stored).
   void studySessionStoresWhatTheStudyRunnerStoresBitForBit() {
-    const auto dir = makeStudyFolder("same");
+    QFETCH(bool, end_rule);
+    const auto dir = makeStudyFolder(end_rule ? "same-end" : "same");
+    const auto hand_file = dir / "lift.csv";
+    const HapticProfile lift = test::writeThenLift(expert_, 1.0);
+    io::writeProfileCsv(lift, hand_file);
+    if (end_rule) std::ofstream(dir / "study.json") << studyJson(kPenUpEnd, hand_file.string());
     const session::StudyDefinition study = session::loadStudy(dir / "study.json");
+    QCOMPARE(study.protocol.fixed_window, !end_rule);
     { (void)session::StudyDatabase::create(dir / "runner.sqlite", study); }
     { (void)session::StudyDatabase::create(dir / "studio.sqlite", study); }
 
@@ -223,7 +339,8 @@ class StudioRigTest : public QObject {
         QCOMPARE(session.state(), StudySession::State::kReady);
         const session::TrialSetup setup = session.currentSetup();
         session.beginTrial();
-        device::ProfileHandScript hand(session.expert(), 1.0471975511965976, Vec3(0.0, 0.0, 0.0));
+        const HapticProfile script = end_rule ? io::readProfileCsv(hand_file) : session.expert();
+        device::ProfileHandScript hand(script, 1.0471975511965976, Vec3(0.0, 0.0, 0.0));
         rig.start(session.environment(), trialRunSpec(setup, false), hand, session::Clock::kSimulated);
         rig.advanceSimulated(setup.settle_s);
         rig.advanceSimulated(setup.duration_s);
@@ -239,7 +356,77 @@ class StudioRigTest : public QObject {
     for (std::size_t i = 0; i < ta.size(); ++i) {
       QCOMPARE(tb[i].status, session::TrialStatus::kCompleted);
       QCOMPARE(tb[i].outcome, ta[i].outcome);
-      QVERIFY2(a.trialProfile(ta[i].id) == b.trialProfile(tb[i].id), std::to_string(i).c_str());
+      const HapticProfile pa = a.trialProfile(ta[i].id);
+      const HapticProfile pb = b.trialProfile(tb[i].id);
+      QCOMPARE(pa.metadata().extra.at("end_reason"),
+               std::string(end_rule ? session::kEndPenLifted : session::kEndMaximumDuration));
+      QVERIFY2(sameButCreationTime(pa, pb), std::to_string(i).c_str());
+      QVERIFY2(pa == pb, std::to_string(i).c_str());
+    }
+    std::filesystem::remove_all(dir);
+  }
+
+  // The studio's set-up of a study trial is the runner's (session::studyTrialSetup), on the
+  // real-time clock: the end rule and its maximum, or an old file's fixed window.
+  void studySessionSetsUpEachTrialAsTheRunnerDoes_data() {
+    QTest::addColumn<bool>("end_rule");
+    QTest::newRow("fixed window (old file)") << false;
+    QTest::newRow("trial_end") << true;
+  }
+
+  void studySessionSetsUpEachTrialAsTheRunnerDoes() {
+    QFETCH(bool, end_rule);
+    const auto dir = makeStudyFolder(end_rule ? "setup-end" : "setup");
+    if (end_rule) std::ofstream(dir / "study.json") << studyJson(kPenUpEnd);
+    { (void)session::StudyDatabase::create(dir / "s.sqlite", session::loadStudy(dir / "study.json")); }
+    {
+      StudySession session(dir / "s.sqlite");
+      session.selectSubject("P01", 0.0);
+      const double expert_s = session.reference()->duration_s();
+      int trials = 0;
+      while (session.state() != StudySession::State::kFinished) {
+        session.skipRest();
+        const session::TrialPlan plan = session.currentTrial()->plan;
+        const session::TrialSetup got = session.currentSetup();
+        const session::TrialSetup want = session::studyTrialSetup(session.study(), plan, session.reference());
+        // What the runner runs; what the study file says.
+        QCOMPARE(got.duration_s, want.duration_s);
+        QCOMPARE(got.pen_up_end_s, want.pen_up_end_s);
+        QCOMPARE(got.duration_s, end_rule ? 3.0 * expert_s : expert_s + 0.2);
+        QCOMPARE(got.pen_up_end_s, end_rule ? 0.4 : 0.0);
+        QCOMPARE(got.guidance.mode, want.guidance.mode);
+        QCOMPARE(got.guidance.mode, plan.view.guidance ? plan.mode : guidance::TrainingMode::kBasic);
+        QCOMPARE(got.guidance.playback.indexing, want.guidance.playback.indexing);
+        QVERIFY(got.reference == session.reference());
+        QVERIFY(got.metadata == want.metadata);
+        QCOMPARE(got.metadata.subject, std::string("P01"));
+        QCOMPARE(got.metadata.extra.at("phase"), std::string(session::phaseName(plan.phase)));
+        QCOMPARE(got.settle_s, want.settle_s);
+        QVERIFY(got.trigger == want.trigger);
+        QVERIFY(got.stop == nullptr);
+        QVERIFY(got.clock == session::Clock::kRealTime);
+        // The rig's run of it carries the end rule.
+        QCOMPARE(trialRunSpec(got, true).pen_up_end_s, got.pen_up_end_s);
+        QCOMPARE(trialRunSpec(got, true).duration_s, got.duration_s);
+        runOneTrial(session, 0.0);
+        ++trials;
+      }
+      QCOMPARE(trials, 4);
+    }
+    std::filesystem::remove_all(dir);
+  }
+
+  void studyTrialSetupRefusesAMissingReference() {
+    const auto dir = makeStudyFolder("noref");
+    const session::StudyDefinition study = session::loadStudy(dir / "study.json");
+    const session::TrialPlan plan{.subject = "P01", .sequence = 2};
+    try {
+      (void)session::studyTrialSetup(study, plan, nullptr);
+      QFAIL("no error");
+    } catch (const InputError& e) {
+      QVERIFY2(QString(e.what()).contains(
+                   "study \"studio test\", subject P01, trial 2: expected the expert's reference trajectory, got none"),
+               e.what());
     }
     std::filesystem::remove_all(dir);
   }

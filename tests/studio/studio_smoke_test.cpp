@@ -9,6 +9,7 @@
 #include <QtTest>
 #include <cmath>
 #include <fstream>
+#include <functional>
 
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/session/study_database.hpp"
@@ -105,16 +106,27 @@ class StudioSmokeTest : public QObject {
     QVERIFY2(w.startTrial(), qPrintable(w.lastError()));
     QCOMPARE(w.activity(), MainWindow::Activity::kTrial);
 
-    // A person 8 mm to the right of the expert, at the expert's pace.
+    // A training trial ends when the person is done: 1 s after the pen is lifted, at most at
+    // three times the expert's duration.
+    QCOMPARE(w.rig().spec().pen_up_end_s, 1.0);
+    QVERIFY(w.rig().spec().duration_s > 3.0 * expert_.duration_s() - 1e-9);
+
+    // A person 8 mm to the right of the expert, at the expert's pace, who lifts the pen at the end.
+    const double max_s = w.rig().spec().duration_s;
+    double ran_s = 0.0;
     driveAlongExpert(w, Vec3(0.008, 0.0, 0.0), MainWindow::Activity::kTrial,
-                     HATTR_STUDIO_SCREENSHOT_DIR "/studio_trial.png");
+                     HATTR_STUDIO_SCREENSHOT_DIR "/studio_trial.png", &ran_s);
     QCOMPARE(w.activity(), MainWindow::Activity::kFree);
+    // The window ended the trial when the rig said the writing was over, not at the maximum.
+    QVERIFY2(ran_s < max_s - 0.5, qPrintable(QString("ran %1 s of a %2 s maximum").arg(ran_s).arg(max_s)));
     QVERIFY2(w.lastTrial().has_value(), qPrintable(w.lastError()));
     QVERIFY(w.lastTrial()->size() > 1000);
     QVERIFY(w.lastTrial()->penDownCount() > 500);
     QVERIFY(w.lastScores().has_value());
     QVERIFY(w.lastScores()->shape() > 0.0);
     QCOMPARE(w.lastTrial()->metadata().extra.at("mode"), std::string("PCONTROL"));
+    QCOMPARE(w.lastTrial()->metadata().extra.at("end_reason"), std::string("pen lifted"));
+    QVERIFY(w.lastTrial()->duration_s() < 3.0 * expert_.duration_s() - 0.5);
 
     // Let a few frames draw, then the screenshot.
     QTest::qWait(100);
@@ -178,7 +190,8 @@ class StudioSmokeTest : public QObject {
   void aStudyTrialIsStoredAndReviewed() {
     MainWindow& w = *window_;
     std::ofstream(dir_ / "study.json") << test::smallStudyJson(
-        "[\"pcontrol\"]", 1.0, "[{\"id\": \"P01\", \"participant\": \"person\"}]", "grain");
+        "[\"pcontrol\"]", 1.0, "[{\"id\": \"P01\", \"participant\": \"person\"}]", "grain",
+        "\"trial_end\": {\"pen_up_s\": 0.5}");
     const auto db_file = dir_ / "study.sqlite";
     { (void)session::StudyDatabase::create(db_file, session::loadStudy(dir_ / "study.json")); }
     QVERIFY2(w.openStudy(QString::fromStdString(db_file.string())), qPrintable(w.lastError()));
@@ -186,7 +199,11 @@ class StudioSmokeTest : public QObject {
     QCOMPARE(w.study()->state(), StudySession::State::kReady);
     QVERIFY(w.studyNext());
     QCOMPARE(w.activity(), MainWindow::Activity::kStudyTrial);
-    driveAlongExpert(w, Vec3(0.003, 0.002, 0.0), MainWindow::Activity::kStudyTrial);
+    QCOMPARE(w.rig().spec().pen_up_end_s, 0.5);
+    const double max_s = w.rig().spec().duration_s;
+    double ran_s = 0.0;
+    driveAlongExpert(w, Vec3(0.003, 0.002, 0.0), MainWindow::Activity::kStudyTrial, nullptr, &ran_s);
+    QVERIFY2(ran_s < max_s - 0.5, qPrintable(QString("ran %1 s of a %2 s maximum").arg(ran_s).arg(max_s)));
     QCOMPARE(w.study()->completedCount(), 1);
     QCOMPARE(w.study()->state(), StudySession::State::kResting);
     w.closeStudy();
@@ -199,6 +216,7 @@ class StudioSmokeTest : public QObject {
       QVERIFY(trials[0].outcome.starts_with("ok: "));
       const HapticProfile stored = db.trialProfile(trials[0].id);
       QCOMPARE(stored.metadata().extra.at("study_mode"), std::string("PCONTROL"));
+      QCOMPARE(stored.metadata().extra.at("end_reason"), std::string("pen lifted"));
       QCOMPARE(stored.metadata().created_utc, std::string());
     }
 
@@ -214,6 +232,52 @@ class StudioSmokeTest : public QObject {
     w.grab().save(QStringLiteral(HATTR_STUDIO_SCREENSHOT_DIR "/studio_review.png"));
     w.abortActivity();
     QCOMPARE(w.activity(), MainWindow::Activity::kFree);
+  }
+
+  // Ctrl+. ends a trial now and keeps it: a training trial is scored, a study trial stored,
+  // both with end_reason "stopped"; during the get-ready phase it keeps nothing.
+  void theStopKeyEndsATrialAndKeepsIt() {
+    MainWindow& w = *window_;
+    w.activateWindow();
+    QVERIFY(QTest::qWaitForWindowActive(&w));
+    w.tabs()->setCurrentIndex(MainWindow::kTabTrain);
+    w.paperView()->setFocus();
+    const auto stop_key = [&w] { QTest::keyClick(&w, Qt::Key_Period, Qt::ControlModifier); };
+
+    // Still getting ready: nothing recorded, nothing kept.
+    const HapticProfile before = *w.lastTrial();
+    QVERIFY2(w.startTrial(), qPrintable(w.lastError()));
+    stop_key();
+    QCOMPARE(w.activity(), MainWindow::Activity::kFree);
+    QVERIFY(*w.lastTrial() == before);
+    QVERIFY2(w.statusBar()->currentMessage().contains("nothing kept"), qPrintable(w.statusBar()->currentMessage()));
+
+    // Writing, the pen down: stopped, kept, scored.
+    QVERIFY2(w.startTrial(), qPrintable(w.lastError()));
+    writeUntilStopped(w, MainWindow::Activity::kTrial, stop_key);
+    QCOMPARE(w.activity(), MainWindow::Activity::kFree);
+    QVERIFY(w.lastTrial()->size() > 300);
+    QCOMPARE(w.lastTrial()->metadata().extra.at("end_reason"), std::string("stopped"));
+    QVERIFY(w.lastScores().has_value());
+
+    // A study trial ended by the stop key is stored like any other.
+    const auto db_file = dir_ / "study.sqlite";
+    QVERIFY2(w.openStudy(QString::fromStdString(db_file.string())), qPrintable(w.lastError()));
+    QVERIFY2(w.selectStudySubject("P01"), qPrintable(w.lastError()));
+    QCOMPARE(w.study()->completedCount(), 1);
+    QVERIFY(w.studyNext());  // cuts the rest short
+    QCOMPARE(w.activity(), MainWindow::Activity::kStudyTrial);
+    writeUntilStopped(w, MainWindow::Activity::kStudyTrial, stop_key);
+    QCOMPARE(w.activity(), MainWindow::Activity::kFree);
+    QCOMPARE(w.study()->state(), StudySession::State::kFinished);
+    w.closeStudy();
+    const auto db = session::StudyDatabase::open(db_file, session::OpenMode::kReadOnly);
+    const auto trials = db.trials("P01");
+    QCOMPARE(trials[1].status, session::TrialStatus::kCompleted);
+    const HapticProfile stored = db.trialProfile(trials[1].id);
+    QCOMPARE(stored.metadata().extra.at("end_reason"), std::string("stopped"));
+    QCOMPARE(stored.metadata().extra.at("phase"), std::string("recall"));
+    QVERIFY(stored.size() > 300);
   }
 
   void shortcutsSwitchModesAndStartTrials() {
@@ -251,10 +315,11 @@ class StudioSmokeTest : public QObject {
 
  private:
   /// Holds the left button and moves the mouse along the expert's path (shifted), on the
-  /// trial's clock, until the activity ends.
-  /// With `mid_shot`, the window is saved there 0.6 s into the trial.
+  /// trial's clock, lifts the pen when the expert's path ends and waits for the activity to end.
+  /// With `mid_shot`, the window is saved there 0.6 s into the trial. `ran_s`: the last trial
+  /// time [s] seen while the activity ran.
   void driveAlongExpert(MainWindow& w, const Vec3& offset, MainWindow::Activity during,
-                        const char* mid_shot = nullptr) {
+                        const char* mid_shot = nullptr, double* ran_s = nullptr) {
     PaperView* view = w.paperView();
     const auto at = [&](double t_trial) {
       Playback where;
@@ -264,18 +329,49 @@ class StudioSmokeTest : public QObject {
     };
     sendMouse(view, QEvent::MouseMove, at(0.0), Qt::NoButton, Qt::NoButton);
     sendMouse(view, QEvent::MouseButtonPress, at(0.0), Qt::LeftButton, Qt::LeftButton);
+    const double lift_at_s = expert_.samples().back().t_s - expert_.samples().front().t_s;
+    bool down = true;
     QElapsedTimer timer;
     timer.start();
     while (w.activity() == during && timer.elapsed() < 15000) {
       const double t_trial = w.rig().status().loop_time_s - w.rig().spec().settle_s;
-      sendMouse(view, QEvent::MouseMove, at(t_trial), Qt::NoButton, Qt::LeftButton);
+      if (ran_s != nullptr) *ran_s = t_trial;
+      if (down && t_trial > lift_at_s) {
+        sendMouse(view, QEvent::MouseButtonRelease, at(t_trial), Qt::LeftButton, Qt::NoButton);
+        down = false;
+      }
+      sendMouse(view, QEvent::MouseMove, at(t_trial), Qt::NoButton, down ? Qt::LeftButton : Qt::NoButton);
       if (mid_shot != nullptr && t_trial > 0.6) {
         QVERIFY(w.grab().save(QString::fromLatin1(mid_shot)));
         mid_shot = nullptr;
       }
       QTest::qWait(8);
     }
-    sendMouse(view, QEvent::MouseButtonRelease, at(10.0), Qt::LeftButton, Qt::NoButton);
+    if (down) sendMouse(view, QEvent::MouseButtonRelease, at(10.0), Qt::LeftButton, Qt::NoButton);
+  }
+
+  /// Holds the left button and writes along the expert's path (on the trial's clock) until
+  /// 0.5 s of the trial have passed, then presses `stop` with the pen still down.
+  void writeUntilStopped(MainWindow& w, MainWindow::Activity during, const std::function<void()>& stop) {
+    PaperView* view = w.paperView();
+    const auto at = [&](double t_trial) {
+      Playback where;
+      where.load(&expert_);
+      return view->mapping().toWidget(expert_[where.indexAt(std::max(0.0, t_trial))].p_WT);
+    };
+    sendMouse(view, QEvent::MouseMove, at(0.0), Qt::NoButton, Qt::NoButton);
+    sendMouse(view, QEvent::MouseButtonPress, at(0.0), Qt::LeftButton, Qt::LeftButton);
+    QElapsedTimer timer;
+    timer.start();
+    double t_trial = -1.0;
+    while (w.activity() == during && t_trial < 0.5 && timer.elapsed() < 15000) {
+      t_trial = w.rig().status().loop_time_s - w.rig().spec().settle_s;
+      sendMouse(view, QEvent::MouseMove, at(t_trial), Qt::NoButton, Qt::LeftButton);
+      QTest::qWait(8);
+    }
+    QCOMPARE(w.activity(), during);  // still running: the end rule or the maximum did not end it
+    stop();
+    sendMouse(view, QEvent::MouseButtonRelease, at(t_trial), Qt::LeftButton, Qt::NoButton);
   }
 
   /// Holds the left button and moves the mouse along a short line for `seconds`.

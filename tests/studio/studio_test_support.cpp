@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 
 #include "hattr/device/hand.hpp"
@@ -48,19 +49,54 @@ HapticProfile recordExpert(session::TrialEnvironment& environment, double durati
 }
 
 std::string smallStudyJson(const std::string& modes, double rest_s, const std::string& subjects,
-                           const std::string& relief) {
+                           const std::string& relief, const std::string& trial_end) {
   // Kept out of the test files: moc does not parse raw string literals. Disturbed trials are
   // flagged, not repeated: the studio's real-time trials run on whatever load the host has, and
   // the policies have tests of their own (DisturbedTrials.*).
   return R"({"format": "hattr-study/1", "name": "studio test", "skill": "eight",)"
          R"("experts": {"eight": "expert.csv"}, "modes": )" +
          modes + R"(, "protocol": {"training_trials": 1, "recall_trials": 1, "rest_s": )" + std::to_string(rest_s) +
-         R"(, "tail_s": 0.2, "disturbed_trials": "flag"}, "order": {"kind": "fixed"}, "device": "sim://pen",)"
+         ", " + trial_end +
+         R"(, "disturbed_trials": "flag"}, "order": {"kind": "fixed"}, "device": "sim://pen",)"
          R"("world": {"relief": {"kind": ")" +
          relief +
          R"("}}, "rate_hz": 1000, "indexing": "time",)"
          R"("subjects": )" +
          subjects + "}";
+}
+
+HapticProfile writeThenLift(const HapticProfile& writing, double lift_s) {
+  HapticProfile script = writing;
+  const Sample last = writing.samples().back();
+  for (int i = 1; i * 0.01 <= lift_s + 1e-9; ++i) {
+    Sample s = last;
+    s.t_s = last.t_s + i * 0.01;
+    s.p_WT.z() = 0.005;
+    s.v_WT.setZero();
+    s.f_user_W.setZero();
+    s.f_guide_W.setZero();
+    s.pen_down = false;
+    s.in_contact = false;
+    script.append(s);
+  }
+  return script;
+}
+
+RealTimeOutcome passesUnlessTheHostStalls(const RealTimeAttempt& attempt, int tries) {
+  RealTimeOutcome outcome;
+  for (int k = 1; k <= tries; ++k) {
+    std::uint64_t stalls = 0;
+    outcome.failures = attempt(stalls);
+    if (outcome.failures.empty()) {
+      outcome.passed = true;
+      return outcome;
+    }
+    if (stalls == 0) return outcome;  // no stall explains it: the test's own failure
+    std::printf("attempt %d of %d: the host stalled the loop %llu times; it failed with: %s\n", k, tries,
+                static_cast<unsigned long long>(stalls), outcome.failures.c_str());
+  }
+  outcome.every_attempt_stalled = true;
+  return outcome;
 }
 
 std::filesystem::path reportStudy(const std::filesystem::path& dir, bool complete) {

@@ -2,7 +2,9 @@
 // Shared helpers of the studio tests: a synthetic expert recorded through runTrial, a
 // flat-paper environment (quick to build), temporary folders.
 
+#include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include "hattr/core/haptic_profile.hpp"
@@ -23,9 +25,27 @@ HapticProfile recordExpert(session::TrialEnvironment& environment, double durati
 
 /// A small study file over the expert "expert.csv" (skill "eight"), one training and one
 /// recall trial per mode, fixed order, on sim://pen at 1 kHz. `modes` and `subjects` are
-/// JSON arrays; `relief` a relief kind ("flat", "grain").
+/// JSON arrays; `relief` a relief kind ("flat", "grain"); `trial_end` the protocol's keys for
+/// the end of a trial: an old file's fixed window (`"tail_s": 0.2`, the default) or an end
+/// rule (`"trial_end": {"pen_up_s": 0.4}`).
 std::string smallStudyJson(const std::string& modes, double rest_s, const std::string& subjects,
-                           const std::string& relief);
+                           const std::string& relief, const std::string& trial_end = "\"tail_s\": 0.2");
+
+/// `writing` followed by the hand lifting the pen 5 mm where it ended and holding it there for
+/// `lift_s` (a hand script for a trial that ends by the pen-up rule), sampled at 100 Hz.
+HapticProfile writeThenLift(const HapticProfile& writing, double lift_s);
+
+/// tests/support/host_stalls.hpp for Qt Test. One attempt of a real-time test: returns its
+/// failures ("" when it passed) and sets the host stalls its loop counted.
+using RealTimeAttempt = std::function<std::string(std::uint64_t& host_stalls)>;
+struct RealTimeOutcome {
+  bool passed = false;
+  bool every_attempt_stalled = false;  ///< failed only with stalls: the test is to be skipped
+  std::string failures;                ///< the last attempt's
+};
+/// Runs `attempt` until one passes, at most `tries` times; an attempt that fails without a
+/// stall ends it at once (a failure of the test's own).
+RealTimeOutcome passesUnlessTheHostStalls(const RealTimeAttempt& attempt, int tries = 3);
 
 /// A study database `dir`/s.sqlite for the report (3 scripted subjects, 3 modes, 1 training
 /// + 3 recall trials each, over a short expert curve), run to the end by StudyRunner when

@@ -27,6 +27,7 @@ RunSpec trialRunSpec(const session::TrialSetup& setup, bool follow_during_settle
   spec.record = setup.trigger == session::RecordTrigger::kPenDown ? RecordMode::kPenDown : RecordMode::kWindow;
   spec.settle_s = setup.settle_s;
   spec.duration_s = setup.duration_s;
+  spec.pen_up_end_s = setup.pen_up_end_s;
   spec.follow_during_settle = follow_during_settle;
   return spec;
 }
@@ -46,6 +47,8 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
                      "settle time: expected [{}, 60] s (at least the safety ramp), got {}", ramp_s, spec.settle_s);
   HATTR_THROW_UNLESS(std::isfinite(spec.pen_up_stop_s) && spec.pen_up_stop_s > 0.0,
                      "pen-up stop time: expected > 0 s, got {}", spec.pen_up_stop_s);
+  HATTR_THROW_UNLESS(std::isfinite(spec.pen_up_end_s) && spec.pen_up_end_s >= 0.0 && spec.pen_up_end_s <= 60.0,
+                     "trial end: pen-up time: expected [0, 60] s (0: off), got {}", spec.pen_up_end_s);
   spec_ = spec;
   clock_ = clock;
   // Guidance, device, paper and loop, set up as runTrial sets them up.
@@ -62,13 +65,15 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
   const ProfileMetadata metadata = session::trialMetadata(spec.metadata, environment, config, clamps_, clock);
 
   // The recorder takes samples through a relay ring, so a trial's window starts and ends
-  // at exact ticks whatever the clock.
+  // at exact ticks whatever the clock; it decides the end rule itself, as in runTrial.
   auto relay = std::make_unique<SpscRing<TickSample>>(kRelayCapacity);
-  const session::RecorderConfig recorder_config{.trigger = spec.record == RecordMode::kPenDown
-                                                               ? session::RecordTrigger::kPenDown
-                                                               : session::RecordTrigger::kCommand,
-                                                .nominal_period_s = 1.0 / environment.rate_hz(),
-                                                .pen_up_stop_s = spec.pen_up_stop_s};
+  session::RecorderConfig recorder_config{.trigger = spec.record == RecordMode::kPenDown
+                                                         ? session::RecordTrigger::kPenDown
+                                                         : session::RecordTrigger::kCommand,
+                                          .nominal_period_s = 1.0 / environment.rate_hz(),
+                                          .pen_up_stop_s = spec.pen_up_stop_s};
+  recorder_config.end_after_pen_up_s = spec.pen_up_end_s;
+  if (spec.pen_up_end_s > 0.0) recorder_config.pen_up_stop_s = spec.pen_up_end_s;
   auto recorder = std::make_unique<session::Recorder>(*relay, recorder_config, metadata);
 
   environment_ = &environment;
@@ -84,9 +89,13 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
   period_s_ = 1.0 / environment.rate_hz();
   window_armed_ = false;
   was_recording_ = false;
+  stop_taken_ = false;
+  stop_.reset();
   status_recording_ = false;
   status_window_done_ = false;
   status_pen_down_done_ = false;
+  status_writing_over_ = false;
+  status_stopped_ = false;
   status_recorded_ = 0;
   status_loop_time_s_ = 0.0;
   if (spec.record == RecordMode::kPenDown) recorder_->start();  // armed; records from the first pen-down
@@ -113,18 +122,22 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
 void LiveRig::advanceSimulated(double seconds) {
   HATTR_DEMAND(loop_ && clock_ == session::Clock::kSimulated, "advanceSimulated() needs a simulated run");
   const auto ticks = static_cast<std::size_t>(std::llround(seconds * environment_->rate_hz()));
-  for (std::size_t done = 0; done < ticks; done += kSimulatedChunk) {
+  // As runTrial: a trial's loop stops with the chunk in which its window ended.
+  for (std::size_t done = 0; done < ticks && !status_window_done_.load(std::memory_order_acquire);
+       done += kSimulatedChunk) {
     loop_->runSimulated(std::min(kSimulatedChunk, ticks - done));
     pump();
   }
 }
 
 // Loop ring → relay → recorder. A trial's window arms and disarms the recorder at the
-// exact sample, the recorder having taken everything before it.
+// exact sample, the recorder having taken everything before it; a stop request disarms it
+// for good at the first sample taken after it.
 void LiveRig::pump() {
   TickSample item;
   while (loop_->samples().tryPop(item)) {
-    if (spec_.record == RecordMode::kWindow) {
+    if (!stop_taken_ && stop_.requested()) takeStop();
+    if (spec_.record == RecordMode::kWindow && !stop_taken_) {
       const bool in_window = item.sample.t_s >= window_begin_s_ && item.sample.t_s < window_end_s_;
       if (in_window != window_armed_) {
         recorder_->drain();
@@ -144,11 +157,25 @@ void LiveRig::pump() {
     }
     status_loop_time_s_.store(item.sample.t_s, std::memory_order_relaxed);
   }
+  if (!stop_taken_ && stop_.requested()) takeStop();
   recorder_->drain();
   publishStatus();
 }
 
+void LiveRig::takeStop() {
+  recorder_->drain();  // what came before the request is the trial's
+  recorder_->stop();
+  window_armed_ = false;
+  stop_taken_ = true;
+}
+
 void LiveRig::publishStatus() {
+  // The end rule: the recorder stopped with the sample that ended the trial.
+  if (recorder_->writingOver()) {
+    status_writing_over_.store(true, std::memory_order_release);
+    if (spec_.record == RecordMode::kWindow) status_window_done_.store(true, std::memory_order_release);
+  }
+  status_stopped_.store(stop_taken_, std::memory_order_release);
   const bool recording = recorder_->recording();
   if (spec_.record == RecordMode::kPenDown && was_recording_ && !recording) {
     status_pen_down_done_.store(true, std::memory_order_release);
@@ -177,7 +204,9 @@ session::TrialResult LiveRig::finish() {
   result.missed_samples = recorder_->missed();
   result.stalls = loop_->counters().stalls.load();
   result.link_faults = loop_->counters().link_faults.load();
-  session::noteTrialEnd(result, *recorder_, false);
+  result.max_period_error_s = static_cast<double>(loop_->periodError().max_ns()) * 1e-9;
+  result.clock = std::string(servo::loopClockName(loop_->clock()));
+  session::noteTrialEnd(result, *recorder_, stop_taken_);
 
   // Tear down in dependency order: the recorder reads the relay, the loop drives the device.
   recorder_.reset();
@@ -217,6 +246,8 @@ RigStatus LiveRig::status() const noexcept {
   status.recording = status_recording_.load(std::memory_order_relaxed);
   status.window_done = status_window_done_.load(std::memory_order_acquire);
   status.pen_down_done = status_pen_down_done_.load(std::memory_order_acquire);
+  status.writing_over = status_writing_over_.load(std::memory_order_acquire);
+  status.stopped = status_stopped_.load(std::memory_order_acquire);
   status.recorded_samples = status_recorded_.load(std::memory_order_relaxed);
   return status;
 }

@@ -8,7 +8,7 @@
 /// runTrial owns its loop and returns only when the trial is over, so the studio cannot use
 /// it for a person who must see the pen move. LiveRig mirrors it step by step (same device
 /// set-up, same settle phase, same metadata, same recorder); with the same hand in simulated
-/// time it records the same profile bit for bit (tests/studio/live_rig_test.cpp). A library
+/// time it records the same profile bit for bit (tests/studio/studio_rig_test.cpp). A library
 /// version of runTrial that exposes its loop while it runs would let this file shrink to a
 /// call (see the report in docs/studio.md).
 ///
@@ -38,7 +38,8 @@ enum class RecordMode {
   kNone,     ///< nothing (free writing); the ring is still drained
   kCommand,  ///< between armRecording() and disarmRecording() (start/stop buttons)
   kPenDown,  ///< from the first pen-down until the pen has been up for pen_up_stop_s
-  kWindow,   ///< exactly the trial: [settle_s, settle_s + duration_s) of loop time
+  kWindow,   ///< exactly the trial: from settle_s of loop time until the end rule (pen_up_end_s)
+             ///< or the maximum (settle_s + duration_s, excluded), whichever comes first
 };
 
 /// One run of the rig.
@@ -50,8 +51,14 @@ struct RunSpec {
   /// The pen is held lifted this long while the forces ramp in (at least the safety ramp,
   /// 0.25 s); the trial's clock and guidance start after it. Not recorded.
   double settle_s = 0.3;
-  double duration_s = 1.0;     ///< kWindow: how long the trial is recorded [s]
-  double pen_up_stop_s = 1.0;  ///< kPenDown: stop after the pen is up this long [s]
+  double duration_s = 1.0;     ///< kWindow: the trial's maximum duration [s]
+  /// The end rule (session::TrialSetup::pen_up_end_s): > 0, the recording ends once the pen
+  /// has been up this long [s] after writing began (the recording's first pen-down), with the
+  /// sample that ends it; the recorder decides sample by sample, as in runTrial. 0: off.
+  double pen_up_end_s = 0.0;
+  /// kPenDown: stop after the pen is up this long [s]. With an end rule, runTrial's recorder
+  /// uses pen_up_end_s here too, and so does the rig.
+  double pen_up_stop_s = 1.0;
   /// During the settle phase: true, the lifted pen follows the live hand (a person moves to
   /// the start); false, it is held above the hand's first point, as runTrial does.
   bool follow_during_settle = true;
@@ -62,14 +69,17 @@ struct RigStatus {
   bool running = false;
   bool settling = false;       ///< still in the settle phase
   bool recording = false;      ///< the recorder is taking samples
-  bool window_done = false;    ///< kWindow: the trial's window has passed
+  bool window_done = false;    ///< kWindow: the trial's window is over (the end rule or the maximum)
+  bool writing_over = false;   ///< the end rule ended the recording (the pen lifted long enough)
+  bool stopped = false;        ///< a stop request was taken: nothing after it is recorded
   bool pen_down_done = false;  ///< kPenDown: recorded and stopped after a long pen-up
   std::uint64_t recorded_samples = 0;
   double loop_time_s = 0.0;  ///< loop time of the newest sample the relay took
 };
 
 /// The run that records a trial set up for runTrial: its guidance, reference, metadata,
-/// duration and settle time, recorded over exactly [settle_s, settle_s + duration_s).
+/// maximum duration, end rule and settle time, recorded from settle_s until the end rule
+/// ends it or until settle_s + duration_s (kPenDown for a pen-down trigger).
 /// `follow_during_settle`: true for a live hand (a person), false for a script (as runTrial).
 RunSpec trialRunSpec(const session::TrialSetup& setup, bool follow_during_settle);
 
@@ -88,11 +98,19 @@ class LiveRig {
   void start(session::TrialEnvironment& environment, const RunSpec& spec, device::HandScript& hand,
              session::Clock clock);
   /// Simulated clock only: runs the loop for `seconds` of loop time (rounded to ticks), the
-  /// recorder draining between chunks of ticks as runTrial does.
+  /// recorder draining between chunks of ticks as runTrial does; like runTrial, it stops after
+  /// the chunk in which a kWindow trial's window ended (the end rule or the maximum).
   void advanceSimulated(double seconds);
   /// Stops the run (the device is commanded zero force) and returns what was recorded
-  /// (an empty profile when nothing was), with the run's counters. No-op result when idle.
+  /// (an empty profile when nothing was), with the run's counters and, as runTrial reports
+  /// them (session::noteTrialEnd), its end reason — "pen lifted", "stopped" after
+  /// requestStop(), else "maximum duration" — and writing span. No-op result when idle.
   session::TrialResult finish();
+  /// Ends the trial now (the stop key): the relay disarms the recorder at the next sample it
+  /// takes, so nothing after the request is recorded, and finish() reports end_reason
+  /// "stopped" (unless the end rule ended it first). The loop keeps running until finish().
+  /// Any thread; cleared by start().
+  void requestStop() noexcept { stop_.request(); }
 
   /// kCommand: start / stop taking samples (the start/stop buttons). Any thread.
   void armRecording() noexcept;
@@ -119,6 +137,7 @@ class LiveRig {
 
  private:
   void pump();           // relay: loop ring → recorder; consumer thread only
+  void takeStop();       // consumer thread only
   void publishStatus();  // consumer thread only
 
   session::TrialEnvironment* environment_ = nullptr;
@@ -133,6 +152,7 @@ class LiveRig {
   std::unique_ptr<SpscRing<TickSample>> relay_;
   std::thread relay_thread_;
   std::atomic<bool> relay_stop_{false};
+  session::TrialStop stop_;  // requestStop(); the relay takes it
 
   // Consumer-side state (relay thread or, in simulated time, the caller).
   double window_begin_s_ = 0.0;
@@ -140,11 +160,14 @@ class LiveRig {
   double period_s_ = 1e-3;
   bool window_armed_ = false;
   bool was_recording_ = false;
+  bool stop_taken_ = false;
 
   // Published for the GUI thread.
   std::atomic<bool> status_recording_{false};
   std::atomic<bool> status_window_done_{false};
   std::atomic<bool> status_pen_down_done_{false};
+  std::atomic<bool> status_writing_over_{false};
+  std::atomic<bool> status_stopped_{false};
   std::atomic<std::uint64_t> status_recorded_{0};
   std::atomic<double> status_loop_time_s_{0.0};
 };

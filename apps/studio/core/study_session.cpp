@@ -90,24 +90,9 @@ std::string StudySession::prompt() const {
 session::TrialSetup StudySession::currentSetup() const {
   const session::TrialRecord* record = currentTrial();
   HATTR_DEMAND(record != nullptr, "no current trial for subject {}", subject_);
-  const session::StudyDefinition& study = db_.study();
-  const session::TrialPlan& plan = record->plan;
-
-  // StudyRunner's set-up: the mode's guidance in training, none (BASIC) in recall.
-  session::TrialSetup setup;
-  setup.guidance.mode = plan.view.guidance ? plan.mode : guidance::TrainingMode::kBasic;
-  setup.guidance.playback.indexing = study.indexing;
-  setup.reference = reference_;
-  setup.duration_s = reference_->duration_s() + study.protocol.tail_s;
+  // StudyRunner's set-up, in real time for a person.
+  session::TrialSetup setup = session::studyTrialSetup(db_.study(), record->plan, reference_);
   setup.clock = session::Clock::kRealTime;
-  setup.metadata.subject = subject_;
-  setup.metadata.skill = study.skill;
-  setup.metadata.source = fmt::format("study:{}", study.name);
-  setup.metadata.extra["study_mode"] = std::string(guidance::modeName(plan.mode));
-  setup.metadata.extra["phase"] = std::string(session::phaseName(plan.phase));
-  setup.metadata.extra["trial"] = fmt::format("{}", plan.index);
-  setup.metadata.extra["sequence"] = fmt::format("{}", plan.sequence);
-  setup.metadata.extra["reference_shown"] = plan.view.show_reference ? "yes" : "no";
   return setup;
 }
 

@@ -7,7 +7,7 @@
 /// rests and its prompts, the same TrialEnvironment and TrialSetup for each trial, the trial
 /// marked running before it starts and stored with its profile in one transaction when it
 /// ends (created_utc cleared, the runner's outcome text). With a scripted hand in simulated
-/// time it stores what the runner stores, bit for bit (tests/studio/study_session_test.cpp).
+/// time it stores what the runner stores, bit for bit (tests/studio/studio_rig_test.cpp).
 ///
 /// GUI thread only; times are seconds of any monotonic clock the caller keeps.
 
@@ -70,8 +70,10 @@ class StudySession {
   [[nodiscard]] const session::TrialRecord* currentTrial() const noexcept;
   /// The runner's prompt for the current trial ("Training with ALPHA: trial 3 of 11").
   [[nodiscard]] std::string prompt() const;
-  /// The runner's set-up of the current trial: guidance on in training, BASIC in recall,
-  /// the expert's duration plus the tail, the study metadata.
+  /// The runner's set-up of the current trial (session::studyTrialSetup: guidance on in
+  /// training, BASIC in recall, the study's end rule and maximum — or an old file's fixed
+  /// window —, the study metadata), on the real-time clock. The caller sets the settle time
+  /// (the person's "get ready") and the stop request.
   [[nodiscard]] session::TrialSetup currentSetup() const;
   [[nodiscard]] int completedCount() const noexcept { return completed_; }
   [[nodiscard]] int totalCount() const noexcept { return static_cast<int>(trials_.size()); }

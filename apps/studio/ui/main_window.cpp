@@ -302,7 +302,7 @@ void MainWindow::buildTrainTab() {
   trial_button_ = new QPushButton(tr("Start trial (Space)"));
   connect(trial_button_, &QPushButton::clicked, this, [this] {
     if (activity_ == Activity::kTrial) {
-      abortActivity();
+      stopTrial();
     } else {
       startTrial();
     }
@@ -357,7 +357,13 @@ void MainWindow::buildStudyTab() {
   study_prompt_->setFont(big);
   layout->addWidget(study_prompt_);
   study_next_button_ = new QPushButton(tr("Start trial (Space) / skip rest (N)"));
-  connect(study_next_button_, &QPushButton::clicked, this, &MainWindow::studyNext);
+  connect(study_next_button_, &QPushButton::clicked, this, [this] {
+    if (activity_ == Activity::kStudyTrial) {
+      stopTrial();
+    } else {
+      studyNext();
+    }
+  });
   layout->addWidget(study_next_button_);
   close_study_button_ = new QPushButton(tr("Close study"));
   connect(close_study_button_, &QPushButton::clicked, this, &MainWindow::closeStudy);
@@ -455,7 +461,9 @@ void MainWindow::buildActions() {
 
   QMenu* act = menuBar()->addMenu(tr("&Actions"));
   add(act, tr("Start / stop (the tab's main action)"), QKeySequence(Qt::Key_Space), [this] { primaryAction(); });
-  add(act, tr("Abort trial, recording or playback"), QKeySequence(Qt::Key_Escape), [this] { abortActivity(); });
+  add(act, tr("Stop trial (keep it)"), QKeySequence(Qt::CTRL | Qt::Key_Period), [this] { stopTrial(); });
+  add(act, tr("Abort trial, recording or playback (nothing kept)"), QKeySequence(Qt::Key_Escape),
+      [this] { abortActivity(); });
   add(act, tr("Record / stop recording"), QKeySequence(Qt::Key_R), [this] {
     tabs_->setCurrentIndex(kTabRecord);
     record_button_->click();
@@ -488,7 +496,9 @@ void MainWindow::buildActions() {
         tr("<table>"
            "<tr><td><b>Space</b></td><td>the tab's main action: record/stop, start/stop trial, study next, "
            "play/pause</td></tr>"
-           "<tr><td><b>Esc</b></td><td>abort the trial, recording or playback</td></tr>"
+           "<tr><td><b>Ctrl+.</b></td><td>stop the trial now and keep it (end reason \"stopped\"; a study "
+           "stores it); stop a recording</td></tr>"
+           "<tr><td><b>Esc</b></td><td>abort the trial, recording or playback (nothing kept)</td></tr>"
            "<tr><td><b>R</b></td><td>record / stop recording</td></tr>"
            "<tr><td><b>T</b></td><td>start a training trial</td></tr>"
            "<tr><td><b>N</b></td><td>study: skip the rest / start the next trial</td></tr>"
@@ -720,12 +730,16 @@ void MainWindow::onFrame() {
                                             trial_expert_->samples().front().t_s);
         paper_->setReferenceCue(Eigen::Vector2d((*trial_expert_)[i].p_WT.head<2>()));
       }
+      const double left_s = std::max(0.0, rig_.spec().duration_s - t_trial);
       if (status.settling) {
         banner = tr("Get ready: %1 s").arg(std::max(0.0, -t_trial), 0, 'f', 1);
+      } else if (rig_.spec().pen_up_end_s > 0.0) {
+        banner = tr("Write! Lift the pen when you are done (%1 s left)").arg(left_s, 0, 'f', 1);
       } else {
-        banner = tr("Write! %1 s").arg(std::max(0.0, rig_.spec().duration_s - t_trial), 0, 'f', 1);
+        banner = tr("Write! %1 s").arg(left_s, 0, 'f', 1);
       }
-      if (status.window_done) finishTrial();
+      // The trial is over: the pen lifted long enough (the end rule) or the maximum passed.
+      if (status.window_done || status.writing_over) finishTrial();
       break;
     }
     case Activity::kRecording:
@@ -814,7 +828,7 @@ void MainWindow::refreshButtons() {
   replay_take_button_->setEnabled(take_.has_value() && free);
   retake_button_->setEnabled(take_.has_value() && free);
   save_take_button_->setEnabled(take_.has_value());
-  trial_button_->setText(activity_ == Activity::kTrial ? tr("Stop trial (Esc)") : tr("Start trial (Space)"));
+  trial_button_->setText(activity_ == Activity::kTrial ? tr("Stop trial (Space, Ctrl+.)") : tr("Start trial (Space)"));
   trial_button_->setEnabled((free && reference_profile_) || activity_ == Activity::kTrial);
   replay_trial_button_->setEnabled(last_trial_.has_value() && free);
   save_trial_button_->setEnabled(last_trial_.has_value());
@@ -822,9 +836,12 @@ void MainWindow::refreshButtons() {
   subject_combo_->setEnabled(study_open && activity_ != Activity::kStudyTrial);
   subject_button_->setEnabled(study_open && activity_ != Activity::kStudyTrial);
   close_study_button_->setEnabled(study_open && activity_ != Activity::kStudyTrial);
+  study_next_button_->setText(activity_ == Activity::kStudyTrial ? tr("Stop trial (Ctrl+.)")
+                                                                 : tr("Start trial (Space) / skip rest (N)"));
   study_next_button_->setEnabled(
-      study_open && free &&
-      (study_->state() == StudySession::State::kReady || study_->state() == StudySession::State::kResting));
+      study_open && (activity_ == Activity::kStudyTrial ||
+                     (free && (study_->state() == StudySession::State::kReady ||
+                               study_->state() == StudySession::State::kResting))));
   play_button_->setEnabled(review_trial_.has_value() || playback_.loaded());
   report_button_->setEnabled(review_db_ != nullptr);
 }

@@ -66,6 +66,11 @@ class MainWindow final : public QMainWindow {
   /// The training mode; during a trial it switches through the servo mailbox (cross-fade).
   void setMode(guidance::TrainingMode mode);
   bool startTrial();
+  /// The stop key (Ctrl+.): ends the running training or study trial now and keeps it, as if
+  /// it had ended by itself (scored, or stored in the study database), its end_reason
+  /// "stopped"; stops a recording and keeps the take. A trial still in its get-ready phase has
+  /// recorded nothing: it is aborted (a study trial runs again). False when nothing runs.
+  bool stopTrial();
   /// Stops a running trial or recording without keeping it; stops a playback.
   void abortActivity();
   bool startRecording();

@@ -170,7 +170,10 @@ bool MainWindow::startTrial() {
     setup.guidance.playback.indexing =
         indexing_combo_->currentIndex() == 0 ? guidance::Indexing::kTime : guidance::Indexing::kProgress;
     setup.reference = reference_;
-    setup.duration_s = reference_->duration_s() + session::Protocol{}.tail_s;  // the study protocol's tail
+    // A study's default end: 1 s with the pen lifted after writing, at most 3 × the expert.
+    const session::TrialEndRule end = session::Protocol{}.trial_end;
+    setup.duration_s = end.maxDuration_s(reference_->duration_s());
+    setup.pen_up_end_s = end.pen_up_s;
     setup.settle_s = settle_spin_->value();
     setup.clock = session::Clock::kRealTime;
     setup.metadata.subject = "trainee";
@@ -201,6 +204,26 @@ bool MainWindow::startTrial() {
   return true;
 }
 
+bool MainWindow::stopTrial() {
+  switch (activity_) {
+    case Activity::kTrial:
+    case Activity::kStudyTrial:
+      // Still getting ready: nothing is recorded yet, so there is nothing to keep.
+      if (rig_.status().settling) {
+        abortActivity();
+        statusBar()->showMessage(tr("Stopped before the trial began: nothing kept."), 5000);
+        return true;
+      }
+      rig_.requestStop();
+      finishTrial();
+      return true;
+    case Activity::kRecording: return stopRecording();
+    case Activity::kFree:
+    case Activity::kPlayback: return false;
+  }
+  return false;
+}
+
 void MainWindow::finishTrial() {
   session::TrialResult result = rig_.finish();
   const Activity was = activity_;
@@ -208,6 +231,11 @@ void MainWindow::finishTrial() {
   startFreeRun();
   paper_->setReferenceCue(std::nullopt);
   if (result.profile.empty()) {
+    // A study trial that recorded nothing is run again.
+    if (was == Activity::kStudyTrial && study_) {
+      study_->abandonTrial();
+      refreshStudyPanel();
+    }
     showError(tr("The trial recorded nothing"), tr("the loop delivered no samples in the trial's window"));
     refreshButtons();
     return;
@@ -321,6 +349,8 @@ bool MainWindow::startRecording() {
 
 bool MainWindow::stopRecording() {
   if (activity_ != Activity::kRecording) return false;
+  // The person ends the take (its end_reason "stopped"), unless the pen-up trigger already did.
+  if (!rig_.status().pen_down_done) rig_.requestStop();
   rig_.disarmRecording();
   session::TrialResult result = rig_.finish();
   activity_ = Activity::kFree;
@@ -464,7 +494,7 @@ void MainWindow::primaryAction() {
       break;
     case kTabTrain:
       if (activity_ == Activity::kTrial) {
-        abortActivity();
+        stopTrial();
       } else {
         startTrial();
       }
@@ -571,8 +601,8 @@ void MainWindow::refreshStudyPanel() {
   }
   study_prompt_->setText(prompt);
   const bool free = activity_ == Activity::kFree || activity_ == Activity::kPlayback;
-  study_next_button_->setEnabled(free &&
-                                 (state == StudySession::State::kReady || state == StudySession::State::kResting));
+  const bool next = state == StudySession::State::kReady || state == StudySession::State::kResting;
+  study_next_button_->setEnabled(activity_ == Activity::kStudyTrial || (free && next));
 }
 
 bool MainWindow::studyNext() {

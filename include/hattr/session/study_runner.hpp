@@ -68,6 +68,17 @@ std::string disturbanceOf(const TrialResult& result);
 /// disturbance (disturbanceOf).
 std::string noteLoopCounters(TrialResult& result);
 
+/// The set-up of one study trial, as every app runs it (StudyRunner, the studio's study
+/// session): the mode's guidance in training, none (BASIC) in recall, the study's indexing,
+/// `reference` (the study's expert at the study's rate); the end: protocol.trial_end (the pen
+/// lifted for pen_up_s after writing began, at most maxDuration_s of the expert's duration),
+/// or for an old study file with protocol.fixed_window the expert's duration plus tail_s and
+/// no end rule; the study metadata (subject = plan.subject, skill, source "study:<name>",
+/// study_mode, phase, trial, sequence, reference_shown). The caller sets the clock, the stop
+/// request, the settle time and any injected stall. Throws InputError when `reference` is null.
+TrialSetup studyTrialSetup(const StudyDefinition& study, const TrialPlan& plan,
+                           std::shared_ptr<const guidance::ReferenceTrajectory> reference);
+
 /// Whether a study runs a disturbed trial again: the policy is "repeat" and it has been
 /// repeated fewer than protocol.max_repeats times.
 bool repeatDisturbedTrial(const Protocol& protocol, const std::string& disturbed, int repeats_so_far);
