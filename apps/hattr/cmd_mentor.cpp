@@ -37,6 +37,7 @@ struct MentorOptions {
   double seconds = 0.0;      // 0: the hand script's length + 0.5 s, or until interrupted
   double wait_s = 30.0;
   bool no_passivity = false;
+  double deadband = 0.0;
   bool force = false;
   bool json = false;
 };
@@ -44,7 +45,7 @@ struct MentorOptions {
 // One station, live: wait for the other, release the hand, record, stop on a lost link.
 void runStation(const MentorOptions& opt, net::MentorRole role) {
   net::MentorConfig mentor{.role = role, .coupling = net::parseCoupling(opt.coupling), .passivity = !opt.no_passivity,
-                           .key = device::net::readKeyFile(opt.key)};
+                           .key = device::net::readKeyFile(opt.key), .deadband = opt.deadband};
   auto socket = device::net::UdpSocket::bound(
       role == net::MentorRole::kLeader ? device::net::parseUdpEndpoint(opt.address, "--listen", 0)
                                        : device::net::UdpEndpoint{.address = 0, .port = 0});
@@ -149,7 +150,7 @@ void runStation(const MentorOptions& opt, net::MentorRole role) {
                {"coupling", opt.coupling},
                {"samples", recorded.size()},
                {"peers_received", s.peers_received},
-               {"peers_sent", s.peers_sent},
+               {"peers_sent", s.peers_sent}, {"peers_withheld", s.peers_withheld},
                {"lost", s.lost},
                {"link_faults", s.link_faults},
                {"busy_refusals", s.busy_refusals},
@@ -173,6 +174,7 @@ struct SimulateOptions {
   std::string rtt_ms = "0,10,50,100,200";
   std::string loss_percent = "0,5";
   std::string passivity = "both";
+  std::string deadband = "0";
   double seconds = 0.0;
   std::string glyph = "na";
   std::uint64_t seed = 1;
@@ -204,8 +206,9 @@ void runSimulate(const SimulateOptions& opt) {
   if (opt.passivity != "on") passivity_settings.push_back(false);
   nlohmann::json rows = nlohmann::json::array();
   if (!opt.json) {
-    std::cout << fmt::format("{:<10} {:>7} {:>6} {:>10} {:>14} {:>11} {:>13} {:>14} {:>11}\n", "coupling", "rtt_ms",
-                             "loss", "passivity", "tracking_mm", "force_N", "energy_J", "dissipated_J", "peak_N");
+    std::cout << fmt::format("{:<10} {:>7} {:>6} {:>10} {:>9} {:>14} {:>11} {:>13} {:>14} {:>11} {:>9}\n", "coupling",
+                             "rtt_ms", "loss", "passivity", "deadband", "tracking_mm", "force_N", "energy_J",
+                             "dissipated_J", "peak_N", "packets/s");
   }
   std::stringstream couplings(opt.couplings);
   std::string name;
@@ -215,24 +218,28 @@ void runSimulate(const SimulateOptions& opt) {
       for (const double loss : numberList(opt.loss_percent, "--loss-percent")) {
         for (const bool passivity : passivity_settings) {
           if (!passivity && coupling != net::Coupling::kBilateral) continue;  // it acts on bilateral only
+          for (const double deadband : numberList(opt.deadband, "--deadband")) {
           device::ProfileHandScript expert(plan);
           net::LaggingHand trainee(plan);
           const net::MentoredRun run = net::runMentoredSimulation(
               {.coupling = coupling, .passivity = passivity, .round_trip_s = rtt * 1e-3, .loss = loss / 100.0,
-               .seed = opt.seed, .duration_s = opt.seconds > 0.0 ? opt.seconds : plan.duration_s() + 0.3,
+               .deadband = deadband, .seed = opt.seed, .duration_s = opt.seconds > 0.0 ? opt.seconds : plan.duration_s() + 0.3,
                .settle_s = 0.8, .leader_device = opt.expert_device, .follower_device = opt.trainee_device},
               expert, trainee);
           rows.push_back({{"coupling", name}, {"rtt_ms", rtt}, {"loss_percent", loss}, {"passivity", passivity},
                           {"tracking_rms_mm", run.tracking_rms_m * 1e3}, {"force_rms_N", run.force_rms_N},
                           {"energy_generated_J", run.energy_generated_J}, {"dissipated_J", run.dissipated_J},
                           {"peak_coupling_force_N", run.peak_coupling_force_N}, {"faults", run.faults},
-                          {"link_faults", run.link_faults}});
+                          {"link_faults", run.link_faults}, {"deadband", deadband},
+                          {"packets_per_s", run.packets_per_s}});
           if (!opt.json) {
-            std::cout << fmt::format("{:<10} {:>7g} {:>5g}% {:>10} {:>14.2f} {:>11.3f} {:>+13.4f} {:>14.4f} {:>11.2f}\n",
-                                     name, rtt, loss, passivity ? "on" : "off", run.tracking_rms_m * 1e3,
+            std::cout << fmt::format("{:<10} {:>7g} {:>5g}% {:>10} {:>9g} {:>14.2f} {:>11.3f} {:>+13.4f} {:>14.4f} {:>11.2f} "
+                                     "{:>9.0f}\n",
+                                     name, rtt, loss, passivity ? "on" : "off", deadband, run.tracking_rms_m * 1e3,
                                      run.force_rms_N, run.energy_generated_J, run.dissipated_J,
-                                     run.peak_coupling_force_N)
+                                     run.peak_coupling_force_N, run.packets_per_s)
                       << std::flush;
+          }
           }
         }
       }
@@ -250,6 +257,10 @@ void addStationOptions(CLI::App& cmd, MentorOptions& opt) {
                                            "interrupted)")
       ->check(CLI::Range(0.0, 36000.0));
   cmd.add_option("--wait", opt.wait_s, "Wait this long for the other station [s]")->check(CLI::Range(0.1, 3600.0))->capture_default_str();
+  cmd.add_option("--deadband", opt.deadband, "Perceptual deadband: send a PEER only when velocity or force changed by "
+                                             "more than this fraction (0: every tick; 0.1 is typical)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   cmd.add_flag("--no-passivity", opt.no_passivity, "Turn the passivity observer/controller off (bilateral; for experiments)");
   cmd.add_flag("--force", opt.force, "Replace the --record file if it exists");
   cmd.add_flag("--json", opt.json, "Print a JSON summary: samples, packets, lost, link_faults, drops, energy, rtt_ms, failure");
@@ -287,6 +298,9 @@ void registerMentorCommands(CLI::App& app) {
   simulate->add_option("--loss-percent", sim_opt->loss_percent, "Comma-separated loss rates [%]")->capture_default_str();
   simulate->add_option("--passivity", sim_opt->passivity, "on, off or both (off rows for bilateral only)")
       ->check(CLI::IsMember({"on", "off", "both"}))
+      ->capture_default_str();
+  simulate->add_option("--deadband", sim_opt->deadband,
+                       "Comma-separated perceptual deadbands (Weber fractions; 0: a packet every tick)")
       ->capture_default_str();
   simulate->add_option("--seconds", sim_opt->seconds, "Recorded time per run (default: the glyph's length + 0.3 s)")
       ->check(CLI::Range(0.1, 600.0));

@@ -53,6 +53,11 @@ void MentorConfig::validate() const {
   check("ramp_s", ramp_s, 0.0, 5.0);
   check("session_timeout_s", session_timeout_s, 0.01, 60.0);
   check("hello_interval_s", hello_interval_s, 0.001, 5.0);
+  check("deadband (Weber fraction)", deadband, 0.0, 1.0);
+  check("deadband position [m]", deadband_position_m, 0.0, 0.01);
+  check("heartbeat_s", heartbeat_s, 0.001, 1.0);
+  HATTR_THROW_UNLESS(heartbeat_s < hold_s, "mentoring: heartbeat_s: expected less than hold_s = {} s (or the link "
+                     "drops between PEERs), got {}", hold_s, heartbeat_s);
   check("position Kp [N/m]", gains.position_kp_N_per_m, 0.0, 1e5);
   check("position Kd [N·s/m]", gains.position_kd_N_s_per_m, 0.0, 1e4);
   check("force Kp", gains.force_kp, 0.0, 100.0);
@@ -163,6 +168,7 @@ void MentorCoupling::onHello(const device::net::Nonce& nonce, const device::net:
   other_ = from;
   peer_sequence_.reset();
   send_sequence_ = 0;
+  have_sent_ = false;
   have_other_ = false;
   last_heard_ns_ = now_ns;
   bump(sessions_);
@@ -189,6 +195,7 @@ void MentorCoupling::handle(const device::net::Packet& packet, const device::net
         session_id_ = h.session_id;
         peer_sequence_.reset();
         send_sequence_ = 0;
+        have_sent_ = false;
         have_other_ = false;
         last_heard_ns_ = now_ns;
         bump(sessions_);
@@ -347,8 +354,15 @@ Vec3 MentorCoupling::compute(const PenState& pen, const ContactForces& contact, 
     out.hold_ns = have_other_ ? now_ns - other_arrival_ns_ : 0;
     out.coupling = static_cast<std::uint32_t>(activeCoupling());
     out.flags = (contact.in_contact ? device::net::kPeerPenDown : 0u) | (up ? device::net::kPeerLinkUp : 0u);
-    send(out, other_, now_ns);
-    bump(peers_sent_);
+    if (worthSending(out, now_ns)) {
+      send(out, other_, now_ns);
+      bump(peers_sent_);
+      last_sent_ = out;
+      last_sent_ns_ = now_ns;
+      have_sent_ = true;
+    } else {
+      bump(peers_withheld_);
+    }
   }
 
   // For other threads.
@@ -374,6 +388,20 @@ void MentorCoupling::close(std::int64_t now_ns) noexcept {
   session_flag_.store(false);
 }
 
+// The perceptual deadband: a change the other person could feel or see, a change of state,
+// or the heartbeat that keeps the link up.
+bool MentorCoupling::worthSending(const device::net::PeerPayload& out, std::int64_t now_ns) const noexcept {
+  if (config_.deadband <= 0.0 || !have_sent_) return true;
+  if (now_ns - last_sent_ns_ >= toNs(config_.heartbeat_s)) return true;
+  if (out.flags != last_sent_.flags || out.coupling != last_sent_.coupling) return true;
+  const auto beyondWeber = [k = config_.deadband](const Vec3& now, const Vec3& sent) {
+    return (now - sent).norm() > k * sent.norm();
+  };
+  return beyondWeber(out.v_WT, last_sent_.v_WT) || beyondWeber(out.f_user_W, last_sent_.f_user_W) ||
+         beyondWeber(out.f_coupling_W, last_sent_.f_coupling_W) ||
+         (out.p_WT - last_sent_.p_WT).norm() > config_.deadband_position_m;
+}
+
 MentorStats MentorCoupling::stats() const noexcept {
   MentorStats s;
   s.session = session_flag_.load(std::memory_order_relaxed);
@@ -384,6 +412,7 @@ MentorStats MentorCoupling::stats() const noexcept {
   s.link_faults = link_faults_.load();
   s.peers_received = peers_received_.load();
   s.peers_sent = peers_sent_.load();
+  s.peers_withheld = peers_withheld_.load();
   s.lost = lost_snapshot_.load();
   for (std::size_t i = 0; i < device::net::kDropReasonCount; ++i) s.drops[i] = drops_[static_cast<DropReason>(i)];
   s.energy_in_J = energy_in_snapshot_.load();

@@ -134,7 +134,7 @@ MentoredRun runMentoredSimulation(const MentoredSetup& setup, device::HandScript
   const auto station = [&](MentorRole role, const std::string& uri) {
     StationConfig c{.device_uri = uri, .world = setup.world};
     c.mentor = MentorConfig{.role = role, .coupling = setup.coupling, .gains = setup.gains, .passivity = setup.passivity,
-                            .key = key, .leader = EmulatedLinkPair::addressOf(0)};
+                            .key = key, .leader = EmulatedLinkPair::addressOf(0), .deadband = setup.deadband};
     c.metadata.subject = role == MentorRole::kLeader ? "expert" : "trainee";
     return c;
   };
@@ -184,6 +184,8 @@ MentoredRun runMentoredSimulation(const MentoredSetup& setup, device::HandScript
   run.link_faults = ls.link_faults + fs.link_faults;
   run.leader_stats = ls;
   run.follower_stats = fs;
+  run.deadband = setup.deadband;
+  run.packets_per_s = 0.5 * static_cast<double>(ls.peers_sent + fs.peers_sent) / (static_cast<double>(total_ticks) / rate_hz);
   return run;
 }
 

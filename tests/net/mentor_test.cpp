@@ -20,12 +20,14 @@ HapticProfile expertScript() { return test::figureEightScript(2.4); }
 /// The follower's pen: held by a compliant hand, so guidance can move it.
 constexpr const char* kTraineePen = "sim://pen?hand_stiffness_N_per_m=80";
 
-MentoredRun mentored(Coupling coupling, double rtt_s, double loss, bool passivity = true, double duration_s = 2.4) {
+MentoredRun mentored(Coupling coupling, double rtt_s, double loss, bool passivity = true, double duration_s = 2.4,
+                     double deadband = 0.0) {
   const HapticProfile script = expertScript();
   device::ProfileHandScript expert(script);
   LaggingHand trainee(script);
-  MentoredSetup setup{.coupling = coupling, .passivity = passivity, .round_trip_s = rtt_s, .loss = loss, .seed = 11,
-                      .duration_s = duration_s, .settle_s = 0.8, .follower_device = kTraineePen};
+  MentoredSetup setup{.coupling = coupling, .passivity = passivity, .round_trip_s = rtt_s, .loss = loss,
+                      .deadband = deadband, .seed = 11, .duration_s = duration_s, .settle_s = 0.8,
+                      .follower_device = kTraineePen};
   return runMentoredSimulation(setup, expert, trainee);
 }
 
@@ -86,6 +88,49 @@ TEST(Mentoring, WithoutThePassivityControllerLooselyHeldPensGoUnstableUnderDelay
   EXPECT_LE(on.energy_generated_J, 1e-9);
   EXPECT_LT(on.tracking_rms_m, 0.002);
   EXPECT_GT(on.dissipated_J, 0.0);
+}
+
+TEST(MentoringDeadband, SendsFewerPacketsWhileEveryCouplingStaysStableAndGuidesAsWell) {
+  // Weber fraction 0.1 at 100 ms round trip and 5 % loss: well under a packet per tick, never
+  // under the heartbeat's rate, the link never drops, and the same coupling does what it did.
+  for (const Coupling c : {Coupling::kPosition, Coupling::kForce, Coupling::kBilateral}) {
+    const MentoredRun every_tick = mentored(c, 0.1, 0.05);
+    const MentoredRun deadband = mentored(c, 0.1, 0.05, true, 2.4, 0.1);
+    std::printf("%-9s packets/s %.0f -> %.0f, tracking %.2f -> %.2f mm, force %.3f -> %.3f N, energy %+.4f J\n",
+                std::string(couplingName(c)).c_str(), every_tick.packets_per_s, deadband.packets_per_s,
+                every_tick.tracking_rms_m * 1e3, deadband.tracking_rms_m * 1e3, every_tick.force_rms_N,
+                deadband.force_rms_N, deadband.energy_generated_J);
+    EXPECT_LT(deadband.packets_per_s, 0.6 * every_tick.packets_per_s) << couplingName(c);
+    EXPECT_GE(deadband.packets_per_s, 0.95 / MentorConfig{}.heartbeat_s) << couplingName(c);  // the heartbeat, less the loss
+    EXPECT_GT(deadband.follower_stats.peers_withheld, 0u);
+    EXPECT_EQ(deadband.link_faults, 0u) << couplingName(c);
+    EXPECT_EQ(deadband.faults, 0u) << couplingName(c);
+    EXPECT_LT(deadband.tracking_rms_m, every_tick.tracking_rms_m + 0.0005) << couplingName(c);
+    EXPECT_LT(deadband.force_rms_N, every_tick.force_rms_N + 0.05) << couplingName(c);
+    if (c == Coupling::kBilateral) {
+      EXPECT_LE(deadband.energy_generated_J, 1e-9);
+    }
+  }
+}
+
+TEST(MentoringDeadband, RefusesAHeartbeatTheLinkWouldNotSurviveAndABadFraction) {
+  MentorConfig config{.role = MentorRole::kLeader, .deadband = 0.1};
+  config.heartbeat_s = config.hold_s;
+  try {
+    config.validate();
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "mentoring: heartbeat_s: expected less than hold_s = 0.01 s (or the link drops between "
+                           "PEERs), got 0.01");
+  }
+  config.heartbeat_s = 0.003;
+  config.deadband = 1.5;
+  try {
+    config.validate();
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "mentoring: deadband (Weber fraction): expected [0, 1], got 1.5");
+  }
 }
 
 TEST(Mentoring, CouplingNamesRoundTripAndBadOnesAreRefused) {

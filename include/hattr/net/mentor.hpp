@@ -127,6 +127,13 @@ struct MentorConfig {
   double ramp_s = 0.25;                    ///< the coupling fades in over this long when the link is up
   double session_timeout_s = 0.5;          ///< the leader ends a silent session after this
   double hello_interval_s = 0.05;          ///< the follower says HELLO this often until welcomed
+  /// Perceptual deadband (Hinterseer & Steinbach): 0 sends a PEER every tick; k > 0 sends one
+  /// only when the pen's velocity or force has changed by more than k (a Weber fraction) of
+  /// the last one sent, its position by more than deadband_position_m, its flags or coupling
+  /// changed, or heartbeat_s has passed. The other station holds the last values.
+  double deadband = 0.0;
+  double deadband_position_m = 0.0002;     ///< [m]; hand position discrimination is ~1 mm or coarser
+  double heartbeat_s = 0.003;              ///< at most this long between PEERs (< hold_s; hold_s / 3 survives two lost in a row)
   /// Throws InputError naming the field for a value out of range.
   void validate() const;
 };
@@ -141,6 +148,7 @@ struct MentorStats {
   std::uint64_t link_faults = 0;     ///< times the link went down with a session
   std::uint64_t peers_received = 0;
   std::uint64_t peers_sent = 0;
+  std::uint64_t peers_withheld = 0;  ///< PEERs the deadband did not send
   std::uint64_t lost = 0;            ///< PEER sequence gaps
   std::array<std::uint64_t, device::net::kDropReasonCount> drops{};
   double energy_in_J = 0.0;          ///< energy this station's person put into the coupling
@@ -184,6 +192,8 @@ class MentorCoupling final : public GuidanceController {
   void send(const device::net::Payload& payload, const device::net::UdpEndpoint& to, std::int64_t now_ns) noexcept;
   Vec3 couplingForce(const PenState& pen, const ContactForces& contact, double dt_s) noexcept;
   Vec3 passive(const Vec3& force, const Vec3& v_WT, double dt_s) noexcept;
+  /// The deadband's test: does `out` differ enough from the last PEER sent to be sent now?
+  [[nodiscard]] bool worthSending(const device::net::PeerPayload& out, std::int64_t now_ns) const noexcept;
   /// The follower names the coupling; the leader runs the one its follower announces.
   [[nodiscard]] Coupling activeCoupling() const noexcept {
     return config_.role == MentorRole::kLeader && have_other_ ? static_cast<Coupling>(other_state_.coupling)
@@ -221,6 +231,11 @@ class MentorCoupling final : public GuidanceController {
   Vec3 error_rate_ = Vec3::Zero();
   bool have_error_ = false;
 
+  // The last PEER sent (the deadband compares with it).
+  device::net::PeerPayload last_sent_{};
+  std::int64_t last_sent_ns_ = 0;
+  bool have_sent_ = false;
+
   // Energy bookkeeping of this port (TDPA).
   double energy_in_J_ = 0.0;
   double energy_out_J_ = 0.0;
@@ -235,6 +250,7 @@ class MentorCoupling final : public GuidanceController {
   std::atomic<std::uint64_t> link_faults_{0};
   std::atomic<std::uint64_t> peers_received_{0};
   std::atomic<std::uint64_t> peers_sent_{0};
+  std::atomic<std::uint64_t> peers_withheld_{0};
   std::atomic<double> energy_in_snapshot_{0.0};
   std::atomic<double> energy_out_snapshot_{0.0};
   std::atomic<double> peer_energy_snapshot_{0.0};

@@ -109,6 +109,8 @@ struct MentoredRun {
   std::uint64_t faults = 0;          ///< latched faults on either side
   std::uint64_t link_faults = 0;
   double peak_coupling_force_N = 0.0;
+  double deadband = 0.0;             ///< the deadband's Weber fraction (0: a PEER every tick)
+  double packets_per_s = 0.0;        ///< PEERs sent per second and direction, mean of the two, whole run
   MentorStats leader_stats;          ///< each coupling's counters at the end
   MentorStats follower_stats;
 };
@@ -120,6 +122,7 @@ struct MentoredSetup {
   double round_trip_s = 0.0;   ///< split evenly between the two directions
   double jitter_s = 0.0;
   double loss = 0.0;
+  double deadband = 0.0;       ///< MentorConfig::deadband of both stations
   std::uint64_t seed = 1;
   double duration_s = 3.0;     ///< recorded after the settle time
   double settle_s = 0.5;       ///< both pens held lifted while the link comes up and forces ramp in
