@@ -147,8 +147,12 @@ TEST(Cli, ServoCheckJsonHasTheStableKeys) {
     }
   }
   for (const char* key : {"p50", "p99", "p99_9", "max"}) EXPECT_TRUE(json["loop"]["tick_compute_us"][key].is_number());
-  EXPECT_GT(json["loop"]["ticks"].get<int>(), 100);
-  EXPECT_EQ(json["loop"]["faults"].get<int>(), 0);
+  // How many ticks fit in 0.2 s is the host's business (a loaded host holds the loop up); every
+  // tick's sample is either consumed or counted as dropped.
+  const auto& loop = json["loop"];
+  EXPECT_GT(loop["ticks"].get<int>(), 0) << r.out;
+  EXPECT_EQ(loop["samples_consumed"].get<int>() + loop["dropped_samples"].get<int>(), loop["ticks"].get<int>()) << r.out;
+  EXPECT_EQ(loop["faults"].get<int>(), 0) << r.out;
   EXPECT_TRUE(json["loop"]["overruns"].is_number());
   EXPECT_TRUE(json["loop"]["dropped_samples"].is_number());
   EXPECT_TRUE(json["ratio_p99"].is_number());

@@ -255,9 +255,10 @@ TEST(DeviceServeCli, KillingTheServerWithSigkillFaultsTheClientWithTheLinkReason
   const auto json = nlohmann::json::parse(check.out);
   EXPECT_THAT(json["link"]["fault"].get<std::string>(),
               HasSubstr("link lost: no state from " + server.address() + " for"));
-  EXPECT_GT(json["link"]["disconnected_reads"].get<int>(), 50);
-  EXPECT_GE(json["loop"]["link_faults"].get<int>(), 1);
-  EXPECT_GT(json["loop"]["disconnected_ticks"].get<int>(), 50);
+  // How many ticks run after the fault depends on the host's load: at least one did, without force.
+  EXPECT_GE(json["link"]["disconnected_reads"].get<int>(), 1) << check.out;
+  EXPECT_GE(json["loop"]["link_faults"].get<int>(), 1) << check.out;
+  EXPECT_GE(json["loop"]["disconnected_ticks"].get<int>(), 1) << check.out;
 }
 
 }  // namespace

@@ -194,7 +194,11 @@ TEST(ServoLoop, RealTimeThreadTicksAndStops) {
   config.realtime.policy = RealtimePolicy::kSkip;
   Rig rig(config);
   rig.loop.start();
-  std::this_thread::sleep_for(100ms);
+  // Wait for ticks rather than for time: a loaded host may hold the thread up for a while.
+  const auto give_up = std::chrono::steady_clock::now() + 20s;
+  while (rig.loop.counters().ticks.load() <= 10u && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(10ms);
+  }
   rig.loop.stop();
   EXPECT_FALSE(rig.loop.running());
   EXPECT_GT(rig.loop.counters().ticks.load(), 10u);
