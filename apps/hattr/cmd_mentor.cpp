@@ -34,7 +34,9 @@ struct MentorOptions {
   std::string coupling = "observe";
   std::string hand;          // a profile the simulated hand writes once the link is up
   std::string record;
-  double seconds = 0.0;      // 0: the hand script's length + 0.5 s, or until interrupted
+  std::string record_dir;    // lead serving sessions: one profile per session
+  int sessions = 1;          // lead: sessions to serve (0: until interrupted)
+  double seconds = 0.0;      // 0: the hand script's length + 0.5 s, or until the session ends
   double wait_s = 30.0;
   bool no_passivity = false;
   double deadband = 0.0;
@@ -42,7 +44,93 @@ struct MentorOptions {
   bool json = false;
 };
 
-// One station, live: wait for the other, release the hand, record, stop on a lost link.
+/// What one session did, for the summary.
+struct SessionSummary {
+  std::size_t samples = 0;
+  net::MentorStats stats;
+  std::string failure;
+  std::string file;
+};
+
+/// The loop time of the station's newest sample [s].
+double loopTime(net::MentorStation& station) {
+  Sample s;
+  (void)station.loop().latest().read(s);
+  return s.t_s;
+}
+
+// Waits for the other station; returns why it did not come ("" once linked). A lead serving
+// many sessions waits until interrupted.
+std::string waitForLink(net::MentorStation& station, const MentorOptions& opt, bool without_limit) {
+  using Clock = std::chrono::steady_clock;
+  const auto wait_until = Clock::now() + std::chrono::duration<double>(opt.wait_s);
+  while (!station.coupling().stats().link_up && !g_mentor_stop) {
+    if (station.coupling().stats().refused_busy) {
+      return fmt::format("the leader at {} already mentors another follower", opt.address);
+    }
+    if (!without_limit && Clock::now() > wait_until) {
+      return fmt::format("no other station within {} s (a wrong key looks like this too: packets are dropped "
+                         "unanswered)", opt.wait_s);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return "";
+}
+
+// A linked session: until the time is up, the other station says goodbye (BYE), the link stays
+// down too long, or we are interrupted. Returns the failure ("" for a normal end).
+std::string runLinkedSession(net::MentorStation& station, double duration_s, double hold_s) {
+  using Clock = std::chrono::steady_clock;
+  const auto end = Clock::now() + std::chrono::duration<double>(duration_s);
+  bool down = false;
+  Clock::time_point down_since{};
+  while (Clock::now() < end && !g_mentor_stop) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    const net::MentorStats s = station.coupling().stats();
+    if (!s.session) return "";  // the other station said BYE: its session is over
+    if (s.link_up) {
+      down = false;
+    } else if (!down) {
+      down = true;
+      down_since = Clock::now();
+    } else if (Clock::now() - down_since > std::chrono::duration<double>(kGiveUpAfter_s)) {
+      return fmt::format("link lost: nothing from the other station for {:.0f} ms (its force went to zero after "
+                         "{:.0f} ms)", kGiveUpAfter_s * 1e3, hold_s * 1e3);
+    }
+  }
+  return "";
+}
+
+/// Where session `number` (from 1) is written: --record for one session, else
+/// --record-dir/session-NNN.csv; empty when neither is given.
+std::string recordPath(const MentorOptions& opt, int number) {
+  if (!opt.record_dir.empty()) return (std::filesystem::path(opt.record_dir) / fmt::format("session-{:03}.csv", number)).string();
+  return opt.record;
+}
+
+nlohmann::json summaryJson(const SessionSummary& summary) {
+  const net::MentorStats& s = summary.stats;
+  nlohmann::json drops = nlohmann::json::object();
+  for (std::size_t i = 0; i < s.drops.size(); ++i) {
+    if (s.drops[i]) drops[std::string(device::net::dropReasonName(static_cast<device::net::DropReason>(i)))] = s.drops[i];
+  }
+  return {{"samples", summary.samples},
+          {"peers_received", s.peers_received},
+          {"peers_sent", s.peers_sent}, {"peers_withheld", s.peers_withheld},
+          {"lost", s.lost},
+          {"link_faults", s.link_faults},
+          {"busy_refusals", s.busy_refusals},
+          {"drops", drops},
+          {"energy_in_J", s.energy_in_J},
+          {"energy_out_J", s.energy_out_J},
+          {"dissipated_J", s.dissipated_J},
+          {"rtt_ms", s.rtt_s * 1e3},
+          {"file", summary.file},
+          {"failure", summary.failure}};
+}
+
+// One station, live: wait for the other, release the hand, record, stop on a lost link; a lead
+// with --sessions other than 1 then waits for the next follower (a study's next trial).
 void runStation(const MentorOptions& opt, net::MentorRole role) {
   net::MentorConfig mentor{.role = role, .coupling = net::parseCoupling(opt.coupling), .passivity = !opt.no_passivity,
                            .key = device::net::readKeyFile(opt.key), .deadband = opt.deadband};
@@ -51,10 +139,14 @@ void runStation(const MentorOptions& opt, net::MentorRole role) {
                                        : device::net::UdpEndpoint{.address = 0, .port = 0});
   if (role == net::MentorRole::kFollower) mentor.leader = device::net::parseUdpEndpoint(opt.address, "--connect");
   net::UdpDatagramLink link(std::move(socket));
+  const bool serving = role == net::MentorRole::kLeader && opt.sessions != 1;
+  HATTR_THROW_UNLESS(!serving || opt.record.empty(), "--record: with --sessions {} each session is its own file: use "
+                     "--record-dir DIR", opt.sessions);
   if (!opt.record.empty() && !opt.force) {
     HATTR_THROW_UNLESS(!std::filesystem::exists(opt.record), "--record {}: the file exists; use --force to replace it",
                        opt.record);
   }
+  if (!opt.record_dir.empty()) std::filesystem::create_directories(opt.record_dir);
 
   // The simulated hand (if any) waits, lifted, until both stations are linked.
   std::optional<HapticProfile> script;
@@ -81,92 +173,70 @@ void runStation(const MentorOptions& opt, net::MentorRole role) {
     std::cout << "connecting to " << opt.address << std::endl;
   }
 
-  // Wait for the other station.
-  const auto loop_time = [&] {
-    Sample s;
-    (void)station.loop().latest().read(s);
-    return s.t_s;
-  };
-  using Clock = std::chrono::steady_clock;
-  const auto wait_until = Clock::now() + std::chrono::duration<double>(opt.wait_s);
-  std::string failure;
-  while (!station.coupling().stats().link_up && !g_mentor_stop) {
-    if (station.coupling().stats().refused_busy) {
-      failure = fmt::format("the leader at {} already mentors another follower", opt.address);
-      break;
+  // Session after session (one for a follower): the hands start together once linked (after
+  // the coupling's fade-in), both sides record; whatever was recorded is kept, failure or not.
+  std::vector<SessionSummary> summaries;
+  std::string first_failure;
+  for (int number = 1; !g_mentor_stop && (opt.sessions == 0 || number <= opt.sessions); ++number) {
+    std::string failure = waitForLink(station, opt, serving);
+    if (failure.empty() && g_mentor_stop) break;
+    if (failure.empty()) {
+      std::cout << "linked: coupling "
+                << (role == net::MentorRole::kFollower ? opt.coupling : std::string("as the follower asks"))
+                << (serving ? fmt::format(" (session {})", number) : "") << std::endl;
+      if (hand) hand->release(loopTime(station) + mentor.ramp_s);
+      station.recorder().start();
+      const double duration_s =
+          opt.seconds > 0.0 ? opt.seconds : (script && !serving ? script->duration_s() + mentor.ramp_s + 0.5 : 1e9);
+      failure = runLinkedSession(station, duration_s, mentor.hold_s);
     }
-    if (Clock::now() > wait_until) {
-      failure = fmt::format("no other station within {} s (a wrong key looks like this too: packets are dropped "
-                            "unanswered)", opt.wait_s);
-      break;
+    station.recorder().stop();
+    station.recorder().stopThread();
+    SessionSummary summary;
+    HapticProfile recorded = station.takeRecording();
+    summary.stats = station.coupling().stats();
+    summary.failure = failure;
+    summary.samples = recorded.size();
+    if (!failure.empty()) recorded.metadata().extra["failed"] = failure;
+    summary.file = recorded.empty() ? "" : recordPath(opt, number);
+    if (!summary.file.empty()) {
+      io::writeProfileCsv(recorded, summary.file, opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-
-  // Linked: the hands start together (after the coupling's fade-in) and both sides record.
-  if (failure.empty() && !g_mentor_stop) {
-    std::cout << "linked: coupling " << opt.coupling << std::endl;
-    const double start_s = loop_time() + mentor.ramp_s;
-    if (hand) hand->release(start_s);
-    station.recorder().start();
-    const double duration_s =
-        opt.seconds > 0.0 ? opt.seconds : (script ? script->duration_s() + mentor.ramp_s + 0.5 : 1e9);
-    const auto end = Clock::now() + std::chrono::duration<double>(duration_s);
-    bool down = false;
-    Clock::time_point down_since{};
-    while (Clock::now() < end && !g_mentor_stop) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(2));
-      const net::MentorStats s = station.coupling().stats();
-      if (s.link_up) {
-        down = false;
-      } else if (!down) {
-        down = true;
-        down_since = Clock::now();
-      } else if (Clock::now() - down_since > std::chrono::duration<double>(kGiveUpAfter_s)) {
-        failure = fmt::format("link lost: nothing from the other station for {:.0f} ms (its force went to zero after "
-                              "{:.0f} ms)",
-                              kGiveUpAfter_s * 1e3, mentor.hold_s * 1e3);
-        break;
-      }
+    if (!opt.json) {
+      std::cout << fmt::format("{}: {} samples recorded, {} packets in, {} out, {} lost, {} link faults, energy in {:.4f} J "
+                               "out {:.4f} J{}{}\n",
+                               net::roleName(role), recorded.size(), summary.stats.peers_received, summary.stats.peers_sent,
+                               summary.stats.lost, summary.stats.link_faults, summary.stats.energy_in_J,
+                               summary.stats.energy_out_J, summary.file.empty() ? "" : "; written to " + summary.file,
+                               failure.empty() ? "" : "; failed: " + failure)
+                << std::flush;
     }
+    summaries.push_back(summary);
+    if (first_failure.empty()) first_failure = failure;
+    if (!serving) break;
+    // Ready for the next follower: the hand lifted and rewound, a fresh recording.
+    if (hand) hand->hold();
+    station.newRecording();
+    station.recorder().startThread();
   }
   station.loop().stop();
   station.recorder().stopThread();
-  station.coupling().close(static_cast<std::int64_t>(loop_time() * 1e9));
+  station.coupling().close(static_cast<std::int64_t>(loopTime(station) * 1e9));
 
-  // Whatever was recorded is kept, failure or not.
-  HapticProfile recorded = station.takeRecording();
-  if (!failure.empty()) recorded.metadata().extra["failed"] = failure;
-  const net::MentorStats s = station.coupling().stats();
-  if (!opt.record.empty() && !recorded.empty()) {
-    io::writeProfileCsv(recorded, opt.record, opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
-  }
   if (opt.json) {
-    nlohmann::json drops = nlohmann::json::object();
-    for (std::size_t i = 0; i < s.drops.size(); ++i) {
-      if (s.drops[i]) drops[std::string(device::net::dropReasonName(static_cast<device::net::DropReason>(i)))] = s.drops[i];
+    nlohmann::json out = {{"role", std::string(net::roleName(role))}, {"coupling", opt.coupling}};
+    if (serving) {
+      out["sessions"] = nlohmann::json::array();
+      for (const auto& summary : summaries) out["sessions"].push_back(summaryJson(summary));
+    } else if (!summaries.empty()) {
+      out.update(summaryJson(summaries.front()));
     }
-    printJson({{"role", std::string(net::roleName(role))},
-               {"coupling", opt.coupling},
-               {"samples", recorded.size()},
-               {"peers_received", s.peers_received},
-               {"peers_sent", s.peers_sent}, {"peers_withheld", s.peers_withheld},
-               {"lost", s.lost},
-               {"link_faults", s.link_faults},
-               {"busy_refusals", s.busy_refusals},
-               {"drops", drops},
-               {"energy_in_J", s.energy_in_J},
-               {"energy_out_J", s.energy_out_J},
-               {"dissipated_J", s.dissipated_J},
-               {"rtt_ms", s.rtt_s * 1e3},
-               {"failure", failure}});
-  } else {
-    std::cout << fmt::format("{}: {} samples recorded, {} packets in, {} out, {} lost, {} link faults, energy in {:.4f} J "
-                             "out {:.4f} J\n",
-                             net::roleName(role), recorded.size(), s.peers_received, s.peers_sent, s.lost, s.link_faults,
-                             s.energy_in_J, s.energy_out_J);
+    printJson(out);
   }
-  if (!failure.empty()) throw Error(failure + (opt.record.empty() ? "" : "; what was recorded is in " + opt.record));
+  // One session: a failure is the command's. Serving: each session's failure was said, and kept.
+  if (!serving && !first_failure.empty()) {
+    throw Error(first_failure + (opt.record.empty() ? "" : "; what was recorded is in " + opt.record));
+  }
 }
 
 struct SimulateOptions {
@@ -253,6 +323,7 @@ void addStationOptions(CLI::App& cmd, MentorOptions& opt) {
   cmd.add_option("--device", opt.device, "This station's device URI (see `hattr devices`)")->capture_default_str();
   cmd.add_option("--hand", opt.hand, "A profile a simulated hand writes on a simulated pen, from when the link is up");
   cmd.add_option("--record", opt.record, "Write this station's haptic profile here (kept on failure, marked failed)");
+  cmd.add_option("--record-dir", opt.record_dir, "Write each session's haptic profile to DIR/session-NNN.csv");
   cmd.add_option("--seconds", opt.seconds, "Record this long once linked (default: the hand script's length, or until "
                                            "interrupted)")
       ->check(CLI::Range(0.0, 36000.0));
@@ -276,6 +347,11 @@ void registerMentorCommands(CLI::App& app) {
   auto lead_opt = std::make_shared<MentorOptions>();
   auto* lead = mentor->add_subcommand("lead", "The expert's station: listen for one trainee and share the pen");
   lead->add_option("--listen", lead_opt->address, "HOST:PORT to listen on (port 0: any free port, printed)")->required();
+  lead->add_option("--sessions", lead_opt->sessions,
+                   "Serve this many sessions one after another, waiting for each follower without limit (0: until "
+                   "interrupted; a study's live mentor: each mentored trial is a session)")
+      ->check(CLI::Range(0, 1000000))
+      ->capture_default_str();
   addStationOptions(*lead, *lead_opt);
   lead->callback([lead_opt] { runStation(*lead_opt, net::MentorRole::kLeader); });
 

@@ -6,6 +6,7 @@
 
 #include "cli_common.hpp"
 #include "hattr/core/error.hpp"
+#include "hattr/net/study_mentor.hpp"
 #include "hattr/session/study_export.hpp"
 #include "hattr/report/paper_comparison.hpp"
 #include "hattr/report/study_report.hpp"
@@ -81,6 +82,14 @@ void runRun(const StudyOptions& opt) {
   session::RunOptions run{.only_subject = opt.subject,
                           .clock = opt.clock == "sim" ? session::Clock::kSimulated : session::Clock::kRealTime,
                           .max_trials = opt.max_trials};
+  // The expert's station for the mentored modes' training trials (the study file's mentor).
+  const session::StudyDefinition& study = db.study();
+  std::unique_ptr<session::LiveGuidance> mentor;
+  if (study.hasMentoredModes()) {
+    mentor = net::makeStudyMentor(study.mentor, db.expert(study.skill),
+                                  render::parseWorldConfig(study.world.dump(), "study world"), study.rate_hz);
+    run.mentor = mentor.get();
+  }
   if (!opt.quiet) {
     run.progress = [](const session::RunProgress& p) {
       std::cerr << fmt::format("\r{} {:>3}/{:<3} {} {} {:>2}   ", p.subject, p.completed, p.total,

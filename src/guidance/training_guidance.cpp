@@ -17,17 +17,22 @@ std::string_view modeName(TrainingMode mode) {
     case TrainingMode::kBasic: return "BASIC";
     case TrainingMode::kPositionControl: return "PCONTROL";
     case TrainingMode::kForceControl: return "ALPHA";
+    case TrainingMode::kMentorObserve: return "MENTOR-OBSERVE";
+    case TrainingMode::kMentorPosition: return "MENTOR-POSITION";
+    case TrainingMode::kMentorForce: return "MENTOR-FORCE";
+    case TrainingMode::kMentorBilateral: return "MENTOR-BILATERAL";
   }
   return "?";
 }
 
 TrainingMode parseMode(std::string_view text) {
-  std::string lower(text);
-  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
-  if (lower == "basic") return TrainingMode::kBasic;
-  if (lower == "pcontrol") return TrainingMode::kPositionControl;
-  if (lower == "alpha") return TrainingMode::kForceControl;
-  throw InputError(fmt::format("mode: expected basic, pcontrol or alpha, got \"{}\"", text));
+  std::string upper(text);
+  std::transform(upper.begin(), upper.end(), upper.begin(), [](unsigned char c) { return std::toupper(c); });
+  for (int m = 0; m <= static_cast<int>(TrainingMode::kMentorBilateral); ++m) {
+    if (upper == modeName(static_cast<TrainingMode>(m))) return static_cast<TrainingMode>(m);
+  }
+  throw InputError(fmt::format("mode: expected basic, pcontrol, alpha, mentor-observe, mentor-position, mentor-force "
+                               "or mentor-bilateral, got \"{}\"", text));
 }
 
 std::vector<std::string> clampGains(GuidanceConfig& config, const DeviceLimits& limits, double rate_hz,
@@ -72,7 +77,7 @@ std::vector<std::string> clampGains(GuidanceConfig& config, const DeviceLimits& 
 
 TrainingGuidance::TrainingGuidance(std::shared_ptr<const ReferenceTrajectory> reference, const GuidanceConfig& config)
     : reference_(std::move(reference)), config_(config), mode_(config.mode), previous_mode_(config.mode) {
-  HATTR_THROW_UNLESS(reference_ || config.mode == TrainingMode::kBasic,
+  HATTR_THROW_UNLESS(reference_ || config.mode == TrainingMode::kBasic || isMentored(config.mode),
                      "guidance: mode {} needs an expert reference", modeName(config.mode));
   const auto check = [](double value, const char* name) {
     HATTR_THROW_UNLESS(std::isfinite(value) && value >= 0.0, "guidance: {}: expected a finite number >= 0, got {}",
@@ -106,7 +111,7 @@ void TrainingGuidance::startTrial(double t_s) noexcept {
 
 void TrainingGuidance::switchMode(TrainingMode mode) noexcept {
   if (mode == mode_) return;
-  if (!reference_ && mode != TrainingMode::kBasic) return;  // nothing to guide toward
+  if (!reference_ && mode != TrainingMode::kBasic && !isMentored(mode)) return;  // nothing to guide toward
   // A switch during a fade starts from the mode that dominates now.
   previous_mode_ = fade_ >= 0.5 ? mode_ : previous_mode_;
   mode_ = mode;
@@ -138,6 +143,11 @@ Vec3 TrainingGuidance::modeForce(TrainingMode mode, const PenState& pen, const V
     }
     case TrainingMode::kForceControl:
       return cue_.weight * contact_weight_ * (config_.force.kp * force_error + config_.force.kd_s * error_rate_);
+    // The live expert's coupling guides in a mentored mode, not the recorded reference.
+    case TrainingMode::kMentorObserve:
+    case TrainingMode::kMentorPosition:
+    case TrainingMode::kMentorForce:
+    case TrainingMode::kMentorBilateral: return Vec3::Zero();
   }
   return Vec3::Zero();
 }

@@ -12,9 +12,10 @@
 namespace hattr::net {
 namespace {
 
-/// The coupling's gains clamped to what the device renders passively beside the paper: live
-/// PCONTROL and ALPHA as the training modes are clamped, the bilateral spring in the plane
-/// beside the friction spring. Returns the lines of what changed for this coupling.
+double rms(double sum_of_squares, std::size_t n) { return n ? std::sqrt(sum_of_squares / static_cast<double>(n)) : 0.0; }
+
+}  // namespace
+
 std::vector<std::string> clampCouplingGains(CouplingGains& gains, Coupling coupling, const session::TrialEnvironment& env) {
   guidance::GuidanceConfig modes;
   modes.position = {.kp_N_per_m = gains.position_kp_N_per_m, .kd_N_s_per_m = gains.position_kd_N_s_per_m};
@@ -39,10 +40,6 @@ std::vector<std::string> clampCouplingGains(CouplingGains& gains, Coupling coupl
   return lines;
 }
 
-double rms(double sum_of_squares, std::size_t n) { return n ? std::sqrt(sum_of_squares / static_cast<double>(n)) : 0.0; }
-
-}  // namespace
-
 HeldHand::HeldHand(device::HandScript& script) : script_(script) {
   script_.rewind();
   lifted_ = script_.command(0.0);
@@ -54,6 +51,7 @@ HeldHand::HeldHand(device::HandScript& script) : script_(script) {
 }
 
 device::HandCommand HeldHand::command(double t_s) noexcept {
+  if (rewind_pending_.exchange(false, std::memory_order_acq_rel)) script_.rewind();
   const double start = start_s_.load(std::memory_order_acquire);
   return t_s < start ? lifted_ : script_.command(t_s - start);
 }
@@ -111,6 +109,8 @@ HapticProfile MentorStation::takeRecording() {
   extra["peer_packets_received"] = fmt::format("{}", s.peers_received);
   return profile;
 }
+
+void MentorStation::newRecording() { recorder_->reset(); }
 
 MentoredRun runMentoredSimulation(const MentoredSetup& setup, device::HandScript& leader_hand,
                                   device::HandScript& follower_hand) {

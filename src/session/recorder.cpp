@@ -39,6 +39,9 @@ void Recorder::take(const TickSample& item) {
     if (pen_up_since_s_ >= 0.0 && sample.t_s - pen_up_since_s_ >= config_.pen_up_stop_s - half_tick) {
       recording_ = false;
       finished_ = true;
+      // Nothing more is recorded: with an end rule, writing is over here (its own check below
+      // would never see this sample).
+      if (config_.end_after_pen_up_s > 0.0) writing_over_.store(true, std::memory_order_release);
     }
   }
   if (!recording_) return;
@@ -110,6 +113,21 @@ HapticProfile Recorder::takeProfile() {
   HapticProfile out = std::move(profile_);
   profile_ = HapticProfile(out.metadata(), out.rawChannels());
   return out;
+}
+
+void Recorder::reset() {
+  stop();
+  profile_ = HapticProfile(profile_.metadata(), profile_.rawChannels());
+  recording_ = false;
+  finished_ = false;
+  pen_up_since_s_ = -1.0;
+  writing_begin_s_ = -1.0;
+  writing_up_since_s_ = -1.0;
+  last_kept_s_ = -1.0;
+  writing_over_.store(false, std::memory_order_release);
+  t_origin_s_ = 0.0;
+  missed_ = 0;
+  rejected_ = 0;
 }
 
 }  // namespace hattr::session

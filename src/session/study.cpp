@@ -118,6 +118,66 @@ void readTrialEnd(const json& protocol, Protocol& p, Problems& problems) {
   }
 }
 
+/// The mentor block {"expert": "simulated" | "live", ...} (docs/studies.md). Live needs where
+/// the expert's station listens and the key file (relative to the study file).
+void readMentor(const json& root, const std::filesystem::path& base_dir, bool check_files, StudyDefinition& study,
+                Problems& problems) {
+  const auto it = root.find("mentor");
+  if (it == root.end()) return;
+  if (!it->is_object()) {
+    problems.add(fmt::format("mentor: expected an object {{\"expert\": \"simulated\" | \"live\", ...}}, got {}", it->dump()));
+    return;
+  }
+  static const std::set<std::string> kMentorKeys{"expert",   "connect",      "key",        "round_trip_ms", "jitter_ms",
+                                                 "loss_percent", "expert_device", "passivity", "deadband"};
+  for (const auto& item : it->items()) {
+    if (!kMentorKeys.contains(item.key())) {
+      problems.add(fmt::format("mentor: unknown key \"{}\": expected one of expert, connect, key, round_trip_ms, "
+                               "jitter_ms, loss_percent, expert_device, passivity, deadband", item.key()));
+    }
+  }
+  StudyMentor& m = study.mentor;
+  const auto string_key = [&](const char* key, std::string& out) {
+    if (const auto v = it->find(key); v != it->end() && !v->is_null()) {  // null: absent (as studyToJson writes it)
+      if (v->is_string() && !v->get<std::string>().empty()) out = v->get<std::string>();
+      else problems.add(fmt::format("mentor.{}: expected a non-empty string, got {}", key, v->dump()));
+    }
+  };
+  string_key("expert", m.expert);
+  string_key("connect", m.connect);
+  string_key("expert_device", m.expert_device);
+  std::string key;
+  string_key("key", key);
+  double round_trip_ms = m.round_trip_s * 1e3, jitter_ms = m.jitter_s * 1e3, loss_percent = m.loss * 100.0;
+  readNumber(*it, "round_trip_ms", round_trip_ms, 0.0, 2000.0, "mentor.", problems);
+  readNumber(*it, "jitter_ms", jitter_ms, 0.0, 500.0, "mentor.", problems);
+  readNumber(*it, "loss_percent", loss_percent, 0.0, 50.0, "mentor.", problems);
+  readNumber(*it, "deadband", m.deadband, 0.0, 1.0, "mentor.", problems);
+  m.round_trip_s = round_trip_ms * 1e-3;
+  m.jitter_s = jitter_ms * 1e-3;
+  m.loss = loss_percent * 1e-2;
+  if (const auto v = it->find("passivity"); v != it->end()) {
+    if (v->is_boolean()) m.passivity = v->get<bool>();
+    else problems.add(fmt::format("mentor.passivity: expected true or false, got {}", v->dump()));
+  }
+
+  // Who the expert is decides which keys are needed.
+  if (m.expert == "live") {
+    if (m.connect.empty()) problems.add("mentor.connect: a live expert needs HOST:PORT where `hattr mentor lead` listens");
+    if (key.empty()) {
+      problems.add("mentor.key: a live expert needs the key file both stations share (`hattr device keygen`)");
+    } else {
+      m.key = key;
+      if (m.key.is_relative()) m.key = base_dir / m.key;
+      if (check_files && !std::filesystem::is_regular_file(m.key)) {
+        problems.add(fmt::format("mentor.key: key file \"{}\" not found", m.key.string()));
+      }
+    }
+  } else if (m.expert != "simulated") {
+    problems.add(fmt::format("mentor.expert: expected \"simulated\" or \"live\", got \"{}\"", m.expert));
+  }
+}
+
 }  // namespace
 
 std::string_view phaseName(Phase phase) { return phase == Phase::kTraining ? "training" : "recall"; }
@@ -129,7 +189,7 @@ StudyDefinition parseStudy(std::string_view json_text, std::string_view source, 
   StudyDefinition study;
 
   static const std::set<std::string> kKeys{"format", "name",  "skill",   "experts",  "modes",    "protocol", "order",
-                                           "device", "world", "rate_hz", "indexing", "subjects"};
+                                           "device", "world", "rate_hz", "indexing", "subjects", "mentor"};
   for (const auto& item : root.items()) {
     if (!kKeys.contains(item.key())) problems.add(fmt::format("unknown key \"{}\"", item.key()));
   }
@@ -173,7 +233,9 @@ StudyDefinition parseStudy(std::string_view json_text, std::string_view source, 
 
   // Modes.
   if (const auto it = root.find("modes"); it != root.end()) {
-    if (!it->is_array() || it->empty()) problems.add("modes: expected a non-empty list such as [\"basic\", \"pcontrol\", \"alpha\"]");
+    if (!it->is_array() || it->empty()) {
+      problems.add("modes: expected a non-empty list such as [\"basic\", \"pcontrol\", \"alpha\", \"mentor-position\"]");
+    }
     std::set<guidance::TrainingMode> seen;
     for (const auto& m : it->is_array() ? *it : json::array()) {
       try {
@@ -225,6 +287,9 @@ StudyDefinition parseStudy(std::string_view json_text, std::string_view source, 
       if (p.training_trials + p.recall_trials == 0) problems.add("protocol: zero trials per mode (training_trials + recall_trials)");
     }
   }
+
+  // Who mentors the mentored modes.
+  readMentor(root, base_dir, check_files, study, problems);
 
   // Order, rate, indexing, world.
   if (const auto it = root.find("order"); it != root.end()) {
@@ -326,7 +391,17 @@ nlohmann::json studyToJson(const StudyDefinition& s) {
           {"world", s.world},
           {"rate_hz", s.rate_hz},
           {"indexing", std::string(guidance::indexingName(s.indexing))},
-          {"subjects", subjects}};
+          {"subjects", subjects},
+          {"mentor",
+           {{"expert", s.mentor.expert},
+            {"connect", s.mentor.connect.empty() ? json(nullptr) : json(s.mentor.connect)},
+            {"key", s.mentor.key.empty() ? json(nullptr) : json(s.mentor.key.string())},
+            {"round_trip_ms", s.mentor.round_trip_s * 1e3},
+            {"jitter_ms", s.mentor.jitter_s * 1e3},
+            {"loss_percent", s.mentor.loss * 100.0},
+            {"expert_device", s.mentor.expert_device},
+            {"passivity", s.mentor.passivity},
+            {"deadband", s.mentor.deadband}}}};
 }
 
 std::string_view disturbedPolicyName(DisturbedPolicy policy) {

@@ -42,6 +42,7 @@ std::string noteLoopCounters(TrialResult& result) {
   extra["missed_samples"] = fmt::format("{}", result.missed_samples);
   extra["safety_faults"] = fmt::format("{}", result.faults);
   extra["device_link_faults"] = fmt::format("{}", result.link_faults);
+  if (result.mentor_link_faults > 0) extra["mentor_link_faults"] = fmt::format("{}", result.mentor_link_faults);
   if (!disturbed.empty()) extra["disturbed"] = disturbed;
   return disturbed;
 }
@@ -87,6 +88,7 @@ std::string disturbanceOf(const TrialResult& r) {
   add(r.missed_samples, "missed sample", "missed samples");
   add(r.faults, "safety fault", "safety faults");
   add(r.link_faults, "lost device link", "lost device links");
+  add(r.mentor_link_faults, "lost link to the mentor", "lost links to the mentor");
   std::string text;
   for (const auto& p : parts) text += (text.empty() ? "" : " · ") + p;
   return text;
@@ -110,6 +112,9 @@ StudyRunner::StudyRunner(StudyDatabase& db, ParticipantFactory factory) : db_(db
 }
 
 int StudyRunner::run(const RunOptions& options) {
+  HATTR_THROW_UNLESS(options.mentor != nullptr || !db_.study().hasMentoredModes(),
+                     "study \"{}\" has mentored modes: their training trials need the expert's station (the study "
+                     "file's mentor block), which this app did not provide", db_.study().name);
   int ran = 0;
   bool found = options.only_subject.empty();
   for (const SubjectRecord& subject : db_.subjects()) {
@@ -152,12 +157,16 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
     // The trial, set up as every app sets up a study trial; the runner's clock.
     TrialSetup setup = studyTrialSetup(study, plan, reference_);
     setup.clock = options.clock;
+    setup.live_guidance = options.mentor;
 
     // The trial; a disturbed one is kept and run again while the policy says so.
     TrialResult result;
     std::string disturbed;
     for (int attempt = 0;; ++attempt) {
       setup.inject_stall_at_s = options.inject_stall_at_s ? options.inject_stall_at_s(plan, attempt) : -1.0;
+      // A simulated mentor's link draws the same losses for the same trial, resumed or not.
+      setup.live_seed = subject.spec.seed * 1'000'003ULL + static_cast<std::uint64_t>(plan.sequence) * 31ULL +
+                        static_cast<std::uint64_t>(attempt);
       db_.markRunning(record.id, session);
       result = runTrial(*environment_, setup, participant->handForTrial(plan));
       // A trial the device broke off is not data: mark it, keep everything stored, and stop.

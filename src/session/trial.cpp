@@ -200,21 +200,29 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
                      "trial settle time: expected [{}, 60] s (at least the safety ramp), got {}", ramp_s, setup.settle_s);
   TrialResult result;
 
-  // Guidance, with its gains clamped to what the device renders passively with the paper.
+  // Guidance, with its gains clamped to what the device renders passively with the paper; a
+  // mentored mode's comes live from the expert's pen, after a settle long enough for the link.
   guidance::GuidanceConfig config = setup.guidance;
   result.clamps = clampTrialGains(config, env);
   guidance::TrainingGuidance guidance(setup.reference, config);
-  guidance.startTrial(setup.settle_s);
+  LiveGuidance* const live = guidance::isMentored(config.mode) ? setup.live_guidance : nullptr;
+  HATTR_THROW_UNLESS(live != nullptr || !guidance::isMentored(config.mode),
+                     "mode {}: a mentored mode needs an expert's station (a study file's mentor block, or "
+                     "`hattr mentor follow` for a session outside a study)", guidance::modeName(config.mode));
+  const double settle_s = live ? std::max(setup.settle_s, live->minimumSettle_s()) : setup.settle_s;
+  GuidanceController& stage =
+      live ? live->beginTrial(config.mode, env, settle_s, setup.live_seed) : static_cast<GuidanceController&>(guidance);
+  guidance.startTrial(settle_s);
 
   // Device, paper, loop, recorder; the hand settles before the script starts. A device that
   // cannot be simulated runs in real time whatever the setup asks.
-  SettlingHand settling(hand, setup.settle_s);
+  SettlingHand settling(hand, settle_s);
   const auto device = openTrialDevice(env.deviceUri(), settling);
   const Clock clock = device->clocking() == device::DeviceClocking::kSimulatable ? setup.clock : Clock::kRealTime;
   env.paper().reset();
   servo::ServoLoop loop(*device, servo::ServoConfig{.rate_hz = env.rate_hz()});
   loop.setWorld(&env.paper());
-  loop.setGuidance(&guidance);
+  loop.setGuidance(&stage);
   ProfileMetadata metadata = trialMetadata(setup.metadata, env, config, result.clamps, clock);
   if (clock == Clock::kRealTime && device->clocking() == device::DeviceClocking::kDeviceClock) {
     metadata.extra["clock"] = "device";
@@ -224,8 +232,8 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
   if (setup.pen_up_end_s > 0.0) recorder_config.pen_up_stop_s = setup.pen_up_end_s;
   Recorder recorder(loop.samples(), recorder_config, metadata);
 
-  const auto settle_ticks = static_cast<std::size_t>(std::llround(setup.settle_s * env.rate_hz()));
-  const auto ticks = static_cast<std::size_t>(std::llround(setup.duration_s * env.rate_hz()));
+  const auto settle_ticks = static_cast<std::size_t>(std::llround(settle_s * env.rate_hz()));
+  auto ticks = static_cast<std::size_t>(std::llround(setup.duration_s * env.rate_hz()));
   // The end: the recorder decides the end rule sample by sample (it stops recording with the
   // sample that ends the trial); between chunks, or every 2 ms in real time, we stop the loop.
   bool stopped = false;
@@ -238,6 +246,8 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
       }
     };
     run(settle_ticks);
+    if (live) result.failure = live->unavailable();
+    if (!result.failure.empty()) ticks = 0;  // no mentor: nothing is recorded
     recorder.start();
     // A host stall injected at its time (rehearsing a study's policy), else straight through.
     const auto stall_tick = setup.inject_stall_at_s >= 0.0
@@ -252,7 +262,8 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
     loop.requireConsumer(&recorder.consumerTime());
     recorder.startThread();
     loop.start();
-    result.failure = waitForEnd(loop, *device, setup.settle_s).failure;
+    result.failure = waitForEnd(loop, *device, settle_s).failure;
+    if (result.failure.empty() && live) result.failure = live->unavailable();
     if (result.failure.empty()) {
       recorder.start();
       const WaitEnd end = waitForEnd(loop, *device, setup.duration_s, &recorder, setup.stop);
@@ -274,7 +285,9 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
   result.max_period_error_s = static_cast<double>(loop.periodError().max_ns()) * 1e-9;
   result.clock = std::string(servo::loopClockName(loop.clock()));
   result.missed_samples = recorder.missed();
+  const std::map<std::string, std::string> live_notes = live ? live->endTrial(result) : std::map<std::string, std::string>{};
   noteTrialEnd(result, recorder, stopped);
+  result.profile.metadata().extra.insert(live_notes.begin(), live_notes.end());
   if (!result.failure.empty()) result.profile.metadata().extra["failed"] = result.failure;
   if (result.link_faults > 0) {
     result.profile.metadata().extra["link_faults"] =

@@ -168,8 +168,18 @@ TEST(TrainingGuidance, RefusesBadModesAndSettings) {
     (void)parseMode("beta");
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_STREQ(e.what(), "mode: expected basic, pcontrol or alpha, got \"beta\"");
+    EXPECT_STREQ(e.what(), "mode: expected basic, pcontrol, alpha, mentor-observe, mentor-position, mentor-force or "
+                           "mentor-bilateral, got \"beta\"");
   }
+  // The mentored modes by name; the recorded reference gives them no force (the live expert does).
+  EXPECT_EQ(parseMode("mentor-force"), TrainingMode::kMentorForce);
+  EXPECT_EQ(modeName(TrainingMode::kMentorObserve), "MENTOR-OBSERVE");
+  EXPECT_TRUE(isMentored(TrainingMode::kMentorBilateral));
+  EXPECT_FALSE(isMentored(TrainingMode::kForceControl));
+  TrainingGuidance mentored(nullptr, GuidanceConfig{.mode = TrainingMode::kMentorPosition});
+  PenState pen;
+  pen.p_WT = Vec3(0.01, 0.0, 0.0);
+  EXPECT_EQ(mentored.compute(pen, ContactForces{}, 1e-3), Vec3::Zero());
   EXPECT_THROW(TrainingGuidance(nullptr, GuidanceConfig{.mode = TrainingMode::kForceControl}), InputError);
   EXPECT_THROW(parseIndexing("space"), InputError);
 }

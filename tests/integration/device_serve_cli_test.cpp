@@ -1,10 +1,7 @@
 // Runs the real `hattr device serve` as a subprocess on loopback (127.0.0.1 only) and the real
 // `hattr` clients against it: keygen, servo-check over udp://, record over udp://, kill -9.
 
-#include <fcntl.h>
-#include <poll.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -18,9 +15,8 @@
 #include <nlohmann/json.hpp>
 
 #include "hattr/io/profile_csv.hpp"
+#include "support/background_process.hpp"
 #include "support/test_support.hpp"
-
-extern char** environ;
 
 namespace hattr {
 namespace {
@@ -42,44 +38,10 @@ RunResult runHattr(const test::TempDir& dir, const std::string& args, const std:
 }
 
 /// `hattr device serve` in the background, its stdout on a pipe.
-class ServeProcess {
+class ServeProcess : public test::BackgroundProcess {
  public:
-  ServeProcess(const test::TempDir& dir, const std::string& key, const std::vector<std::string>& extra = {}) {
-    std::vector<std::string> args = {HATTR_CLI_PATH, "device", "serve", "--device", "sim://pen",
-                                     "--listen", "127.0.0.1:0", "--key", key, "--json", "--realtime", "skip"};
-    args.insert(args.end(), extra.begin(), extra.end());
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    int fds[2];
-    if (::pipe(fds) != 0) throw std::runtime_error("pipe failed");
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
-    posix_spawn_file_actions_addclose(&actions, fds[0]);
-    const std::string err = (dir / "serve.err").string();
-    posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    const int rc = posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    ::close(fds[1]);
-    out_ = fds[0];
-    if (rc != 0) throw std::runtime_error("posix_spawn failed");
-    first_line_ = readLine(std::chrono::seconds(5));
-  }
-  ~ServeProcess() {
-    if (pid_ > 0) {
-      ::kill(pid_, SIGKILL);
-      (void)wait();
-    }
-    ::close(out_);
-  }
-  [[nodiscard]] const std::string& firstLine() const { return first_line_; }
-  /// "127.0.0.1:PORT" from "listening on 127.0.0.1:PORT".
-  [[nodiscard]] std::string address() const {
-    const std::string prefix = "listening on ";
-    return first_line_.starts_with(prefix) ? first_line_.substr(prefix.size()) : std::string{};
-  }
-  void signal(int number) const { ::kill(pid_, number); }
+  ServeProcess(const test::TempDir& dir, const std::string& key, const std::vector<std::string>& extra = {})
+      : BackgroundProcess(arguments(key, extra), dir / "serve.err") {}
   /// Waits (up to `timeout`) until the server says on stderr that the client's `n`-th session
   /// opened (a client command first opens the device once to read its limits: session 1).
   bool waitForSession(const test::TempDir& dir, int n, std::chrono::milliseconds timeout) const {
@@ -91,37 +53,14 @@ class ServeProcess {
     }
     return false;
   }
-  /// Waits for the exit; returns the exit code (or 128 + signal).
-  int wait() {
-    int status = 0;
-    ::waitpid(pid_, &status, 0);
-    pid_ = -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  }
-  std::string readRest() {
-    std::string text;
-    char buffer[4096];
-    for (ssize_t n; (n = ::read(out_, buffer, sizeof buffer)) > 0;) text.append(buffer, static_cast<std::size_t>(n));
-    return text;
-  }
 
  private:
-  std::string readLine(std::chrono::milliseconds timeout) {
-    std::string line;
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (std::chrono::steady_clock::now() < deadline) {
-      pollfd p{out_, POLLIN, 0};
-      if (::poll(&p, 1, 50) <= 0) continue;
-      char c = 0;
-      if (::read(out_, &c, 1) != 1) break;
-      if (c == '\n') break;
-      line += c;
-    }
-    return line;
+  static std::vector<std::string> arguments(const std::string& key, const std::vector<std::string>& extra) {
+    std::vector<std::string> args = {HATTR_CLI_PATH, "device", "serve", "--device", "sim://pen",
+                                     "--listen", "127.0.0.1:0", "--key", key, "--json", "--realtime", "skip"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return args;
   }
-  pid_t pid_ = -1;
-  int out_ = -1;
-  std::string first_line_;
 };
 
 std::string makeKey(const test::TempDir& dir) {

@@ -69,7 +69,8 @@ TEST(StudyDefinition, ValidationNamesEveryProblemAtOnce) {
   EXPECT_THAT(message, HasSubstr("study.json: 6 problems in the study definition:"));
   EXPECT_THAT(message, HasSubstr("unknown key \"colour\""));
   EXPECT_THAT(message, HasSubstr("experts.na: expert file"));
-  EXPECT_THAT(message, HasSubstr("modes: mode: expected basic, pcontrol or alpha, got \"gamma\""));
+  EXPECT_THAT(message, HasSubstr("modes: mode: expected basic, pcontrol, alpha, mentor-observe, mentor-position, "
+                                 "mentor-force or mentor-bilateral, got \"gamma\""));
   EXPECT_THAT(message, HasSubstr("modes: \"basic\" listed twice"));
   EXPECT_THAT(message, HasSubstr("protocol: zero trials per mode"));
   EXPECT_THAT(message, HasSubstr("subjects[1]: id \"S1\" used twice"));
@@ -85,6 +86,43 @@ TEST(StudyDefinition, DefaultsAreThePapersProtocol) {
   EXPECT_FALSE(s.protocol.recall.show_reference);
   EXPECT_FALSE(s.protocol.recall.guidance);
   EXPECT_EQ(planTrials(s, "S01", s.modes).size(), 66u);
+}
+
+TEST(StudyDefinition, AMentorBlockSaysWhoMentorsAndSurvivesTheDatabase) {
+  test::TempDir dir;
+  writeExpert(dir / "expert.csv");
+  test::writeText(dir / "mentor.key", "not checked here");
+  const std::string head = R"({"name": "m", "skill": "dash", "experts": {"dash": "expert.csv"},
+      "modes": ["basic", "MENTOR-Bilateral"], "subjects": {"count": 1}, "mentor": )";
+
+  // A simulated expert with its link, read back from the definition's JSON unchanged.
+  const StudyDefinition s = parseStudy(head + R"({"expert": "simulated", "round_trip_ms": 80, "jitter_ms": 2,
+      "loss_percent": 5, "passivity": false, "deadband": 0.1, "expert_device": "sim://pen?mass_kg=0.05"}})",
+                                       "study.json", dir.path());
+  EXPECT_TRUE(s.hasMentoredModes());
+  EXPECT_EQ(s.modes[1], guidance::TrainingMode::kMentorBilateral);
+  EXPECT_DOUBLE_EQ(s.mentor.round_trip_s, 0.08);
+  EXPECT_DOUBLE_EQ(s.mentor.loss, 0.05);
+  EXPECT_FALSE(s.mentor.passivity);
+  const StudyDefinition again = parseStudy(studyToJson(s).dump(), "stored", dir.path());
+  EXPECT_EQ(studyToJson(again), studyToJson(s));
+
+  // A live expert: where, and the key (relative to the study file).
+  const StudyDefinition live =
+      parseStudy(head + R"({"expert": "live", "connect": "10.0.0.2:7400", "key": "mentor.key"}})", "study.json", dir.path());
+  EXPECT_EQ(live.mentor.key, dir.path() / "mentor.key");
+  EXPECT_EQ(parseStudy(studyToJson(live).dump(), "stored", dir.path()).mentor.connect, "10.0.0.2:7400");
+
+  // Every problem named.
+  const std::string message = studyError(head + R"({"expert": "live", "loss_percent": 80, "colour": 1}})", dir.path());
+  EXPECT_THAT(message, HasSubstr("mentor: unknown key \"colour\""));
+  EXPECT_THAT(message, HasSubstr("mentor.loss_percent: expected a number in [0, 50], got 80"));
+  EXPECT_THAT(message, HasSubstr("mentor.connect: a live expert needs HOST:PORT"));
+  EXPECT_THAT(message, HasSubstr("mentor.key: a live expert needs the key file"));
+  EXPECT_THAT(studyError(head + R"({"expert": "ghost"}})", dir.path()),
+              HasSubstr("mentor.expert: expected \"simulated\" or \"live\", got \"ghost\""));
+  EXPECT_THAT(studyError(head + R"({"expert": "live", "connect": "h:1", "key": "nope.key"}})", dir.path()),
+              HasSubstr("mentor.key: key file"));
 }
 
 TEST(StudyDefinition, LatinSquareCounterbalancesOrderAndCarryOver) {

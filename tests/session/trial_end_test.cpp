@@ -79,6 +79,18 @@ TEST(TrialEnd, AHandThatNeverLiftsEndsAtTheMaximum) {
   EXPECT_EQ(r.writing_end_s, r.profile.samples().back().t_s);
 }
 
+// The studio's expert takes: recording from the first pen-down, stopped by a pen-up as long as
+// the end rule's. The trigger's stop is where writing ends; the trial says "pen lifted".
+TEST(TrialEnd, APenDownTriggerWithTheSamePenUpTimeEndsAsPenLifted) {
+  TrialEnvironment env("sim://pen", flatWorld(), 1000.0);
+  device::ProfileHandScript hand(writeThenLift(1.0, 1.2));
+  TrialSetup setup{.duration_s = 10.0, .pen_up_end_s = 0.5, .trigger = RecordTrigger::kPenDown};
+  const TrialResult r = runTrial(env, setup, hand);
+  EXPECT_EQ(r.end_reason, "pen lifted");
+  EXPECT_GT(r.writing_end_s, 0.8);
+  EXPECT_LT(r.profile.samples().back().t_s, 2.0);  // not the 10 s maximum
+}
+
 TEST(TrialEnd, WithoutTheRuleATrialLastsItsWholeDuration) {
   TrialEnvironment env("sim://pen", flatWorld(), 1000.0);
   device::ProfileHandScript hand(writeThenLift(0.5, 0.6));

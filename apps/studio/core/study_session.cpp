@@ -12,6 +12,11 @@ StudySession::StudySession(const std::filesystem::path& file)
     : db_(session::StudyDatabase::open(file, session::OpenMode::kRunner)) {
   // The expert, the environment and the reference, as StudyRunner builds them.
   const session::StudyDefinition& study = db_.study();
+  // Mentored modes need the expert's station beside the trial; the studio's trials do not
+  // connect to one (the Mentor tab is for sessions outside a study).
+  HATTR_THROW_UNLESS(!study.hasMentoredModes(),
+                     "study \"{}\" has mentored modes: run its trials with `hattr study run --clock real` (the "
+                     "studio's study session does not connect to a mentor's station)", study.name);
   expert_ = db_.expert(study.skill);
   environment_ = std::make_unique<session::TrialEnvironment>(
       study.device, render::parseWorldConfig(study.world.dump(), "study world"), study.rate_hz);

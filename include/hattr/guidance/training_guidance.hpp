@@ -21,12 +21,29 @@
 
 namespace hattr::guidance {
 
-enum class TrainingMode : int { kBasic = 0, kPositionControl = 1, kForceControl = 2 };
+/// The paper's three modes, then hattr's mentored modes: in these an expert at another station
+/// writes live and the force comes over the network from their pen (net::MentorCoupling, one
+/// mode per coupling, in net::Coupling's order; docs/mentoring.md). TrainingGuidance renders no
+/// force for a mentored mode: the trial's live guidance does.
+enum class TrainingMode : int {
+  kBasic = 0,
+  kPositionControl = 1,
+  kForceControl = 2,
+  kMentorObserve = 3,
+  kMentorPosition = 4,
+  kMentorForce = 5,
+  kMentorBilateral = 6,
+};
 
-/// The paper's names, where users see them: "BASIC", "PCONTROL", "ALPHA".
+/// Where users see them: the paper's "BASIC", "PCONTROL", "ALPHA"; "MENTOR-OBSERVE",
+/// "MENTOR-POSITION", "MENTOR-FORCE", "MENTOR-BILATERAL".
 std::string_view modeName(TrainingMode mode);
-/// "basic", "pcontrol", "alpha" (any case); throws InputError otherwise.
+/// The names of modeName in any case; throws InputError listing them otherwise.
 TrainingMode parseMode(std::string_view text);
+/// A mentored mode: a live expert's pen guides (the MENTOR-... modes).
+[[nodiscard]] constexpr bool isMentored(TrainingMode mode) noexcept {
+  return static_cast<int>(mode) >= static_cast<int>(TrainingMode::kMentorObserve);
+}
 
 struct PositionGains {
   double kp_N_per_m = units::newtonsPerMillimetreToSi(0.35);            ///< 350 N/m

@@ -31,11 +31,17 @@ class HeldHand final : public device::HandScript {
   void rewind() noexcept override { script_.rewind(); }
   /// The script starts at loop time `t_s`.
   void release(double t_s) noexcept { start_s_.store(t_s, std::memory_order_release); }
+  /// Lifted again, the script back at its start, until the next release() (a new session).
+  void hold() noexcept {
+    start_s_.store(std::numeric_limits<double>::infinity(), std::memory_order_release);
+    rewind_pending_.store(true, std::memory_order_release);
+  }
 
  private:
   device::HandScript& script_;
   device::HandCommand lifted_;
   std::atomic<double> start_s_{std::numeric_limits<double>::infinity()};
+  std::atomic<bool> rewind_pending_{false};  // the servo thread rewinds the script
 };
 
 /// The simulated trainee of the mentoring tests and table (docs/mentoring.md): plays the
@@ -56,6 +62,12 @@ class LaggingHand final : public device::HandScript {
   double lag_s_;
   Vec3 offset_W_;
 };
+
+/// The coupling's gains clamped to what `environment`'s device renders passively beside the
+/// paper: live PCONTROL and ALPHA as the training modes are clamped, the bilateral spring in
+/// the plane beside the friction spring. Returns the lines of what changed for `coupling`.
+std::vector<std::string> clampCouplingGains(CouplingGains& gains, Coupling coupling,
+                                            const session::TrialEnvironment& environment);
 
 struct StationConfig {
   std::string device_uri = "sim://pen";
@@ -82,7 +94,10 @@ class MentorStation {
   /// Every gain clamped for this device ("position Kd 170 N·s/m -> 0.46 N·s/m: ...").
   [[nodiscard]] const std::vector<std::string>& clamps() const noexcept { return clamps_; }
   /// The recording so far, with the coupling's totals in its metadata; stops recording.
+  /// After the recorder's thread stopped (or before it started).
   [[nodiscard]] HapticProfile takeRecording();
+  /// Between sessions, the recorder's thread stopped: the next recording starts from nothing.
+  void newRecording();
 
  private:
   StationConfig config_;

@@ -64,6 +64,9 @@ class Recorder {
   /// metadata `t_origin_s`), with `missed_samples` and `rejected_samples` in its metadata.
   /// After stopThread(), or from the consumer thread.
   HapticProfile takeProfile();
+  /// Forgets the recording, its counts and its writing span, to record anew with start()
+  /// (stopped first). After stopThread(), or from the consumer thread.
+  void reset();
 
  private:
   void take(const TickSample& item);

@@ -78,6 +78,22 @@ struct SubjectSpec {
   nlohmann::json options;                  ///< participant-specific settings (e.g. a hand script)
 };
 
+/// Who mentors a mentored mode's training trials (the MENTOR-... modes, docs/mentoring.md):
+/// a simulated expert who writes the study's expert reference on a second simulated pen,
+/// tick for tick with the trainee over an emulated link, or a person at a station running
+/// `hattr mentor lead`, reached over UDP.
+struct StudyMentor {
+  std::string expert = "simulated";        ///< "simulated" or "live"
+  std::string connect;                     ///< live: HOST:PORT where `hattr mentor lead` listens
+  std::filesystem::path key;               ///< live: the key file both stations share
+  double round_trip_s = 0.0;               ///< simulated: the emulated link, half each way [s]
+  double jitter_s = 0.0;                   ///< simulated [s]
+  double loss = 0.0;                       ///< simulated: the fraction of packets lost, [0, 0.5]
+  std::string expert_device = "sim://pen"; ///< simulated: the expert's pen
+  bool passivity = true;                   ///< the time-domain passivity controller (bilateral)
+  double deadband = 0.0;                   ///< the perceptual deadband's Weber fraction (0: off)
+};
+
 struct StudyDefinition {
   std::string name;
   std::string skill;                                        ///< the character / skill trained
@@ -91,6 +107,11 @@ struct StudyDefinition {
   double rate_hz = 1000.0;
   guidance::Indexing indexing = guidance::Indexing::kTime;
   std::vector<SubjectSpec> subjects;
+  StudyMentor mentor;                                       ///< used by mentored modes only
+  /// Whether any mode is a mentored one (then the study file's mentor block applies).
+  [[nodiscard]] bool hasMentoredModes() const noexcept {
+    return std::any_of(modes.begin(), modes.end(), [](auto m) { return guidance::isMentored(m); });
+  }
 };
 
 /// The recall trials the analysis uses: protocol.analyzed_recall_trials, or all but the first.

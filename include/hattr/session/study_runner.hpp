@@ -56,11 +56,14 @@ struct RunOptions {
   /// Rehearsing the disturbed-trial policy on the simulator: the trial time at which a host
   /// stall is injected into an attempt (attempt 0 is the first), negative for none.
   std::function<double(const TrialPlan&, int attempt)> inject_stall_at_s;
+  /// The expert's station for the training trials of mentored modes (net::makeStudyMentor);
+  /// required when the study has one, and such a trial is refused without it.
+  LiveGuidance* mentor = nullptr;
 };
 
 /// How the servo loop disturbed a trial, for people ("2 stalls (force zeroed) · 3 missed
-/// samples"); empty when it ran clean. Stalls, missed samples, safety faults and lost device
-/// links disturb a trial; overruns alone (late ticks) do not, and are stored all the same.
+/// samples"); empty when it ran clean. Stalls, missed samples, safety faults, lost device
+/// links and lost links to a mentor disturb a trial; overruns alone (late ticks) do not, and are stored all the same.
 std::string disturbanceOf(const TrialResult& result);
 
 /// Writes the loop's counters of a trial (ticks, overruns, stalls, missed samples, safety

@@ -5,6 +5,7 @@
 /// trainee's trial; `hattr record`, `hattr train` and the study runner call it.
 
 #include <atomic>
+#include <map>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -70,6 +71,32 @@ inline constexpr std::string_view kEndMaximumDuration = "maximum duration";
 inline constexpr std::string_view kEndStopped = "stopped";
 inline constexpr std::string_view kEndFailed = "failed";
 
+struct TrialResult;
+
+/// The guidance of a mentored mode's trial (guidance::isMentored): an expert at another
+/// station, or a simulated one, writes live, and a coupling turns their pen into this trial's
+/// force (net::makeStudyMentor implements it; the session module does not depend on the
+/// network). One trial at a time; main-thread calls, the stage runs on the servo thread.
+class LiveGuidance {
+ public:
+  virtual ~LiveGuidance() = default;
+  /// The shortest settle phase that lets the link come up and the coupling fade in [s].
+  [[nodiscard]] virtual double minimumSettle_s() const noexcept = 0;
+  /// Before the trial's loop starts: the guidance stage for a trial of `mode` (a mentored one)
+  /// on `environment`, with `settle_s` before the trial's clock starts; `seed` makes an emulated
+  /// link repeatable. Valid until endTrial. Throws InputError or Error.
+  virtual GuidanceController& beginTrial(guidance::TrainingMode mode, const TrialEnvironment& environment,
+                                         double settle_s, std::uint64_t seed) = 0;
+  /// Empty once the link to the expert is up; otherwise why not, for people ("no answer from
+  /// the expert's station at ..."). Checked when the settle phase ends: a trial without its
+  /// mentor fails there, before anything is recorded.
+  [[nodiscard]] virtual std::string unavailable() const = 0;
+  /// After the loop stopped: ends the link's session; a link lost during the trial counts in
+  /// TrialResult::mentor_link_faults (a disturbed trial). Returns what
+  /// goes into the recording's metadata (the coupling, the link, the energies).
+  virtual std::map<std::string, std::string> endTrial(TrialResult& result) = 0;
+};
+
 struct TrialSetup {
   guidance::GuidanceConfig guidance;                            ///< mode, gains, indexing
   std::shared_ptr<const guidance::ReferenceTrajectory> reference;  ///< null for BASIC without one
@@ -94,6 +121,9 @@ struct TrialSetup {
   /// (rehearsing a study's disturbed-trial policy); negative: none.
   double inject_stall_at_s = -1.0;
   double injected_stall_s = 0.03;
+  /// A mentored mode's guidance (required for one, unused otherwise); must outlive the trial.
+  LiveGuidance* live_guidance = nullptr;
+  std::uint64_t live_seed = 1;   ///< passed to LiveGuidance::beginTrial
 };
 
 struct TrialResult {
@@ -104,6 +134,7 @@ struct TrialResult {
   std::uint64_t overruns = 0;
   std::uint64_t faults = 0;
   std::uint64_t link_faults = 0;       ///< times the device (a network link) was lost
+  std::uint64_t mentor_link_faults = 0;  ///< times a mentored trial's link to the expert was lost
   std::uint64_t stalls = 0;            ///< loop or device-clock stalls (force zeroed)
   double max_period_error_s = 0.0;     ///< the largest |period − nominal| of a real-time run [s]
   std::string clock;                   ///< the clock that ran it: simulated, real-time, device
