@@ -20,14 +20,33 @@ std::string readTextFile(const std::filesystem::path& file) {
 }
 
 nlohmann::json parseJsonObject(std::string_view text, std::string_view source) {
+  // The depth is checked as the parser descends, before anything deep is built.
+  const auto bounded = [source](int depth, nlohmann::json::parse_event_t event, nlohmann::json&) {
+    const bool opening = event == nlohmann::json::parse_event_t::object_start ||
+                         event == nlohmann::json::parse_event_t::array_start;
+    if (opening && depth >= kMaxJsonDepth) {
+      throw InputError(fmt::format("{}: JSON nested deeper than {} levels: expected a configuration a few levels deep",
+                                   source, kMaxJsonDepth));
+    }
+    return true;
+  };
   nlohmann::json root;
   try {
-    root = nlohmann::json::parse(text);
+    root = nlohmann::json::parse(text, bounded);
   } catch (const nlohmann::json::parse_error& e) {
     throw InputError(fmt::format("{}: not valid JSON: {}", source, e.what()));
   }
   HATTR_THROW_UNLESS(root.is_object(), "{}: expected a JSON object, got {}", source, root.type_name());
   return root;
+}
+
+std::string jsonExcerpt(const nlohmann::json& value) {
+  constexpr std::size_t kShown = 60;
+  std::string text = value.dump();
+  if (text.size() <= kShown) return text;
+  const std::size_t total = text.size();
+  text.resize(kShown);
+  return fmt::format("{}... ({} characters)", text, total);
 }
 
 }  // namespace hattr

@@ -147,13 +147,13 @@ TabletCalibration parseCalibration(std::string_view json_text, std::string_view 
     const std::string& key = item.key();
     const nlohmann::json& value = item.value();
     if (key == "name") {
-      HATTR_THROW_UNLESS(value.is_string(), "{}: key name: expected a string, got {}", source_name, value.dump());
+      HATTR_THROW_UNLESS(value.is_string(), "{}: key name: expected a string, got {}", source_name, jsonExcerpt(value));
       cal.name = value.get<std::string>();
       continue;
     }
     if (key == "y_axis_toward_writer") {
       HATTR_THROW_UNLESS(value.is_boolean(), "{}: key {}: expected true or false, got {}", source_name, key,
-                         value.dump());
+                         jsonExcerpt(value));
       cal.y_axis_toward_writer = value.get<bool>();
       continue;
     }
@@ -165,7 +165,7 @@ TabletCalibration parseCalibration(std::string_view json_text, std::string_view 
       throw InputError(fmt::format("{}: unknown key \"{}\": expected one of {}", source_name, key, keys));
     }
     HATTR_THROW_UNLESS(value.is_number(), "{}: key {}: expected a number in [{}, {}], got {}", source_name,
-                       key, field->min, field->max, value.dump());
+                       key, field->min, field->max, jsonExcerpt(value));
     const double number = value.get<double>();
     HATTR_THROW_UNLESS(number >= field->min && number <= field->max,
                        "{}: key {}: expected a number in [{}, {}], got {}", source_name, key, field->min,

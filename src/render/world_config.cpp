@@ -23,7 +23,7 @@ class Section {
   Section(const json& root, const char* name, std::string_view source) : source_(source), name_(name) {
     const auto found = root.find(name);
     if (found == root.end()) return;
-    HATTR_THROW_UNLESS(found->is_object(), "{}: key {}: expected an object, got {}", source, name, found->dump());
+    HATTR_THROW_UNLESS(found->is_object(), "{}: key {}: expected an object, got {}", source, name, jsonExcerpt(*found));
     object_ = &*found;
   }
   void number(const char* key, double& value, double lo, double hi) {
@@ -31,7 +31,7 @@ class Section {
     const json* v = find(key);
     if (!v) return;
     HATTR_THROW_UNLESS(v->is_number() && std::isfinite(v->get<double>()) && v->get<double>() >= lo && v->get<double>() <= hi,
-                       "{}: key {}.{}: expected a number in [{}, {}], got {}", source_, name_, key, lo, hi, v->dump());
+                       "{}: key {}.{}: expected a number in [{}, {}], got {}", source_, name_, key, lo, hi, jsonExcerpt(*v));
     value = v->get<double>();
   }
   void integer(const char* key, std::uint64_t& value, std::uint64_t hi) {
@@ -39,14 +39,14 @@ class Section {
     const json* v = find(key);
     if (!v) return;
     HATTR_THROW_UNLESS(v->is_number_unsigned() && v->get<std::uint64_t>() <= hi,
-                       "{}: key {}.{}: expected an integer in [0, {}], got {}", source_, name_, key, hi, v->dump());
+                       "{}: key {}.{}: expected an integer in [0, {}], got {}", source_, name_, key, hi, jsonExcerpt(*v));
     value = v->get<std::uint64_t>();
   }
   void text(const char* key, std::string& value) {
     known_.push_back(key);
     const json* v = find(key);
     if (!v) return;
-    HATTR_THROW_UNLESS(v->is_string(), "{}: key {}.{}: expected a string, got {}", source_, name_, key, v->dump());
+    HATTR_THROW_UNLESS(v->is_string(), "{}: key {}.{}: expected a string, got {}", source_, name_, key, jsonExcerpt(*v));
     value = v->get<std::string>();
   }
   /// Every key present must be one of those read.
@@ -131,7 +131,7 @@ WorldConfig parseWorldConfig(std::string_view json_text, std::string_view source
 
   if (const auto angle = root.find("writing_angle_deg"); angle != root.end()) {
     HATTR_THROW_UNLESS(angle->is_number() && angle->get<double>() >= 10.0 && angle->get<double>() <= 90.0,
-                       "{}: key writing_angle_deg: expected a number in [10, 90], got {}", source, angle->dump());
+                       "{}: key writing_angle_deg: expected a number in [10, 90], got {}", source, jsonExcerpt(*angle));
     p.writing_angle_rad = units::degreesToRadians(angle->get<double>());
   }
   return config;

@@ -45,7 +45,7 @@ void readNumber(const json& object, const char* key, T& value, double lo, double
   const bool integral = std::is_integral_v<T>;
   if (!it->is_number() || (integral && !it->is_number_integer()) || it->get<double>() < lo || it->get<double>() > hi) {
     problems.add(fmt::format("{}{}: expected {} in [{}, {}], got {}", where, key, integral ? "an integer" : "a number",
-                             lo, hi, it->dump()));
+                             lo, hi, jsonExcerpt(*it)));
     return;
   }
   value = it->get<T>();
@@ -60,13 +60,13 @@ void readAnalyzedRecall(const json& protocol, Protocol& p, Problems& problems) {
       fmt::format("protocol.analyzed_recall_trials: expected a list of distinct recall trial numbers in [1, {}]",
                   p.recall_trials);
   if (!it->is_array() || it->empty()) {
-    problems.add(fmt::format("{}, got {}", expected, it->dump()));
+    problems.add(fmt::format("{}, got {}", expected, jsonExcerpt(*it)));
     return;
   }
   std::set<int> seen;
   for (const auto& v : *it) {
     if (!v.is_number_integer() || v.get<int>() < 1 || v.get<int>() > p.recall_trials || !seen.insert(v.get<int>()).second) {
-      problems.add(fmt::format("{}, got {}", expected, v.dump()));
+      problems.add(fmt::format("{}, got {}", expected, jsonExcerpt(v)));
       return;
     }
   }
@@ -85,7 +85,7 @@ void readPhaseView(const json& object, const char* key, PhaseView& view, Problem
     if (!target) {
       problems.add(fmt::format("protocol.{}: unknown key \"{}\": expected show_reference, guidance", key, item.key()));
     } else if (!item.value().is_boolean()) {
-      problems.add(fmt::format("protocol.{}.{}: expected true or false, got {}", key, item.key(), item.value().dump()));
+      problems.add(fmt::format("protocol.{}.{}: expected true or false, got {}", key, item.key(), jsonExcerpt(item.value())));
     } else {
       *target = item.value().get<bool>();
     }
@@ -102,7 +102,7 @@ void readTrialEnd(const json& protocol, Protocol& p, Problems& problems) {
   }
   if (!it->is_object()) {
     problems.add(fmt::format("protocol.trial_end: expected an object {{\"pen_up_s\": seconds, \"max_s\": seconds}}, got {}",
-                             it->dump()));
+                             jsonExcerpt(*it)));
     return;
   }
   for (const auto& item : it->items()) {
@@ -125,7 +125,7 @@ void readMentor(const json& root, const std::filesystem::path& base_dir, bool ch
   const auto it = root.find("mentor");
   if (it == root.end()) return;
   if (!it->is_object()) {
-    problems.add(fmt::format("mentor: expected an object {{\"expert\": \"simulated\" | \"live\", ...}}, got {}", it->dump()));
+    problems.add(fmt::format("mentor: expected an object {{\"expert\": \"simulated\" | \"live\", ...}}, got {}", jsonExcerpt(*it)));
     return;
   }
   static const std::set<std::string> kMentorKeys{"expert",   "connect",      "key",        "round_trip_ms", "jitter_ms",
@@ -140,7 +140,7 @@ void readMentor(const json& root, const std::filesystem::path& base_dir, bool ch
   const auto string_key = [&](const char* key, std::string& out) {
     if (const auto v = it->find(key); v != it->end() && !v->is_null()) {  // null: absent (as studyToJson writes it)
       if (v->is_string() && !v->get<std::string>().empty()) out = v->get<std::string>();
-      else problems.add(fmt::format("mentor.{}: expected a non-empty string, got {}", key, v->dump()));
+      else problems.add(fmt::format("mentor.{}: expected a non-empty string, got {}", key, jsonExcerpt(*v)));
     }
   };
   string_key("expert", m.expert);
@@ -158,7 +158,7 @@ void readMentor(const json& root, const std::filesystem::path& base_dir, bool ch
   m.loss = loss_percent * 1e-2;
   if (const auto v = it->find("passivity"); v != it->end()) {
     if (v->is_boolean()) m.passivity = v->get<bool>();
-    else problems.add(fmt::format("mentor.passivity: expected true or false, got {}", v->dump()));
+    else problems.add(fmt::format("mentor.passivity: expected true or false, got {}", jsonExcerpt(*v)));
   }
 
   // Who the expert is decides which keys are needed.
@@ -194,7 +194,7 @@ StudyDefinition parseStudy(std::string_view json_text, std::string_view source, 
     if (!kKeys.contains(item.key())) problems.add(fmt::format("unknown key \"{}\"", item.key()));
   }
   if (const auto f = root.find("format"); f != root.end() && *f != "hattr-study/1") {
-    problems.add(fmt::format("format: expected \"hattr-study/1\", got {}", f->dump()));
+    problems.add(fmt::format("format: expected \"hattr-study/1\", got {}", jsonExcerpt(*f)));
   }
 
   // Name, skill, experts.
@@ -203,7 +203,7 @@ StudyDefinition parseStudy(std::string_view json_text, std::string_view source, 
     if (it == root.end()) {
       if (required) problems.add(fmt::format("{}: missing (a string)", key));
     } else if (!it->is_string() || it->get<std::string>().empty()) {
-      problems.add(fmt::format("{}: expected a non-empty string, got {}", key, it->dump()));
+      problems.add(fmt::format("{}: expected a non-empty string, got {}", key, jsonExcerpt(*it)));
     } else {
       out = it->get<std::string>();
     }
@@ -216,7 +216,7 @@ StudyDefinition parseStudy(std::string_view json_text, std::string_view source, 
   } else {
     for (const auto& item : it->items()) {
       if (!item.value().is_string()) {
-        problems.add(fmt::format("experts.{}: expected a file name, got {}", item.key(), item.value().dump()));
+        problems.add(fmt::format("experts.{}: expected a file name, got {}", item.key(), jsonExcerpt(item.value())));
         continue;
       }
       std::filesystem::path file = item.value().get<std::string>();
@@ -239,8 +239,8 @@ StudyDefinition parseStudy(std::string_view json_text, std::string_view source, 
     std::set<guidance::TrainingMode> seen;
     for (const auto& m : it->is_array() ? *it : json::array()) {
       try {
-        const auto mode = guidance::parseMode(m.is_string() ? m.get<std::string>() : m.dump());
-        if (!seen.insert(mode).second) problems.add(fmt::format("modes: {} listed twice", m.dump()));
+        const auto mode = guidance::parseMode(m.is_string() ? m.get<std::string>() : jsonExcerpt(m));
+        if (!seen.insert(mode).second) problems.add(fmt::format("modes: {} listed twice", jsonExcerpt(m)));
         study.modes.push_back(mode);
       } catch (const InputError& e) {
         problems.add(fmt::format("modes: {}", e.what()));
@@ -274,15 +274,15 @@ StudyDefinition parseStudy(std::string_view json_text, std::string_view source, 
       readAnalyzedRecall(*it, p, problems);
       readNumber(*it, "max_repeats", p.max_repeats, 0, 10, "protocol.", problems);
       if (const auto d = it->find("disturbed_trials"); d != it->end()) {
-        const std::string policy = d->is_string() ? d->get<std::string>() : d->dump();
+        const std::string policy = d->is_string() ? d->get<std::string>() : jsonExcerpt(*d);
         if (policy == "repeat") p.disturbed = DisturbedPolicy::kRepeat;
         else if (policy == "flag") p.disturbed = DisturbedPolicy::kFlag;
         else if (policy == "exclude") p.disturbed = DisturbedPolicy::kExclude;
-        else problems.add(fmt::format("protocol.disturbed_trials: expected \"repeat\", \"flag\" or \"exclude\", got {}", d->dump()));
+        else problems.add(fmt::format("protocol.disturbed_trials: expected \"repeat\", \"flag\" or \"exclude\", got {}", jsonExcerpt(*d)));
       }
       if (const auto v = it->find("show_scores"); v != it->end()) {
         if (v->is_boolean()) p.show_scores = v->get<bool>();
-        else problems.add(fmt::format("protocol.show_scores: expected true or false, got {}", v->dump()));
+        else problems.add(fmt::format("protocol.show_scores: expected true or false, got {}", jsonExcerpt(*v)));
       }
       if (p.training_trials + p.recall_trials == 0) problems.add("protocol: zero trials per mode (training_trials + recall_trials)");
     }
@@ -297,13 +297,13 @@ StudyDefinition parseStudy(std::string_view json_text, std::string_view source, 
     if (kind == "latin-square") study.order = OrderKind::kLatinSquare;
     else if (kind == "fixed") study.order = OrderKind::kFixed;
     else if (kind == "random") study.order = OrderKind::kRandom;
-    else problems.add(fmt::format("order: expected {{\"kind\": \"latin-square\" | \"fixed\" | \"random\", \"seed\": N}}, got {}", it->dump()));
+    else problems.add(fmt::format("order: expected {{\"kind\": \"latin-square\" | \"fixed\" | \"random\", \"seed\": N}}, got {}", jsonExcerpt(*it)));
     if (it->is_object()) readNumber(*it, "seed", study.order_seed, 0, 9.0e15, "order.", problems);
   }
   readNumber(root, "rate_hz", study.rate_hz, 1.0, 10'000.0, "", problems);
   if (const auto it = root.find("indexing"); it != root.end()) {
     try {
-      study.indexing = guidance::parseIndexing(it->is_string() ? it->get<std::string>() : it->dump());
+      study.indexing = guidance::parseIndexing(it->is_string() ? it->get<std::string>() : jsonExcerpt(*it));
     } catch (const InputError& e) {
       problems.add(e.what());
     }

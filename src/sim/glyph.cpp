@@ -40,7 +40,7 @@ void checkKeys(const json& object, const auto& keys, std::string_view where) {
 std::string optionalText(const json& object, const char* key, std::string_view where) {
   const auto it = object.find(key);
   if (it == object.end()) return {};
-  HATTR_THROW_UNLESS(it->is_string(), "{}: key {}: expected a string, got {}", where, key, it->dump());
+  HATTR_THROW_UNLESS(it->is_string(), "{}: key {}: expected a string, got {}", where, key, jsonExcerpt(*it));
   return it->get<std::string>();
 }
 
@@ -58,16 +58,16 @@ Glyph parseGlyph(std::string_view json_text, std::string_view source) {
   const auto format = root.find("format");
   HATTR_THROW_UNLESS(format != root.end() && format->is_string() && *format == "hattr-glyph",
                      "{}: key format: expected \"hattr-glyph\", got {}", source,
-                     format == root.end() ? std::string("nothing") : format->dump());
+                     format == root.end() ? std::string("nothing") : jsonExcerpt(*format));
   const auto version = root.find("version");
   HATTR_THROW_UNLESS(version != root.end() && version->is_number_integer() && *version == 1,
                      "{}: key version: expected 1, got {}", source,
-                     version == root.end() ? std::string("nothing") : version->dump());
+                     version == root.end() ? std::string("nothing") : jsonExcerpt(*version));
 
   Glyph glyph;
   glyph.name = optionalText(root, "name", source);
   HATTR_THROW_UNLESS(!glyph.name.empty(), "{}: key name: expected a non-empty string, got {}", source,
-                     root.contains("name") ? root["name"].dump() : std::string("nothing"));
+                     root.contains("name") ? jsonExcerpt(root["name"]) : std::string("nothing"));
   glyph.unicode = optionalText(root, "unicode", source);
   HATTR_THROW_UNLESS(glyph.unicode.empty() || isUnicodeLabel(glyph.unicode),
                      "{}: key unicode: expected \"U+\" and 4 to 6 hex digits (or \"\"), got \"{}\"", source, glyph.unicode);
@@ -79,18 +79,18 @@ Glyph parseGlyph(std::string_view json_text, std::string_view source) {
   const auto strokes = root.find("strokes");
   HATTR_THROW_UNLESS(strokes != root.end() && strokes->is_array() && !strokes->empty(),
                      "{}: key strokes: expected a non-empty list of strokes, got {}", source,
-                     strokes == root.end() ? std::string("nothing") : strokes->dump());
+                     strokes == root.end() ? std::string("nothing") : jsonExcerpt(*strokes));
   for (std::size_t s = 0; s < strokes->size(); ++s) {
     const json& stroke = (*strokes)[s];
     const std::string where = fmt::format("{}: stroke {}", source, s + 1);
-    HATTR_THROW_UNLESS(stroke.is_object(), "{}: expected an object with \"points\", got {}", where, stroke.dump());
+    HATTR_THROW_UNLESS(stroke.is_object(), "{}: expected an object with \"points\", got {}", where, jsonExcerpt(stroke));
     checkKeys(stroke, kStrokeKeys, where);
     GlyphStroke out;
     out.note = optionalText(stroke, "note", where);
     const auto points = stroke.find("points");
     HATTR_THROW_UNLESS(points != stroke.end() && points->is_array() && points->size() >= 2,
                        "{}: key points: expected a list of at least two [x_mm, y_mm] points, got {}", where,
-                       points == stroke.end() ? std::string("nothing") : points->dump());
+                       points == stroke.end() ? std::string("nothing") : jsonExcerpt(*points));
     for (std::size_t p = 0; p < points->size(); ++p) {
       const json& point = (*points)[p];
       const bool numbers = point.is_array() && point.size() == 2 && point[0].is_number() && point[1].is_number();
@@ -98,12 +98,12 @@ Glyph parseGlyph(std::string_view json_text, std::string_view source) {
       const bool inside = finite && std::abs(point[0].get<double>()) <= kMaxGlyphCoordinate_mm &&
                           std::abs(point[1].get<double>()) <= kMaxGlyphCoordinate_mm;
       HATTR_THROW_UNLESS(inside, "{}, point {}: expected [x_mm, y_mm], two finite numbers within ±{} mm, got {}", where,
-                         p + 1, kMaxGlyphCoordinate_mm, point.dump());
+                         p + 1, kMaxGlyphCoordinate_mm, jsonExcerpt(point));
       const Vec2 position(units::millimetresToMetres(point[0].get<double>()),
                           units::millimetresToMetres(point[1].get<double>()));
       HATTR_THROW_UNLESS(out.points.empty() || position != out.points.back(),
                          "{}, point {}: expected a point different from point {}, got the same {}", where, p + 1, p,
-                         point.dump());
+                         jsonExcerpt(point));
       out.points.push_back(position);
     }
     glyph.strokes.push_back(std::move(out));

@@ -62,7 +62,7 @@ std::string keyList(const auto& keys) {
   return out;
 }
 
-std::string shown(const json* value) { return value ? value->dump() : std::string("nothing"); }
+std::string shown(const json* value) { return value ? jsonExcerpt(*value) : std::string("nothing"); }
 
 const json* find(const json& object, const char* key) {
   const auto it = object.find(key);
@@ -90,7 +90,7 @@ bool isSource(const std::string& text) {
 ModelParameter parseParameter(const json& item, const ParameterSpec& spec, std::string_view source) {
   const std::string where = fmt::format("{}: parameters.{}", source, spec.key);
   HATTR_THROW_UNLESS(item.is_object(), "{}: expected an object with value, unit, range, source, per_subject, got {}",
-                     where, item.dump());
+                     where, jsonExcerpt(item));
   for (const auto& field : item.items()) {
     const bool known = std::any_of(kParameterKeys.begin(), kParameterKeys.end(),
                                    [&](const char* k) { return field.key() == k; });
@@ -118,7 +118,7 @@ ModelParameter parseParameter(const json& item, const ParameterSpec& spec, std::
                      shown(value));
   const double v = value->get<double>();
   HATTR_THROW_UNLESS(std::string_view(spec.key) != "basis_count" || v == std::floor(v),
-                     "{}.value: expected an integer, got {}", where, value->dump());
+                     "{}.value: expected an integer, got {}", where, jsonExcerpt(*value));
 
   const json* text = find(item, "source");
   HATTR_THROW_UNLESS(text && text->is_string() && isSource(text->get<std::string>()),

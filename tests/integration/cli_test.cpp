@@ -166,6 +166,30 @@ TEST(Cli, ServoCheckRejectsABadDeviceWithExitTwo) {
   EXPECT_EQ(runHattr(dir, "servo-check --rate 20000").exit_code, 2);
 }
 
+// A value nested 100 000 deep crashed the error path (printed recursively); a huge value made a
+// huge message. Every JSON file goes through one reader that bounds both.
+TEST(Cli, DeeplyNestedOrHugeJsonValuesAreRefusedWithAShortMessage) {
+  test::TempDir dir;
+  const std::string deep = std::string(100'000, '[') + std::string(100'000, ']');
+  test::writeText(dir / "deep-study.json", R"({"name": "x", "skill": "na", "experts": {"na": )" + deep + "}}");
+  test::writeText(dir / "deep-world.json", R"({"paper": )" + deep + "}");
+  for (const std::string& command : {"study init " + (dir / "deep-study.json").string() + " --db " + (dir / "d.sqlite").string(),
+                                    "world check " + (dir / "deep-world.json").string()}) {
+    const RunResult r = runHattr(dir, command);
+    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.err;
+    EXPECT_THAT(r.err, HasSubstr("JSON nested deeper than 64 levels")) << command;
+  }
+  std::string huge = "[0";
+  for (int i = 1; i < 20'000; ++i) huge += ", " + std::to_string(i);
+  huge += "]";
+  test::writeText(dir / "huge.json", R"({"paper": {"stiffness_N_per_m": )" + huge + "}}");
+  const RunResult r = runHattr(dir, "world check " + (dir / "huge.json").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("key paper.stiffness_N_per_m: expected a number"));
+  EXPECT_THAT(r.err, HasSubstr("characters)"));
+  EXPECT_LT(r.err.size(), 400u) << r.err.substr(0, 400);
+}
+
 TEST(Cli, WorldCheckReportsClampsAndRefusesBadConfigs) {
   test::TempDir dir;
   test::writeText(dir / "stiff.json", R"({"paper": {"stiffness_N_per_m": 4000}, "relief": {"kind": "flat"}})");

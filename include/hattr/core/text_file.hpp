@@ -13,8 +13,17 @@ namespace hattr {
 /// The whole file as text. Throws InputError naming the file and the reason it cannot be read.
 std::string readTextFile(const std::filesystem::path& file);
 
-/// Parses text that must hold a JSON object. Throws InputError ("SOURCE: not valid JSON: ...",
-/// "SOURCE: expected a JSON object, got array").
+/// Values nested deeper than this are refused: no hattr file needs more than a few levels, and
+/// the JSON library prints and copies values recursively.
+inline constexpr int kMaxJsonDepth = 64;
+
+/// Parses text that must hold a JSON object nested at most kMaxJsonDepth deep. Throws
+/// InputError ("SOURCE: not valid JSON: ...", "SOURCE: expected a JSON object, got array",
+/// "SOURCE: nested deeper than 64 levels ...").
 nlohmann::json parseJsonObject(std::string_view text, std::string_view source_name);
+
+/// A value as it appears in a message: its JSON text, cut to about 60 characters ("[1, 2, ...]
+/// (5000 characters)") so no message ever prints an unbounded value.
+std::string jsonExcerpt(const nlohmann::json& value);
 
 }  // namespace hattr
