@@ -32,6 +32,7 @@
 #include "core/profile_files.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/render/world_config.hpp"
+#include "ui/mentor_tab.hpp"
 #include "ui/paper_view.hpp"
 #include "ui/profile_plot.hpp"
 
@@ -94,7 +95,10 @@ MainWindow::MainWindow(std::unique_ptr<QSettings> settings, QWidget* parent)
   refreshButtons();
 }
 
-MainWindow::~MainWindow() { (void)rig_.finish(); }
+MainWindow::~MainWindow() {
+  mentor_->shutdown();  // its session uses the hand, which goes before the tab does
+  (void)rig_.finish();
+}
 
 double MainWindow::now_s() const { return static_cast<double>(clock_.nsecsElapsed()) * 1e-9; }
 
@@ -116,6 +120,7 @@ void MainWindow::buildUi() {
   buildTrainTab();
   buildStudyTab();
   buildReviewTab();
+  buildMentorTab();
   tabs_->setMinimumWidth(320);
   connect(tabs_, &QTabWidget::currentChanged, this, [this] { refreshButtons(); });
 
@@ -417,6 +422,34 @@ void MainWindow::buildReviewTab() {
   tabs_->addTab(page, tr("Review"));
 }
 
+// The Mentor tab borrows the device (the rig stops; Activity::kMentoring) and the dialogs.
+void MainWindow::buildMentorTab() {
+  MentorHost host;
+  host.claim = [this](QString& why) -> const session::TrialEnvironment* {
+    if (activity_ == Activity::kPlayback) abortActivity();
+    if (activity_ != Activity::kFree) {
+      why = tr("finish the trial or recording first");
+      return nullptr;
+    }
+    (void)rig_.finish();
+    activity_ = Activity::kMentoring;
+    paper_->overlay().clear();
+    refreshButtons();
+    return environment_;
+  };
+  host.release = [this] {
+    activity_ = Activity::kFree;
+    startFreeRun();
+    refreshButtons();
+  };
+  host.error = [this](const QString& what, const QString& detail) { showError(what, detail); };
+  host.confirm = [this](const QString& question) { return confirm(question); };
+  host.ask_save_file = [this](const QString& title, const QString& name) { return askSaveFile(title, name); };
+  host.ask_open_file = [this](const QString& title, const QString& filter) { return askOpenFile(title, filter); };
+  mentor_ = new MentorTab(hand_, *paper_, *settings_, std::move(host));
+  tabs_->addTab(mentor_, tr("Mentor"));
+}
+
 void MainWindow::buildActions() {
   const auto add = [this](QMenu* menu, const QString& text, const QKeySequence& keys, auto slot) {
     auto* action = new QAction(text, this);
@@ -495,7 +528,7 @@ void MainWindow::buildActions() {
         this, tr("hattr studio: shortcuts"),
         tr("<table>"
            "<tr><td><b>Space</b></td><td>the tab's main action: record/stop, start/stop trial, study next, "
-           "play/pause</td></tr>"
+           "play/pause, connect/disconnect (Mentor)</td></tr>"
            "<tr><td><b>Ctrl+.</b></td><td>stop the trial now and keep it (end reason \"stopped\"; a study "
            "stores it); stop a recording</td></tr>"
            "<tr><td><b>Esc</b></td><td>abort the trial, recording or playback (nothing kept)</td></tr>"
@@ -511,7 +544,7 @@ void MainWindow::buildActions() {
            "<tr><td><b>Ctrl+D</b>, <b>Ctrl+Shift+D</b></td><td>open a study, open a study for review</td></tr>"
            "<tr><td><b>Ctrl+W</b></td><td>load a world configuration</td></tr>"
            "<tr><td><b>Ctrl+Shift+R</b></td><td>review: open the study's report</td></tr>"
-           "<tr><td><b>Ctrl+1…5</b></td><td>the tabs</td></tr>"
+           "<tr><td><b>Ctrl+1…6</b></td><td>the tabs</td></tr>"
            "</table>"));
   });
 }
@@ -586,6 +619,10 @@ void MainWindow::closeEvent(QCloseEvent* event) {
     return;
   }
   if (last_trial_ && !last_trial_saved_ && !confirm(tr("The last trial was not stored anywhere. Quit and lose it?"))) {
+    event->ignore();
+    return;
+  }
+  if (!mentor_->mayClose()) {
     event->ignore();
     return;
   }
@@ -704,11 +741,18 @@ void MainWindow::consumeLive(const Sample& sample) {
       plot_->setTimeWindow(std::make_pair(sample.t_s - kRollingWindow_s, sample.t_s));
       return;
     }
-    case Activity::kPlayback: return;
+    case Activity::kPlayback:
+    case Activity::kMentoring: return;
   }
 }
 
 void MainWindow::onFrame() {
+  // A mentoring session has the device: the Mentor tab draws both pens.
+  if (activity_ == Activity::kMentoring) {
+    mentor_->frame();
+    paper_->update();
+    return;
+  }
   const double now = now_s();
   Sample sample;
   const bool fresh = rig_.active() && rig_.readLatest(sample);
@@ -766,6 +810,7 @@ void MainWindow::onFrame() {
       if (playback_.playing() && playback_.finished(now)) playback_.pause(now);
       break;
     }
+    case Activity::kMentoring: break;  // drawn by the Mentor tab (above)
     case Activity::kFree:
       if (study_ && study_->state() != StudySession::State::kNoSubject) {
         study_->tick(now);
@@ -797,7 +842,8 @@ void MainWindow::onStatus() {
                              .arg(input.pen_down ? tr("pen down") : tr("pen up"))
                              .arg(input.tablet ? input.tablet_press_N : input.press_N, 0, 'f', 1));
   // The loop: measured rate, overruns, faults, drops, stalls.
-  const servo::LiveCounters* counters = rig_.counters();
+  const bool mentoring = activity_ == Activity::kMentoring;
+  const servo::LiveCounters* counters = mentoring ? mentor_->counters() : rig_.counters();
   if (counters == nullptr) {
     status_loop_->setText(tr("Loop: stopped"));
   } else {
@@ -812,10 +858,10 @@ void MainWindow::onStatus() {
                               .arg(counters->faults.load())
                               .arg(counters->dropped_samples.load())
                               .arg(counters->stalls.load() + counters->consumer_stalls.load())
-                              .arg(qs(rig_.realtimeSummary())));
+                              .arg(mentoring ? tr("mentoring station") : qs(rig_.realtimeSummary())));
   }
   last_status_s_ = now;
-  static const char* kNames[] = {"writing", "recording", "training trial", "study trial", "playback"};
+  static const char* kNames[] = {"writing", "recording", "training trial", "study trial", "playback", "mentoring"};
   status_activity_->setText(tr("Activity: %1 · mode %2")
                                 .arg(QString::fromLatin1(kNames[static_cast<int>(activity_)]))
                                 .arg(mode_combo_->currentText()));
@@ -835,7 +881,8 @@ void MainWindow::refreshButtons() {
   const bool study_open = study_ != nullptr;
   subject_combo_->setEnabled(study_open && activity_ != Activity::kStudyTrial);
   subject_button_->setEnabled(study_open && activity_ != Activity::kStudyTrial);
-  close_study_button_->setEnabled(study_open && activity_ != Activity::kStudyTrial);
+  close_study_button_->setEnabled(study_open && activity_ != Activity::kStudyTrial &&
+                                  activity_ != Activity::kMentoring);
   study_next_button_->setText(activity_ == Activity::kStudyTrial ? tr("Stop trial (Ctrl+.)")
                                                                  : tr("Start trial (Space) / skip rest (N)"));
   study_next_button_->setEnabled(

@@ -1,10 +1,12 @@
 #pragma once
-/// The studio's main window: the paper view and the haptic-profile plot beside five tabs —
+/// The studio's main window: the paper view and the haptic-profile plot beside six tabs —
 /// Write (free writing), Record (an expert's take), Train (a trial against a reference in
 /// BASIC, PCONTROL or ALPHA, scored by DTW), Study (a person's study session from a study
-/// database) and Review (a study's subjects and trials, overlaid on the expert and played
-/// back). One live rig runs the servo loop in real time on the simulated pen the mouse
-/// holds; the window reads the loop's newest sample at display rate and never waits on it.
+/// database), Review (a study's subjects and trials, overlaid on the expert and played
+/// back) and Mentor (live mentoring over the network, ui/mentor_tab.hpp). One live rig runs
+/// the servo loop in real time on the simulated pen the mouse holds (a mentoring session
+/// takes the device and the hand over while it runs); the window reads the loop's newest
+/// sample at display rate and never waits on it.
 /// Every action is also a public member, so tests (and scripts) drive what a person drives.
 
 #include <QElapsedTimer>
@@ -38,6 +40,7 @@ class QTreeWidgetItem;
 
 namespace hattr::studio {
 
+class MentorTab;
 class PaperView;
 class ProfilePlot;
 
@@ -46,8 +49,8 @@ class MainWindow final : public QMainWindow {
 
  public:
   /// What the rig and the view are doing.
-  enum class Activity { kFree, kRecording, kTrial, kStudyTrial, kPlayback };
-  enum Tab : int { kTabWrite = 0, kTabRecord, kTabTrain, kTabStudy, kTabReview };
+  enum class Activity { kFree, kRecording, kTrial, kStudyTrial, kPlayback, kMentoring };
+  enum Tab : int { kTabWrite = 0, kTabRecord, kTabTrain, kTabStudy, kTabReview, kTabMentor };
 
   /// `settings`: where settings are remembered (null: QSettings "hattr"/"studio").
   explicit MainWindow(std::unique_ptr<QSettings> settings = nullptr, QWidget* parent = nullptr);
@@ -115,6 +118,7 @@ class MainWindow final : public QMainWindow {
   [[nodiscard]] MouseHand& mouseHand() { return hand_; }
   [[nodiscard]] LiveRig& rig() { return rig_; }
   [[nodiscard]] QTabWidget* tabs() const { return tabs_; }
+  [[nodiscard]] MentorTab* mentorTab() const { return mentor_; }
 
  protected:
   void closeEvent(QCloseEvent* event) override;
@@ -127,6 +131,7 @@ class MainWindow final : public QMainWindow {
   void buildTrainTab();
   void buildStudyTab();
   void buildReviewTab();
+  void buildMentorTab();
   void buildActions();
   void loadSettings();
   void saveSettings();
@@ -261,6 +266,8 @@ class MainWindow final : public QMainWindow {
   QPushButton* play_button_ = nullptr;
   QComboBox* speed_combo_ = nullptr;
   QPushButton* report_button_ = nullptr;
+  // Mentor tab (it has the device and the hand while a session runs: Activity::kMentoring).
+  MentorTab* mentor_ = nullptr;
 };
 
 }  // namespace hattr::studio

@@ -21,6 +21,7 @@
 #include "hattr/core/error.hpp"
 #include "hattr/render/world_config.hpp"
 #include "ui/main_window.hpp"
+#include "ui/mentor_tab.hpp"
 #include "ui/paper_view.hpp"
 #include "ui/profile_plot.hpp"
 
@@ -218,6 +219,7 @@ bool MainWindow::stopTrial() {
       finishTrial();
       return true;
     case Activity::kRecording: return stopRecording();
+    case Activity::kMentoring: return mentor_->disconnectSession();  // the recording is kept
     case Activity::kFree:
     case Activity::kPlayback: return false;
   }
@@ -430,6 +432,7 @@ void MainWindow::abortActivity() {
       activity_ = Activity::kFree;
       plot_->setCursorTime(std::nullopt);
       break;
+    case Activity::kMentoring: (void)mentor_->disconnectSession(); break;  // nothing recorded is lost
     case Activity::kFree: break;
   }
   refreshButtons();
@@ -481,6 +484,7 @@ void MainWindow::clearTrail() {
   if (activity_ == Activity::kPlayback) abortActivity();
   paper_->trail().clear();
   paper_->overlay().clear();
+  mentor_->clearPeerTrail();
 }
 
 void MainWindow::primaryAction() {
@@ -501,6 +505,7 @@ void MainWindow::primaryAction() {
       break;
     case kTabStudy: studyNext(); break;
     case kTabReview: togglePlayback(); break;
+    case kTabMentor: mentor_->toggleSession(); break;
     default: break;
   }
 }
@@ -647,7 +652,7 @@ bool MainWindow::studyNext() {
 }
 
 void MainWindow::closeStudy() {
-  if (activity_ == Activity::kStudyTrial) return;
+  if (activity_ == Activity::kStudyTrial || activity_ == Activity::kMentoring) return;  // the device is in use
   if (!study_) return;
   (void)rig_.finish();  // the loop runs on the study's paper: stop it before the study goes
   study_.reset();

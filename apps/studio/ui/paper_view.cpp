@@ -6,6 +6,7 @@
 #include <QTabletEvent>
 #include <QWheelEvent>
 #include <cmath>
+#include <vector>
 
 #include "core/relief_image.hpp"
 
@@ -126,6 +127,27 @@ void PaperView::drawArrow(QPainter& painter, const QPointF& from, const Eigen::V
   painter.setBrush(Qt::NoBrush);
 }
 
+// The other station's pen: filled on the paper, a ring above it, its label beside it.
+void PaperView::drawPeerPen(QPainter& painter) const {
+  if (!peer_pen_) return;
+  const QPointF at = mapping_.toWidget(peer_pen_->p_WT);
+  if (peer_pen_->in_contact) {
+    painter.setPen(QPen(Qt::white, 1.5));
+    painter.setBrush(PaperColours::peer());
+    painter.drawEllipse(at, kPenRadius_px, kPenRadius_px);
+  } else {
+    const double lift_px = std::clamp(peer_pen_->p_WT.z() * 1000.0, 0.0, 10.0) * 1.5;
+    painter.setPen(QPen(PaperColours::peer(), 2.0));
+    painter.setBrush(Qt::NoBrush);
+    painter.drawEllipse(at, kPenRadius_px + lift_px, kPenRadius_px + lift_px);
+  }
+  painter.setBrush(Qt::NoBrush);
+  if (!peer_label_.isEmpty()) {
+    painter.setPen(PaperColours::peer());
+    painter.drawText(at + QPointF(kPenRadius_px + 6.0, -kPenRadius_px - 4.0), peer_label_);
+  }
+}
+
 void PaperView::paintEvent(QPaintEvent*) {
   QPainter painter(this);
   painter.setRenderHint(QPainter::Antialiasing);
@@ -152,6 +174,7 @@ void PaperView::paintEvent(QPaintEvent*) {
   // Reference, reviewed trial, the pen's trail.
   if (reference_shown_) drawTrail(painter, reference_, PaperColours::reference(), 3.0);
   drawTrail(painter, overlay_, PaperColours::overlay(), 2.5);
+  if (peer_trail_ != nullptr) drawTrail(painter, *peer_trail_, PaperColours::peer(), 2.5);
   drawTrail(painter, trail_, PaperColours::ink(), 2.5);
 
   // Where the reference is now.
@@ -187,6 +210,7 @@ void PaperView::paintEvent(QPaintEvent*) {
     }
     painter.setBrush(Qt::NoBrush);
   }
+  drawPeerPen(painter);
 
   // Read-outs (millimetres and newtons for people).
   painter.setPen(QColor(40, 40, 40));
@@ -208,14 +232,16 @@ void PaperView::paintEvent(QPaintEvent*) {
 
   // Legend.
   const QPointF legend(paper.left() + 10.0, paper.bottom() - 12.0);
-  const struct {
+  struct LegendItem {
     QColor colour;
     QString text;
-  } items[] = {{PaperColours::reference(), tr("reference")},
-               {PaperColours::ink(), tr("pen trail")},
-               {PaperColours::overlay(), tr("reviewed trial")},
-               {PaperColours::userForce(), tr("your force")},
-               {PaperColours::guideForce(), tr("guidance")}};
+  };
+  std::vector<LegendItem> items = {{PaperColours::reference(), tr("reference")},
+                                   {PaperColours::ink(), tr("pen trail")},
+                                   {PaperColours::overlay(), tr("reviewed trial")},
+                                   {PaperColours::userForce(), tr("your force")},
+                                   {PaperColours::guideForce(), tr("guidance")}};
+  if (peer_trail_ != nullptr) items.push_back({PaperColours::peer(), tr("other station's pen")});
   double x = legend.x();
   for (const auto& item : items) {
     painter.setPen(QPen(item.colour, 3.0));

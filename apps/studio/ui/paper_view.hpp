@@ -27,6 +27,7 @@ struct PaperColours {
   static QColor overlay() { return {225, 70, 20}; }     ///< a reviewed trial
   static QColor userForce() { return {235, 120, 0}; }   ///< the user's force on the paper
   static QColor guideForce() { return {0, 165, 70}; }   ///< the guidance force on the pen
+  static QColor peer() { return {165, 30, 200}; }       ///< the other station's pen (Mentor tab)
 };
 
 class PaperView final : public QWidget {
@@ -52,6 +53,13 @@ class PaperView final : public QWidget {
   Trail& trail() { return trail_; }
   /// A trial overlaid on the reference (review).
   Trail& overlay() { return overlay_; }
+  /// The other station's pen in a mentored session and its trail, drawn in PaperColours::peer()
+  /// with `label` beside the pen (null trail: none; the trail must outlive its use here).
+  void setPeer(const Trail* trail, const std::optional<Sample>& pen, const QString& label = {}) {
+    peer_trail_ = trail;
+    peer_pen_ = pen;
+    peer_label_ = label;
+  }
   /// Text over the paper (prompts, countdowns); empty: none.
   void setBanner(const QString& text) { banner_ = text; }
   void setForceArrowsShown(bool shown) { arrows_shown_ = shown; }
@@ -81,6 +89,7 @@ class PaperView final : public QWidget {
   void publish(const QPointF& px, std::optional<bool> pen_down);
   void drawTrail(QPainter& painter, const Trail& trail, const QColor& colour, double width_px) const;
   void drawArrow(QPainter& painter, const QPointF& from, const Eigen::Vector2d& f_N, const QColor& colour) const;
+  void drawPeerPen(QPainter& painter) const;
 
   MouseHand* hand_ = nullptr;
   PaperMapping mapping_;
@@ -93,6 +102,9 @@ class PaperView final : public QWidget {
   bool reference_shown_ = true;
   bool arrows_shown_ = true;
   std::optional<Eigen::Vector2d> cue_m_;
+  const Trail* peer_trail_ = nullptr;
+  std::optional<Sample> peer_pen_;
+  QString peer_label_;
   QString banner_;
 };
 

@@ -1,0 +1,275 @@
+#include "core/mentor_session.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "hattr/core/error.hpp"
+
+namespace hattr::studio {
+namespace {
+
+using Seconds = std::chrono::duration<double>;
+
+/// The pen is held lifted (following the hand) this long while the loop's forces ramp in, as in
+/// the live rig's free writing: a pen pressed down from the first tick would sink into a paper
+/// whose force is still ramping in.
+constexpr double kSettle_s = 0.3;
+static_assert(kSettle_s >= servo::SafetyConfig{}.ramp_time_s);
+
+bool isLeader(const MentorSettings& settings) { return settings.role == net::MentorRole::kLeader; }
+
+}  // namespace
+
+MentorSetup mentorSetupFor(const MentorSettings& settings) {
+  HATTR_THROW_UNLESS(std::isfinite(settings.wait_s) && settings.wait_s >= 0.1 && settings.wait_s <= 3600.0,
+                     "wait for the other station: expected [0.1, 3600] s, got {}", settings.wait_s);
+  HATTR_THROW_UNLESS(std::isfinite(settings.give_up_s) && settings.give_up_s >= 0.01 && settings.give_up_s <= 60.0,
+                     "give up after the link is down: expected [0.01, 60] s, got {}", settings.give_up_s);
+  MentorSetup setup;
+  net::MentorConfig& mentor = setup.mentor;
+  mentor.role = settings.role;
+  mentor.coupling = settings.coupling;
+  mentor.passivity = settings.passivity;
+  mentor.deadband = settings.deadband;
+  // The address, then the key: the library's own messages.
+  if (isLeader(settings)) {
+    setup.bind = device::net::parseUdpEndpoint(settings.address, "listen address", 0);
+  } else {
+    mentor.leader = device::net::parseUdpEndpoint(settings.address, "leader's address");
+    setup.bind = device::net::UdpEndpoint{.address = 0, .port = 0};
+  }
+  HATTR_THROW_UNLESS(!settings.key_file.empty(),
+                     "key file: none chosen; make one with `hattr device keygen --out FILE` and use the same file on "
+                     "both stations");
+  mentor.key = device::net::readKeyFile(settings.key_file);
+  mentor.validate();
+  return setup;
+}
+
+std::string mentorPhaseText(const MentorSnapshot& snapshot) {
+  switch (snapshot.phase) {
+    case MentorPhase::kIdle: return "not connected";
+    case MentorPhase::kWaiting: return snapshot.where + " …";
+    case MentorPhase::kLinked:
+      if (snapshot.link_down_now) {
+        return fmt::format("link down for {:.0f} ms: no coupling force", snapshot.link_down_s * 1e3);
+      }
+      return "linked";
+    case MentorPhase::kEnded:
+      if (!snapshot.failure.empty()) return snapshot.failure;
+      return snapshot.ended_by_other ? "the other station ended the session" : "session over (stopped)";
+  }
+  return {};
+}
+
+MentorSession::MentorSession() = default;
+
+MentorSession::~MentorSession() { stop(); }
+
+void MentorSession::start(const MentorSettings& settings, device::HandScript& hand) {
+  stop();
+  // Everything that can be refused is checked before anything runs.
+  const MentorSetup setup = mentorSetupFor(settings);
+  auto link = std::make_unique<net::UdpDatagramLink>(device::net::UdpSocket::bound(setup.bind));
+  net::StationConfig config{.device_uri = settings.device_uri, .world = settings.world, .rate_hz = settings.rate_hz,
+                            .mentor = setup.mentor};
+  config.metadata.subject = !settings.subject.empty() ? settings.subject : isLeader(settings) ? "expert" : "trainee";
+  auto settling = std::make_unique<session::SettlingHand>(hand, kSettle_s, true);
+  auto station = std::make_unique<net::MentorStation>(config, *link, settling.get());
+
+  // The loop in real time, its samples drained by the recorder's thread (recording starts once linked).
+  station->loop().requireConsumer(&station->recorder().consumerTime());
+  station->recorder().startThread();
+  try {
+    station->loop().start();
+  } catch (...) {
+    station->recorder().stopThread();
+    throw;
+  }
+
+  settings_ = settings;
+  where_ = isLeader(settings) ? "listening on " + link->localEndpoint().text()
+                              : "connecting to " + setup.mentor.leader.text();
+  clamps_ = station->clamps();
+  hold_s_ = setup.mentor.hold_s;
+  session_timeout_s_ = setup.mentor.session_timeout_s;
+  link_ = std::move(link);
+  settling_ = std::move(settling);
+  station_ = std::move(station);
+  phase_ = MentorPhase::kWaiting;
+  failure_.clear();
+  ended_by_other_ = false;
+  last_stats_ = {};
+  final_counters_ = {};
+  started_at_ = Clock::now();
+  down_ = false;
+  own_.reset();
+  own_fresh_ = false;
+  peer_ = {};
+  peer_trail_.clear();
+  recording_.reset();
+  recording_saved_ = true;
+}
+
+bool MentorSession::poll() {
+  own_fresh_ = false;
+  if (!station_) return false;
+  // This station's pen and the other's.
+  Sample sample;
+  if (station_->loop().latest().read(sample)) {
+    own_ = sample;
+    own_fresh_ = true;
+  }
+  net::PeerView view;
+  if (station_->coupling().peer().read(view) && view.valid) {
+    peer_ = view;
+    Sample point;
+    point.t_s = view.t_s;
+    point.p_WT = view.p_WT;
+    point.pen_down = view.pen_down;
+    point.in_contact = view.pen_down;
+    peer_trail_.append(point);
+  }
+  last_stats_ = station_->coupling().stats();
+  watchLink(last_stats_, Clock::now());
+  return station_ == nullptr;
+}
+
+// Waiting: linked, refused or no answer in time. Linked: the other station's goodbye ends it
+// normally; a link down for give_up_s ends it as lost (a link that came back and went down
+// again in between starts the count again).
+void MentorSession::watchLink(const net::MentorStats& stats, Clock::time_point now) {
+  if (!station_->loop().running()) {
+    end("the servo loop stopped");
+    return;
+  }
+  if (phase_ == MentorPhase::kWaiting) {
+    if (stats.link_up || stats.link_faults > 0) {
+      phase_ = MentorPhase::kLinked;
+      linked_at_ = now;
+      last_up_at_ = now;
+      down_ = false;
+      station_->recorder().start();
+    } else if (stats.refused_busy) {
+      end(fmt::format("refused: the leader at {} already mentors another follower", settings_.address));
+    } else if (Seconds(now - started_at_).count() > settings_.wait_s) {
+      end(fmt::format("no other station within {:g} s (a wrong key looks like this too: its packets are dropped "
+                      "unanswered)",
+                      settings_.wait_s));
+    }
+    return;
+  }
+  // No session any more: a goodbye (as `hattr mentor`), unless the link has been down long
+  // enough for the session to have timed out, which is a lost link.
+  if (!stats.session) {
+    if (Seconds(now - last_up_at_).count() < session_timeout_s_ - hold_s_) {
+      end({}, true);
+    } else {
+      end(linkLost());
+    }
+    return;
+  }
+  if (stats.link_up) {
+    down_ = false;
+    last_up_at_ = now;
+    return;
+  }
+  if (!down_ || stats.link_faults != faults_when_down_) {
+    down_ = true;
+    down_since_ = now;
+    faults_when_down_ = stats.link_faults;
+    return;
+  }
+  if (Seconds(now - down_since_).count() > settings_.give_up_s) end(linkLost());
+}
+
+std::string MentorSession::linkLost() const {
+  return fmt::format("link lost: nothing from the other station for {:.0f} ms (its force went to zero after {:.0f} ms)",
+                     settings_.give_up_s * 1e3, hold_s_ * 1e3);
+}
+
+void MentorSession::stop() { end({}); }
+
+// Stops the loop and the recorder, says BYE, keeps the recording (marked failed on a failure).
+void MentorSession::end(const std::string& failure, bool by_other) {
+  if (!station_) return;
+  net::MentorStation& station = *station_;
+  station.loop().stop();
+  station.recorder().stopThread();
+  Sample last = own_.value_or(Sample{});
+  (void)station.loop().latest().read(last);
+  station.coupling().close(static_cast<std::int64_t>(last.t_s * 1e9));
+  last_stats_ = station.coupling().stats();
+  copyCounters(final_counters_);
+  HapticProfile recorded = station.takeRecording();
+  station_.reset();
+  settling_.reset();
+  link_.reset();
+
+  phase_ = MentorPhase::kEnded;
+  failure_ = failure;
+  ended_by_other_ = by_other;
+  down_ = false;
+  if (!recorded.empty()) {
+    if (!failure.empty()) recorded.metadata().extra["failed"] = failure;
+    recording_ = std::move(recorded);
+    recording_saved_ = false;
+  }
+}
+
+void MentorSession::copyCounters(MentorSnapshot& out) const {
+  if (!station_) {
+    out.ticks = final_counters_.ticks;
+    out.overruns = final_counters_.overruns;
+    out.faults = final_counters_.faults;
+    out.stalls = final_counters_.stalls;
+    return;
+  }
+  const servo::LiveCounters& c = station_->loop().counters();
+  out.ticks = c.ticks.load();
+  out.overruns = c.overruns.load();
+  out.faults = c.faults.load();
+  out.stalls = c.stalls.load() + c.consumer_stalls.load();
+}
+
+MentorSnapshot MentorSession::snapshot() const {
+  MentorSnapshot s;
+  s.phase = phase_;
+  s.role = settings_.role;
+  s.where = where_;
+  s.failure = failure_;
+  s.ended_by_other = ended_by_other_;
+  s.stats = last_stats_;
+  copyCounters(s);
+  const auto now = Clock::now();
+  if (phase_ == MentorPhase::kLinked) {
+    s.linked_s = Seconds(now - linked_at_).count();
+    s.link_down_now = down_;
+    s.link_down_s = down_ ? Seconds(now - down_since_).count() : 0.0;
+  }
+  return s;
+}
+
+device::net::UdpEndpoint MentorSession::localEndpoint() const {
+  HATTR_DEMAND(link_ != nullptr, "localEndpoint() needs a running session");
+  return link_->localEndpoint();
+}
+
+const servo::LiveCounters* MentorSession::counters() const noexcept {
+  return station_ ? &station_->loop().counters() : nullptr;
+}
+
+SaveOutcome MentorSession::saveRecording(const std::filesystem::path& file, bool replace_confirmed) {
+  HATTR_THROW_UNLESS(recording_.has_value(), "{}: nothing to save: the last session recorded nothing", file.string());
+  const SaveOutcome outcome = saveProfile(*recording_, file, replace_confirmed);
+  if (outcome == SaveOutcome::kSaved) recording_saved_ = true;
+  return outcome;
+}
+
+void MentorSession::discardRecording() {
+  recording_.reset();
+  recording_saved_ = true;
+}
+
+}  // namespace hattr::studio
