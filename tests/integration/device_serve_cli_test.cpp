@@ -3,11 +3,9 @@
 
 #include <signal.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
-#include <cstdlib>
 #include <thread>
 
 #include <gmock/gmock.h>
@@ -16,6 +14,7 @@
 
 #include "hattr/io/profile_csv.hpp"
 #include "support/background_process.hpp"
+#include "support/run_command.hpp"
 #include "support/test_support.hpp"
 
 namespace hattr {
@@ -23,18 +22,10 @@ namespace {
 
 using ::testing::HasSubstr;
 
-struct RunResult {
-  int exit_code;
-  std::string out;
-  std::string err;
-};
+using test::RunResult;
 
 RunResult runHattr(const test::TempDir& dir, const std::string& args, const std::string& tag = "run") {
-  const auto out = dir / (tag + ".out");
-  const auto err = dir / (tag + ".err");
-  const std::string command = std::string(HATTR_CLI_PATH) + " " + args + " >" + out.string() + " 2>" + err.string();
-  const int status = std::system(command.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, test::readText(out), test::readText(err)};
+  return test::runCommand(dir, HATTR_CLI_PATH, args, tag);
 }
 
 /// `hattr device serve` in the background, its stdout on a pipe.

@@ -3,9 +3,7 @@
 // a study whose mentored trials are each a session of a live expert's station.
 
 #include <signal.h>
-#include <sys/wait.h>
 
-#include <cstdlib>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -15,6 +13,7 @@
 #include "hattr/session/study_database.hpp"
 #include "net/writing_script.hpp"
 #include "support/background_process.hpp"
+#include "support/run_command.hpp"
 #include "support/test_support.hpp"
 
 namespace hattr {
@@ -22,38 +21,18 @@ namespace {
 
 using ::testing::HasSubstr;
 
-struct RunResult {
-  int exit_code;
-  std::string out;
-  std::string err;
-};
+using test::RunResult;
 
 RunResult runHattr(const test::TempDir& dir, const std::string& args, const std::string& tag = "run") {
-  const auto out = dir / (tag + ".out");
-  const auto err = dir / (tag + ".err");
-  const std::string command = std::string(HATTR_CLI_PATH) + " " + args + " >" + out.string() + " 2>" + err.string();
-  const int status = std::system(command.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, test::readText(out), test::readText(err)};
+  return test::runCommand(dir, HATTR_CLI_PATH, args, tag);
 }
 
 /// The expert's writing (a figure of eight in 2.4 s, then the pen lifted) and the trainee's
 /// (the same, 3 mm right and 2 mm down), written to the folder.
 void writeScripts(const test::TempDir& dir) {
-  HapticProfile expert = test::figureEightScript(2.4);
-  Sample lifted = expert.samples().back();
-  lifted.t_s += 0.1;
-  lifted.p_WT.z() = 0.005;
-  lifted.f_user_W.setZero();
-  lifted.v_WT.setZero();
-  lifted.pen_down = false;
-  expert.append(lifted);
+  const HapticProfile expert = test::figureEightThenLift(2.4);
   io::writeProfileCsv(expert, dir / "expert.csv");
-  HapticProfile trainee(expert.metadata(), expert.rawChannels());
-  for (Sample s : expert.samples()) {
-    s.p_WT += Vec3(0.003, -0.002, 0.0);
-    trainee.append(s);
-  }
-  io::writeProfileCsv(trainee, dir / "trainee.csv");
+  io::writeProfileCsv(test::offsetScript(expert, Vec3(0.003, -0.002, 0.0)), dir / "trainee.csv");
 }
 
 std::string makeKey(const test::TempDir& dir) {

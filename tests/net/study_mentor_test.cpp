@@ -21,27 +21,10 @@ namespace {
 using ::testing::HasSubstr;
 
 /// The expert writes a figure of eight in 2.4 s, then lifts the pen (so a trial ends 1 s later).
-HapticProfile expertWriting() {
-  HapticProfile p = test::figureEightScript(2.4);
-  Sample lifted = p.samples().back();
-  lifted.t_s += 0.1;
-  lifted.p_WT.z() = 0.005;
-  lifted.v_WT.setZero();
-  lifted.f_user_W.setZero();
-  lifted.pen_down = false;
-  p.append(lifted);
-  return p;
-}
+HapticProfile expertWriting() { return test::figureEightThenLift(2.4); }
 
 /// The trainee's hand: the expert's plan 3 mm right and 2 mm down of it.
-HapticProfile offsetWriting(const HapticProfile& expert) {
-  HapticProfile p(expert.metadata(), expert.rawChannels());
-  for (Sample s : expert.samples()) {
-    s.p_WT += Vec3(0.003, -0.002, 0.0);
-    p.append(s);
-  }
-  return p;
-}
+HapticProfile offsetWriting(const HapticProfile& expert) { return test::offsetScript(expert, Vec3(0.003, -0.002, 0.0)); }
 
 double trajectoryDtw(const HapticProfile& a, const HapticProfile& b) {
   double sum = 0.0;

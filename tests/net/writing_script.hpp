@@ -25,4 +25,27 @@ inline HapticProfile figureEightScript(double period_s) {
   return p;
 }
 
+/// The figure of eight, then the pen lifted 5 mm 0.1 s later (so a trial's end rule ends it).
+inline HapticProfile figureEightThenLift(double period_s) {
+  HapticProfile p = figureEightScript(period_s);
+  Sample lifted = p.samples().back();
+  lifted.t_s += 0.1;
+  lifted.p_WT.z() = 0.005;
+  lifted.v_WT.setZero();
+  lifted.f_user_W.setZero();
+  lifted.pen_down = false;
+  p.append(lifted);
+  return p;
+}
+
+/// The same writing moved by `offset_W` (a trainee who writes beside the expert).
+inline HapticProfile offsetScript(const HapticProfile& script, const Vec3& offset_W) {
+  HapticProfile p(script.metadata(), script.rawChannels());
+  for (Sample s : script.samples()) {
+    s.p_WT += offset_W;
+    p.append(s);
+  }
+  return p;
+}
+
 }  // namespace hattr::test
