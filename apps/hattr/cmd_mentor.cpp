@@ -177,6 +177,7 @@ void runStation(const MentorOptions& opt, net::MentorRole role) {
   // the coupling's fade-in), both sides record; whatever was recorded is kept, failure or not.
   std::vector<SessionSummary> summaries;
   std::string first_failure;
+  net::MentorStats before_session{};  // each session's figures are its own
   for (int number = 1; !g_mentor_stop && (opt.sessions == 0 || number <= opt.sessions); ++number) {
     std::string failure = waitForLink(station, opt, serving);
     if (failure.empty() && g_mentor_stop) break;
@@ -194,7 +195,9 @@ void runStation(const MentorOptions& opt, net::MentorRole role) {
     station.recorder().stopThread();
     SessionSummary summary;
     HapticProfile recorded = station.takeRecording();
-    summary.stats = station.coupling().stats();
+    const net::MentorStats after_session = station.coupling().stats();
+    summary.stats = net::statsSince(after_session, before_session);
+    before_session = after_session;
     summary.failure = failure;
     summary.samples = recorded.size();
     if (!failure.empty()) recorded.metadata().extra["failed"] = failure;

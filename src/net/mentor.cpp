@@ -228,9 +228,10 @@ void MentorCoupling::handle(const device::net::Packet& packet, const device::net
     return;
   }
   last_heard_ns_ = now_ns;
-  if (h.type == PacketType::kBye) {
+  if (h.type == PacketType::kBye) {  // a normal end: the link goes down without a fault
     session_ = false;
     have_other_ = false;
+    link_up_ = false;
     return;
   }
   other_state_ = std::get<device::net::PeerPayload>(packet.payload);
@@ -421,6 +422,21 @@ MentorStats MentorCoupling::stats() const noexcept {
   s.dissipated_J = dissipated_snapshot_.load();
   s.rtt_s = rtt_snapshot_.load();
   return s;
+}
+
+MentorStats statsSince(const MentorStats& now, const MentorStats& before) noexcept {
+  MentorStats d = now;
+  d.sessions -= before.sessions;
+  d.busy_refusals -= before.busy_refusals;
+  d.link_faults -= before.link_faults;
+  d.peers_received -= before.peers_received;
+  d.peers_sent -= before.peers_sent;
+  d.peers_withheld -= before.peers_withheld;
+  for (std::size_t i = 0; i < d.drops.size(); ++i) d.drops[i] -= before.drops[i];
+  d.energy_in_J -= before.energy_in_J;
+  d.energy_out_J -= before.energy_out_J;
+  d.dissipated_J -= before.dissipated_J;
+  return d;
 }
 
 }  // namespace hattr::net

@@ -47,6 +47,11 @@ std::string noteLoopCounters(TrialResult& result) {
   return disturbed;
 }
 
+std::uint64_t studyLiveSeed(const SubjectSpec& subject, const TrialPlan& plan, int attempt) {
+  return subject.seed * 1'000'003ULL + static_cast<std::uint64_t>(plan.sequence) * 31ULL +
+         static_cast<std::uint64_t>(attempt);
+}
+
 TrialSetup studyTrialSetup(const StudyDefinition& study, const TrialPlan& plan,
                            std::shared_ptr<const guidance::ReferenceTrajectory> reference) {
   HATTR_THROW_UNLESS(reference != nullptr, "study \"{}\", subject {}, trial {}: expected the expert's reference "
@@ -164,9 +169,7 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
     std::string disturbed;
     for (int attempt = 0;; ++attempt) {
       setup.inject_stall_at_s = options.inject_stall_at_s ? options.inject_stall_at_s(plan, attempt) : -1.0;
-      // A simulated mentor's link draws the same losses for the same trial, resumed or not.
-      setup.live_seed = subject.spec.seed * 1'000'003ULL + static_cast<std::uint64_t>(plan.sequence) * 31ULL +
-                        static_cast<std::uint64_t>(attempt);
+      setup.live_seed = studyLiveSeed(subject.spec, plan, attempt);
       db_.markRunning(record.id, session);
       result = runTrial(*environment_, setup, participant->handForTrial(plan));
       // A trial the device broke off is not data: mark it, keep everything stored, and stop.

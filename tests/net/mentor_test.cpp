@@ -145,5 +145,35 @@ TEST(Mentoring, CouplingNamesRoundTripAndBadOnesAreRefused) {
   }
 }
 
+// A goodbye is a normal end: the station that hears it ends the session with no lost link,
+// while a link that goes silent counts one. Two couplings on an in-process link without loss,
+// ticked by hand at 1 kHz, so nothing depends on the host's timing.
+TEST(Mentoring, AGoodbyeEndsTheSessionWithoutALinkFaultASilentLinkCountsOne) {
+  for (const bool goodbye : {true, false}) {
+    EmulatedLinkPair link(LinkConditions{}, LinkConditions{});
+    const device::net::AuthKey key = device::net::randomKey();
+    MentorCoupling leader(MentorConfig{.role = MentorRole::kLeader, .key = key}, link.end(0));
+    MentorCoupling follower(MentorConfig{.role = MentorRole::kFollower, .key = key, .leader = EmulatedLinkPair::addressOf(0)},
+                            link.end(1));
+    const ContactForces contact;
+    int tick = 0;
+    const auto run = [&](int ticks, bool follower_ticks) {
+      for (int i = 0; i < ticks; ++i, ++tick) {
+        const PenState pen{.t_s = tick * 1e-3};
+        (void)leader.compute(pen, contact, 1e-3);
+        if (follower_ticks) (void)follower.compute(pen, contact, 1e-3);
+      }
+    };
+    run(300, true);
+    ASSERT_TRUE(leader.stats().link_up);
+    ASSERT_TRUE(follower.stats().link_up);
+    if (goodbye) follower.close(static_cast<std::int64_t>(tick) * 1'000'000);
+    run(100, false);  // the follower's loop has stopped
+    EXPECT_FALSE(leader.stats().link_up);
+    EXPECT_EQ(leader.stats().link_faults, goodbye ? 0u : 1u) << (goodbye ? "goodbye" : "silence");
+    EXPECT_EQ(leader.stats().sessions, 1u);
+  }
+}
+
 }  // namespace
 }  // namespace hattr::net

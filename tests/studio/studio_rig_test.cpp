@@ -9,7 +9,11 @@
 #include "core/mouse_hand.hpp"
 #include "core/study_session.hpp"
 #include "hattr/core/error.hpp"
+#include "hattr/device/net_protocol.hpp"
+#include "hattr/device/udp_socket.hpp"
 #include "hattr/io/profile_csv.hpp"
+#include "hattr/net/study_mentor.hpp"
+#include "hattr/render/world_config.hpp"
 #include "hattr/session/study_runner.hpp"
 #include "studio_test_support.hpp"
 
@@ -480,6 +484,117 @@ class StudioRigTest : public QObject {
     const auto db = session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kReadOnly);
     QCOMPARE(db.trials("P01")[0].attempts, 2);
     QCOMPARE(db.trials("P01")[0].status, session::TrialStatus::kCompleted);
+    std::filesystem::remove_all(dir);
+  }
+
+  // A mentored mode's trials at the studio: the expert's station from the study file's mentor
+  // block, the runner's set-up (a simulated mentor's link seeded per trial), stored bit for
+  // bit as `hattr study run` stores them, the mentor's notes included.
+  void studySessionRunsMentoredTrialsAsTheRunnerDoes() {
+    const auto dir = makeStudyFolder("mentored");
+    const HapticProfile lift = test::writeThenLift(expert_, 1.0);
+    io::writeProfileCsv(lift, dir / "lift.csv");
+    std::ofstream(dir / "study.json") << test::smallStudyJson(
+        "[\"mentor-position\", \"mentor-force\"]", 2.0,
+        "[{\"id\": \"P01\", \"participant\": \"person\", \"seed\": 5, \"options\": {\"hand\": \"" +
+            (dir / "lift.csv").string() + "\"}}]",
+        "flat", kPenUpEnd, "{\"expert\": \"simulated\", \"round_trip_ms\": 20, \"loss_percent\": 5}");
+    const session::StudyDefinition study = session::loadStudy(dir / "study.json");
+    QVERIFY(study.hasMentoredModes());
+    { (void)session::StudyDatabase::create(dir / "runner.sqlite", study); }
+    { (void)session::StudyDatabase::create(dir / "studio.sqlite", study); }
+    {
+      auto db = session::StudyDatabase::open(dir / "runner.sqlite", session::OpenMode::kRunner);
+      const auto mentor = net::makeStudyMentor(study.mentor, db.expert(study.skill),
+                                               render::parseWorldConfig(study.world.dump(), "w"), study.rate_hz);
+      session::StudyRunner runner(db, session::makeScriptParticipant);
+      QCOMPARE(runner.run({.mentor = mentor.get()}), 4);
+    }
+    {
+      StudySession session(dir / "studio.sqlite");
+      session.selectSubject("P01", 0.0);
+      LiveRig rig;
+      int mentored = 0;
+      while (session.state() != StudySession::State::kFinished) {
+        session.skipRest();
+        const session::TrialSetup setup = session.currentSetup();
+        QVERIFY(setup.live_guidance != nullptr);
+        mentored += guidance::isMentored(setup.guidance.mode) ? 1 : 0;
+        session.beginTrial();
+        const HapticProfile script = io::readProfileCsv(dir / "lift.csv");  // as the runner reads it
+        device::ProfileHandScript hand(script, 1.0471975511965976, Vec3(0.0, 0.0, 0.0));
+        rig.start(session.environment(), trialRunSpec(setup, false), hand, session::Clock::kSimulated);
+        QVERIFY(rig.spec().settle_s >= setup.settle_s);  // at least the mentor's minimum
+        rig.advanceSimulated(rig.spec().settle_s);
+        rig.advanceSimulated(setup.duration_s);
+        const std::string disturbed = session.completeTrial(rig.finish(), 0.0);
+        QVERIFY2(disturbed.empty(), disturbed.c_str());
+      }
+      QCOMPARE(mentored, 2);  // training is mentored, recall is not
+    }
+    const auto a = session::StudyDatabase::open(dir / "runner.sqlite", session::OpenMode::kReadOnly);
+    const auto b = session::StudyDatabase::open(dir / "studio.sqlite", session::OpenMode::kReadOnly);
+    const auto ta = a.trials("P01");
+    const auto tb = b.trials("P01");
+    QCOMPARE(tb.size(), ta.size());
+    int with_mentor = 0;
+    for (std::size_t i = 0; i < ta.size(); ++i) {
+      QCOMPARE(tb[i].status, session::TrialStatus::kCompleted);
+      const HapticProfile pa = a.trialProfile(ta[i].id);
+      const HapticProfile pb = b.trialProfile(tb[i].id);
+      with_mentor += pb.metadata().extra.count("mentor") > 0 ? 1 : 0;
+      QVERIFY2(sameButCreationTime(pa, pb), std::to_string(i).c_str());
+    }
+    QCOMPARE(with_mentor, 2);
+    std::filesystem::remove_all(dir);
+  }
+
+  // A live mentor whose station does not answer: the trial fails when the settle ends, records
+  // nothing, and is marked failed with the reason; the same trial is next again.
+  void studySessionFailsAMentoredTrialWhoseExpertIsNotThere() {
+    const auto dir = makeStudyFolder("mentor-absent");
+    device::net::writeKeyFile(dir / "mentor.key", device::net::randomKey(), false);
+    // A station that never answers: a bound socket nobody reads.
+    const device::net::UdpSocket silent = device::net::UdpSocket::bound({.address = 0x7f000001, .port = 0});
+    const std::string connect = fmt::format("127.0.0.1:{}", silent.localEndpoint().port);
+    std::ofstream(dir / "study.json") << test::smallStudyJson(
+        "[\"mentor-observe\"]", 2.0, "[{\"id\": \"P01\", \"participant\": \"person\"}]", "flat", kPenUpEnd,
+        "{\"expert\": \"live\", \"connect\": \"" + connect + "\", \"key\": \"mentor.key\"}");
+    { (void)session::StudyDatabase::create(dir / "s.sqlite", session::loadStudy(dir / "study.json")); }
+    {
+      StudySession session(dir / "s.sqlite");
+      session.selectSubject("P01", 0.0);
+      const session::TrialSetup setup = session.currentSetup();
+      QCOMPARE(setup.guidance.mode, guidance::TrainingMode::kMentorObserve);
+      session.beginTrial();
+      device::ProfileHandScript hand(session.expert());
+      LiveRig rig;
+      rig.start(session.environment(), trialRunSpec(setup, false), hand, session::Clock::kSimulated);
+      rig.advanceSimulated(rig.spec().settle_s + setup.duration_s);
+      QVERIFY(rig.status().window_done);
+      const session::TrialResult result = rig.finish();
+      QVERIFY2(result.failure.find("no answer from the expert's station at " + connect) != std::string::npos,
+               result.failure.c_str());
+      QCOMPARE(result.end_reason, std::string(session::kEndFailed));
+      QVERIFY(result.profile.empty());
+      session.failTrial(result.failure);
+      QCOMPARE(session.state(), StudySession::State::kReady);
+      QCOMPARE(session.currentTrial()->plan.sequence, 0);
+      // Without its mentor a mentored run is refused before anything starts.
+      session::TrialSetup bare = setup;
+      bare.live_guidance = nullptr;
+      try {
+        rig.start(session.environment(), trialRunSpec(bare, false), hand, session::Clock::kSimulated);
+        QFAIL("no error");
+      } catch (const InputError& e) {
+        QVERIFY2(QString(e.what()).contains("mode MENTOR-OBSERVE: a mentored mode needs an expert's station"), e.what());
+      }
+      QVERIFY(!rig.active());
+    }
+    const auto db = session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kReadOnly);
+    const session::TrialRecord first = db.trials("P01")[0];
+    QCOMPARE(first.status, session::TrialStatus::kInterrupted);
+    QVERIFY2(first.outcome.find("failed: no answer from the expert's station") == 0, first.outcome.c_str());
     std::filesystem::remove_all(dir);
   }
 

@@ -49,7 +49,7 @@ HapticProfile recordExpert(session::TrialEnvironment& environment, double durati
 }
 
 std::string smallStudyJson(const std::string& modes, double rest_s, const std::string& subjects,
-                           const std::string& relief, const std::string& trial_end) {
+                           const std::string& relief, const std::string& trial_end, const std::string& mentor) {
   // Kept out of the test files: moc does not parse raw string literals. Disturbed trials are
   // flagged, not repeated: the studio's real-time trials run on whatever load the host has, and
   // the policies have tests of their own (DisturbedTrials.*).
@@ -62,7 +62,7 @@ std::string smallStudyJson(const std::string& modes, double rest_s, const std::s
          relief +
          R"("}}, "rate_hz": 1000, "indexing": "time",)"
          R"("subjects": )" +
-         subjects + "}";
+         subjects + (mentor.empty() ? "" : R"(, "mentor": )" + mentor) + "}";
 }
 
 HapticProfile writeThenLift(const HapticProfile& writing, double lift_s) {

@@ -28,8 +28,10 @@ HapticProfile recordExpert(session::TrialEnvironment& environment, double durati
 /// JSON arrays; `relief` a relief kind ("flat", "grain"); `trial_end` the protocol's keys for
 /// the end of a trial: an old file's fixed window (`"tail_s": 0.2`, the default) or an end
 /// rule (`"trial_end": {"pen_up_s": 0.4}`).
+/// `mentor`: the study's mentor block (a JSON object), none when empty.
 std::string smallStudyJson(const std::string& modes, double rest_s, const std::string& subjects,
-                           const std::string& relief, const std::string& trial_end = "\"tail_s\": 0.2");
+                           const std::string& relief, const std::string& trial_end = "\"tail_s\": 0.2",
+                           const std::string& mentor = "");
 
 /// `writing` followed by the hand lifting the pen 5 mm where it ended and holding it there for
 /// `lift_s` (a hand script for a trial that ends by the pen-up rule), sampled at 100 Hz.

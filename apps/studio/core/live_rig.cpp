@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 
 #include "hattr/core/error.hpp"
 #include "hattr/device/device_uri.hpp"
@@ -29,6 +30,8 @@ RunSpec trialRunSpec(const session::TrialSetup& setup, bool follow_during_settle
   spec.duration_s = setup.duration_s;
   spec.pen_up_end_s = setup.pen_up_end_s;
   spec.follow_during_settle = follow_during_settle;
+  spec.live_guidance = setup.live_guidance;
+  spec.live_seed = setup.live_seed;
   return spec;
 }
 
@@ -51,17 +54,26 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
                      "trial end: pen-up time: expected [0, 60] s (0: off), got {}", spec.pen_up_end_s);
   spec_ = spec;
   clock_ = clock;
-  // Guidance, device, paper and loop, set up as runTrial sets them up.
+  // Guidance, device, paper and loop, set up as runTrial sets them up; a mentored mode's
+  // guidance comes live from the expert's pen, after a settle long enough for the link.
   guidance::GuidanceConfig config = spec.guidance;
   clamps_ = session::clampTrialGains(config, environment);
   auto guidance = std::make_unique<guidance::TrainingGuidance>(spec.reference, config);
-  guidance->startTrial(spec.settle_s);
-  auto settling = std::make_unique<session::SettlingHand>(hand, spec.settle_s, spec.follow_during_settle);
+  live_ = guidance::isMentored(config.mode) ? spec.live_guidance : nullptr;
+  HATTR_THROW_UNLESS(live_ != nullptr || !guidance::isMentored(config.mode),
+                     "mode {}: a mentored mode needs an expert's station (the study file's mentor block)",
+                     guidance::modeName(config.mode));
+  if (live_) spec_.settle_s = std::max(spec.settle_s, live_->minimumSettle_s());
+  GuidanceController& stage =
+      live_ ? live_->beginTrial(config.mode, environment, spec_.settle_s, spec.live_seed)
+            : static_cast<GuidanceController&>(*guidance);
+  guidance->startTrial(spec_.settle_s);
+  auto settling = std::make_unique<session::SettlingHand>(hand, spec_.settle_s, spec.follow_during_settle);
   auto device = session::openTrialDevice(environment.deviceUri(), *settling);
   environment.paper().reset();
   auto loop = std::make_unique<servo::ServoLoop>(*device, servo::ServoConfig{.rate_hz = environment.rate_hz()});
   loop->setWorld(&environment.paper());
-  loop->setGuidance(guidance.get());
+  loop->setGuidance(&stage);
   const ProfileMetadata metadata = session::trialMetadata(spec.metadata, environment, config, clamps_, clock);
 
   // The recorder takes samples through a relay ring, so a trial's window starts and ends
@@ -84,12 +96,13 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
   relay_ = std::move(relay);
   recorder_ = std::move(recorder);
   const double half_period_s = 0.5 / environment.rate_hz();  // time stamps are not exact multiples
-  window_begin_s_ = spec.settle_s - half_period_s;
-  window_end_s_ = spec.settle_s + spec.duration_s - half_period_s;
+  window_begin_s_ = spec_.settle_s - half_period_s;
+  window_end_s_ = spec_.settle_s + spec_.duration_s - half_period_s;
   period_s_ = 1.0 / environment.rate_hz();
   window_armed_ = false;
   was_recording_ = false;
   stop_taken_ = false;
+  mentor_failure_.clear();
   stop_.reset();
   status_recording_ = false;
   status_window_done_ = false;
@@ -139,7 +152,12 @@ void LiveRig::pump() {
     if (!stop_taken_ && stop_.requested()) takeStop();
     if (spec_.record == RecordMode::kWindow && !stop_taken_) {
       const bool in_window = item.sample.t_s >= window_begin_s_ && item.sample.t_s < window_end_s_;
-      if (in_window != window_armed_) {
+      // As runTrial: a mentor not there when the settle ends fails the trial, nothing recorded.
+      if (in_window && !window_armed_ && live_) mentor_failure_ = live_->unavailable();
+      if (!mentor_failure_.empty()) {
+        takeStop();
+        status_window_done_.store(true, std::memory_order_release);
+      } else if (in_window != window_armed_) {
         recorder_->drain();
         if (in_window) {
           recorder_->start();
@@ -206,7 +224,13 @@ session::TrialResult LiveRig::finish() {
   result.link_faults = loop_->counters().link_faults.load();
   result.max_period_error_s = static_cast<double>(loop_->periodError().max_ns()) * 1e-9;
   result.clock = std::string(servo::loopClockName(loop_->clock()));
+  // The mentor's session ends with the loop; its notes go with the recording, as runTrial's.
+  result.failure = mentor_failure_;
+  const std::map<std::string, std::string> live_notes =
+      live_ ? live_->endTrial(result) : std::map<std::string, std::string>{};
   session::noteTrialEnd(result, *recorder_, stop_taken_);
+  result.profile.metadata().extra.insert(live_notes.begin(), live_notes.end());
+  if (!result.failure.empty()) result.profile.metadata().extra["failed"] = result.failure;
 
   // Tear down in dependency order: the recorder reads the relay, the loop drives the device.
   recorder_.reset();
@@ -215,6 +239,7 @@ session::TrialResult LiveRig::finish() {
   device_.reset();
   settling_.reset();
   guidance_.reset();
+  live_ = nullptr;
   environment_ = nullptr;
   return result;
 }

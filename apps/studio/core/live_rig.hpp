@@ -62,6 +62,13 @@ struct RunSpec {
   /// During the settle phase: true, the lifted pen follows the live hand (a person moves to
   /// the start); false, it is held above the hand's first point, as runTrial does.
   bool follow_during_settle = true;
+  /// A mentored mode's guidance (session::TrialSetup::live_guidance): the expert's station
+  /// steers this run's force instead of TrainingGuidance. As in runTrial, the settle phase is
+  /// lengthened to the mentor's minimum (spec() reports the settle used) and a mentor whose
+  /// link is not up when the settle ends fails the run before anything is recorded. Must
+  /// outlive the run; null for every other mode.
+  session::LiveGuidance* live_guidance = nullptr;
+  std::uint64_t live_seed = 1;  ///< passed to LiveGuidance::beginTrial
 };
 
 /// The rig's state, readable from the GUI thread while a run goes on.
@@ -104,7 +111,9 @@ class LiveRig {
   /// Stops the run (the device is commanded zero force) and returns what was recorded
   /// (an empty profile when nothing was), with the run's counters and, as runTrial reports
   /// them (session::noteTrialEnd), its end reason — "pen lifted", "stopped" after
-  /// requestStop(), else "maximum duration" — and writing span. No-op result when idle.
+  /// requestStop(), else "maximum duration" — and writing span. A mentored run also carries
+  /// the mentor's notes, its lost links (mentor_link_faults) and, when the mentor was not
+  /// there at the settle's end, the failure (nothing recorded). No-op result when idle.
   session::TrialResult finish();
   /// Ends the trial now (the stop key): the relay disarms the recorder at the next sample it
   /// takes, so nothing after the request is recorded, and finish() reports end_reason
@@ -147,6 +156,7 @@ class LiveRig {
   std::unique_ptr<session::SettlingHand> settling_;
   std::unique_ptr<device::Device> device_;
   std::unique_ptr<guidance::TrainingGuidance> guidance_;
+  session::LiveGuidance* live_ = nullptr;  // a mentored run's guidance (spec_.live_guidance)
   std::unique_ptr<servo::ServoLoop> loop_;
   std::unique_ptr<session::Recorder> recorder_;
   std::unique_ptr<SpscRing<TickSample>> relay_;
@@ -161,6 +171,7 @@ class LiveRig {
   bool window_armed_ = false;
   bool was_recording_ = false;
   bool stop_taken_ = false;
+  std::string mentor_failure_;  // the mentor was unavailable when the settle ended
 
   // Published for the GUI thread.
   std::atomic<bool> status_recording_{false};

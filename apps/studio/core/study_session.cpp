@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/net/study_mentor.hpp"
 #include "hattr/render/world_config.hpp"
 #include "hattr/session/study_runner.hpp"
 
@@ -12,15 +13,12 @@ StudySession::StudySession(const std::filesystem::path& file)
     : db_(session::StudyDatabase::open(file, session::OpenMode::kRunner)) {
   // The expert, the environment and the reference, as StudyRunner builds them.
   const session::StudyDefinition& study = db_.study();
-  // Mentored modes need the expert's station beside the trial; the studio's trials do not
-  // connect to one (the Mentor tab is for sessions outside a study).
-  HATTR_THROW_UNLESS(!study.hasMentoredModes(),
-                     "study \"{}\" has mentored modes: run its trials with `hattr study run --clock real` (the "
-                     "studio's study session does not connect to a mentor's station)", study.name);
   expert_ = db_.expert(study.skill);
-  environment_ = std::make_unique<session::TrialEnvironment>(
-      study.device, render::parseWorldConfig(study.world.dump(), "study world"), study.rate_hz);
+  const render::WorldConfig world = render::parseWorldConfig(study.world.dump(), "study world");
+  environment_ = std::make_unique<session::TrialEnvironment>(study.device, world, study.rate_hz);
   reference_ = std::make_shared<guidance::ReferenceTrajectory>(expert_, study.rate_hz);
+  // The expert's station for the mentored modes' training trials, as `hattr study run`'s.
+  if (study.hasMentoredModes()) mentor_ = net::makeStudyMentor(study.mentor, expert_, world, study.rate_hz);
 }
 
 StudySession::~StudySession() {
@@ -98,6 +96,10 @@ session::TrialSetup StudySession::currentSetup() const {
   // StudyRunner's set-up, in real time for a person.
   session::TrialSetup setup = session::studyTrialSetup(db_.study(), record->plan, reference_);
   setup.clock = session::Clock::kRealTime;
+  setup.live_guidance = mentor_.get();
+  for (const session::SubjectRecord& s : db_.subjects()) {
+    if (s.id == subject_) setup.live_seed = session::studyLiveSeed(s.spec, record->plan, repeats_);
+  }
   return setup;
 }
 
@@ -149,6 +151,12 @@ std::string StudySession::completeTrial(session::TrialResult result, double now_
     rest_until_s_ = now_s + db_.study().protocol.rest_s;
   }
   return disturbed;
+}
+
+void StudySession::failTrial(const std::string& reason) {
+  HATTR_DEMAND(state_ == State::kRunning, "study: failTrial() in state {}", stateName(state_));
+  db_.failTrial(trials_[next_].id, reason);
+  state_ = State::kReady;
 }
 
 void StudySession::abandonTrial() {

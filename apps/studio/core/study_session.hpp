@@ -9,6 +9,10 @@
 /// ends (created_utc cleared, the runner's outcome text). With a scripted hand in simulated
 /// time it stores what the runner stores, bit for bit (tests/studio/studio_rig_test.cpp).
 ///
+/// A study with mentored modes gets its expert's station from the study file's mentor
+/// block (net::makeStudyMentor), as `hattr study run` does: currentSetup() hands it to the
+/// trial as its live guidance, and a trial whose mentor was not there fails (failTrial).
+///
 /// GUI thread only; times are seconds of any monotonic clock the caller keeps.
 
 #include <cstdint>
@@ -34,7 +38,8 @@ class StudySession {
   };
 
   /// Opens a study database as its runner. Throws InputError for a file that is not a
-  /// hattr study, a newer schema, or a study another runner holds (naming the holder).
+  /// hattr study, a newer schema, a study another runner holds (naming the holder), or a
+  /// mentor block that cannot be set up (a live mentor's address or key file).
   explicit StudySession(const std::filesystem::path& file);
   /// Ends the session in the database if one was begun.
   ~StudySession();
@@ -89,6 +94,9 @@ class StudySession {
   /// disturbed attempt and the state goes back to ready for the same trial. Returns the
   /// disturbance ("" when clean).
   std::string completeTrial(session::TrialResult result, double now_s);
+  /// The trial failed (its mentor was not there; session::TrialResult::failure): marked
+  /// failed with the reason, as the runner marks it, and back to ready to run it again.
+  void failTrial(const std::string& reason);
   /// The person abandoned the trial: it stays marked running until run again (each run
   /// counts an attempt; a crash leaves it to be marked interrupted). Back to ready.
   void abandonTrial();
@@ -99,6 +107,7 @@ class StudySession {
   HapticProfile expert_;
   std::unique_ptr<session::TrialEnvironment> environment_;
   std::shared_ptr<const guidance::ReferenceTrajectory> reference_;
+  std::unique_ptr<session::LiveGuidance> mentor_;  ///< the mentored modes' expert station
   std::string subject_;
   std::vector<session::TrialRecord> trials_;
   std::size_t next_ = 0;  // index of the current trial in trials_

@@ -232,6 +232,19 @@ void MainWindow::finishTrial() {
   activity_ = Activity::kFree;
   startFreeRun();
   paper_->setReferenceCue(std::nullopt);
+  if (!result.failure.empty() && was == Activity::kStudyTrial && study_) {
+    // A mentored trial whose expert was not there: marked failed, as the runner marks it.
+    try {
+      study_->failTrial(result.failure);
+    } catch (const std::exception& e) {
+      study_->abandonTrial();
+      result.failure += "\n\n" + what(e).toStdString();
+    }
+    refreshStudyPanel();
+    showError(tr("The trial failed"), qs(result.failure) + tr("\n\nNothing was recorded; Next runs this trial again."));
+    refreshButtons();
+    return;
+  }
   if (result.profile.empty()) {
     // A study trial that recorded nothing is run again.
     if (was == Activity::kStudyTrial && study_) {

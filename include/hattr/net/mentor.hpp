@@ -158,6 +158,11 @@ struct MentorStats {
   double rtt_s = 0.0;                ///< the latest round-trip estimate
 };
 
+/// What happened between two snapshots of one coupling's stats (`before` taken first): the
+/// counters and energies as differences, the state (session, link, rtt, lost of the current
+/// session) as `now` has them. A station serving session after session reports each one so.
+[[nodiscard]] MentorStats statsSince(const MentorStats& now, const MentorStats& before) noexcept;
+
 /// The other station's pen as last heard (for a display).
 struct PeerView {
   bool valid = false;

@@ -82,6 +82,10 @@ std::string noteLoopCounters(TrialResult& result);
 TrialSetup studyTrialSetup(const StudyDefinition& study, const TrialPlan& plan,
                            std::shared_ptr<const guidance::ReferenceTrajectory> reference);
 
+/// The seed of a mentored trial's link (LiveGuidance::beginTrial): a simulated mentor's link
+/// draws the same losses for the same trial and attempt, resumed or not, in every app.
+std::uint64_t studyLiveSeed(const SubjectSpec& subject, const TrialPlan& plan, int attempt);
+
 /// Whether a study runs a disturbed trial again: the policy is "repeat" and it has been
 /// repeated fewer than protocol.max_repeats times.
 bool repeatDisturbedTrial(const Protocol& protocol, const std::string& disturbed, int repeats_so_far);

@@ -89,7 +89,7 @@ class LiveGuidance {
                                          double settle_s, std::uint64_t seed) = 0;
   /// Empty once the link to the expert is up; otherwise why not, for people ("no answer from
   /// the expert's station at ..."). Checked when the settle phase ends: a trial without its
-  /// mentor fails there, before anything is recorded.
+  /// mentor fails there, before anything is recorded. Any thread, while the trial runs.
   [[nodiscard]] virtual std::string unavailable() const = 0;
   /// After the loop stopped: ends the link's session; a link lost during the trial counts in
   /// TrialResult::mentor_link_faults (a disturbed trial). Returns what
