@@ -40,13 +40,30 @@ nlohmann::json parseJsonObject(std::string_view text, std::string_view source) {
   return root;
 }
 
-std::string jsonExcerpt(const nlohmann::json& value) {
+std::string jsonExcerpt(const nlohmann::json& value) { return textExcerpt(value.dump()); }
+
+std::string textExcerpt(std::string_view text) {
   constexpr std::size_t kShown = 60;
-  std::string text = value.dump();
-  if (text.size() <= kShown) return text;
-  const std::size_t total = text.size();
-  text.resize(kShown);
-  return fmt::format("{}... ({} characters)", text, total);
+  if (text.size() <= kShown) return std::string(text);
+  return fmt::format("{}... ({} characters)", text.substr(0, kShown), text.size());
+}
+
+bool isSafeFileName(std::string_view name) noexcept {
+  if (name.empty() || name.size() > 64 || name.front() == '.') return false;
+  for (const char c : name) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+                    c == '-' || c == '.';
+    if (!ok) return false;
+  }
+  return true;
+}
+
+bool isPlainRelativePath(const std::filesystem::path& path) noexcept {
+  if (path.empty() || path.has_root_path()) return false;
+  for (const auto& part : path) {
+    if (part == ".." || part.empty()) return false;
+  }
+  return true;
 }
 
 }  // namespace hattr

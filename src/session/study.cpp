@@ -343,6 +343,15 @@ StudyDefinition parseStudy(std::string_view json_text, std::string_view source, 
   } else {
     problems.add("subjects: expected a non-empty list or {\"count\": N}");
   }
+  // Subject ids and skills become file names (an export's trials/<id>/, experts/<skill>.csv).
+  for (const auto& s : study.subjects) {
+    if (!isSafeFileName(s.id)) {
+      problems.add(fmt::format("subject id \"{}\": expected {}", textExcerpt(s.id), kSafeFileNameRule));
+    }
+  }
+  for (const auto& [skill, file] : study.experts) {
+    if (!isSafeFileName(skill)) problems.add(fmt::format("experts: skill \"{}\": expected {}", textExcerpt(skill), kSafeFileNameRule));
+  }
   for (const auto& s : study.subjects) {
     if (s.participant != "simulated" && s.participant != "script" && s.participant != "person") {
       problems.add(fmt::format("subject {}: participant \"{}\": expected simulated, script or person", s.id, s.participant));

@@ -53,6 +53,8 @@ class Statement {
     while (step()) {
     }
   }
+  /// Rows the last run() changed.
+  [[nodiscard]] std::int64_t changes() const { return sqlite3_changes64(db_); }
   std::int64_t integer(int col) const { return sqlite3_column_int64(stmt_, col); }
   std::string text(int col) const {
     const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(stmt_, col));
@@ -270,7 +272,31 @@ StudyDatabase::~StudyDatabase() {
   if (lock_fd_ >= 0) ::close(lock_fd_);
 }
 
-StudyDatabase StudyDatabase::create(const std::filesystem::path& file, const StudyDefinition& study) {
+namespace {
+
+/// Removes a database file and SQLite's companions (journal, WAL, shared memory); quiet.
+void removeDatabaseFiles(const std::filesystem::path& file) noexcept {
+  std::error_code ignored;
+  for (const char* suffix : {"", "-journal", "-wal", "-shm"}) {
+    std::filesystem::remove(std::filesystem::path(file.string() + suffix), ignored);
+  }
+}
+
+/// Moves a finished database into place without ever replacing a file: link, then unlink.
+void publishDatabase(const std::filesystem::path& from, const std::filesystem::path& to) {
+  if (::link(from.c_str(), to.c_str()) != 0) {
+    const int error = errno;
+    if (error == EEXIST) throw InputError(fmt::format("{}: already exists; refusing to overwrite a study database", to.string()));
+    throw Error(fmt::format("{}: cannot create the study database: {}", to.string(), std::strerror(error)));
+  }
+  std::error_code ignored;
+  std::filesystem::remove(from, ignored);
+}
+
+}  // namespace
+
+StudyDatabase StudyDatabase::create(const std::filesystem::path& file, const StudyDefinition& study,
+                                    const std::function<void(StudyDatabase&)>& fill) {
   HATTR_THROW_UNLESS(!std::filesystem::exists(file), "{}: already exists; refusing to overwrite a study database",
                      file.string());
   // Read the experts first: a bad one leaves no half-made file.
@@ -280,11 +306,32 @@ StudyDatabase StudyDatabase::create(const std::filesystem::path& file, const Stu
     io::writeProfileCsv(io::readProfileCsv(path), text);
     expert_csv[skill] = text.str();
   }
-  sqlite3* db = openSqlite(file, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
-  StudyDatabase database(file, db, -1);
-  exec(db, "PRAGMA journal_mode = WAL");
-  exec(db, "PRAGMA synchronous = FULL");
-  exec(db, "PRAGMA foreign_keys = ON");
+  // Built under a hidden name beside the file and linked into place only when complete, so a
+  // kill, a full disk or a failed fill leaves no stub that blocks the next attempt.
+  const std::filesystem::path building =
+      file.parent_path() / fmt::format(".{}.creating-{}", file.filename().string(), ::getpid());
+  removeDatabaseFiles(building);
+  try {
+    {
+      sqlite3* db = openSqlite(building, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+      StudyDatabase database(building, db, -1);
+      exec(db, "PRAGMA journal_mode = WAL");
+      exec(db, "PRAGMA synchronous = FULL");
+      exec(db, "PRAGMA foreign_keys = ON");
+      database.writeNewStudy(study, expert_csv);
+      if (fill) fill(database);
+      exec(db, "PRAGMA wal_checkpoint(TRUNCATE)");
+    }  // closed: the WAL is checked in and removed
+    publishDatabase(building, file);
+  } catch (...) {
+    removeDatabaseFiles(building);
+    throw;
+  }
+  return open(file, OpenMode::kReadWrite);
+}
+
+void StudyDatabase::writeNewStudy(const StudyDefinition& study, const std::map<std::string, std::string>& expert_csv) {
+  sqlite3* db = db_;
   {
     Transaction t(db);
     exec(db, fmt::format("PRAGMA application_id = {}", kStudyApplicationId));
@@ -316,8 +363,7 @@ StudyDatabase StudyDatabase::create(const std::filesystem::path& file, const Stu
     t.commit();
   }
   migrate(db, 1);
-  database.loadDefinition();
-  return database;
+  loadDefinition();
 }
 
 StudyDatabase StudyDatabase::open(const std::filesystem::path& file, OpenMode mode) {
@@ -459,8 +505,16 @@ void StudyDatabase::endSession(std::int64_t session_id) {
 
 void StudyDatabase::markRunning(std::int64_t trial_id, std::int64_t session_id) {
   Statement s(db_,
-              "UPDATE trials SET status = 'running', attempts = attempts + 1, session = ?, started_utc = ? WHERE id = ?");
+              "UPDATE trials SET status = 'running', attempts = attempts + 1, session = ?, started_utc = ? "
+              "WHERE id = ? AND status != 'completed'");
   s.bind(1, session_id).bind(2, utcNowIso8601()).bind(3, trial_id).run();
+  refuseCompleted(s.changes(), trial_id, "run again");
+}
+
+void StudyDatabase::refuseCompleted(std::int64_t changed, std::int64_t trial_id, std::string_view what) const {
+  if (changed == 1) return;
+  throw Error(fmt::format("study database {}: trial {} is completed or missing; a completed trial is never {}",
+                          file_.string(), trial_id, what));
 }
 
 namespace {
@@ -477,12 +531,8 @@ void StudyDatabase::completeTrial(std::int64_t trial_id, const HapticProfile& pr
                                   const std::string& disturbed) {
   const std::string data = encodeSamples(profile);
   Transaction t(db_);
-  Statement samples(db_,
-                    "INSERT OR REPLACE INTO samples (trial, raw_pressure, raw_tilt, sample_count, data) VALUES (?, ?, ?, ?, ?)");
-  samples.bind(1, trial_id).bind(2, profile.rawChannels().pressure ? 1 : 0).bind(3, profile.rawChannels().tilt ? 1 : 0)
-      .bind(4, static_cast<std::int64_t>(profile.size())).bindBlob(5, data).run();
   Statement trial(db_, "UPDATE trials SET status = 'completed', ended_utc = ?, outcome = ?, metadata = ?, disturbed = ? "
-                       "WHERE id = ?");
+                       "WHERE id = ? AND status != 'completed'");
   trial.bind(1, utcNowIso8601()).bind(2, outcome).bind(3, metadataJson(profile.metadata()).dump());
   if (disturbed.empty()) {
     trial.bindNull(4);
@@ -490,6 +540,11 @@ void StudyDatabase::completeTrial(std::int64_t trial_id, const HapticProfile& pr
     trial.bind(4, disturbed);
   }
   trial.bind(5, trial_id).run();
+  refuseCompleted(trial.changes(), trial_id, "replaced");
+  Statement samples(db_,
+                    "INSERT OR REPLACE INTO samples (trial, raw_pressure, raw_tilt, sample_count, data) VALUES (?, ?, ?, ?, ?)");
+  samples.bind(1, trial_id).bind(2, profile.rawChannels().pressure ? 1 : 0).bind(3, profile.rawChannels().tilt ? 1 : 0)
+      .bind(4, static_cast<std::int64_t>(profile.size())).bindBlob(5, data).run();
   t.commit();
 }
 

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/core/text_file.hpp"
 #include "hattr/io/profile_csv.hpp"
 
 namespace hattr::session {
@@ -15,7 +16,16 @@ constexpr std::string_view kTrialsHeader =
     "id,subject,sequence,mode,phase,trial,show_reference,guidance,status,attempts,interruptions,started_utc,ended_utc,"
     "samples,file";
 
+/// A name that becomes a path component of the export; a database written before names were
+/// checked could hold any, so the writer refuses what would leave its folder.
+const std::string& checkedName(const std::string& name, std::string_view what) {
+  HATTR_THROW_UNLESS(isSafeFileName(name), "study export: {} \"{}\": expected {}; not written", what, textExcerpt(name),
+                     kSafeFileNameRule);
+  return name;
+}
+
 std::string trialFileName(const TrialPlan& p) {
+  (void)checkedName(p.subject, "subject id");
   return fmt::format("trials/{}/{:03}_{}_{}_{:02}.csv", p.subject, p.sequence, guidance::modeName(p.mode),
                      phaseName(p.phase), p.index);
 }
@@ -26,10 +36,13 @@ std::size_t exportStudy(const StudyDatabase& db, const std::filesystem::path& ou
   namespace fs = std::filesystem;
   HATTR_THROW_UNLESS(!fs::exists(out) || fs::is_empty(out), "{}: exists and is not empty; choose a new folder",
                      out.string());
-  fs::create_directories(out / "experts");
 
-  // The definition, with the experts pointing into the export.
+  // Every name checked before anything is written.
   StudyDefinition study = db.study();
+  for (const auto& [skill, path] : study.experts) (void)checkedName(skill, "skill");
+  for (const SubjectRecord& s : db.subjects()) (void)checkedName(s.id, "subject id");
+  fs::create_directories(out / "experts");
+  // The definition, with the experts pointing into the export.
   for (auto& [skill, path] : study.experts) {
     io::writeProfileCsv(db.expert(skill), out / "experts" / (skill + ".csv"));
     path = fs::path("experts") / (skill + ".csv");
@@ -57,38 +70,45 @@ std::size_t exportStudy(const StudyDatabase& db, const std::filesystem::path& ou
 }
 
 std::size_t importStudy(const std::filesystem::path& dir, const std::filesystem::path& db_file) {
-  StudyDatabase db = StudyDatabase::create(db_file, loadStudy(dir / "study.json"));
-  std::map<std::pair<std::string, int>, std::int64_t> ids;
-  for (const TrialRecord& t : db.trials()) ids[{t.plan.subject, t.plan.sequence}] = t.id;
-
-  // Every completed trial in trials.csv, its profile from its file.
-  const auto table_file = dir / "trials.csv";
-  std::ifstream in(table_file);
-  HATTR_THROW_UNLESS(in.good(), "{}: cannot open for reading", table_file.string());
-  std::string line;
-  std::getline(in, line);
-  HATTR_THROW_UNLESS(line == kTrialsHeader, "{}:1: expected the header \"{}\", got \"{}\"", table_file.string(),
-                     kTrialsHeader, line);
+  // All or nothing: the database appears only once every trial is in (StudyDatabase::create).
   std::size_t imported = 0;
-  for (int number = 2; std::getline(in, line); ++number) {
-    std::vector<std::string> fields;
-    std::stringstream split(line);
-    for (std::string f; std::getline(split, f, ',');) fields.push_back(f);
-    if (line.ends_with(',')) fields.emplace_back();
-    HATTR_THROW_UNLESS(fields.size() == 15, "{}:{}: expected 15 fields, got {}", table_file.string(), number, fields.size());
-    if (fields[8] != "completed") continue;
-    int sequence = 0;
-    try {
-      sequence = std::stoi(fields[2]);
-    } catch (const std::exception&) {
-      throw InputError(fmt::format("{}:{}: sequence: expected an integer, got \"{}\"", table_file.string(), number, fields[2]));
+  (void)StudyDatabase::create(db_file, loadStudy(dir / "study.json"), [&](StudyDatabase& db) {
+    std::map<std::pair<std::string, int>, std::int64_t> ids;
+    for (const TrialRecord& t : db.trials()) ids[{t.plan.subject, t.plan.sequence}] = t.id;
+
+    // Every completed trial in trials.csv, its profile from its file inside the export.
+    const auto table_file = dir / "trials.csv";
+    std::ifstream in(table_file);
+    HATTR_THROW_UNLESS(in.good(), "{}: cannot open for reading", table_file.string());
+    std::string line;
+    std::getline(in, line);
+    HATTR_THROW_UNLESS(line == kTrialsHeader, "{}:1: expected the header \"{}\", got \"{}\"", table_file.string(),
+                       kTrialsHeader, textExcerpt(line));
+    for (int number = 2; std::getline(in, line); ++number) {
+      std::vector<std::string> fields;
+      std::stringstream split(line);
+      for (std::string f; std::getline(split, f, ',');) fields.push_back(f);
+      if (line.ends_with(',')) fields.emplace_back();
+      HATTR_THROW_UNLESS(fields.size() == 15, "{}:{}: expected 15 fields, got {}", table_file.string(), number,
+                         fields.size());
+      if (fields[8] != "completed") continue;
+      int sequence = 0;
+      try {
+        sequence = std::stoi(fields[2]);
+      } catch (const std::exception&) {
+        throw InputError(fmt::format("{}:{}: sequence: expected an integer, got \"{}\"", table_file.string(), number,
+                                     textExcerpt(fields[2])));
+      }
+      const auto id = ids.find({fields[1], sequence});
+      HATTR_THROW_UNLESS(id != ids.end(), "{}:{}: subject {} has no trial {} in the study's plan", table_file.string(),
+                         number, textExcerpt(fields[1]), sequence);
+      const std::filesystem::path file(fields[14]);
+      HATTR_THROW_UNLESS(isPlainRelativePath(file), "{}:{}: file: expected a path inside the export folder, got \"{}\"",
+                         table_file.string(), number, textExcerpt(fields[14]));
+      db.completeTrial(id->second, io::readProfileCsv(dir / file), "imported");
+      ++imported;
     }
-    const auto id = ids.find({fields[1], sequence});
-    HATTR_THROW_UNLESS(id != ids.end(), "{}:{}: subject {} has no trial {} in the study's plan", table_file.string(),
-                       number, fields[1], sequence);
-    db.completeTrial(id->second, io::readProfileCsv(dir / fields[14]), "imported");
-    ++imported;
-  }
+  });
   return imported;
 }
 

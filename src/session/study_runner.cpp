@@ -153,6 +153,12 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
     if (budget >= 0 && ran >= budget) break;
     const TrialRecord& record = trials[i];
     const TrialPlan& plan = record.plan;
+    // A trial completed after a gap (an earlier one left pending) is never run again: the
+    // participant relives it in its place, as on resume.
+    if (record.status == TrialStatus::kCompleted) {
+      participant->trialCompleted(plan, db_.trialProfile(record.id));
+      continue;
+    }
     if (i > static_cast<std::size_t>(completed) || completed > 0) participant->rest(study.protocol.rest_s);
     participant->prompt(fmt::format("{} with {}: trial {} of {}", plan.phase == Phase::kTraining ? "Training" : "Recall",
                                     guidance::modeName(plan.mode), plan.index,

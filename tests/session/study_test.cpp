@@ -18,6 +18,7 @@ namespace hattr::session {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 /// A short expert profile (0.3 s, pressing 1.2 N) written to `file`.
 void writeExpert(const std::filesystem::path& file) {
@@ -260,6 +261,179 @@ TEST(StudyRunner, StopsAndResumesAtTheFirstUnfinishedTrial) {
   EXPECT_EQ(next->interruptions, 1);
   StudyRunner runner(db, makeScriptParticipant);
   EXPECT_EQ(runner.run({}), 13);
+}
+
+// A trial list with a gap (an earlier trial pending, later ones completed): the runner runs
+// only the pending one; every completed trial keeps its profile, attempts and end time, and
+// the database itself refuses to run or replace a completed trial.
+TEST(StudyRunner, NeverRunsOrReplacesACompletedTrialWhateverTheGap) {
+  StudyFolder folder;
+  { (void)StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json")); }
+  std::vector<TrialRecord> before;
+  std::vector<HapticProfile> profiles;
+  {
+    StudyDatabase db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);
+    StudyRunner runner(db, makeScriptParticipant);
+    ASSERT_EQ(runner.run({.only_subject = "S01"}), 9);
+    before = db.trials("S01");
+    for (const TrialRecord& t : before) profiles.push_back(db.trialProfile(t.id));
+  }
+  // The gap: the third trial back to pending, its samples gone.
+  sqlite3* raw = nullptr;
+  ASSERT_EQ(sqlite3_open((folder.dir / "s.sqlite").c_str(), &raw), SQLITE_OK);
+  const std::string gap = fmt::format("UPDATE trials SET status = 'pending' WHERE id = {0}; DELETE FROM samples WHERE trial = {0};",
+                                      before[2].id);
+  ASSERT_EQ(sqlite3_exec(raw, gap.c_str(), nullptr, nullptr, nullptr), SQLITE_OK);
+  sqlite3_close(raw);
+
+  StudyDatabase db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);
+  StudyRunner runner(db, makeScriptParticipant);
+  EXPECT_EQ(runner.run({.only_subject = "S01"}), 1);
+  const std::vector<TrialRecord> after = db.trials("S01");
+  ASSERT_EQ(after.size(), before.size());
+  for (std::size_t i = 0; i < after.size(); ++i) {
+    EXPECT_EQ(after[i].status, TrialStatus::kCompleted) << i;
+    EXPECT_EQ(db.trialProfile(after[i].id), profiles[i]) << i;  // the same hand, the same trial
+    if (i == 2) continue;
+    EXPECT_EQ(after[i].attempts, before[i].attempts) << i;
+    EXPECT_EQ(after[i].ended_utc, before[i].ended_utc) << i;
+  }
+  EXPECT_EQ(after[2].attempts, before[2].attempts + 1);
+
+  // The writer's own guard.
+  const std::int64_t done = after[4].id;
+  try {
+    db.markRunning(done, db.beginSession("S01"));
+    FAIL() << "a completed trial was marked running";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr(fmt::format("trial {} is completed or missing; a completed trial is never run again", done)));
+    EXPECT_THAT(e.what(), HasSubstr("s.sqlite"));
+  }
+  try {
+    db.completeTrial(done, profiles[0], "ok");
+    FAIL() << "a completed trial was replaced";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("a completed trial is never replaced"));
+  }
+  EXPECT_EQ(db.trialProfile(done), profiles[4]);
+  EXPECT_EQ(db.trials("S01")[4].status, TrialStatus::kCompleted);
+}
+
+/// The files in `dir` (names only), hidden ones included.
+std::set<std::string> filesIn(const std::filesystem::path& dir) {
+  std::set<std::string> names;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) names.insert(e.path().filename().string());
+  return names;
+}
+
+// Import is all or nothing: one bad trial, and no database (nor any hidden half of one) is
+// left; with the trial fixed, the same import succeeds.
+TEST(StudyImport, OneBadTrialLeavesNoDatabaseBehind) {
+  StudyFolder folder;
+  {
+    StudyDatabase db = StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json"));
+    db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);
+    StudyRunner runner(db, makeScriptParticipant);
+    ASSERT_EQ(runner.run({}), 18);
+    ASSERT_EQ(exportStudy(db, folder.dir / "export"), 18u);
+  }
+  // Damage the 10th trial's file.
+  std::filesystem::path victim;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(folder.dir / "export" / "trials")) {
+    if (e.is_regular_file() && e.path().filename().string().starts_with("001_")) victim = e.path();
+  }
+  ASSERT_FALSE(victim.empty());
+  const std::string good = test::readText(victim);
+  test::writeText(victim, good.substr(0, good.size() / 2) + "1.0,not-a-number\n");
+  const std::set<std::string> before = filesIn(folder.dir.path());
+  try {
+    (void)importStudy(folder.dir / "export", folder.dir / "copy.sqlite");
+    FAIL() << "a damaged trial was imported";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr(victim.filename().string()));
+  }
+  EXPECT_EQ(filesIn(folder.dir.path()), before);  // no copy.sqlite, no hidden file, no journal
+  test::writeText(victim, good);
+  EXPECT_EQ(importStudy(folder.dir / "export", folder.dir / "copy.sqlite"), 18u);
+  EXPECT_EQ(StudyDatabase::open(folder.dir / "copy.sqlite", OpenMode::kReadOnly).trials().size(), 18u);
+}
+
+// An import's table names each trial's file; one that points outside the export is refused.
+TEST(StudyImport, RefusesATrialFileOutsideTheExport) {
+  StudyFolder folder;
+  {
+    StudyDatabase db = StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json"));
+    db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);
+    StudyRunner runner(db, makeScriptParticipant);
+    ASSERT_EQ(runner.run({.max_trials = 1}), 1);
+    ASSERT_EQ(exportStudy(db, folder.dir / "export"), 1u);
+  }
+  std::string table = test::readText(folder.dir / "export" / "trials.csv");
+  const auto at = table.find("trials/S01/");
+  ASSERT_NE(at, std::string::npos);
+  table.replace(at, std::string("trials/S01/").size(), "../../");
+  test::writeText(folder.dir / "export" / "trials.csv", table);
+  try {
+    (void)importStudy(folder.dir / "export", folder.dir / "copy.sqlite");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("trials.csv:2: file: expected a path inside the export folder, got \"../../"));
+  }
+  EXPECT_FALSE(std::filesystem::exists(folder.dir / "copy.sqlite"));
+}
+
+// Creation is atomic: whatever fails while a database is being made, the file never appears.
+TEST(StudyDatabase, CreationIsAllOrNothing) {
+  StudyFolder folder;
+  const std::set<std::string> before = filesIn(folder.dir.path());
+  EXPECT_THROW((void)StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json"),
+                                           [](StudyDatabase&) { throw Error("the disk is full"); }),
+               Error);
+  EXPECT_EQ(filesIn(folder.dir.path()), before);
+  // An existing file is never replaced, even one that appears while the database is made.
+  EXPECT_THROW((void)StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json"),
+                                           [&](StudyDatabase&) { test::writeText(folder.dir / "s.sqlite", "mine"); }),
+               InputError);
+  EXPECT_EQ(test::readText(folder.dir / "s.sqlite"), "mine");
+  std::filesystem::remove(folder.dir / "s.sqlite");
+  EXPECT_EQ(filesIn(folder.dir.path()), before);
+}
+
+// Subject ids and skills become file names: one that could leave a folder is refused where it
+// enters (the study file), and the export's writer refuses one that got in some other way.
+TEST(StudyDefinition, SubjectIdsAndSkillsThatCouldEscapeAFolderAreRefused) {
+  test::TempDir dir;
+  writeExpert(dir.path() / "expert.csv");
+  const std::string message = studyError(R"({"name": "x", "skill": "../na", "experts": {"../na": "expert.csv"},
+      "subjects": [{"id": "../../x"}, {"id": "a/b"}, {"id": ".hidden"}, {"id": "fine-01.b"}]})", dir.path());
+  EXPECT_THAT(message, HasSubstr("subject id \"../../x\": expected 1 to 64 letters, digits, '_', '-' or '.', not "
+                                 "starting with '.'"));
+  EXPECT_THAT(message, HasSubstr("subject id \"a/b\""));
+  EXPECT_THAT(message, HasSubstr("subject id \".hidden\""));
+  EXPECT_THAT(message, Not(HasSubstr("fine-01.b")));
+  EXPECT_THAT(message, HasSubstr("experts: skill \"../na\""));
+}
+
+TEST(StudyExport, TheWriterRefusesANameThatWouldLeaveTheFolder) {
+  StudyFolder folder;
+  { (void)StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json")); }
+  // A database changed behind hattr's back.
+  sqlite3* raw = nullptr;
+  ASSERT_EQ(sqlite3_open((folder.dir / "s.sqlite").c_str(), &raw), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(raw, "UPDATE trials SET subject = '../../x' WHERE subject = 'S02'; "
+                              "UPDATE subjects SET id = '../../x' WHERE id = 'S02';", nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(raw);
+  const StudyDatabase db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kReadOnly);
+  try {
+    (void)exportStudy(db, folder.dir / "out" / "export");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("study export: subject id \"../../x\""));
+    EXPECT_THAT(e.what(), HasSubstr("not written"));
+  }
+  EXPECT_FALSE(std::filesystem::exists(folder.dir / "out"));
+  EXPECT_FALSE(std::filesystem::exists(folder.dir / "x"));
 }
 
 TEST(SamplePacking, IsExact) {

@@ -40,16 +40,15 @@ void StudySession::selectSubject(const std::string& subject_id, double now_s) {
   subject_ = subject_id;
   trials_ = db_.trials(subject_id);
 
-  // Resume at the first trial not completed, as the runner does.
+  // Resume at the first trial not completed, as the runner does; trials completed after a
+  // gap are skipped when their turn comes (never run again).
   completed_ = 0;
-  while (static_cast<std::size_t>(completed_) < trials_.size() &&
-         trials_[static_cast<std::size_t>(completed_)].status == session::TrialStatus::kCompleted) {
-    ++completed_;
-  }
-  next_ = static_cast<std::size_t>(completed_);
+  for (const session::TrialRecord& t : trials_) completed_ += t.status == session::TrialStatus::kCompleted ? 1 : 0;
+  next_ = 0;
+  skipCompleted();
   if (next_ >= trials_.size()) {
     state_ = State::kFinished;
-  } else if (completed_ > 0) {
+  } else if (next_ > 0) {
     state_ = State::kResting;  // resuming: the runner rests before the first trial too
     rest_until_s_ = now_s + db_.study().protocol.rest_s;
   } else {
@@ -142,6 +141,7 @@ std::string StudySession::completeTrial(session::TrialResult result, double now_
   trials_[next_].status = session::TrialStatus::kCompleted;
   ++completed_;
   ++next_;
+  skipCompleted();
   if (next_ >= trials_.size()) {
     state_ = State::kFinished;
     db_.endSession(*session_id_);
@@ -157,6 +157,10 @@ void StudySession::failTrial(const std::string& reason) {
   HATTR_DEMAND(state_ == State::kRunning, "study: failTrial() in state {}", stateName(state_));
   db_.failTrial(trials_[next_].id, reason);
   state_ = State::kReady;
+}
+
+void StudySession::skipCompleted() {
+  while (next_ < trials_.size() && trials_[next_].status == session::TrialStatus::kCompleted) ++next_;
 }
 
 void StudySession::abandonTrial() {

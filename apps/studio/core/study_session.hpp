@@ -102,6 +102,8 @@ class StudySession {
   void abandonTrial();
 
  private:
+  void skipCompleted();  ///< moves next_ past completed trials
+
   session::StudyDatabase db_;
   int repeats_ = 0;  ///< disturbed attempts of the current trial run again so far
   HapticProfile expert_;

@@ -25,5 +25,17 @@ nlohmann::json parseJsonObject(std::string_view text, std::string_view source_na
 /// A value as it appears in a message: its JSON text, cut to about 60 characters ("[1, 2, ...]
 /// (5000 characters)") so no message ever prints an unbounded value.
 std::string jsonExcerpt(const nlohmann::json& value);
+/// Any text as it appears in a message, cut the same way.
+std::string textExcerpt(std::string_view text);
+
+/// Whether `name` may become one component of a file path hattr writes (a subject id, a
+/// skill): 1 to 64 letters, digits, '_', '-' or '.', not starting with '.' (so never "..",
+/// never hidden, never a separator).
+[[nodiscard]] bool isSafeFileName(std::string_view name) noexcept;
+/// What isSafeFileName accepts, for messages.
+inline constexpr std::string_view kSafeFileNameRule =
+    "1 to 64 letters, digits, '_', '-' or '.', not starting with '.'";
+/// Whether `path` is relative and stays below its base: no root, no "..", not empty.
+[[nodiscard]] bool isPlainRelativePath(const std::filesystem::path& path) noexcept;
 
 }  // namespace hattr

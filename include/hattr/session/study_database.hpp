@@ -13,6 +13,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -61,8 +63,12 @@ class StudyDatabase {
  public:
   /// Creates a new study file from a definition (refuses to overwrite an existing file):
   /// stores the definition, copies the expert profiles in, assigns mode orders and plans
-  /// every trial. Throws InputError for an existing file or bad experts.
-  static StudyDatabase create(const std::filesystem::path& file, const StudyDefinition& study);
+  /// every trial; then `fill` (if any) adds to it (an import's trials). All or nothing: the
+  /// file is built under a hidden name beside `file` and linked into place only when
+  /// complete, so a failure (of `fill` too), a kill or a full disk leaves no `file` behind.
+  /// Returns it opened kReadWrite. Throws InputError for an existing file or bad experts.
+  static StudyDatabase create(const std::filesystem::path& file, const StudyDefinition& study,
+                              const std::function<void(StudyDatabase&)>& fill = {});
 
   /// Opens a study file. kRunner takes the exclusive runner lock (another runner: InputError
   /// naming the file and the holder) and marks trials left running as interrupted. Refuses
@@ -88,7 +94,8 @@ class StudyDatabase {
   /// Starts a session (a run of the protocol by this process); returns its id.
   std::int64_t beginSession(const std::string& subject);
   void endSession(std::int64_t session_id);
-  /// Marks a trial running (its own transaction).
+  /// Marks a trial running (its own transaction). A completed trial is never run again or
+  /// replaced: markRunning and completeTrial throw hattr::Error for one.
   void markRunning(std::int64_t trial_id, std::int64_t session_id);
   /// Stores a finished trial's profile and marks it completed, in one transaction;
   /// `disturbed` says how the loop disturbed it ("" when clean).
@@ -105,6 +112,10 @@ class StudyDatabase {
   [[nodiscard]] std::optional<std::string> result(const std::string& key) const;
 
  private:
+  /// Throws hattr::Error unless `changed` is 1: the trial was completed (or is not there).
+  void refuseCompleted(std::int64_t changed, std::int64_t trial_id, std::string_view what) const;
+  /// create(): the schema, the definition, the experts, the subjects and their trial plans.
+  void writeNewStudy(const StudyDefinition& study, const std::map<std::string, std::string>& expert_csv);
   StudyDatabase(std::filesystem::path file, sqlite3* db, int lock_fd);
   void loadDefinition();
 
