@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -121,6 +122,31 @@ std::vector<Column> parseColumnRow(std::string_view line, const LineReader& read
 
 // ---- Sample fields ---------------------------------------------------------------------
 
+/// What no pen on paper can produce: a value beyond this is a broken file (or an attack: a
+/// reference with absurd positions would ask the guidance for absurd forces).
+struct PhysicalBound {
+  double limit;
+  std::string_view unit;
+  std::string_view why;
+};
+
+PhysicalBound physicalBound(Channel channel) {
+  switch (channel) {
+    case Channel::kX: case Channel::kY: case Channel::kZ:
+      return {1.0, "m", "a pen's workspace is well under a metre"};
+    case Channel::kVx: case Channel::kVy: case Channel::kVz:
+      return {100.0, "m/s", "a hand writes at well under 100 m/s"};
+    case Channel::kFx: case Channel::kFy: case Channel::kFz:
+    case Channel::kCmdFx: case Channel::kCmdFy: case Channel::kCmdFz:
+    case Channel::kGuideFx: case Channel::kGuideFy: case Channel::kGuideFz:
+      return {1000.0, "N", "a hand on a pen exerts well under a kilonewton"};
+    case Channel::kTime:
+      return {1e7, "s", "a recording shorter than 115 days"};
+    default:
+      return {std::numeric_limits<double>::max(), "", ""};
+  }
+}
+
 double parseValue(std::string_view field, const Column& column, int index, const LineReader& reader) {
   const auto where = [&] { return fmt::format("{}: column {} ({})", reader.where(), index, column.header); };
   const auto value = detail::parseDouble(field);
@@ -129,7 +155,11 @@ double parseValue(std::string_view field, const Column& column, int index, const
                      quotedField(detail::trim(field)));
   HATTR_THROW_UNLESS(!isFlag(column.channel) || *value == 0.0 || *value == 1.0,
                      "{}: expected 0 or 1, got {}", where(), quotedField(detail::trim(field)));
-  return *value * column.to_si;
+  const double si = *value * column.to_si;
+  const PhysicalBound bound = physicalBound(column.channel);
+  HATTR_THROW_UNLESS(std::abs(si) <= bound.limit, "{}: expected at most {} {} in magnitude ({}), got {}", where(),
+                     bound.limit, bound.unit, bound.why, quotedField(detail::trim(field)));
+  return si;
 }
 
 Sample parseRow(std::string_view line, const std::vector<Column>& columns, const LineReader& reader) {

@@ -135,6 +135,24 @@ TEST(ProfileCsvErrors, NonNumericValue) {
             "bad.csv:2: column 7 (fz_N): expected a number, got \"abc\"");
 }
 
+// Values no pen on paper produces are refused with the line, the column and the bound; the
+// bound applies in SI, whatever unit the column is in (1200 mm is 1.2 m).
+TEST(ProfileCsvErrors, PhysicallyAbsurdValues) {
+  EXPECT_EQ(readError(std::string(kHeader) + "0,0,0,0,0,0,0,1\n0.1,1e150,0,0,0,0,0,1\n"),
+            "bad.csv:3: column 2 (x_m): expected at most 1 m in magnitude (a pen's workspace is well under a metre), "
+            "got \"1e150\"");
+  EXPECT_EQ(readError(std::string(kHeader) + "0,0,0,0,0,0,-1500,1\n"),
+            "bad.csv:2: column 7 (fz_N): expected at most 1000 N in magnitude (a hand on a pen exerts well under a "
+            "kilonewton), got \"-1500\"");
+  EXPECT_THAT(readError("t_s,x_mm,y_m,z_m,fx_N,fy_N,fz_N,pen_down_bool\n0,1200,0,0,0,0,0,1\n"),
+              HasSubstr("bad.csv:2: column 2 (x_mm): expected at most 1 m in magnitude"));
+  EXPECT_THAT(readError("t_s,x_m,y_m,z_m,vx_m_per_s,vy_m_per_s,vz_m_per_s,fx_N,fy_N,fz_N,pen_down_bool\n"
+                        "0,0,0,0,0,250,0,0,0,0,1\n"),
+              HasSubstr("column 6 (vy_m_per_s): expected at most 100 m/s"));
+  // At the bound is still a (strange but possible) profile.
+  EXPECT_EQ(readError(std::string(kHeader) + "0,1,-1,0.5,1000,0,-1000,1\n"), "(no error)");
+}
+
 TEST(ProfileCsvErrors, EmptyField) {
   EXPECT_EQ(readError(std::string(kHeader) + "0,,0,0,0,0,0,1\n"),
             "bad.csv:2: column 2 (x_m): expected a number, got \"\"");

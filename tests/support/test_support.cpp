@@ -54,8 +54,9 @@ HapticProfile randomProfile(std::mt19937_64& rng, std::size_t samples, RawChanne
                        .extra = {{"mode", "alpha"}, {"trial", "3"}, {"note", "a: b, c"}}};
   HapticProfile profile(meta, raw);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  std::uniform_int_distribution<int> scale(-12, 3);
-  // Values spread over many magnitudes, plus subnormals and signed zeros.
+  std::uniform_int_distribution<int> scale(-12, 0);
+  // Values spread over many magnitudes (within what a profile file may hold: 1 m, 100 m/s,
+  // 1 kN), plus subnormals and signed zeros.
   const auto value = [&]() {
     const int pick = static_cast<int>(rng() % 20);
     if (pick == 0) return std::numeric_limits<double>::denorm_min() * static_cast<double>(rng() % 1000);
