@@ -16,7 +16,7 @@ help:
 	@echo "make test      install deps, build, run every test (ctest)"
 	@echo "make sanitize  the tests again under address+undefined and thread sanitizers"
 	@echo "make bench     build and run the benchmarks"
-	@echo "make fuzz      build the libFuzzer targets and fuzz the profile reader for 60 s"
+	@echo "make fuzz      build the libFuzzer targets and fuzz the profile, study and world readers for 60 s each"
 
 deps:
 	@scripts/install-deps
@@ -44,8 +44,10 @@ bench: build
 fuzz: deps
 	cmake --preset fuzz >/dev/null
 	cmake --build --preset fuzz -j $(JOBS)
-	mkdir -p build/fuzz/corpus
+	mkdir -p build/fuzz/corpus build/fuzz/corpus-study build/fuzz/corpus-world
 	build/fuzz/fuzz/fuzz_profile_csv -max_total_time=60 -max_len=4096 build/fuzz/corpus fuzz/seeds
+	build/fuzz/fuzz/fuzz_study_file -max_total_time=60 -max_len=4096 build/fuzz/corpus-study fuzz/seeds-study
+	build/fuzz/fuzz/fuzz_world_file -max_total_time=60 -max_len=4096 build/fuzz/corpus-world fuzz/seeds-world
 
 clean:
 	rm -rf build demo-out

@@ -1,8 +1,14 @@
 #include "cli_common.hpp"
 
+#include <unistd.h>
+
 #include <iostream>
+#include <optional>
 
 #include <fmt/format.h>
+
+#include "hattr/core/error.hpp"
+#include "hattr/io/profile_csv.hpp"
 
 namespace hattr::cli {
 
@@ -51,5 +57,79 @@ std::string profileSummaryText(const HapticProfile& profile) {
 }
 
 void printJson(const nlohmann::json& json) { std::cout << json.dump(2) << '\n'; }
+
+namespace {
+
+/// The folder must be writable; a missing one (when it may be, the writer creates it) must
+/// have a writable folder above it. Nothing is created here: a refused command leaves nothing.
+void checkWritableFolder(const std::filesystem::path& folder, const std::filesystem::path& for_output, bool may_be_missing) {
+  namespace fs = std::filesystem;
+  fs::path dir = folder.empty() ? fs::path(".") : folder;
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec)) {
+    throw InputError(fmt::format("{}: expected a folder for {}, got a file", dir.string(), for_output.string()));
+  }
+  if (!fs::exists(dir, ec)) {
+    HATTR_THROW_UNLESS(may_be_missing, "{}: no such folder (for {})", dir.string(), for_output.string());
+    dir = fs::absolute(dir, ec);
+    while (!fs::exists(dir, ec) && dir.has_parent_path() && dir.parent_path() != dir) dir = dir.parent_path();
+    HATTR_THROW_UNLESS(fs::is_directory(dir, ec), "{}: cannot be created under {} (a file)", folder.string(),
+                       dir.string());
+  }
+  HATTR_THROW_UNLESS(::access(dir.c_str(), W_OK) == 0, "{}: not writable (for {})", dir.string(), for_output.string());
+}
+
+void refuseExisting(const std::filesystem::path& path, bool force) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(fs::symlink_status(path, ec))) return;
+  HATTR_THROW_UNLESS(force, "{}: already exists; add --force to replace it (nothing was written)", path.string());
+}
+
+}  // namespace
+
+void checkOutputFiles(const std::vector<std::filesystem::path>& files, bool force) {
+  for (const auto& file : files) {
+    std::error_code ec;
+    HATTR_THROW_UNLESS(!std::filesystem::is_directory(file, ec), "{}: expected a file name, got a folder", file.string());
+    refuseExisting(file, force);
+    checkWritableFolder(file.parent_path(), file, false);
+  }
+}
+
+void checkOutputFolder(const std::filesystem::path& dir, const std::vector<std::string>& names, bool force) {
+  for (const auto& name : names) refuseExisting(dir / name, force);
+  checkWritableFolder(dir, dir, true);
+}
+
+namespace {
+
+/// A recording that could not be written where asked: beside it under a new name, else in
+/// the temporary folder. Returns where it went, if anywhere.
+std::optional<std::filesystem::path> keepSomewhere(const HapticProfile& profile, const std::filesystem::path& file) {
+  const std::string name = fmt::format("{}.rescued-{}.csv", file.filename().string(), ::getpid());
+  for (const auto& rescue : {file.parent_path() / name, std::filesystem::temp_directory_path() / name}) {
+    try {
+      io::writeProfileCsv(profile, rescue, io::Overwrite::kRefuse);
+      return rescue;
+    } catch (const std::exception&) {  // try the next place
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+void writeRecording(const HapticProfile& profile, const std::filesystem::path& file, bool force) {
+  try {
+    io::writeProfileCsv(profile, file, force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
+  } catch (const std::exception& e) {
+    const std::string why = e.what();
+    if (const auto kept = keepSomewhere(profile, file)) {
+      throw Error(fmt::format("{}; the recording is kept in {}", why, kept->string()));
+    }
+    throw Error(fmt::format("{}; the recording could not be kept anywhere ({} samples lost)", why, profile.size()));
+  }
+}
 
 }  // namespace hattr::cli

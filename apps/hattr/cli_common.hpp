@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -37,6 +38,19 @@ void registerDevicesCommands(CLI::App& app);
 void registerMentorCommands(CLI::App& app);
 /// `serve` and `keygen` under the `devices` (alias `device`) command: the network device server.
 void registerDeviceServeCommands(CLI::App& devices);
+
+/// Before any work: refuses (InputError, exit 2) every output file that exists unless
+/// `force` ("...: already exists; add --force to replace it"), is a folder, or whose folder
+/// is missing or not writable, so a command never works (or records) and then cannot write.
+void checkOutputFiles(const std::vector<std::filesystem::path>& files, bool force);
+/// The same for an output folder and the files and folders a command writes in it: `dir`
+/// must be a writable folder, or not exist yet under a writable one (the writer creates it);
+/// each of `names` inside it must not exist unless `force`. Creates nothing.
+void checkOutputFolder(const std::filesystem::path& dir, const std::vector<std::string>& names, bool force);
+/// Writes a recording; if that fails (a full disk, a folder gone), keeps it beside the
+/// temporary folder's copy instead and throws hattr::Error naming where it is: a recording
+/// is never lost.
+void writeRecording(const HapticProfile& profile, const std::filesystem::path& file, bool force);
 
 /// The world configuration in `file`, or the defaults when `file` is empty.
 render::WorldConfig worldConfigOrDefault(const std::string& file);

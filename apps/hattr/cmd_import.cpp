@@ -22,6 +22,7 @@ struct ImportOptions {
 };
 
 void runImport(TabletFormat format, const ImportOptions& opt) {
+  checkOutputFiles({opt.output}, opt.force);
   const io::TabletCalibration defaults =
       format == TabletFormat::kSvc2004 ? io::svc2004Calibration() : io::susigCalibration();
   const io::TabletCalibration calibration =

@@ -142,11 +142,11 @@ void runStation(const MentorOptions& opt, net::MentorRole role) {
   const bool serving = role == net::MentorRole::kLeader && opt.sessions != 1;
   HATTR_THROW_UNLESS(!serving || opt.record.empty(), "--record: with --sessions {} each session is its own file: use "
                      "--record-dir DIR", opt.sessions);
-  if (!opt.record.empty() && !opt.force) {
-    HATTR_THROW_UNLESS(!std::filesystem::exists(opt.record), "--record {}: the file exists; use --force to replace it",
-                       opt.record);
+  if (!opt.record.empty()) checkOutputFiles({opt.record}, opt.force);
+  if (!opt.record_dir.empty()) {
+    checkOutputFolder(opt.record_dir, {"session-001.csv"}, opt.force);  // sessions are numbered from 1
+    std::filesystem::create_directories(opt.record_dir);
   }
-  if (!opt.record_dir.empty()) std::filesystem::create_directories(opt.record_dir);
 
   // The simulated hand (if any) waits, lifted, until both stations are linked.
   std::optional<HapticProfile> script;
@@ -203,7 +203,13 @@ void runStation(const MentorOptions& opt, net::MentorRole role) {
     if (!failure.empty()) recorded.metadata().extra["failed"] = failure;
     summary.file = recorded.empty() ? "" : recordPath(opt, number);
     if (!summary.file.empty()) {
-      io::writeProfileCsv(recorded, summary.file, opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
+      try {
+        writeRecording(recorded, summary.file, opt.force);
+      } catch (const Error& e) {  // kept elsewhere (or not at all): said, and the station goes on
+        std::cerr << "hattr: " << e.what() << '\n';
+        summary.failure += (summary.failure.empty() ? "" : "; ") + std::string(e.what());
+        summary.file.clear();
+      }
     }
     if (!opt.json) {
       std::cout << fmt::format("{}: {} samples recorded, {} packets in, {} out, {} lost, {} link faults, energy in {:.4f} J "

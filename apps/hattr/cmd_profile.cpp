@@ -31,6 +31,7 @@ void runProfileInfo(const ProfileInfoOptions& opt) {
 }
 
 void runProfileConvert(const ProfileConvertOptions& opt) {
+  checkOutputFiles({opt.output}, opt.force);
   const HapticProfile profile = io::readProfileCsv(opt.input);
   io::writeProfileCsv(profile, opt.output, opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
   std::cout << "wrote " << opt.output << " (" << profile.size() << " samples, SI units)\n";

@@ -66,6 +66,7 @@ void addCommonOptions(CLI::App& cmd, TrialOptions& opt) {
 }
 
 void runTrialCommand(const TrialOptions& opt, bool training) {
+  checkOutputFiles({opt.output}, opt.force);  // before the trial: a recording is never left unwritable
   const HapticProfile script = io::readProfileCsv(opt.hand);
   device::ProfileHandScript hand(script);
   session::TrialEnvironment env(opt.device, worldConfigOrDefault(opt.world), opt.rate_hz);
@@ -95,11 +96,11 @@ void runTrialCommand(const TrialOptions& opt, bool training) {
   // A trial the device broke off keeps what it recorded (marked failed) and exits 1.
   if (!result.failure.empty()) {
     if (result.profile.empty()) throw Error(fmt::format("the trial failed before recording began: {}", result.failure));
-    io::writeProfileCsv(result.profile, opt.output, opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
+    writeRecording(result.profile, opt.output, opt.force);
     throw Error(fmt::format("the trial failed after {:.3f} s: {}; what was recorded is in {} (metadata: failed)",
                             result.profile.duration_s(), result.failure, opt.output));
   }
-  io::writeProfileCsv(result.profile, opt.output, opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
+  writeRecording(result.profile, opt.output, opt.force);
 
   if (opt.json) {
     nlohmann::json json = profileSummaryJson(result.profile);

@@ -40,6 +40,9 @@ const analysis::AnovaRow* row(const analysis::AnovaTable& t, const std::string& 
 }
 
 void runExpert(const SimOptions& opt) {
+  std::vector<std::filesystem::path> outputs{opt.output};
+  if (!opt.script_output.empty()) outputs.emplace_back(opt.script_output);
+  checkOutputFiles(outputs, opt.force);  // both checked before either is written
   const sim::Glyph glyph = sim::loadGlyph(sim::defaultDataDir() / "glyphs" / (opt.glyph + ".json"));
   const HapticProfile script = sim::expertScript(glyph);
   session::TrialEnvironment env("sim://pen", render::WorldConfig{}, 1000.0);

@@ -27,17 +27,22 @@ struct StudyOptions {
   double band = -1.0;
   bool json = false;
   bool quiet = false;
+  bool force = false;
 };
 
 nlohmann::json statusJson(const session::StudyDatabase& db) {
   nlohmann::json subjects = nlohmann::json::array();
-  int total = 0, completed = 0, interrupted = 0;
+  int total = 0, completed = 0, interrupted = 0, running = 0;
+  // A trial marked running is being run while a runner holds the study; otherwise its runner died.
+  const bool runner_active = db.runnerActive();
   for (const auto& s : db.subjects()) {
     const auto trials = db.trials(s.id);
     int done = 0;
     for (const auto& t : trials) {
       done += t.status == session::TrialStatus::kCompleted ? 1 : 0;
-      interrupted += t.interruptions + (t.status == session::TrialStatus::kRunning ? 1 : 0);
+      const int now_running = t.status == session::TrialStatus::kRunning ? 1 : 0;
+      running += runner_active ? now_running : 0;
+      interrupted += t.interruptions + (runner_active ? 0 : now_running);
     }
     nlohmann::json order = nlohmann::json::array();
     for (const auto m : s.mode_order) order.push_back(std::string(guidance::modeName(m)));
@@ -54,7 +59,7 @@ nlohmann::json statusJson(const session::StudyDatabase& db) {
   }
   return {{"study", db.study().name}, {"file", db.file().string()}, {"schema_version", db.schemaVersion()},
           {"subjects", subjects}, {"trials_total", total}, {"trials_completed", completed},
-          {"trials_interrupted", interrupted}};
+          {"trials_interrupted", interrupted}, {"trials_running", running}, {"runner_active", runner_active}};
 }
 
 std::unique_ptr<session::Participant> makeParticipant(const session::SubjectRecord& subject, const HapticProfile& expert) {
@@ -108,9 +113,12 @@ void runStatus(const StudyOptions& opt) {
   const session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kReadOnly);
   const auto status = statusJson(db);
   if (opt.json) return printJson(status);
-  std::cout << fmt::format("{} ({}): {}/{} trials completed, {} interrupted\n", status["study"].get<std::string>(), opt.db,
+  std::cout << fmt::format("{} ({}): {}/{} trials completed, {} interrupted{}\n", status["study"].get<std::string>(), opt.db,
                            status["trials_completed"].get<int>(), status["trials_total"].get<int>(),
-                           status["trials_interrupted"].get<int>());
+                           status["trials_interrupted"].get<int>(),
+                           status["runner_active"].get<bool>()
+                               ? fmt::format(", {} running now (a runner holds the study)", status["trials_running"].get<int>())
+                               : "");
   for (const auto& s : status["subjects"]) {
     std::string next = "done";
     if (!s["next"].is_null()) {
@@ -135,6 +143,7 @@ report::AnalysisOptions analysisOptions(const StudyOptions& opt) {
 }
 
 void runAnalyze(const StudyOptions& opt) {
+  if (!opt.out.empty()) checkOutputFolder(opt.out, report::kAnalysisCsvFiles, opt.force);  // before anything is written
   session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kReadWrite);
   const report::StudyAnalysis analysis = report::analyzeStudy(db, analysisOptions(opt));
   report::storeAnalysis(db, analysis);
@@ -146,6 +155,10 @@ void runAnalyze(const StudyOptions& opt) {
 }
 
 void runReport(const StudyOptions& opt) {
+  // Every output checked before anything is written (the database's stored analysis included).
+  std::vector<std::string> outputs = report::kAnalysisCsvFiles;
+  outputs.insert(outputs.end(), report::kStudyReportFiles.begin(), report::kStudyReportFiles.end());
+  checkOutputFolder(opt.out, outputs, opt.force);
   session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kReadWrite);
   const report::StudyAnalysis analysis = report::analyzeStudy(db, analysisOptions(opt));
   report::storeAnalysis(db, analysis);
@@ -206,6 +219,7 @@ void registerStudyCommands(CLI::App& app) {
       "analyze", "DTW costs of every recall trial against the expert, ANOVAs, Tukey HSD and Table 1; stored in the database");
   analyze->add_option("--db", opt->db, "Study database")->required();
   analyze->add_option("--out", opt->out, "Also write recall_costs.csv, anova.csv, table1.csv here");
+  analyze->add_flag("--force", opt->force, "Replace earlier tables in --out");
   analyze->add_option("--band", opt->band, "Sakoe–Chiba band fraction for DTW (default: none, the paper's)")
       ->check(CLI::Range(0.0, 1.0));
   analyze->add_flag("--json", opt->json, "Print the whole analysis as JSON");
@@ -214,6 +228,7 @@ void registerStudyCommands(CLI::App& app) {
   auto* rep = study->add_subcommand("report", "Analyze and write report.html (self-contained) and report.md with figures");
   rep->add_option("--db", opt->db, "Study database")->required();
   rep->add_option("--out", opt->out, "Folder for the report")->required();
+  rep->add_flag("--force", opt->force, "Replace an earlier report in --out");
   rep->add_option("--band", opt->band, "Sakoe–Chiba band fraction for DTW (default: none)")->check(CLI::Range(0.0, 1.0));
   rep->callback([opt] { runReport(*opt); });
 

@@ -33,11 +33,17 @@ nlohmann::json parseJsonObject(std::string_view text, std::string_view source) {
   nlohmann::json root;
   try {
     root = nlohmann::json::parse(text, bounded);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(fmt::format("{}: not valid JSON: {}", source, e.what()));
+  } catch (const nlohmann::json::exception& e) {  // syntax, or a number beyond a double (1e400)
+    throw InputError(fmt::format("{}: not valid JSON: {}", source, jsonLibraryMessage(e)));
   }
   HATTR_THROW_UNLESS(root.is_object(), "{}: expected a JSON object, got {}", source, root.type_name());
   return root;
+}
+
+std::string jsonLibraryMessage(const nlohmann::json::exception& e) {
+  const std::string_view what = e.what();
+  const auto end = what.starts_with("[json.exception.") ? what.find("] ") : std::string_view::npos;
+  return std::string(end == std::string_view::npos ? what : what.substr(end + 2));
 }
 
 std::string jsonExcerpt(const nlohmann::json& value) { return textExcerpt(value.dump()); }

@@ -13,6 +13,9 @@ bool LineReader::next(std::string& line) {
   if (!std::getline(in_, line)) return false;
   ++line_number_;
   if (!line.empty() && line.back() == '\r') line.pop_back();
+  // A UTF-8 byte-order mark (spreadsheets write one) is not part of the first line's text.
+  constexpr std::string_view kUtf8Bom = "\xEF\xBB\xBF";
+  if (line_number_ == 1 && line.starts_with(kUtf8Bom)) line.erase(0, kUtf8Bom.size());
   return true;
 }
 

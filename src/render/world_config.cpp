@@ -72,10 +72,17 @@ class Section {
   std::vector<std::string> known_;
 };
 
+WorldConfig parseWorldObject(const json& root, std::string_view source, const std::filesystem::path& base_dir);
+
 }  // namespace
 
 WorldConfig parseWorldConfig(std::string_view json_text, std::string_view source, const std::filesystem::path& base_dir) {
-  const json root = parseJsonObject(json_text, source);
+  return readingJson(source, [&] { return parseWorldObject(parseJsonObject(json_text, source), source, base_dir); });
+}
+
+namespace {
+
+WorldConfig parseWorldObject(const json& root, std::string_view source, const std::filesystem::path& base_dir) {
   for (const auto& item : root.items()) {
     static const std::vector<std::string> kTop{"paper", "friction", "texture", "relief", "writing_angle_deg"};
     HATTR_THROW_UNLESS(std::find(kTop.begin(), kTop.end(), item.key()) != kTop.end(),
@@ -128,6 +135,9 @@ WorldConfig parseWorldConfig(std::string_view json_text, std::string_view source
   HATTR_THROW_UNLESS(r.kind != ReliefConfig::Kind::kPgm || !file.empty(), "{}: key relief.file: required when kind is pgm",
                      source);
   if (!file.empty()) r.file = std::filesystem::path(file).is_absolute() ? std::filesystem::path(file) : base_dir / file;
+  std::error_code ec;
+  HATTR_THROW_UNLESS(r.kind != ReliefConfig::Kind::kPgm || std::filesystem::is_regular_file(r.file, ec),
+                     "{}: key relief.file: file \"{}\" not found", source, r.file.string());
 
   if (const auto angle = root.find("writing_angle_deg"); angle != root.end()) {
     HATTR_THROW_UNLESS(angle->is_number() && angle->get<double>() >= 10.0 && angle->get<double>() <= 90.0,
@@ -136,6 +146,8 @@ WorldConfig parseWorldConfig(std::string_view json_text, std::string_view source
   }
   return config;
 }
+
+}  // namespace
 
 WorldConfig loadWorldConfig(const std::filesystem::path& file) {
   return parseWorldConfig(readTextFile(file), file.string(), file.parent_path());

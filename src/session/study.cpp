@@ -178,13 +178,22 @@ void readMentor(const json& root, const std::filesystem::path& base_dir, bool ch
   }
 }
 
+StudyDefinition parseStudyObject(const json& root, std::string_view source, const std::filesystem::path& base_dir,
+                                 bool check_files);
+
 }  // namespace
 
 std::string_view phaseName(Phase phase) { return phase == Phase::kTraining ? "training" : "recall"; }
 
 StudyDefinition parseStudy(std::string_view json_text, std::string_view source, const std::filesystem::path& base_dir,
                            bool check_files) {
-  const json root = parseJsonObject(json_text, source);
+  return readingJson(source, [&] { return parseStudyObject(parseJsonObject(json_text, source), source, base_dir, check_files); });
+}
+
+namespace {
+
+StudyDefinition parseStudyObject(const json& root, std::string_view source, const std::filesystem::path& base_dir,
+                                 bool check_files) {
   Problems problems(source);
   StudyDefinition study;
 
@@ -360,6 +369,8 @@ StudyDefinition parseStudy(std::string_view json_text, std::string_view source, 
   problems.throwIfAny();
   return study;
 }
+
+}  // namespace
 
 StudyDefinition loadStudy(const std::filesystem::path& file) {
   return parseStudy(readTextFile(file), file.string(), file.parent_path());

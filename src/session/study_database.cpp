@@ -6,12 +6,14 @@
 #include <unistd.h>
 
 #include <bit>
+#include <cerrno>
 #include <cstring>
 #include <sstream>
 
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/core/text_file.hpp"
 #include "hattr/io/profile_csv.hpp"
 
 namespace hattr::session {
@@ -21,12 +23,24 @@ using nlohmann::json;
 
 // ---- A thin RAII layer over the SQLite C API --------------------------------------------
 
+/// An SQLite failure as hattr reports it, naming the file: a damaged file (corrupt pages, not
+/// a database, a table or column gone) is bad input (InputError, exit 2); anything else (a
+/// full disk, a read-only file) is a runtime failure.
+[[noreturn]] void throwSqlite(sqlite3* db, int rc, std::string_view doing) {
+  const char* name = sqlite3_db_filename(db, "main");
+  const std::string file = name && *name ? name : "study database";
+  const int primary = rc & 0xff;
+  if (primary == SQLITE_CORRUPT || primary == SQLITE_NOTADB || (primary == SQLITE_ERROR && doing == "prepare")) {
+    throw InputError(fmt::format("{}: the study database is damaged: {}", file, sqlite3_errmsg(db)));
+  }
+  throw Error(fmt::format("{}: {}: {}", file, doing, sqlite3_errmsg(db)));
+}
+
 class Statement {
  public:
   Statement(sqlite3* db, std::string_view sql) : db_(db) {
-    if (sqlite3_prepare_v2(db, sql.data(), static_cast<int>(sql.size()), &stmt_, nullptr) != SQLITE_OK) {
-      throw Error(fmt::format("study database: cannot prepare \"{}\": {}", sql, sqlite3_errmsg(db)));
-    }
+    const int rc = sqlite3_prepare_v2(db, sql.data(), static_cast<int>(sql.size()), &stmt_, nullptr);
+    if (rc != SQLITE_OK) throwSqlite(db, rc, "prepare");
   }
   ~Statement() { sqlite3_finalize(stmt_); }
   Statement(const Statement&) = delete;
@@ -47,7 +61,7 @@ class Statement {
     const int rc = sqlite3_step(stmt_);
     if (rc == SQLITE_ROW) return true;
     if (rc == SQLITE_DONE) return false;
-    throw Error(fmt::format("study database: {}", sqlite3_errmsg(db_)));
+    throwSqlite(db_, rc, "step");
   }
   void run() {
     while (step()) {
@@ -75,12 +89,8 @@ class Statement {
 };
 
 void exec(sqlite3* db, std::string_view sql) {
-  char* message = nullptr;
-  if (sqlite3_exec(db, std::string(sql).c_str(), nullptr, nullptr, &message) != SQLITE_OK) {
-    const std::string text = message ? message : "unknown error";
-    sqlite3_free(message);
-    throw Error(fmt::format("study database: {}", text));
-  }
+  const int rc = sqlite3_exec(db, std::string(sql).c_str(), nullptr, nullptr, nullptr);
+  if (rc != SQLITE_OK) throwSqlite(db, rc, "exec");
 }
 
 /// A transaction that rolls back unless committed.
@@ -163,6 +173,37 @@ sqlite3* openSqlite(const std::filesystem::path& file, int flags) {
   return db;
 }
 
+/// Opens a study for reading only. A study in a folder this process cannot write (a shared,
+/// read-only copy) is opened immutable: SQLite could not create the WAL's shared-memory file
+/// there, and nobody can be writing it either.
+sqlite3* openForReading(const std::filesystem::path& file) {
+  const std::filesystem::path folder = file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
+  if (::access(folder.c_str(), W_OK) == 0) {
+    // A writable study is read through a query-only read-write connection: SQLite's WAL and
+    // shared-memory files go away when it closes, as they do not after a read-only one.
+    if (::access(file.c_str(), W_OK) != 0) return openSqlite(file, SQLITE_OPEN_READONLY);
+    sqlite3* db = openSqlite(file, SQLITE_OPEN_READWRITE);
+    sqlite3_exec(db, "PRAGMA query_only = 1", nullptr, nullptr, nullptr);
+    return db;
+  }
+  std::string uri = "file:";
+  for (const char c : std::filesystem::absolute(file).string()) {
+    if (c == '%' || c == '?' || c == '#') {
+      uri += fmt::format("%{:02X}", static_cast<unsigned char>(c));
+    } else {
+      uri += c;
+    }
+  }
+  uri += "?immutable=1";
+  sqlite3* db = nullptr;
+  if (sqlite3_open_v2(uri.c_str(), &db, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, nullptr) != SQLITE_OK) {
+    const std::string message = db ? sqlite3_errmsg(db) : "out of memory";
+    sqlite3_close(db);
+    throw InputError(fmt::format("{}: cannot open the study database: {}", file.string(), message));
+  }
+  return db;
+}
+
 /// The exclusive runner lock: flock on the database file itself (independent of SQLite's
 /// own POSIX locks on Linux). Returns the descriptor, or throws naming the holder.
 int takeRunnerLock(const std::filesystem::path& file, sqlite3* db) {
@@ -234,9 +275,9 @@ std::string encodeSamples(const HapticProfile& profile) {
 
 std::vector<Sample> decodeSamples(std::string_view bytes, const RawChannels& raw, std::size_t count) {
   const auto channels = storedChannels(raw);
-  HATTR_THROW_UNLESS(bytes.size() == count * channels.size() * sizeof(double),
-                     "study database: a trial's samples hold {} bytes, expected {} samples × {} channels × 8",
-                     bytes.size(), count, channels.size());
+  HATTR_THROW_UNLESS(count <= bytes.size() && bytes.size() == count * channels.size() * sizeof(double),
+                     "samples: {} bytes stored, expected {} samples × {} channels × 8", bytes.size(), count,
+                     channels.size());
   std::vector<Sample> samples(count);
   const char* in = bytes.data();
   for (Sample& s : samples) {
@@ -369,7 +410,7 @@ void StudyDatabase::writeNewStudy(const StudyDefinition& study, const std::map<s
 StudyDatabase StudyDatabase::open(const std::filesystem::path& file, OpenMode mode) {
   HATTR_THROW_UNLESS(std::filesystem::is_regular_file(file), "{}: no such study database (create one with `hattr study init`)",
                      file.string());
-  sqlite3* db = openSqlite(file, mode == OpenMode::kReadOnly ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE);
+  sqlite3* db = mode == OpenMode::kReadOnly ? openForReading(file) : openSqlite(file, SQLITE_OPEN_READWRITE);
   StudyDatabase database(file, db, -1);
 
   // Is this a hattr study, and one we can read?
@@ -378,7 +419,10 @@ StudyDatabase StudyDatabase::open(const std::filesystem::path& file, OpenMode mo
     app_id = scalar(db, "PRAGMA application_id");
     version = scalar(db, "PRAGMA user_version");
   } catch (const Error&) {
-    throw InputError(fmt::format("{}: not a hattr study database (not an SQLite file)", file.string()));
+    if ((sqlite3_errcode(db) & 0xff) == SQLITE_NOTADB) {
+      throw InputError(fmt::format("{}: not a hattr study database (not an SQLite file)", file.string()));
+    }
+    throw InputError(fmt::format("{}: cannot read the study database: {}", file.string(), sqlite3_errmsg(db)));
   }
   HATTR_THROW_UNLESS(app_id == kStudyApplicationId,
                      "{}: not a hattr study database (SQLite application id {:#x}, expected {:#x})", file.string(),
@@ -428,9 +472,15 @@ std::vector<SubjectRecord> StudyDatabase::subjects() const {
     SubjectRecord r;
     r.id = s.text(0);
     r.position = static_cast<int>(s.integer(1));
-    for (const auto& m : json::parse(s.text(2))) r.mode_order.push_back(guidance::parseMode(m.get<std::string>()));
-    const json spec = json::parse(s.text(3));
-    r.spec = {r.id, spec["participant"].get<std::string>(), spec["seed"].get<std::uint64_t>(), spec["options"]};
+    try {
+      for (const auto& m : json::parse(s.text(2))) r.mode_order.push_back(guidance::parseMode(m.get<std::string>()));
+      const json spec = json::parse(s.text(3));
+      r.spec = {r.id, spec.at("participant").get<std::string>(), spec.at("seed").get<std::uint64_t>(), spec.at("options")};
+    } catch (const std::exception& e) {
+      const auto* j = dynamic_cast<const json::exception*>(&e);
+      throw InputError(fmt::format("{}: subject {} is damaged: {}", file_.string(), textExcerpt(r.id),
+                                   j ? jsonLibraryMessage(*j) : std::string(e.what())));
+    }
     out.push_back(std::move(r));
   }
   return out;
@@ -475,19 +525,29 @@ std::optional<TrialRecord> StudyDatabase::nextTrial(const std::string& subject) 
 
 HapticProfile StudyDatabase::trialProfile(std::int64_t trial_id) const {
   Statement s(db_,
-              "SELECT s.raw_pressure, s.raw_tilt, s.sample_count, s.data, t.metadata FROM samples s "
-              "JOIN trials t ON t.id = s.trial WHERE s.trial = ?");
+              "SELECT s.raw_pressure, s.raw_tilt, s.sample_count, s.data, t.metadata, t.subject, t.sequence "
+              "FROM samples s JOIN trials t ON t.id = s.trial WHERE s.trial = ?");
   s.bind(1, trial_id);
   HATTR_THROW_UNLESS(s.step(), "{}: trial {} has no recorded samples", file_.string(), trial_id);
-  const RawChannels raw{s.integer(0) != 0, s.integer(1) != 0};
-  const json meta = json::parse(s.text(4));
-  ProfileMetadata metadata{meta["subject"], meta["skill"], meta["device"], meta["source"], meta["created_utc"],
-                           meta["rate_hz"].get<double>(), meta["extra"].get<std::map<std::string, std::string>>()};
-  HapticProfile profile(std::move(metadata), raw);
-  const auto samples = decodeSamples(s.blob(3), raw, static_cast<std::size_t>(s.integer(2)));
-  profile.reserve(samples.size());
-  for (const Sample& sample : samples) profile.append(sample);
-  return profile;
+  // What was stored is checked as it is read back: a damaged trial is named, never half-read.
+  try {
+    const RawChannels raw{s.integer(0) != 0, s.integer(1) != 0};
+    const json meta = json::parse(s.text(4));
+    ProfileMetadata metadata{meta.at("subject"), meta.at("skill"), meta.at("device"), meta.at("source"),
+                             meta.at("created_utc"), meta.at("rate_hz").get<double>(),
+                             meta.at("extra").get<std::map<std::string, std::string>>()};
+    HapticProfile profile(std::move(metadata), raw);
+    const auto samples = decodeSamples(s.blob(3), raw, static_cast<std::size_t>(std::max<std::int64_t>(s.integer(2), 0)));
+    profile.reserve(samples.size());
+    for (const Sample& sample : samples) profile.append(sample);
+    return profile;
+  } catch (const json::exception& e) {
+    throw InputError(fmt::format("{}: trial {} (subject {}, sequence {}) is damaged: metadata: {}", file_.string(),
+                                 trial_id, textExcerpt(s.text(5)), s.integer(6), jsonLibraryMessage(e)));
+  } catch (const std::exception& e) {
+    throw InputError(fmt::format("{}: trial {} (subject {}, sequence {}) is damaged: {}", file_.string(), trial_id,
+                                 textExcerpt(s.text(5)), s.integer(6), e.what()));
+  }
 }
 
 // ---- Writing ---------------------------------------------------------------------------------
@@ -501,6 +561,15 @@ std::int64_t StudyDatabase::beginSession(const std::string& subject) {
 void StudyDatabase::endSession(std::int64_t session_id) {
   Statement s(db_, "UPDATE sessions SET ended_utc = ? WHERE id = ?");
   s.bind(1, utcNowIso8601()).bind(2, session_id).run();
+}
+
+bool StudyDatabase::runnerActive() const {
+  if (lock_fd_ >= 0) return true;
+  const int fd = ::open(file_.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return false;
+  const bool held = ::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+  ::close(fd);  // releases the shared lock if it was taken
+  return held;
 }
 
 void StudyDatabase::markRunning(std::int64_t trial_id, std::int64_t session_id) {

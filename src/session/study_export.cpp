@@ -1,5 +1,7 @@
 #include "hattr/session/study_export.hpp"
 
+#include <unistd.h>
+
 #include <fstream>
 #include <sstream>
 
@@ -30,17 +32,9 @@ std::string trialFileName(const TrialPlan& p) {
                      phaseName(p.phase), p.index);
 }
 
-}  // namespace
-
-std::size_t exportStudy(const StudyDatabase& db, const std::filesystem::path& out) {
+/// exportStudy's files, written into `out` (created).
+std::size_t writeExport(const StudyDatabase& db, StudyDefinition study, const std::filesystem::path& out) {
   namespace fs = std::filesystem;
-  HATTR_THROW_UNLESS(!fs::exists(out) || fs::is_empty(out), "{}: exists and is not empty; choose a new folder",
-                     out.string());
-
-  // Every name checked before anything is written.
-  StudyDefinition study = db.study();
-  for (const auto& [skill, path] : study.experts) (void)checkedName(skill, "skill");
-  for (const SubjectRecord& s : db.subjects()) (void)checkedName(s.id, "subject id");
   fs::create_directories(out / "experts");
   // The definition, with the experts pointing into the export.
   for (auto& [skill, path] : study.experts) {
@@ -66,6 +60,37 @@ std::size_t exportStudy(const StudyDatabase& db, const std::filesystem::path& ou
                          t.attempts, t.interruptions, t.started_utc, t.ended_utc, t.sample_count, file);
   }
   io::writeFileAtomically(out / "trials.csv", table);
+  return written;
+}
+
+}  // namespace
+
+std::size_t exportStudy(const StudyDatabase& db, const std::filesystem::path& out) {
+  namespace fs = std::filesystem;
+  HATTR_THROW_UNLESS(!fs::exists(out) || (fs::is_directory(out) && fs::is_empty(out)),
+                     "{}: exists and is not an empty folder; choose a new folder", out.string());
+
+  // Every name checked before anything is written.
+  StudyDefinition study = db.study();
+  for (const auto& [skill, path] : study.experts) (void)checkedName(skill, "skill");
+  for (const SubjectRecord& s : db.subjects()) (void)checkedName(s.id, "subject id");
+
+  // All or nothing: written under a hidden name beside `out`, renamed into place when whole,
+  // so a damaged trial or a full disk leaves no half export.
+  const fs::path parent = out.parent_path().empty() ? fs::path(".") : out.parent_path();
+  fs::create_directories(parent);
+  const fs::path building = parent / fmt::format(".{}.exporting-{}", out.filename().string(), ::getpid());
+  fs::remove_all(building);
+  std::size_t written = 0;
+  try {
+    written = writeExport(db, study, building);
+    if (fs::exists(out)) fs::remove(out);  // the empty folder the caller made
+    fs::rename(building, out);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove_all(building, ignored);
+    throw;
+  }
   return written;
 }
 

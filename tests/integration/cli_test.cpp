@@ -103,7 +103,7 @@ TEST(Cli, ConvertRefusesToOverwriteAndKeepsTheExistingFile) {
   test::writeText(dir / "out.csv", "precious");
   const RunResult r = runHattr(dir, "profile convert " + (dir / "in.csv").string() + " " + (dir / "out.csv").string());
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_THAT(r.err, HasSubstr("already exists; refusing to overwrite it"));
+  EXPECT_THAT(r.err, HasSubstr("already exists; add --force to replace it"));
   EXPECT_EQ(test::readText(dir / "out.csv"), "precious");
   const RunResult forced =
       runHattr(dir, "profile convert --force " + (dir / "in.csv").string() + " " + (dir / "out.csv").string());

@@ -8,6 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "hattr/core/error.hpp"
+
 namespace hattr {
 
 /// The whole file as text. Throws InputError naming the file and the reason it cannot be read.
@@ -21,6 +23,21 @@ inline constexpr int kMaxJsonDepth = 64;
 /// InputError ("SOURCE: not valid JSON: ...", "SOURCE: expected a JSON object, got array",
 /// "SOURCE: nested deeper than 64 levels ...").
 nlohmann::json parseJsonObject(std::string_view text, std::string_view source_name);
+
+/// The JSON library's message without its "[json.exception.type_error.302] " prefix.
+std::string jsonLibraryMessage(const nlohmann::json::exception& e);
+
+/// Runs `read`, which takes values out of parsed JSON: a JSON library error that slipped past
+/// its checks (a value of an unexpected type) becomes an InputError naming `source`, never a
+/// library exception.
+template <class Read>
+auto readingJson(std::string_view source, Read&& read) -> decltype(read()) {
+  try {
+    return read();
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(std::string(source) + ": " + jsonLibraryMessage(e));
+  }
+}
 
 /// A value as it appears in a message: its JSON text, cut to about 60 characters ("[1, 2, ...]
 /// (5000 characters)") so no message ever prints an unbounded value.

@@ -83,7 +83,9 @@ StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptio
 nlohmann::json analysisToJson(const StudyAnalysis& analysis);
 /// Stores the analysis in the database (results key "analysis").
 void storeAnalysis(session::StudyDatabase& db, const StudyAnalysis& analysis);
-/// Writes recall_costs.csv, anova.csv and table1.csv into `dir` (created).
+/// The files writeAnalysisCsv writes (for checking outputs before any is written).
+inline const std::vector<std::string> kAnalysisCsvFiles{"recall_costs.csv", "anova.csv", "table1.csv"};
+/// Writes recall_costs.csv, anova.csv and table1.csv into `dir` (created; existing ones replaced).
 void writeAnalysisCsv(const StudyAnalysis& analysis, const std::filesystem::path& dir);
 
 }  // namespace hattr::report

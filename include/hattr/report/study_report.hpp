@@ -11,6 +11,8 @@
 
 namespace hattr::report {
 
+/// What writeStudyReport writes in OUT (the figures folder with its SVGs inside).
+inline const std::vector<std::string> kStudyReportFiles{"report.html", "report.md", "figures"};
 /// Writes OUT/report.html, OUT/report.md and OUT/figures/*.svg (OUT is created; existing
 /// report files are replaced). Returns the path of report.html.
 std::filesystem::path writeStudyReport(const session::StudyDatabase& db, const StudyAnalysis& analysis,

@@ -91,6 +91,10 @@ class StudyDatabase {
   /// The recorded profile of a completed trial, exactly as stored.
   [[nodiscard]] HapticProfile trialProfile(std::int64_t trial_id) const;
 
+  /// Whether a runner holds the study now (this one, or another process): then a trial marked
+  /// running is being run, not interrupted.
+  [[nodiscard]] bool runnerActive() const;
+
   /// Starts a session (a run of the protocol by this process); returns its id.
   std::int64_t beginSession(const std::string& subject);
   void endSession(std::int64_t session_id);
