@@ -112,7 +112,8 @@ DeviceUri parseDeviceUri(std::string_view uri) {
 SimulatedPenParams simulatedPenParams(const DeviceUri& uri) {
   SimulatedPenParams params;
   for (const auto& [key, text] : uri.query) {
-    const auto* spec = std::find_if(std::begin(kSimKeys), std::end(kSimKeys), [&](const SimKey& k) { return k.key == key; });
+    const std::string_view name = key;  // clang 14 cannot capture a structured binding
+    const auto* spec = std::find_if(std::begin(kSimKeys), std::end(kSimKeys), [name](const SimKey& k) { return k.key == name; });
     HATTR_THROW_UNLESS(spec != std::end(kSimKeys), "sim://{}: unknown key \"{}\": expected one of {}", uri.target, key,
                        simKeyList());
     double value = 0.0;

@@ -43,8 +43,9 @@ UdpDeviceParams udpDeviceParams(const DeviceUri& uri) {
       params.key_file = text;
       continue;
     }
+    const std::string_view name = key;  // clang 14 cannot capture a structured binding
     const auto* spec = std::find_if(std::begin(kUdpNumberKeys), std::end(kUdpNumberKeys),
-                                    [&](const UdpKey& k) { return k.key == key; });
+                                    [name](const UdpKey& k) { return k.key == name; });
     HATTR_THROW_UNLESS(spec != std::end(kUdpNumberKeys), "{}: unknown key \"{}\": expected one of {}", where, key,
                        kUdpKeyList);
     double value = 0.0;

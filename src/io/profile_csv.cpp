@@ -123,7 +123,9 @@ std::vector<Column> parseColumnRow(std::string_view line, const LineReader& read
 // ---- Sample fields ---------------------------------------------------------------------
 
 /// What no pen on paper can produce: a value beyond this is a broken file (or an attack: a
-/// reference with absurd positions would ask the guidance for absurd forces).
+/// reference with absurd positions would ask the guidance for absurd forces). Velocities are
+/// not bounded: a file without them gets them by finite differences, which a tight time step
+/// can make large from sane positions, and a file must read back as it was written.
 struct PhysicalBound {
   double limit;
   std::string_view unit;
@@ -134,8 +136,6 @@ PhysicalBound physicalBound(Channel channel) {
   switch (channel) {
     case Channel::kX: case Channel::kY: case Channel::kZ:
       return {1.0, "m", "a pen's workspace is well under a metre"};
-    case Channel::kVx: case Channel::kVy: case Channel::kVz:
-      return {100.0, "m/s", "a hand writes at well under 100 m/s"};
     case Channel::kFx: case Channel::kFy: case Channel::kFz:
     case Channel::kCmdFx: case Channel::kCmdFy: case Channel::kCmdFz:
     case Channel::kGuideFx: case Channel::kGuideFy: case Channel::kGuideFz:

@@ -327,6 +327,14 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
   if (subjects == root.end()) {
     problems.add("subjects: missing (a list of {\"id\": ...} or {\"count\": N})");
   } else if (subjects->is_object()) {
+    for (const auto& item : subjects->items()) {
+      static const std::set<std::string> kSubjectKeys{"count", "prefix", "participant", "options"};
+      if (!kSubjectKeys.contains(item.key())) {
+        problems.add(fmt::format("subjects: unknown key \"{}\": expected count, prefix, participant or options",
+                                 textExcerpt(item.key())));
+      }
+    }
+    if (!subjects->contains("count")) problems.add("subjects.count: missing (how many subjects)");
     int count = 0;
     std::string prefix = subjects->value("prefix", std::string("S"));
     readNumber(*subjects, "count", count, 1, 10'000, "subjects.", problems);

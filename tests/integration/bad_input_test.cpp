@@ -237,6 +237,9 @@ std::vector<BadInput> corpus() {
   };
   c.back().names = "expert.csv";
   c.push_back(studyCase("study_is_array", "[]", "expected a JSON object"));
+  // Found by the fuzzer: a subjects object without its count was a study of nobody.
+  c.push_back(studyCase("study_subjects_without_count", study("\"count\": 2", "\"coun%\": 2"),
+                        "subjects: unknown key \"coun%\""));
   // Databases.
   c.push_back({"db_text_file",
                [](const fs::path& dir) {

@@ -146,9 +146,6 @@ TEST(ProfileCsvErrors, PhysicallyAbsurdValues) {
             "kilonewton), got \"-1500\"");
   EXPECT_THAT(readError("t_s,x_mm,y_m,z_m,fx_N,fy_N,fz_N,pen_down_bool\n0,1200,0,0,0,0,0,1\n"),
               HasSubstr("bad.csv:2: column 2 (x_mm): expected at most 1 m in magnitude"));
-  EXPECT_THAT(readError("t_s,x_m,y_m,z_m,vx_m_per_s,vy_m_per_s,vz_m_per_s,fx_N,fy_N,fz_N,pen_down_bool\n"
-                        "0,0,0,0,0,250,0,0,0,0,1\n"),
-              HasSubstr("column 6 (vy_m_per_s): expected at most 100 m/s"));
   // At the bound is still a (strange but possible) profile.
   EXPECT_EQ(readError(std::string(kHeader) + "0,1,-1,0.5,1000,0,-1000,1\n"), "(no error)");
 }

@@ -55,8 +55,8 @@ HapticProfile randomProfile(std::mt19937_64& rng, std::size_t samples, RawChanne
   HapticProfile profile(meta, raw);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   std::uniform_int_distribution<int> scale(-12, 0);
-  // Values spread over many magnitudes (within what a profile file may hold: 1 m, 100 m/s,
-  // 1 kN), plus subnormals and signed zeros.
+  // Values spread over many magnitudes (within what a profile file may hold: 1 m, 1 kN),
+  // plus subnormals and signed zeros.
   const auto value = [&]() {
     const int pick = static_cast<int>(rng() % 20);
     if (pick == 0) return std::numeric_limits<double>::denorm_min() * static_cast<double>(rng() % 1000);
