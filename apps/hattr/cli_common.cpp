@@ -108,10 +108,12 @@ namespace {
 /// the temporary folder. Returns where it went, if anywhere.
 std::optional<std::filesystem::path> keepSomewhere(const HapticProfile& profile, const std::filesystem::path& file) {
   const std::string name = fmt::format("{}.rescued-{}.csv", file.filename().string(), ::getpid());
-  for (const auto& rescue : {file.parent_path() / name, std::filesystem::temp_directory_path() / name}) {
+  std::error_code ec;
+  const std::filesystem::path temp = std::filesystem::temp_directory_path(ec);  // may fail: TMPDIR not a folder
+  for (const auto& folder : {file.parent_path(), ec ? std::filesystem::path("/tmp") : temp}) {
     try {
-      io::writeProfileCsv(profile, rescue, io::Overwrite::kRefuse);
-      return rescue;
+      io::writeProfileCsv(profile, folder / name, io::Overwrite::kRefuse);
+      return folder / name;
     } catch (const std::exception&) {  // try the next place
     }
   }

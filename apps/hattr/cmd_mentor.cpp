@@ -205,7 +205,7 @@ void runStation(const MentorOptions& opt, net::MentorRole role) {
     if (!summary.file.empty()) {
       try {
         writeRecording(recorded, summary.file, opt.force);
-      } catch (const Error& e) {  // kept elsewhere (or not at all): said, and the station goes on
+      } catch (const std::exception& e) {  // kept elsewhere (or not at all): said, and the station goes on
         std::cerr << "hattr: " << e.what() << '\n';
         summary.failure += (summary.failure.empty() ? "" : "; ") + std::string(e.what());
         summary.file.clear();

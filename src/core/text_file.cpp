@@ -64,6 +64,11 @@ bool isSafeFileName(std::string_view name) noexcept {
   return true;
 }
 
+bool staysInFolder(std::string_view name) noexcept {
+  return !name.empty() && name.size() <= 255 && name != "." && name != ".." &&
+         name.find_first_of(std::string_view("/\0", 2)) == std::string_view::npos;
+}
+
 bool isPlainRelativePath(const std::filesystem::path& path) noexcept {
   if (path.empty() || path.has_root_path()) return false;
   for (const auto& part : path) {

@@ -229,6 +229,7 @@ void MentorCoupling::handle(const device::net::Packet& packet, const device::net
   }
   last_heard_ns_ = now_ns;
   if (h.type == PacketType::kBye) {  // a normal end: the link goes down without a fault
+    if (session_) bump(goodbyes_);
     session_ = false;
     have_other_ = false;
     link_up_ = false;
@@ -411,6 +412,7 @@ MentorStats MentorCoupling::stats() const noexcept {
   s.busy_refusals = busy_refusals_.load();
   s.refused_busy = refused_.load();
   s.link_faults = link_faults_.load();
+  s.goodbyes_received = goodbyes_.load();
   s.peers_received = peers_received_.load();
   s.peers_sent = peers_sent_.load();
   s.peers_withheld = peers_withheld_.load();
@@ -429,6 +431,7 @@ MentorStats statsSince(const MentorStats& now, const MentorStats& before) noexce
   d.sessions -= before.sessions;
   d.busy_refusals -= before.busy_refusals;
   d.link_faults -= before.link_faults;
+  d.goodbyes_received -= before.goodbyes_received;
   d.peers_received -= before.peers_received;
   d.peers_sent -= before.peers_sent;
   d.peers_withheld -= before.peers_withheld;

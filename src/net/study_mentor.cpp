@@ -124,7 +124,8 @@ class SimulatedStudyMentor final : public session::LiveGuidance {
     HATTR_DEMAND(follower_ != nullptr, "endTrial() without beginTrial()");
     follower_->close(static_cast<std::int64_t>(std::llround(stage_->lastTime_s() * 1e9)));
     const MentorStats s = follower_->stats();
-    result.mentor_link_faults += s.link_faults;
+    // The trainee's side ends each trial's session; a goodbye heard means the expert left mid-trial.
+    result.mentor_link_faults += s.link_faults + s.goodbyes_received;
     auto notes = couplingNotes(follower_config_.coupling, follower_config_, s, clamps_);
     notes["mentor"] = fmt::format("simulated expert on {}", spec_.expert_device);
     notes["mentor_link"] = fmt::format("emulated: round trip {} ms, jitter {} ms, loss {} %", spec_.round_trip_s * 1e3,
@@ -197,7 +198,8 @@ class LiveStudyMentor final : public session::LiveGuidance {
     HATTR_DEMAND(follower_ != nullptr, "endTrial() without beginTrial()");
     follower_->close(0);  // BYE: the expert's station ends this session and waits for the next
     const MentorStats s = follower_->stats();
-    result.mentor_link_faults += s.link_faults;
+    // The trainee's side ends each trial's session; a goodbye heard means the expert left mid-trial.
+    result.mentor_link_faults += s.link_faults + s.goodbyes_received;
     auto notes = couplingNotes(config_.coupling, config_, s, clamps_);
     notes["mentor"] = fmt::format("live expert at {}", spec_.connect);
     follower_.reset();

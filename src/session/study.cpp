@@ -360,14 +360,18 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
   } else {
     problems.add("subjects: expected a non-empty list or {\"count\": N}");
   }
-  // Subject ids and skills become file names (an export's trials/<id>/, experts/<skill>.csv).
+  // Subject ids and skills become file names (an export's trials/<id>/, experts/<skill>.csv):
+  // a new study file's must be safe ones; a stored study keeps what it was created with (the
+  // export's writer refuses only what would leave its folder).
   for (const auto& s : study.subjects) {
-    if (!isSafeFileName(s.id)) {
+    if (check_files && !isSafeFileName(s.id)) {
       problems.add(fmt::format("subject id \"{}\": expected {}", textExcerpt(s.id), kSafeFileNameRule));
     }
   }
   for (const auto& [skill, file] : study.experts) {
-    if (!isSafeFileName(skill)) problems.add(fmt::format("experts: skill \"{}\": expected {}", textExcerpt(skill), kSafeFileNameRule));
+    if (check_files && !isSafeFileName(skill)) {
+      problems.add(fmt::format("experts: skill \"{}\": expected {}", textExcerpt(skill), kSafeFileNameRule));
+    }
   }
   for (const auto& s : study.subjects) {
     if (s.participant != "simulated" && s.participant != "script" && s.participant != "person") {

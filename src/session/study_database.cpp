@@ -31,6 +31,7 @@ using nlohmann::json;
   const std::string file = name && *name ? name : "study database";
   const int primary = rc & 0xff;
   if (primary == SQLITE_CORRUPT || primary == SQLITE_NOTADB || (primary == SQLITE_ERROR && doing == "prepare")) {
+    // A statement of this build that does not prepare: a table or column is gone.
     throw InputError(fmt::format("{}: the study database is damaged: {}", file, sqlite3_errmsg(db)));
   }
   throw Error(fmt::format("{}: {}: {}", file, doing, sqlite3_errmsg(db)));
@@ -173,9 +174,19 @@ sqlite3* openSqlite(const std::filesystem::path& file, int flags) {
   return db;
 }
 
+/// Whether a runner holds the study's lock (a shared-lock probe that is released at once).
+bool runnerLockHeld(const std::filesystem::path& file) {
+  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return false;
+  const bool held = ::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+  ::close(fd);
+  return held;
+}
+
 /// Opens a study for reading only. A study in a folder this process cannot write (a shared,
-/// read-only copy) is opened immutable: SQLite could not create the WAL's shared-memory file
-/// there, and nobody can be writing it either.
+/// read-only copy) is opened immutable, since SQLite could not create the WAL's shared-memory
+/// file there; immutable means the file is read alone, so a study whose write-ahead log still
+/// holds changes, or that a runner (another user) is writing, is refused, not read stale.
 sqlite3* openForReading(const std::filesystem::path& file) {
   const std::filesystem::path folder = file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
   if (::access(folder.c_str(), W_OK) == 0) {
@@ -186,6 +197,14 @@ sqlite3* openForReading(const std::filesystem::path& file) {
     sqlite3_exec(db, "PRAGMA query_only = 1", nullptr, nullptr, nullptr);
     return db;
   }
+  std::error_code ec;
+  const std::filesystem::path wal(file.string() + "-wal");
+  HATTR_THROW_UNLESS(!std::filesystem::exists(wal, ec) || std::filesystem::file_size(wal, ec) == 0,
+                     "{}: its write-ahead log {} holds changes not yet in the file, and this user cannot write the "
+                     "folder: copy the study with its -wal file to a writable folder and read it there",
+                     file.string(), wal.string());
+  HATTR_THROW_UNLESS(!runnerLockHeld(file), "{}: a runner is writing this study and this user cannot write its "
+                     "folder: read it when the run is over", file.string());
   std::string uri = "file:";
   for (const char c : std::filesystem::absolute(file).string()) {
     if (c == '%' || c == '?' || c == '#') {
@@ -209,7 +228,13 @@ sqlite3* openForReading(const std::filesystem::path& file) {
 int takeRunnerLock(const std::filesystem::path& file, sqlite3* db) {
   const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw Error(fmt::format("{}: cannot open for locking: {}", file.string(), std::strerror(errno)));
-  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+  // A reader's probe (runnerLockHeld) holds a shared lock for an instant: try a few times.
+  bool locked = false;
+  for (int attempt = 0; attempt < 5 && !locked; ++attempt) {
+    locked = ::flock(fd, LOCK_EX | LOCK_NB) == 0;
+    if (!locked) ::usleep(20'000);
+  }
+  if (!locked) {
     ::close(fd);
     std::string holder = "another process";
     try {
@@ -340,6 +365,9 @@ StudyDatabase StudyDatabase::create(const std::filesystem::path& file, const Stu
                                     const std::function<void(StudyDatabase&)>& fill) {
   HATTR_THROW_UNLESS(!std::filesystem::exists(file), "{}: already exists; refusing to overwrite a study database",
                      file.string());
+  const std::filesystem::path folder = file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
+  HATTR_THROW_UNLESS(std::filesystem::is_directory(folder), "{}: no such folder (for the study database {})",
+                     folder.string(), file.string());
   // Read the experts first: a bad one leaves no half-made file.
   std::map<std::string, std::string> expert_csv;
   for (const auto& [skill, path] : study.experts) {
@@ -419,10 +447,12 @@ StudyDatabase StudyDatabase::open(const std::filesystem::path& file, OpenMode mo
     app_id = scalar(db, "PRAGMA application_id");
     version = scalar(db, "PRAGMA user_version");
   } catch (const Error&) {
-    if ((sqlite3_errcode(db) & 0xff) == SQLITE_NOTADB) {
+    const int code = sqlite3_errcode(db) & 0xff;
+    if (code == SQLITE_NOTADB) {
       throw InputError(fmt::format("{}: not a hattr study database (not an SQLite file)", file.string()));
     }
-    throw InputError(fmt::format("{}: cannot read the study database: {}", file.string(), sqlite3_errmsg(db)));
+    if (code == SQLITE_CORRUPT) throw InputError(fmt::format("{}: the study database is damaged: {}", file.string(), sqlite3_errmsg(db)));
+    throw Error(fmt::format("{}: cannot read the study database: {}", file.string(), sqlite3_errmsg(db)));
   }
   HATTR_THROW_UNLESS(app_id == kStudyApplicationId,
                      "{}: not a hattr study database (SQLite application id {:#x}, expected {:#x})", file.string(),
@@ -431,6 +461,10 @@ StudyDatabase StudyDatabase::open(const std::filesystem::path& file, OpenMode mo
                      "{}: study schema version {} is {} this build of hattr reads (1 to {}); {}", file.string(), version,
                      version > kStudySchemaVersion ? "newer than" : "not one", kStudySchemaVersion,
                      version > kStudySchemaVersion ? "use a newer hattr" : "the file is damaged");
+  HATTR_THROW_UNLESS(mode != OpenMode::kReadOnly || version == kStudySchemaVersion,
+                     "{}: study schema version {} is older than this build's {}; it is brought up to date when it is "
+                     "opened for writing (`hattr study run` or `hattr study analyze`), and cannot be read as it is",
+                     file.string(), version, kStudySchemaVersion);
   if (mode != OpenMode::kReadOnly) {
     exec(db, "PRAGMA synchronous = FULL");
     exec(db, "PRAGMA foreign_keys = ON");
@@ -563,14 +597,7 @@ void StudyDatabase::endSession(std::int64_t session_id) {
   s.bind(1, utcNowIso8601()).bind(2, session_id).run();
 }
 
-bool StudyDatabase::runnerActive() const {
-  if (lock_fd_ >= 0) return true;
-  const int fd = ::open(file_.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return false;
-  const bool held = ::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
-  ::close(fd);  // releases the shared lock if it was taken
-  return held;
-}
+bool StudyDatabase::runnerActive() const { return lock_fd_ >= 0 || runnerLockHeld(file_); }
 
 void StudyDatabase::markRunning(std::int64_t trial_id, std::int64_t session_id) {
   Statement s(db_,

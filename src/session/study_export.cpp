@@ -4,6 +4,7 @@
 
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -18,11 +19,13 @@ constexpr std::string_view kTrialsHeader =
     "id,subject,sequence,mode,phase,trial,show_reference,guidance,status,attempts,interruptions,started_utc,ended_utc,"
     "samples,file";
 
-/// A name that becomes a path component of the export; a database written before names were
-/// checked could hold any, so the writer refuses what would leave its folder.
+/// A name that becomes a path component of the export. A study stored before names were
+/// checked can hold any ("P 01" is fine); the writer refuses what would leave its folder.
 const std::string& checkedName(const std::string& name, std::string_view what) {
-  HATTR_THROW_UNLESS(isSafeFileName(name), "study export: {} \"{}\": expected {}; not written", what, textExcerpt(name),
-                     kSafeFileNameRule);
+  HATTR_THROW_UNLESS(staysInFolder(name),
+                     "study export: {} \"{}\": would not stay inside the export folder ('/', \".\", \"..\" or "
+                     "empty); not written",
+                     what, textExcerpt(name));
   return name;
 }
 
@@ -75,20 +78,23 @@ std::size_t exportStudy(const StudyDatabase& db, const std::filesystem::path& ou
   for (const auto& [skill, path] : study.experts) (void)checkedName(skill, "skill");
   for (const SubjectRecord& s : db.subjects()) (void)checkedName(s.id, "subject id");
 
-  // All or nothing: written under a hidden name beside `out`, renamed into place when whole,
-  // so a damaged trial or a full disk leaves no half export.
-  const fs::path parent = out.parent_path().empty() ? fs::path(".") : out.parent_path();
-  fs::create_directories(parent);
-  const fs::path building = parent / fmt::format(".{}.exporting-{}", out.filename().string(), ::getpid());
-  fs::remove_all(building);
+  // All or nothing: written into a hidden folder inside `out` and moved into place when whole,
+  // so a damaged trial or a full disk leaves no half export (and `out` as it was: absent, or
+  // an empty folder, a link to one or a mount point).
+  const bool existed = fs::exists(out);
+  fs::create_directories(out);
+  const fs::path building = out / fmt::format(".exporting-{}", ::getpid());
   std::size_t written = 0;
   try {
     written = writeExport(db, study, building);
-    if (fs::exists(out)) fs::remove(out);  // the empty folder the caller made
-    fs::rename(building, out);
+    std::vector<fs::path> parts;  // listed first: the folder is not changed while it is read
+    for (const auto& entry : fs::directory_iterator(building)) parts.push_back(entry.path());
+    for (const auto& part : parts) fs::rename(part, out / part.filename());
+    fs::remove(building);
   } catch (...) {
     std::error_code ignored;
     fs::remove_all(building, ignored);
+    if (!existed) fs::remove(out, ignored);
     throw;
   }
   return written;
@@ -100,6 +106,7 @@ std::size_t importStudy(const std::filesystem::path& dir, const std::filesystem:
   (void)StudyDatabase::create(db_file, loadStudy(dir / "study.json"), [&](StudyDatabase& db) {
     std::map<std::pair<std::string, int>, std::int64_t> ids;
     for (const TrialRecord& t : db.trials()) ids[{t.plan.subject, t.plan.sequence}] = t.id;
+    std::map<std::int64_t, int> listed_at;  // trial id -> the table line that listed it
 
     // Every completed trial in trials.csv, its profile from its file inside the export.
     const auto table_file = dir / "trials.csv";
@@ -127,6 +134,9 @@ std::size_t importStudy(const std::filesystem::path& dir, const std::filesystem:
       const auto id = ids.find({fields[1], sequence});
       HATTR_THROW_UNLESS(id != ids.end(), "{}:{}: subject {} has no trial {} in the study's plan", table_file.string(),
                          number, textExcerpt(fields[1]), sequence);
+      const auto [first, fresh] = listed_at.emplace(id->second, number);
+      HATTR_THROW_UNLESS(fresh, "{}:{}: subject {} trial {} is listed twice (first on line {})", table_file.string(),
+                         number, textExcerpt(fields[1]), sequence, first->second);
       const std::filesystem::path file(fields[14]);
       HATTR_THROW_UNLESS(isPlainRelativePath(file), "{}:{}: file: expected a path inside the export folder, got \"{}\"",
                          table_file.string(), number, textExcerpt(fields[14]));

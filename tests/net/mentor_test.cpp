@@ -171,6 +171,7 @@ TEST(Mentoring, AGoodbyeEndsTheSessionWithoutALinkFaultASilentLinkCountsOne) {
     run(100, false);  // the follower's loop has stopped
     EXPECT_FALSE(leader.stats().link_up);
     EXPECT_EQ(leader.stats().link_faults, goodbye ? 0u : 1u) << (goodbye ? "goodbye" : "silence");
+    EXPECT_EQ(leader.stats().goodbyes_received, goodbye ? 1u : 0u);
     EXPECT_EQ(leader.stats().sessions, 1u);
   }
 }

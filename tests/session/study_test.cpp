@@ -436,6 +436,79 @@ TEST(StudyExport, TheWriterRefusesANameThatWouldLeaveTheFolder) {
   EXPECT_FALSE(std::filesystem::exists(folder.dir / "x"));
 }
 
+// A study stored before the name rule (a subject "P 01") still opens, runs and exports: the
+// rule applies to new study files, the export's writer refuses only names that leave a folder.
+// The export also takes a folder written with a trailing slash, and an existing empty one.
+TEST(StudyExport, AStudyStoredBeforeTheNameRuleOpensAndExports) {
+  StudyFolder folder(smallStudy(1));
+  { (void)StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json")); }
+  sqlite3* raw = nullptr;
+  ASSERT_EQ(sqlite3_open((folder.dir / "s.sqlite").c_str(), &raw), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(raw, "UPDATE trials SET subject = 'P 01'; UPDATE subjects SET id = 'P 01'; "
+                              "UPDATE study SET definition = replace(definition, '\"S01\"', '\"P 01\"');",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(raw);
+  {
+    StudyDatabase db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);
+    EXPECT_EQ(db.subjects().front().id, "P 01");
+    StudyRunner runner(db, makeScriptParticipant);
+    EXPECT_EQ(runner.run({.max_trials = 2}), 2);
+  }
+  const StudyDatabase db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kReadOnly);
+  EXPECT_EQ(exportStudy(db, (folder.dir / "exp").string() + "/"), 2u);
+  EXPECT_TRUE(std::filesystem::is_directory(folder.dir / "exp" / "trials" / "P 01"));
+  EXPECT_TRUE(std::filesystem::is_regular_file(folder.dir / "exp" / "study.json"));
+  std::filesystem::create_directory(folder.dir / "empty");
+  EXPECT_EQ(exportStudy(db, folder.dir / "empty"), 2u);
+  EXPECT_TRUE(std::filesystem::is_regular_file(folder.dir / "empty" / "trials.csv"));
+  EXPECT_EQ(filesIn(folder.dir / "empty"), (std::set<std::string>{"experts", "study.json", "trials", "trials.csv"}));
+}
+
+// An import's table that lists a trial twice is refused at the line, and leaves no database.
+TEST(StudyImport, ATrialListedTwiceIsRefusedAtItsLine) {
+  StudyFolder folder;
+  {
+    StudyDatabase db = StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json"));
+    db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);
+    StudyRunner runner(db, makeScriptParticipant);
+    ASSERT_EQ(runner.run({.max_trials = 1}), 1);
+    ASSERT_EQ(exportStudy(db, folder.dir / "export"), 1u);
+  }
+  std::string table = test::readText(folder.dir / "export" / "trials.csv");
+  const auto second = table.find('\n', table.find('\n') + 1);
+  table += table.substr(table.find('\n') + 1, second - table.find('\n'));  // the first trial again
+  test::writeText(folder.dir / "export" / "trials.csv", table);
+  try {
+    (void)importStudy(folder.dir / "export", folder.dir / "copy.sqlite");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("is listed twice (first on line 2)"));
+  }
+  EXPECT_FALSE(std::filesystem::exists(folder.dir / "copy.sqlite"));
+}
+
+// An older schema is brought up to date by a writer; a reader says so instead of failing on a
+// missing column.
+TEST(StudyDatabase, AnOlderSchemaOpenedForReadingSaysHowToUpdateIt) {
+  StudyFolder folder;
+  { (void)StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json")); }
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open((folder.dir / "s.sqlite").c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db, "DROP TABLE disturbed_attempts; ALTER TABLE trials DROP COLUMN disturbed; PRAGMA user_version = 2;",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  try {
+    (void)StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kReadOnly);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("study schema version 2 is older than this build's"));
+  }
+  EXPECT_EQ(StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kReadWrite).schemaVersion(), kStudySchemaVersion);
+  EXPECT_NO_THROW((void)StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kReadOnly).trials());
+}
+
 TEST(SamplePacking, IsExact) {
   std::mt19937_64 rng(test::testSeed(17));
   for (const RawChannels raw : {RawChannels{}, RawChannels{true, true}}) {

@@ -103,6 +103,7 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
   was_recording_ = false;
   stop_taken_ = false;
   mentor_failure_.clear();
+  mentor_checked_ = false;
   stop_.reset();
   status_recording_ = false;
   status_window_done_ = false;
@@ -135,11 +136,17 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
 void LiveRig::advanceSimulated(double seconds) {
   HATTR_DEMAND(loop_ && clock_ == session::Clock::kSimulated, "advanceSimulated() needs a simulated run");
   const auto ticks = static_cast<std::size_t>(std::llround(seconds * environment_->rate_hz()));
-  // As runTrial: a trial's loop stops with the chunk in which its window ended.
-  for (std::size_t done = 0; done < ticks && !status_window_done_.load(std::memory_order_acquire);
-       done += kSimulatedChunk) {
-    loop_->runSimulated(std::min(kSimulatedChunk, ticks - done));
+  const auto settle_ticks = static_cast<std::uint64_t>(std::llround(spec_.settle_s * environment_->rate_hz()));
+  // As runTrial: a trial's loop stops with the chunk in which its window ended; a mentored
+  // trial's chunks also stop at the settle's last tick, where runTrial asks for the mentor.
+  for (std::size_t done = 0; done < ticks && !status_window_done_.load(std::memory_order_acquire);) {
+    std::size_t chunk = std::min(kSimulatedChunk, ticks - done);
+    const std::uint64_t ran = loop_->counters().ticks.load();
+    if (live_ && !mentor_checked_ && ran < settle_ticks) chunk = std::min<std::size_t>(chunk, settle_ticks - ran);
+    loop_->runSimulated(chunk);
+    done += chunk;
     pump();
+    if (live_ && !mentor_checked_ && loop_->counters().ticks.load() == settle_ticks) checkMentor();
   }
 }
 
@@ -153,11 +160,8 @@ void LiveRig::pump() {
     if (spec_.record == RecordMode::kWindow && !stop_taken_) {
       const bool in_window = item.sample.t_s >= window_begin_s_ && item.sample.t_s < window_end_s_;
       // As runTrial: a mentor not there when the settle ends fails the trial, nothing recorded.
-      if (in_window && !window_armed_ && live_) mentor_failure_ = live_->unavailable();
-      if (!mentor_failure_.empty()) {
-        takeStop();
-        status_window_done_.store(true, std::memory_order_release);
-      } else if (in_window != window_armed_) {
+      if (in_window && !window_armed_ && live_ && !mentor_checked_) checkMentor();  // (real time)
+      if (!stop_taken_ && in_window != window_armed_) {
         recorder_->drain();
         if (in_window) {
           recorder_->start();
@@ -178,6 +182,15 @@ void LiveRig::pump() {
   if (!stop_taken_ && stop_.requested()) takeStop();
   recorder_->drain();
   publishStatus();
+}
+
+void LiveRig::checkMentor() {
+  mentor_failure_ = live_->unavailable();
+  mentor_checked_ = true;
+  if (!mentor_failure_.empty()) {
+    takeStop();
+    status_window_done_.store(true, std::memory_order_release);
+  }
 }
 
 void LiveRig::takeStop() {

@@ -147,6 +147,7 @@ class LiveRig {
  private:
   void pump();           // relay: loop ring → recorder; consumer thread only
   void takeStop();       // consumer thread only
+  void checkMentor();    // consumer thread only: the mentor's link at the settle's end
   void publishStatus();  // consumer thread only
 
   session::TrialEnvironment* environment_ = nullptr;
@@ -172,6 +173,7 @@ class LiveRig {
   bool was_recording_ = false;
   bool stop_taken_ = false;
   std::string mentor_failure_;  // the mentor was unavailable when the settle ended
+  bool mentor_checked_ = false;  // the settle's end was checked
 
   // Published for the GUI thread.
   std::atomic<bool> status_recording_{false};

@@ -39,6 +39,7 @@ void StudySession::selectSubject(const std::string& subject_id, double now_s) {
   }
   subject_ = subject_id;
   trials_ = db_.trials(subject_id);
+  repeats_ = 0;  // as the runner: a trial's attempts count from 0 in each run
 
   // Resume at the first trial not completed, as the runner does; trials completed after a
   // gap are skipped when their turn comes (never run again).
@@ -156,6 +157,7 @@ std::string StudySession::completeTrial(session::TrialResult result, double now_
 void StudySession::failTrial(const std::string& reason) {
   HATTR_DEMAND(state_ == State::kRunning, "study: failTrial() in state {}", stateName(state_));
   db_.failTrial(trials_[next_].id, reason);
+  repeats_ = 0;  // the runner stops at a failed trial; its next run starts the trial at attempt 0
   state_ = State::kReady;
 }
 

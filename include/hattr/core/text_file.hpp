@@ -52,6 +52,10 @@ std::string textExcerpt(std::string_view text);
 /// What isSafeFileName accepts, for messages.
 inline constexpr std::string_view kSafeFileNameRule =
     "1 to 64 letters, digits, '_', '-' or '.', not starting with '.'";
+/// Whether `name` can be one path component without leaving its folder: not empty, not "."
+/// or "..", no '/', no NUL, at most 255 bytes. Looser than isSafeFileName: for names stored
+/// before that rule (a subject "P 01"), which a writer must still place inside its folder.
+[[nodiscard]] bool staysInFolder(std::string_view name) noexcept;
 /// Whether `path` is relative and stays below its base: no root, no "..", not empty.
 [[nodiscard]] bool isPlainRelativePath(const std::filesystem::path& path) noexcept;
 

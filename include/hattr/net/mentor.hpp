@@ -145,7 +145,8 @@ struct MentorStats {
   std::uint64_t sessions = 0;
   std::uint64_t busy_refusals = 0;   ///< HELLOs refused: a second follower (leader)
   bool refused_busy = false;         ///< this follower was refused (the leader serves another)
-  std::uint64_t link_faults = 0;     ///< times the link went down with a session
+  std::uint64_t link_faults = 0;     ///< times the link went down with a session (not by a goodbye)
+  std::uint64_t goodbyes_received = 0;  ///< sessions the other station ended (BYE heard)
   std::uint64_t peers_received = 0;
   std::uint64_t peers_sent = 0;
   std::uint64_t peers_withheld = 0;  ///< PEERs the deadband did not send
@@ -253,6 +254,7 @@ class MentorCoupling final : public GuidanceController {
   std::atomic<std::uint64_t> sessions_{0};
   std::atomic<std::uint64_t> busy_refusals_{0};
   std::atomic<std::uint64_t> link_faults_{0};
+  std::atomic<std::uint64_t> goodbyes_{0};
   std::atomic<std::uint64_t> peers_received_{0};
   std::atomic<std::uint64_t> peers_sent_{0};
   std::atomic<std::uint64_t> peers_withheld_{0};

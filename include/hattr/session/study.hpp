@@ -118,8 +118,10 @@ struct StudyDefinition {
 std::vector<int> analyzedRecallTrials(const Protocol& protocol);
 
 /// Parses and validates a study file's text. Relative expert paths resolve against
-/// `base_dir`; with `check_files`, each must exist. Throws InputError listing every problem
-/// found, one per line.
+/// `base_dir`; with `check_files` (a new study file, not one stored in a database), each must
+/// exist and subject ids and skills must be safe file names (isSafeFileName), so a study
+/// stored before that rule still opens. Throws InputError listing every problem found, one
+/// per line.
 StudyDefinition parseStudy(std::string_view json_text, std::string_view source_name,
                            const std::filesystem::path& base_dir, bool check_files = true);
 StudyDefinition loadStudy(const std::filesystem::path& file);
