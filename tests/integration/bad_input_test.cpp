@@ -444,7 +444,11 @@ TEST(StudyStatus, AStudyInAReadOnlyFolderReads) {
     fs::permissions(dir.path(), fs::perms::others_exec | fs::perms::others_read, fs::perm_options::add);
     prefix = "runuser -u nobody -- ";
   }
-  const test::RunResult r = test::runCommand(dir, prefix + HATTR_CLI_PATH, "study status --json --db " + q(dir / "shared" / "s.sqlite"));
+  // A copy of the binary nobody can run (the build tree may sit in a folder only root enters).
+  fs::copy_file(HATTR_CLI_PATH, dir / "hattr");
+  fs::permissions(dir / "hattr", fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
+                                     fs::perms::others_read | fs::perms::others_exec);
+  const test::RunResult r = test::runCommand(dir, prefix + q(dir / "hattr"), "study status --json --db " + q(dir / "shared" / "s.sqlite"));
   fs::permissions(dir / "shared", fs::perms::owner_all, fs::perm_options::add);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("\"trials_completed\": 8"));

@@ -67,19 +67,22 @@ TEST(MentorCli, LeadAndFollowOverLoopbackRecordBothSides) {
   const std::string lead_rest = lead.readRest();
   EXPECT_EQ(lead.wait(), 0) << test::readText(dir / "lead.err");
 
-  // The follower's summary and the leader's: linked, packets both ways, no failure.
-  const auto follower = nlohmann::json::parse(follow.out.substr(follow.out.find('{')));
-  EXPECT_EQ(follower["failure"], "");
-  EXPECT_GT(follower["peers_received"].get<int>(), 2000);
-  const auto leader = nlohmann::json::parse(lead_rest.substr(lead_rest.find('{')));
-  EXPECT_EQ(leader["failure"], "");
-  EXPECT_GT(leader["peers_received"].get<int>(), 2000);
-
-  // Both sides are haptic profiles, the coupling named in each.
+  // The follower's summary and the leader's: linked, packets both ways, no failure. The
+  // sessions last a wall-clock time, so how many ticks fit depends on the host (a loaded CI
+  // host froze both loops for ~0.4 s: 1705 samples where 2100 are usual): the counts are
+  // checked against each side's own recording, not against the clock.
   const HapticProfile expert_side = io::readProfileCsv(dir / "expert-side.csv");
   const HapticProfile trainee_side = io::readProfileCsv(dir / "trainee-side.csv");
-  EXPECT_GT(expert_side.size(), 2000u);
-  EXPECT_GT(trainee_side.size(), 2000u);
+  const auto follower = nlohmann::json::parse(follow.out.substr(follow.out.find('{')));
+  EXPECT_EQ(follower["failure"], "");
+  EXPECT_GT(follower["peers_received"].get<double>(), 0.5 * static_cast<double>(trainee_side.size()));
+  const auto leader = nlohmann::json::parse(lead_rest.substr(lead_rest.find('{')));
+  EXPECT_EQ(leader["failure"], "");
+  EXPECT_GT(leader["peers_received"].get<double>(), 0.5 * static_cast<double>(expert_side.size()));
+
+  // Both sides are haptic profiles (at least a second of the linked session), the coupling named in each.
+  EXPECT_GT(expert_side.size(), 1000u);
+  EXPECT_GT(trainee_side.size(), 1000u);
   EXPECT_EQ(trainee_side.metadata().extra.at("coupling"), "position");
   EXPECT_EQ(expert_side.metadata().extra.at("mentor_role"), "leader");
 }
