@@ -40,7 +40,7 @@ void BM_StoreTrial4sAt1kHz(benchmark::State& state) {
   study.experts["na"] = dir / "expert.csv";
   study.modes = {guidance::TrainingMode::kBasic};
   study.protocol.training_trials = 1000;
-  study.protocol.recall_trials = 0;
+  study.protocol.recall_trials = 2;  // the smallest protocol the study file allows (recall 1 is a warm-up)
   study.subjects = {{"S01", "script", 1, nlohmann::json::object()}};
   { (void)session::StudyDatabase::create(dir / "s.sqlite", study); }
   session::StudyDatabase db = session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kRunner);

@@ -2,6 +2,8 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <iostream>
 #include <optional>
 
@@ -132,6 +134,57 @@ void writeRecording(const HapticProfile& profile, const std::filesystem::path& f
     }
     throw Error(fmt::format("{}; the recording could not be kept anywhere ({} samples lost)", why, profile.size()));
   }
+}
+
+// The progress line: drawn with a carriage return, cleared with spaces at the end.
+Progress::Progress(std::string label, double total, std::string unit)
+    : label_(std::move(label)), total_(total), unit_(std::move(unit)), shown_(onTerminal()) {}
+
+Progress::~Progress() { finish(); }
+
+bool Progress::onTerminal() {
+  const char* term = std::getenv("TERM");
+  return isatty(STDERR_FILENO) == 1 && !(term != nullptr && std::string_view(term) == "dumb");
+}
+
+void Progress::update(double done, const std::string& label) {
+  const bool relabeled = !label.empty() && label != label_;
+  if (relabeled) label_ = label;
+  if (!shown_) return;
+  // At most ten redraws a second, but a new label or the end is always drawn.
+  const auto now = std::chrono::steady_clock::now();
+  if (drawn_ && !relabeled && now - last_draw_ < std::chrono::milliseconds(100) && done < total_) return;
+  last_draw_ = now;
+  // The bar, the count and an estimate of the time left from the rate so far.
+  constexpr int kWidth = 30;
+  const double fraction = total_ > 0.0 ? std::clamp(done / total_, 0.0, 1.0) : 1.0;
+  const int filled = static_cast<int>(fraction * kWidth);
+  const double elapsed = std::chrono::duration<double>(now - start_).count();
+  std::string eta;
+  const double left = fraction > 0.0 ? elapsed * (1.0 / fraction - 1.0) : 0.0;
+  if (fraction < 1.0 && elapsed > 1.0 && left >= 1.0) eta = fmt::format(", about {:.0f} s left", left);
+  const bool whole = done == static_cast<double>(static_cast<long long>(done));
+  const std::string count = whole ? fmt::format("{}/{}", static_cast<long long>(done), static_cast<long long>(total_))
+                                  : fmt::format("{:.1f}/{:.1f}", done, total_);
+  std::cerr << fmt::format("\r\x1b[K{} [{}{}] {} {}{}", label_, std::string(static_cast<std::size_t>(filled), '#'),
+                           std::string(static_cast<std::size_t>(kWidth - filled), '.'), count, unit_, eta)
+            << std::flush;
+  drawn_ = true;
+}
+
+void Progress::finish() {
+  if (drawn_) std::cerr << "\r\x1b[K" << std::flush;
+  drawn_ = false;
+}
+
+std::function<void(std::string_view, int, int)> stageProgress(Progress& progress, std::string prefix) {
+  return [&progress, prefix = std::move(prefix)](std::string_view stage, int done, int total) {
+    const std::string what = stage == "trials"    ? "running the study"
+                             : stage == "scoring" ? "scoring recall trials"
+                                                  : "writing the report";
+    progress.setTotal(total);
+    progress.update(done, fmt::format("{}: {}", prefix, what));
+  };
 }
 
 }  // namespace hattr::cli

@@ -1,8 +1,11 @@
 #pragma once
 // Shared pieces of the hattr command-line tool: exit codes, JSON summaries, output.
 
+#include <chrono>
 #include <filesystem>
+#include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -51,6 +54,39 @@ void checkOutputFolder(const std::filesystem::path& dir, const std::vector<std::
 /// temporary folder's copy instead and throws hattr::Error naming where it is: a recording
 /// is never lost.
 void writeRecording(const HapticProfile& profile, const std::filesystem::path& file, bool force);
+
+/// A progress line for long commands, on stderr and only when stderr is a terminal: scripts,
+/// pipes and CI logs see nothing. "label [#####.....] done/total unit, about N s left",
+/// redrawn at most ten times a second; finish() (or the destructor) clears the line.
+class Progress {
+ public:
+  Progress(std::string label, double total, std::string unit);
+  ~Progress();
+  Progress(const Progress&) = delete;
+  Progress& operator=(const Progress&) = delete;
+
+  /// `done` of the total so far; `label` replaces the label when not empty.
+  void update(double done, const std::string& label = {});
+  /// When the total is learned late (a callback's "done of total").
+  void setTotal(double total) { total_ = total; }
+  /// Clears the line (nothing was drawn when stderr is not a terminal).
+  void finish();
+  /// Whether progress is drawn: stderr is a terminal and TERM is not "dumb".
+  [[nodiscard]] static bool onTerminal();
+
+ private:
+  std::string label_;
+  double total_;
+  std::string unit_;
+  bool shown_;
+  bool drawn_ = false;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::time_point last_draw_{};
+};
+
+/// An in-silico study's progress callback drawing on `progress`: "PREFIX: running the study",
+/// "PREFIX: scoring recall trials", "PREFIX: writing the report".
+std::function<void(std::string_view, int, int)> stageProgress(Progress& progress, std::string prefix);
 
 /// The world configuration in `file`, or the defaults when `file` is empty.
 render::WorldConfig worldConfigOrDefault(const std::string& file);

@@ -22,16 +22,6 @@ struct DemoOptions {
   bool json = false;
 };
 
-/// A one-line progress bar on stderr.
-void progressBar(int done, int total) {
-  constexpr int kWidth = 40;
-  if (done != total && done % std::max(1, total / 100) != 0) return;  // about a hundred updates
-  const int filled = total > 0 ? done * kWidth / total : kWidth;
-  std::cerr << fmt::format("\r[{}{}] {:>4}/{} trials", std::string(static_cast<std::size_t>(filled), '#'),
-                           std::string(static_cast<std::size_t>(kWidth - filled), '.'), done, total)
-            << (done == total ? "\n" : "") << std::flush;
-}
-
 const analysis::AnovaRow* row(const analysis::AnovaTable& t, const std::string& source) {
   for (const auto& r : t.rows) {
     if (r.source == source) return &r;
@@ -46,8 +36,10 @@ void runDemo(const DemoOptions& opt) {
                            "at 1 kHz (simulated time).\n\n",
                            opt.subjects);
   sim::InSilicoOptions options{.out_dir = opt.out_dir, .subjects = opt.subjects, .seed = opt.seed};
-  if (!opt.json) options.progress = progressBar;
+  Progress progress("hattr demo: running the study", 0, "trials");
+  if (!opt.json) options.progress = stageProgress(progress, "hattr demo");
   const sim::InSilicoResult r = sim::runInSilicoStudy(options);
+  progress.finish();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const std::uint64_t ticks = r.servo_ticks + static_cast<std::uint64_t>(r.trials) * 300;  // + each trial's settle
 

@@ -1,6 +1,11 @@
 // hattr servo-check: runs the real-time loop with the full pipeline on a (simulated) device
 // next to a bare sleep loop measured in the same run, and reports both.
 
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <exception>
+#include <functional>
 #include <iostream>
 #include <thread>
 
@@ -64,15 +69,42 @@ nlohmann::json reportJson(const servo::RealtimeReport& r) {
           {"timer_slack_minimal", r.timer_slack_minimal}, {"notes", r.notes}};
 }
 
+/// Sleeps in steps of at most 0.1 s until `done()` or `deadline`, moving `progress` from
+/// `start` by the seconds passed (at most `seconds`).
+void waitShowingProgress(Progress& progress, double start, double seconds, const std::function<bool()>& done,
+                         std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max()) {
+  const auto begin = std::chrono::steady_clock::now();
+  for (auto now = begin; !done() && now < deadline; now = std::chrono::steady_clock::now()) {
+    std::this_thread::sleep_until(std::min(deadline, now + std::chrono::milliseconds(100)));
+    const double passed = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+    progress.update(start + std::min(passed, seconds));
+  }
+}
+
 void runServoCheck(const ServoCheckOptions& opt) {
   servo::RealtimeSettings realtime{.policy = parsePolicy(opt.realtime),
                                    .cpu = opt.cpu,
                                    .final_spin = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.spin_us * 1e3))};
   const auto duration = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.seconds * 1e9));
 
-  // The platform's floor first: the same sleeps with nothing to do.
+  // The platform's floor first: the same sleeps with nothing to do (measured on its own
+  // thread while this one draws the progress line, on a terminal only).
+  Progress progress("servo-check: the bare sleep loop (floor)", 2.0 * opt.seconds, "s");
   servo::RealtimeReport floor_report;
-  const DurationHistogram floor = servo::measureSleepFloor(opt.rate_hz, duration, realtime, &floor_report);
+  DurationHistogram floor;
+  std::exception_ptr floor_error;
+  std::atomic<bool> floor_done{false};
+  std::thread floor_thread([&] {
+    try {
+      floor = servo::measureSleepFloor(opt.rate_hz, duration, realtime, &floor_report);
+    } catch (...) {
+      floor_error = std::current_exception();
+    }
+    floor_done.store(true, std::memory_order_release);
+  });
+  waitShowingProgress(progress, 0.0, opt.seconds, [&] { return floor_done.load(std::memory_order_acquire); });
+  floor_thread.join();
+  if (floor_error) std::rethrow_exception(floor_error);
 
   // Then the full pipeline: a hand writing circles on the paper through the device.
   render::WorldConfig world = worldConfigOrDefault(opt.world);
@@ -94,8 +126,11 @@ void runServoCheck(const ServoCheckOptions& opt) {
     while (loop.samples().tryPop(s)) ++consumed;
   });
   loop.start();
-  std::this_thread::sleep_for(duration);
+  progress.update(opt.seconds, "servo-check: the servo loop");
+  const auto loop_end = std::chrono::steady_clock::now() + duration;
+  waitShowingProgress(progress, opt.seconds, opt.seconds, [] { return false; }, loop_end);
   loop.stop();
+  progress.finish();
   done = true;
   consumer.join();
 
@@ -178,7 +213,9 @@ void registerServoCheckCommand(CLI::App& app) {
                                  "Run the real-time servo loop (full pipeline) next to a bare sleep loop and report "
                                  "period error, tick compute time, overruns, drops and faults");
   cmd->add_option("--rate", opt->rate_hz, "Servo rate [Hz]")->check(CLI::Range(1.0, 10000.0))->capture_default_str();
-  cmd->add_option("--seconds", opt->seconds, "Duration of each of the two runs [s]")
+  cmd->add_option("--seconds", opt->seconds,
+                  "Duration of each of the two runs, the bare sleep loop (floor) and then the servo loop: the "
+                  "check takes twice this [s]")
       ->check(CLI::Range(0.01, 3600.0))
       ->capture_default_str();
   cmd->add_option("--device", opt->device, "Device URI (see `hattr devices`)")->capture_default_str();

@@ -1,6 +1,7 @@
 // hattr sim expert | aa | sweep: the simulated expert, and the checks that keep the trainee
 // model honest.
 
+#include <functional>
 #include <iostream>
 #include <sstream>
 
@@ -54,26 +55,35 @@ void runExpert(const SimOptions& opt) {
                            expert.duration_s(), opt.script_output.empty() ? "" : fmt::format(" (script: {})", opt.script_output));
 }
 
+/// Moves `progress` through one study of several (`before` studies done): its trials.
+std::function<void(std::string_view, int, int)> withinStudy(Progress& progress, double before) {
+  return [&progress, before](std::string_view stage, int done, int total) {
+    if (stage == "trials" && total > 0) progress.update(before + static_cast<double>(done) / total);
+  };
+}
+
 /// One reduced study per seed with guidance switched off in every mode.
 void runAa(const SimOptions& opt) {
   nlohmann::json seeds = nlohmann::json::array();
   int significant[2] = {0, 0};
+  Progress progress("A/A", opt.seeds, "studies");
   for (int s = 1; s <= opt.seeds; ++s) {
+    progress.update(s - 1, fmt::format("A/A: study {} of {}", s, opt.seeds));
     const auto r = sim::runInSilicoStudy({.out_dir = fmt::format("{}/aa-{:03}", opt.out_dir, s), .subjects = opt.subjects,
                                           .seed = static_cast<std::uint64_t>(s), .training_trials = opt.trials,
-                                          .recall_trials = opt.trials, .guidance = false, .write_report = false});
+                                          .recall_trials = opt.trials, .guidance = false, .write_report = false,
+                                          .progress = withinStudy(progress, s - 1)});
     const double p_traj = row(r.analysis.trajectory.overall, "mode")->p;
     const double p_force = row(r.analysis.force.overall, "mode")->p;
     significant[0] += p_traj < 0.05 ? 1 : 0;
     significant[1] += p_force < 0.05 ? 1 : 0;
     seeds.push_back({{"seed", s}, {"p_mode_trajectory", p_traj}, {"p_mode_force", p_force}});
-    if (!opt.json) std::cerr << fmt::format("\rA/A seed {}/{}: p(mode) trajectory {:.3f}, force {:.3f}   ", s, opt.seeds, p_traj, p_force);
   }
+  progress.finish();
   const nlohmann::json json = {{"seeds", seeds}, {"alpha", 0.05},
                                {"fraction_significant_trajectory", static_cast<double>(significant[0]) / opt.seeds},
                                {"fraction_significant_force", static_cast<double>(significant[1]) / opt.seeds}};
   if (opt.json) return printJson(json);
-  std::cerr << '\n';
   std::cout << fmt::format("A/A check ({} seeds, {} subjects, {}+{} trials per mode, guidance off in every mode):\n"
                            "  mode effect significant at α = 0.05: trajectory {}/{}, force {}/{} (expected about {:.1f})\n",
                            opt.seeds, opt.subjects, opt.trials, opt.trials, significant[0], opt.seeds, significant[1], opt.seeds,
@@ -95,12 +105,15 @@ void runSweep(const SimOptions& opt) {
   HATTR_THROW_UNLESS(!values.empty(), "--values: expected at least one number");
   nlohmann::json rows = nlohmann::json::array();
   std::string baseline;
+  Progress progress("sweep", static_cast<double>(values.size()), "studies");
   for (const double v : values) {
+    progress.update(static_cast<double>(rows.size()), fmt::format("sweep: {} = {}", opt.parameter, v));
     sim::TraineeModel model = base;
     sim::setModelParameter(model, opt.parameter, v);
     const auto r = sim::runInSilicoStudy({.out_dir = fmt::format("{}/sweep-{}-{}", opt.out_dir, opt.parameter, v),
                                           .subjects = opt.subjects, .training_trials = opt.trials,
-                                          .recall_trials = opt.trials, .model = model, .write_report = false});
+                                          .recall_trials = opt.trials, .model = model, .write_report = false,
+                                          .progress = withinStudy(progress, static_cast<double>(rows.size()))});
     nlohmann::json entry = {{"value", v}};
     std::string conclusion;
     for (const auto* m : {&r.analysis.trajectory, &r.analysis.force}) {
@@ -114,6 +127,7 @@ void runSweep(const SimOptions& opt) {
     entry["conclusion"] = conclusion;
     entry["same_as_first"] = conclusion == baseline;
     rows.push_back(entry);
+    progress.finish();
     if (!opt.json) {
       std::cout << fmt::format("{} = {:<8} best mode (* = mode effect p < 0.05): {}{}\n", opt.parameter, v, conclusion,
                                conclusion == baseline ? "" : "  <- differs");

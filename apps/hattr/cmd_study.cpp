@@ -81,6 +81,16 @@ void runInit(const StudyOptions& opt) {
                            status["trials_total"].get<int>());
 }
 
+/// The trials a run will do: those not completed (of --subject), at most --max-trials.
+int trialsToRun(const session::StudyDatabase& db, const StudyOptions& opt) {
+  int left = 0;
+  for (const session::TrialRecord& t : db.trials()) {
+    const bool selected = opt.subject.empty() || t.plan.subject == opt.subject;
+    left += selected && t.status != session::TrialStatus::kCompleted ? 1 : 0;
+  }
+  return opt.max_trials >= 0 ? std::min(left, opt.max_trials) : left;
+}
+
 void runRun(const StudyOptions& opt) {
   session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kRunner);
   session::StudyRunner runner(db, makeParticipant);
@@ -95,16 +105,18 @@ void runRun(const StudyOptions& opt) {
                                   render::parseWorldConfig(study.world.dump(), "study world"), study.rate_hz);
     run.mentor = mentor.get();
   }
+  // Progress over the trials this run has to do (a terminal only): the subject's trial just done.
+  Progress progress("study run", trialsToRun(db, opt), "trials");
+  int done = 0;
   if (!opt.quiet) {
-    run.progress = [](const session::RunProgress& p) {
-      std::cerr << fmt::format("\r{} {:>3}/{:<3} {} {} {:>2}   ", p.subject, p.completed, p.total,
-                               guidance::modeName(p.trial->plan.mode), session::phaseName(p.trial->plan.phase),
-                               p.trial->plan.index)
-                << std::flush;
+    run.progress = [&progress, &done](const session::RunProgress& p) {
+      progress.update(++done, fmt::format("study run: {} {:>2}/{} {} {} {:>2}", p.subject, p.completed, p.total,
+                                          guidance::modeName(p.trial->plan.mode),
+                                          session::phaseName(p.trial->plan.phase), p.trial->plan.index));
     };
   }
   const int ran = runner.run(run);
-  if (!opt.quiet) std::cerr << '\n';
+  progress.finish();
   if (opt.json) return printJson(statusJson(db));
   std::cout << fmt::format("ran {} trial{}\n", ran, ran == 1 ? "" : "s");
 }
@@ -136,16 +148,23 @@ void runExport(const StudyOptions& opt) {
   std::cout << fmt::format("exported {} trial profiles to {}/\n", n, opt.out);
 }
 
-report::AnalysisOptions analysisOptions(const StudyOptions& opt) {
+/// The analysis options, scoring progress drawn on `progress` (a terminal only).
+report::AnalysisOptions analysisOptions(const StudyOptions& opt, Progress& progress) {
   report::AnalysisOptions a;
   a.band_fraction = opt.band;
+  a.progress = [&progress](int scored, int total) {
+    progress.setTotal(total);
+    progress.update(scored);
+  };
   return a;
 }
 
 void runAnalyze(const StudyOptions& opt) {
   if (!opt.out.empty()) checkOutputFolder(opt.out, report::kAnalysisCsvFiles, opt.force);  // before anything is written
   session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kReadWrite);
-  const report::StudyAnalysis analysis = report::analyzeStudy(db, analysisOptions(opt));
+  Progress progress("scoring recall trials", 0, "trials");
+  const report::StudyAnalysis analysis = report::analyzeStudy(db, analysisOptions(opt, progress));
+  progress.finish();
   report::storeAnalysis(db, analysis);
   if (!opt.out.empty()) report::writeAnalysisCsv(analysis, opt.out);
   if (opt.json) return printJson(report::analysisToJson(analysis));
@@ -160,10 +179,13 @@ void runReport(const StudyOptions& opt) {
   outputs.insert(outputs.end(), report::kStudyReportFiles.begin(), report::kStudyReportFiles.end());
   checkOutputFolder(opt.out, outputs, opt.force);
   session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kReadWrite);
-  const report::StudyAnalysis analysis = report::analyzeStudy(db, analysisOptions(opt));
+  Progress progress("study report: scoring recall trials", 0, "trials");
+  const report::StudyAnalysis analysis = report::analyzeStudy(db, analysisOptions(opt, progress));
   report::storeAnalysis(db, analysis);
   report::writeAnalysisCsv(analysis, opt.out);
+  progress.update(0, "study report: writing the report and figures");
   const auto html = report::writeStudyReport(db, analysis, opt.out);
+  progress.finish();
   std::cout << fmt::format("report: {} (and report.md, figures/, CSV tables beside it)\n", html.string());
   const report::PaperComparison paper = report::compareWithPaper(db.study(), db.subjects().size(), analysis);
   for (const auto& line : report::comparisonText(paper)) std::cout << line << '\n';

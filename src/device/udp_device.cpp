@@ -370,7 +370,13 @@ std::string udpDeviceHelp() {
   std::string text =
       "udp://HOST:PORT keys (a pen served by `hattr device serve`; HOST an IPv4 address or localhost):\n"
       "  key                      the shared key file, 64 hex characters (`hattr device keygen`); required\n";
-  for (const auto& k : kUdpNumberKeys) text += fmt::format("  {:<24} {} in [{}, {}]\n", k.key, k.help, k.min, k.max);
+  // Each key's default is the parameters' own default, in the key's unit.
+  const UdpDeviceParams defaults;
+  static_assert(std::size(kUdpNumberKeys) == 2, "a new key needs its default here");
+  for (const auto& k : kUdpNumberKeys) {
+    const double fallback = k.key == "hold_ms" ? defaults.hold_s * 1e3 : defaults.handshake_timeout_s;
+    text += fmt::format("  {:<24} {} in [{}, {}], default {}\n", k.key, k.help, k.min, k.max, fallback);
+  }
   return text;
 }
 

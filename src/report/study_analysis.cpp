@@ -70,6 +70,7 @@ StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptio
   const session::StudyDefinition& study = db.study();
   StudyAnalysis out;
   out.options = options;
+  out.options.progress = nullptr;  // the caller's callback does not outlive the call
   out.analyzed_recall_trials = session::analyzedRecallTrials(study.protocol);
   out.disturbed_policy = std::string(session::disturbedPolicyName(study.protocol.disturbed));
   const std::set<int> analyzed(out.analyzed_recall_trials.begin(), out.analyzed_recall_trials.end());
@@ -124,17 +125,25 @@ StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptio
     }
   }
   HATTR_THROW_UNLESS(!out.costs.empty(), "{}: the study has no recall trials to analyze", db.file().string());
-  std::vector<HapticProfile> profiles;
-  for (const TrialCost& c : out.costs) profiles.push_back(db.trialProfile(c.trial_id));
 
-  // One scorer, as `hattr dtw --score` and the studio use it.
+  // One scorer, as `hattr dtw --score` and the studio use it; the trials are loaded and
+  // scored a chunk at a time (bounded memory, and progress between chunks).
   const analysis::TrialScorer scorer(db.expert(study.skill), {.normalization = options.normalization,
                                                               .cost = options.cost,
                                                               .band_fraction = options.band_fraction});
-  std::vector<const HapticProfile*> pointers;
-  for (const auto& p : profiles) pointers.push_back(&p);
-  const std::vector<analysis::TrialScore> scores = scorer.scoreAll(pointers, options.threads);
-  for (std::size_t i = 0; i < scores.size(); ++i) out.costs[i].score = scores[i];
+  constexpr std::size_t kChunk = 16;
+  const int total = static_cast<int>(out.costs.size());
+  if (options.progress) options.progress(0, total);
+  for (std::size_t first = 0; first < out.costs.size(); first += kChunk) {
+    const std::size_t last = std::min(out.costs.size(), first + kChunk);
+    std::vector<HapticProfile> profiles;
+    for (std::size_t i = first; i < last; ++i) profiles.push_back(db.trialProfile(out.costs[i].trial_id));
+    std::vector<const HapticProfile*> pointers;
+    for (const auto& p : profiles) pointers.push_back(&p);
+    const std::vector<analysis::TrialScore> scores = scorer.scoreAll(pointers, options.threads);
+    for (std::size_t i = first; i < last; ++i) out.costs[i].score = scores[i - first];
+    if (options.progress) options.progress(static_cast<int>(last), total);
+  }
   out.trajectory = analyzeMetric("trajectory", out.costs, true);
   out.force = analyzeMetric("force", out.costs, false);
   return out;

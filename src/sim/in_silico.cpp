@@ -116,16 +116,19 @@ InSilicoResult runInSilicoStudy(const InSilicoOptions& o) {
   session::RunOptions run;
   run.progress = [&](const session::RunProgress&) {
     ++done;
-    if (o.progress) o.progress(done, total);
+    if (o.progress) o.progress("trials", done, total);
   };
   result.trials = runner.run(run);
   for (const auto& t : db.trials()) result.servo_ticks += static_cast<std::uint64_t>(t.sample_count);
 
   // Analyze and report.
   result.database = dir / "study.sqlite";
-  result.analysis = report::analyzeStudy(db);
+  report::AnalysisOptions analysis_options;
+  if (o.progress) analysis_options.progress = [&o](int scored, int all) { o.progress("scoring", scored, all); };
+  result.analysis = report::analyzeStudy(db, analysis_options);
   report::storeAnalysis(db, result.analysis);
   if (o.write_report) {
+    if (o.progress) o.progress("report", 0, 1);
     report::writeAnalysisCsv(result.analysis, dir);
     result.report_html = report::writeStudyReport(db, result.analysis, dir);
   }

@@ -9,6 +9,7 @@
 /// best mode (the paper's Table 1). Offline code.
 
 #include <array>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -28,6 +29,8 @@ struct AnalysisOptions {
   analysis::DtwCost cost = analysis::DtwCost::kAbsolute;
   double band_fraction = -1.0;  ///< Sakoe–Chiba band (negative: none, the paper's)
   unsigned threads = 2;
+  /// Called on the calling thread as the recall trials are scored: scored so far, in all.
+  std::function<void(int scored, int total)> progress;
 };
 
 /// One recall trial's costs against the expert (analysis::TrialScorer).

@@ -8,6 +8,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "hattr/report/study_analysis.hpp"
@@ -25,8 +26,9 @@ struct InSilicoOptions {
   bool guidance = true;                     ///< false: an A/A study (no mode ever guides)
   std::optional<TraineeModel> model;        ///< default: data/sim/trainee_model.json
   bool write_report = true;
-  /// After each trial: trials done, trials in all.
-  std::function<void(int done, int total)> progress;
+  /// Progress by stage: "trials" after each trial (done of total), "scoring" as the recall
+  /// trials are scored, "report" (0 of 1) before the report is written.
+  std::function<void(std::string_view stage, int done, int total)> progress;
 };
 
 struct InSilicoResult {

@@ -1,0 +1,181 @@
+#!/usr/bin/env python3
+"""Tests of run_doc_commands.py: a page whose command fails, whose output changed, whose
+synopsis names a command or option that does not exist, or that hides a command, fails and
+names the page and line; a page that matches passes. Uses the real hattr binary given as
+the first argument, in a scratch source tree holding only the page."""
+
+import subprocess
+import sys
+import tempfile
+import textwrap
+import unittest
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+HATTR = ""
+
+
+def run_page(text: str) -> subprocess.CompletedProcess[str]:
+    with tempfile.TemporaryDirectory() as source:
+        (Path(source) / "page.md").write_text(textwrap.dedent(text))
+        return subprocess.run([sys.executable, str(HERE / "run_doc_commands.py"), "page.md", "--source-dir", source,
+                               "--hattr", HATTR, "--shared", str(Path(source) / "none")],
+                              capture_output=True, text=True, timeout=120)
+
+
+class DocRunner(unittest.TestCase):
+    def test_a_page_that_matches_passes(self):
+        r = run_page("""\
+            Intro.
+
+            ```sh
+            hattr world defaults > world.json
+            answer=world.json
+            ```
+
+            State carries from block to block:
+
+            ```sh
+            hattr world check $answer
+            ```
+
+            ```output
+            world.json: valid; relief ... vertices
+            ```
+
+            ```synopsis
+            hattr world check FILE [--json]
+            ```
+            """)
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        self.assertIn("2 block(s) run, 1 synopsis block(s) checked", r.stdout)
+
+    def test_a_failing_command_names_the_page_and_line(self):
+        r = run_page("""\
+            # Title
+
+            ```sh
+            hattr world defaults > world.json
+            hattr world check no-such-file.json
+            echo never
+            ```
+            """)
+        self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+        self.assertIn("page.md:5: command failed (exit 2): hattr world check no-such-file.json", r.stderr)
+
+    def test_a_renamed_command_fails(self):
+        r = run_page("""\
+            ```sh
+            hattr wrld defaults
+            ```
+            """)
+        self.assertEqual(r.returncode, 1)
+        self.assertIn("page.md:2: command failed (exit 2): hattr wrld defaults", r.stderr)
+        self.assertIn('did you mean "hattr world"', r.stderr)
+
+    def test_changed_output_names_the_expected_line(self):
+        r = run_page("""\
+            ```sh
+            hattr world defaults > world.json
+            hattr world check world.json
+            ```
+
+            ```output
+            world.json: valid
+            world.json: renders at 10 kHz
+            ```
+            """)
+        self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+        self.assertIn("page.md:8: expected output line not printed (in this order): 'world.json: renders at 10 kHz'",
+                      r.stderr)
+
+    def test_expected_lines_must_come_in_order(self):
+        r = run_page("""\
+            ```sh
+            echo first; echo second
+            ```
+
+            ```output
+            second
+            first
+            ```
+            """)
+        self.assertEqual(r.returncode, 1)
+        self.assertIn("page.md:7: expected output line not printed (in this order): 'first'", r.stderr)
+
+    def test_a_synopsis_with_an_unknown_command_or_option_fails(self):
+        r = run_page("""\
+            ```synopsis
+            hattr study run --db study.sqlite [--subject S03]
+            hattr study run --db study.sqlite [--subjekt S03]
+            hattr study rnu --db study.sqlite
+            ```
+            """)
+        self.assertEqual(r.returncode, 1)
+        self.assertNotIn("page.md:2:", r.stderr)
+        self.assertIn("page.md:3: `hattr study run` has no option --subjekt", r.stderr)
+        self.assertIn("page.md:4: `hattr study rnu --help` failed (exit 2)", r.stderr)
+
+    def test_skipped_blocks_say_why_and_need_a_reason(self):
+        r = run_page("""\
+            ```sh
+            # not runnable here: needs the vendor SDK
+            false
+            ```
+
+            <!-- not runnable here: two machines -->
+            ```sh
+            false
+            ```
+            """)
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        self.assertIn("page.md:1: skipped: not runnable here: needs the vendor SDK", r.stdout)
+        self.assertIn("page.md:7: skipped: not runnable here: two machines", r.stdout)
+        r = run_page("""\
+            ```sh
+            # not runnable here:
+            false
+            ```
+            """)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("needs its reason", r.stderr)
+
+    def test_an_unlabelled_block_that_holds_a_command_is_refused(self):
+        r = run_page("""\
+            ```
+            hattr study run --db study.sqlite
+            ```
+            """)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("page.md:1: an unlabelled block starts like a command", r.stderr)
+
+    def test_a_page_reading_absent_shared_data_is_skipped(self):
+        r = run_page("""\
+            ```sh
+            hattr import svc2004 ../shared/data/svc2004-task2/U1S1.TXT -o u1s1.csv
+            ```
+            """)
+        self.assertEqual(r.returncode, 77)
+        self.assertIn("SKIPPED: page.md reads ../shared/data", r.stdout)
+
+    def test_a_background_server_left_running_is_stopped(self):
+        r = run_page("""\
+            ```sh
+            sleep 300 &
+            echo started
+            ```
+            """)
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        still_running = []
+        for proc in Path("/proc").glob("[0-9]*"):
+            try:
+                if (proc / "cmdline").read_bytes() == b"sleep\x00300\x00":
+                    still_running.append(proc.name)
+            except OSError:
+                pass
+        self.assertEqual(still_running, [])
+
+
+if __name__ == "__main__":
+    HATTR = sys.argv.pop(1)
+    unittest.main(verbosity=2)

@@ -1,0 +1,354 @@
+#!/usr/bin/env python3
+"""Runs the commands of one Markdown page (README.md, docs/*.md) the way a reader would.
+
+The page's fenced blocks say what they are by their info string:
+
+  ```sh        commands, run in order in one shell in a scratch folder laid out like a clone
+               (variables and files carry from block to block). A block whose first line is
+               "# not runnable here: REASON", or right below the comment line
+               "<!-- not runnable here: REASON -->", is skipped, and REASON is printed.
+  ```output    lines the sh block just above prints, in order; "..." inside a line stands for
+               any text (numbers that change from run to run).
+  ```synopsis  usage lines ("hattr CMD [--option ...]"): each command must exist and each
+               --option must appear in its --help.
+
+Any other block (json, cpp, text, diagrams) is not run; an unlabelled block that starts like a
+command fails the page (say sh, synopsis or output).
+
+Exit status: 0 every command ran and matched; 1 a command failed or an output or synopsis
+did not match (the message names the page and line); 2 the page itself is malformed; 77 the
+page reads the shared data folder (../shared/data) and it is absent here (ctest: skipped).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+SKIP_MARK = re.compile(r"^(?:#\s*)?not runnable here(?: as written)?:\s*(.*)$")
+COMMAND_START = re.compile(r"^\s*(\$?hattr\b|build/|make\b|cmake\b|ctest\b)")
+COMMAND_WORD = re.compile(r"^[a-z][a-z0-9-]*$")
+OPTION = re.compile(r"(?<![\w-])(--[a-z][a-z0-9-]*)")
+SKIPPED_EXIT = 77
+
+
+@dataclass
+class Block:
+    info: str            # the info string's first word ("" when unlabelled)
+    line: int            # 1-based line of the opening fence
+    lines: list[str]     # the content
+    after_sh: bool = False  # directly below a sh block (blank lines between at most)
+    note: str = ""          # the line just above the fence when it is an HTML comment
+
+    def content_line(self, i: int) -> int:
+        """The page's line number of content line i (0-based)."""
+        return self.line + 1 + i
+
+
+@dataclass
+class Page:
+    path: Path
+    name: str
+    blocks: list[Block] = field(default_factory=list)
+
+
+class PageError(Exception):
+    """The page itself is malformed (exit 2)."""
+
+
+def parse_page(path: Path, name: str) -> Page:
+    """Splits the page into its fenced blocks."""
+    page = Page(path, name)
+    text = path.read_text(encoding="utf-8").split("\n")
+    i = 0
+    last_block_end = -10
+    last_kind = ""
+    while i < len(text):
+        opening = re.match(r"^(\s*)(`{3,}|~{3,})\s*([^\s`]*)(.*)$", text[i])
+        if not opening:
+            i += 1
+            continue
+        fence = opening.group(2)
+        j = i + 1
+        while j < len(text) and not re.match(r"^\s*" + re.escape(fence[0]) + "{" + str(len(fence)) + r",}\s*$", text[j]):
+            j += 1
+        if j == len(text):
+            raise PageError(f"{name}:{i + 1}: a fenced block is never closed")
+        blank_between = all(not t.strip() for t in text[last_block_end + 1:i])
+        above = text[i - 1].strip() if i > 0 else ""
+        block = Block(opening.group(3).lower(), i + 1, text[i + 1:j], blank_between and last_kind == "sh",
+                      above if above.startswith("<!--") else "")
+        page.blocks.append(block)
+        last_block_end, last_kind = j, block.info
+        i = j + 1
+    return page
+
+
+def check_page_form(page: Page) -> None:
+    """Refuses blocks that would hide a command from the test."""
+    for b in page.blocks:
+        first = next((l for l in b.lines if l.strip() and not l.strip().startswith("#")), "")
+        if b.info == "" and COMMAND_START.match(first):
+            raise PageError(f"{page.name}:{b.line}: an unlabelled block starts like a command "
+                            f"({first.strip()!r}): label it sh (run), synopsis (usage) or output")
+        if b.info == "output" and not b.after_sh:
+            raise PageError(f"{page.name}:{b.line}: an output block must follow a sh block (blank lines between at most)")
+        if b.info == "sh" and skip_reason(b) == "":
+            raise PageError(f"{page.name}:{b.line}: \"not runnable here\" needs its reason")
+
+
+def skip_reason(block: Block) -> str | None:
+    """Why a sh block is not run here, or None."""
+    note = re.match(r"^<!--\s*(.*?)\s*-->$", block.note)
+    for text in ([note.group(1)] if note else []) + block.lines[:1]:
+        skip = SKIP_MARK.match(text.strip())
+        if skip:
+            return skip.group(1).strip()
+    return None
+
+
+def make_scratch(source: Path, hattr: Path, build: Path, shared: Path | None) -> tuple[Path, Path]:
+    """A scratch folder laid out like a clone beside ../shared: the source tree's entries by
+    link, and build/release/ holding copies of the programs under test (copies, so nothing a
+    page runs can write into the real build tree), and bin/ with hattr on PATH."""
+    root = Path(tempfile.mkdtemp(prefix="hattr-doc-"))
+    clone = root / "hattr"
+    clone.mkdir()
+    for entry in source.iterdir():
+        if entry.name in {"build", ".git", "demo-out"}:
+            continue
+        (clone / entry.name).symlink_to(entry)
+    release = clone / "build" / "release"
+    (release / "apps" / "hattr").mkdir(parents=True)
+    shutil.copy2(hattr, release / "apps" / "hattr" / "hattr")
+    for sub, pattern in [("bench", "bench_*"), ("plugins", "*.so")]:
+        (release / sub).mkdir()
+        for program in sorted((build / sub).glob(pattern)) if (build / sub).is_dir() else []:
+            if program.is_file():
+                shutil.copy2(program, release / sub / program.name)
+    if shared is not None and shared.is_dir():
+        (root / "shared").symlink_to(shared)
+    (root / "bin").mkdir()
+    (root / "bin" / "hattr").symlink_to(release / "apps" / "hattr" / "hattr")
+    return root, clone
+
+
+def stop_leftovers(root: Path) -> None:
+    """Stops every process still working inside the scratch folder (a server a page left
+    running, the jobs of a build tool that gives each its own process group)."""
+    for proc in Path("/proc").iterdir():
+        if not proc.name.isdigit():
+            continue
+        try:
+            cwd = os.readlink(proc / "cwd")
+        except OSError:
+            continue
+        if cwd == str(root) or cwd.startswith(str(root) + "/"):
+            try:
+                os.kill(int(proc.name), signal.SIGKILL)
+            except (ProcessLookupError, PermissionError):
+                pass
+
+
+def build_script(page: Page, runnable: list[tuple[int, Block]], out_dir: Path, fail_file: Path) -> tuple[str, dict[int, int]]:
+    """One bash script running every runnable block in order, each block's output to its own
+    file; returns the script and a map from script line to page line."""
+    lines = [
+        "set -o pipefail",
+        "set -E",
+        f"__doc_fail() {{ echo \"$1 $2\" > '{fail_file}'; exit 1; }}",
+        "trap '__doc_fail $LINENO $?' ERR",
+    ]
+    page_line: dict[int, int] = {}
+    for k, block in runnable:
+        lines.append(f"echo {k} > '{out_dir}/current'")
+        lines.append("{")
+        for i, text in enumerate(block.lines):
+            lines.append(text)
+            page_line[len(lines)] = block.content_line(i)
+        lines.append(f"}} > '{out_dir}/{k}.txt' 2>&1")
+    return "\n".join(lines) + "\n", page_line
+
+
+def expected_lines(block: Block) -> list[tuple[int, re.Pattern[str], str]]:
+    """Each non-blank line of an output block as a pattern ("..." matches anything)."""
+    patterns = []
+    for i, text in enumerate(block.lines):
+        if not text.strip():
+            continue
+        parts = [re.escape(p) for p in text.strip().split("...")]
+        patterns.append((block.content_line(i), re.compile(".*".join(parts)), text.strip()))
+    return patterns
+
+
+def check_output(page: Page, output: str, block: Block) -> list[str]:
+    """The expected lines not found, in order, in the command's output."""
+    found_lines = [l.rstrip() for l in re.sub(r"\x1b\[[0-9;]*[A-Za-z]", "", output).replace("\r", "\n").split("\n")]
+    failures = []
+    at = 0
+    for line_no, pattern, text in expected_lines(block):
+        match = next((k for k in range(at, len(found_lines)) if pattern.search(found_lines[k])), None)
+        if match is None:
+            failures.append(f"{page.name}:{line_no}: expected output line not printed (in this order): {text!r}")
+        else:
+            at = match + 1
+    return failures
+
+
+def synopsis_failures(page: Page, block: Block, hattr: Path, env: dict[str, str], cwd: Path) -> list[str]:
+    """Every `hattr CMD ...` line: the command exists and knows each --option it shows."""
+    failures = []
+    joined: list[tuple[int, str]] = []
+    for i, text in enumerate(block.lines):
+        if joined and joined[-1][1].endswith("\\"):
+            joined[-1] = (joined[-1][0], joined[-1][1][:-1] + " " + text.strip())
+        else:
+            joined.append((block.content_line(i), text.strip()))
+    for line_no, text in joined:
+        words = text.split("#", 1)[0].split()
+        if not words or words[0] != "hattr":
+            continue
+        command = []
+        for w in words[1:]:
+            if not COMMAND_WORD.match(w):
+                break
+            command.append(w)
+        result = subprocess.run([str(hattr), *command, "--help"], capture_output=True, text=True, env=env, cwd=cwd)
+        if result.returncode != 0:
+            failures.append(f"{page.name}:{line_no}: `hattr {' '.join(command)} --help` failed "
+                            f"(exit {result.returncode}): {result.stderr.strip()[:300]}")
+            continue
+        for option in OPTION.findall(text):
+            if not re.search(r"(?<![\w-])" + re.escape(option) + r"(?![\w-])", result.stdout):
+                failures.append(f"{page.name}:{line_no}: `hattr {' '.join(command)}` has no option {option} "
+                                f"(not in its --help)")
+    return failures
+
+
+def run_script(script: Path, cwd: Path, env: dict[str, str], timeout: float) -> subprocess.CompletedProcess[str]:
+    """Runs the page's script in its own process group; whatever it left running in the
+    background (a server a page forgot to stop) is stopped at the end, and everything on timeout."""
+    log = script.with_suffix(".log")
+    with open(log, "w") as out:
+        process = subprocess.Popen(["bash", str(script)], cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=out,
+                                   stderr=subprocess.STDOUT, start_new_session=True)
+        try:
+            process.wait(timeout=timeout)
+        finally:
+            try:
+                os.killpg(process.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+            stop_leftovers(script.parent)
+    return subprocess.CompletedProcess(process.args, process.returncode, "", log.read_text(errors="replace"))
+
+
+def tail(text: str, lines: int = 25) -> str:
+    return "\n".join("    | " + l for l in text.rstrip().split("\n")[-lines:])
+
+
+def run_page(args: argparse.Namespace) -> int:
+    source = Path(args.source_dir).resolve()
+    doc = source / args.page
+    page = parse_page(doc, args.page)
+    check_page_form(page)
+    hattr = Path(args.hattr).resolve()
+    build = Path(args.build_dir).resolve() if args.build_dir else hattr.parent.parent.parent
+    shared = Path(args.shared).resolve() if args.shared else (source.parent / "shared")
+
+    runnable = []
+    for k, b in enumerate(page.blocks):
+        if b.info != "sh":
+            continue
+        reason = skip_reason(b)
+        if reason is not None:
+            print(f"{page.name}:{b.line}: skipped: not runnable here: {reason}")
+            continue
+        runnable.append((k, b))
+    needs_shared = any("../shared/" in "\n".join(b.lines) for _, b in runnable)
+    if needs_shared and not (shared / "data").is_dir():
+        print(f"SKIPPED: {page.name} reads ../shared/data (the SVC2004 recordings), absent here: {shared / 'data'}")
+        return SKIPPED_EXIT
+
+    root, clone = make_scratch(source, hattr, build, shared if shared.is_dir() else None)
+    failures: list[str] = []
+    try:
+        env = dict(os.environ)
+        env["PATH"] = f"{root / 'bin'}:{env.get('PATH', '')}"
+        env.pop("TERM", None)
+        # Benchmarks run briefly: the page's commands are checked, not its figures.
+        env["BENCHMARK_MIN_TIME"] = "0.001"
+        for b in page.blocks:
+            if b.info == "synopsis":
+                failures += synopsis_failures(page, b, hattr, env, clone)
+
+        out_dir = root / "outputs"
+        out_dir.mkdir()
+        fail_file = root / "failed"
+        script, page_line = build_script(page, runnable, out_dir, fail_file)
+        (root / "page.sh").write_text(script)
+        result = run_script(root / "page.sh", clone, env, args.timeout)
+        failed_block = None
+        if fail_file.exists():
+            script_line, status = (fail_file.read_text().split() + ["?"])[:2]
+            line_no = page_line.get(int(script_line))
+            failed_block = int((out_dir / "current").read_text())
+            where = f"{page.name}:{line_no}" if line_no else f"{page.name}:{page.blocks[failed_block].line}"
+            command = doc.read_text(encoding="utf-8").split("\n")[line_no - 1].strip() if line_no else "?"
+            output = (out_dir / f"{failed_block}.txt").read_text(errors="replace")
+            failures.append(f"{where}: command failed (exit {status}): {command}\n{tail(output)}")
+        elif result.returncode != 0:
+            failures.append(f"{page.name}: the page's commands ended with exit {result.returncode}: {result.stderr.strip()[:500]}")
+
+        # Each finished block's output against the output block below it.
+        for k, b in runnable:
+            if failed_block is not None and k >= failed_block:
+                break
+            following = page.blocks[k + 1] if k + 1 < len(page.blocks) else None
+            if following is not None and following.info == "output" and following.after_sh:
+                output = (out_dir / f"{k}.txt").read_text(errors="replace")
+                mismatch = check_output(page, output, following)
+                if mismatch:
+                    failures += mismatch
+                    failures.append(f"{page.name}:{b.line}: what the block printed:\n{tail(output, 40)}")
+        ran = sum(1 for _ in runnable)
+        print(f"{page.name}: {ran} block(s) run, {sum(1 for b in page.blocks if b.info == 'synopsis')} synopsis block(s) "
+              f"checked, in {clone}")
+    finally:
+        if not args.keep:
+            shutil.rmtree(root, ignore_errors=True)
+    for f in failures:
+        print(f, file=sys.stderr)
+    return 1 if failures else 0
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("page", help="the page, relative to --source-dir (README.md, docs/studies.md, ...)")
+    parser.add_argument("--source-dir", required=True, help="the project's source tree")
+    parser.add_argument("--hattr", required=True, help="the hattr binary under test")
+    parser.add_argument("--build-dir", help="the build tree (default: three folders above --hattr)")
+    parser.add_argument("--shared", help="the shared folder beside the clone (default: SOURCE/../shared)")
+    parser.add_argument("--timeout", type=float, default=900, help="seconds for the whole page")
+    parser.add_argument("--keep", action="store_true", help="keep the scratch folder")
+    args = parser.parse_args()
+    try:
+        return run_page(args)
+    except PageError as e:
+        print(f"malformed page: {e}", file=sys.stderr)
+        return 2
+    except subprocess.TimeoutExpired:
+        print(f"{args.page}: the page's commands took longer than {args.timeout} s", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
