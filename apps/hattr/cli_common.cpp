@@ -148,13 +148,17 @@ bool Progress::onTerminal() {
 }
 
 void Progress::update(double done, const std::string& label) {
-  const bool relabeled = !label.empty() && label != label_;
-  if (relabeled) label_ = label;
+  if (!label.empty()) label_ = label;
   if (!shown_) return;
-  // At most ten redraws a second, but a new label or the end is always drawn.
+  // At most ten redraws a second; the end is always drawn.
   const auto now = std::chrono::steady_clock::now();
-  if (drawn_ && !relabeled && now - last_draw_ < std::chrono::milliseconds(100) && done < total_) return;
+  if (drawn_ && now - last_draw_ < std::chrono::milliseconds(100) && done < total_) return;
   last_draw_ = now;
+  if (total_ <= 0.0) {
+    std::cerr << "\r\x1b[K" << label_ << std::flush;
+    drawn_ = true;
+    return;
+  }
   // The bar, the count and an estimate of the time left from the rate so far.
   constexpr int kWidth = 30;
   const double fraction = total_ > 0.0 ? std::clamp(done / total_, 0.0, 1.0) : 1.0;
@@ -163,13 +167,22 @@ void Progress::update(double done, const std::string& label) {
   std::string eta;
   const double left = fraction > 0.0 ? elapsed * (1.0 / fraction - 1.0) : 0.0;
   if (fraction < 1.0 && elapsed > 1.0 && left >= 1.0) eta = fmt::format(", about {:.0f} s left", left);
-  const bool whole = done == static_cast<double>(static_cast<long long>(done));
+  const auto integral = [](double v) { return v == static_cast<double>(static_cast<long long>(v)); };
+  const bool whole = integral(done) && integral(total_);
   const std::string count = whole ? fmt::format("{}/{}", static_cast<long long>(done), static_cast<long long>(total_))
                                   : fmt::format("{:.1f}/{:.1f}", done, total_);
   std::cerr << fmt::format("\r\x1b[K{} [{}{}] {} {}{}", label_, std::string(static_cast<std::size_t>(filled), '#'),
                            std::string(static_cast<std::size_t>(kWidth - filled), '.'), count, unit_, eta)
             << std::flush;
   drawn_ = true;
+}
+
+void Progress::stage(const std::string& label, double total) {
+  label_ = label;
+  total_ = total;
+  start_ = std::chrono::steady_clock::now();
+  drawn_ = false;  // drawn now, whatever the last redraw's time
+  update(0.0);
 }
 
 void Progress::finish() {
@@ -182,8 +195,9 @@ std::function<void(std::string_view, int, int)> stageProgress(Progress& progress
     const std::string what = stage == "trials"    ? "running the study"
                              : stage == "scoring" ? "scoring recall trials"
                                                   : "writing the report";
-    progress.setTotal(total);
-    progress.update(done, fmt::format("{}: {}", prefix, what));
+    const std::string label = fmt::format("{}: {}", prefix, what);
+    if (label != progress.label()) progress.stage(label, stage == "report" ? 0 : total);
+    progress.update(done);
   };
 }
 

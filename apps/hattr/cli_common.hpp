@@ -56,8 +56,9 @@ void checkOutputFolder(const std::filesystem::path& dir, const std::vector<std::
 void writeRecording(const HapticProfile& profile, const std::filesystem::path& file, bool force);
 
 /// A progress line for long commands, on stderr and only when stderr is a terminal: scripts,
-/// pipes and CI logs see nothing. "label [#####.....] done/total unit, about N s left",
-/// redrawn at most ten times a second; finish() (or the destructor) clears the line.
+/// pipes and CI logs see nothing. "label [#####.....] done/total unit, about N s left" (just
+/// the label while the total is 0), redrawn at most ten times a second; a new stage is drawn
+/// at once; finish() (or the destructor) clears the line.
 class Progress {
  public:
   Progress(std::string label, double total, std::string unit);
@@ -67,10 +68,12 @@ class Progress {
 
   /// `done` of the total so far; `label` replaces the label when not empty.
   void update(double done, const std::string& label = {});
-  /// When the total is learned late (a callback's "done of total").
-  void setTotal(double total) { total_ = total; }
+  /// A new stage: its label and total (0: no count), drawn at once; the time-left estimate
+  /// starts again.
+  void stage(const std::string& label, double total);
   /// Clears the line (nothing was drawn when stderr is not a terminal).
   void finish();
+  [[nodiscard]] const std::string& label() const noexcept { return label_; }
   /// Whether progress is drawn: stderr is a terminal and TERM is not "dumb".
   [[nodiscard]] static bool onTerminal();
 

@@ -36,7 +36,7 @@ void runDemo(const DemoOptions& opt) {
                            "at 1 kHz (simulated time).\n\n",
                            opt.subjects);
   sim::InSilicoOptions options{.out_dir = opt.out_dir, .subjects = opt.subjects, .seed = opt.seed};
-  Progress progress("hattr demo: running the study", 0, "trials");
+  Progress progress("hattr demo", 0, "trials");
   if (!opt.json) options.progress = stageProgress(progress, "hattr demo");
   const sim::InSilicoResult r = sim::runInSilicoStudy(options);
   progress.finish();

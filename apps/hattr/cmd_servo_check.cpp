@@ -71,13 +71,15 @@ nlohmann::json reportJson(const servo::RealtimeReport& r) {
 
 /// Sleeps in steps of at most 0.1 s until `done()` or `deadline`, moving `progress` from
 /// `start` by the seconds passed (at most `seconds`).
-void waitShowingProgress(Progress& progress, double start, double seconds, const std::function<bool()>& done,
+/// Draws `progress` (the seconds passed, at most `seconds`) every 0.1 s until `done()` or
+/// `deadline`.
+void waitShowingProgress(Progress& progress, double seconds, const std::function<bool()>& done,
                          std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max()) {
   const auto begin = std::chrono::steady_clock::now();
   for (auto now = begin; !done() && now < deadline; now = std::chrono::steady_clock::now()) {
     std::this_thread::sleep_until(std::min(deadline, now + std::chrono::milliseconds(100)));
     const double passed = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
-    progress.update(start + std::min(passed, seconds));
+    progress.update(std::min(passed, seconds));
   }
 }
 
@@ -87,24 +89,30 @@ void runServoCheck(const ServoCheckOptions& opt) {
                                    .final_spin = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.spin_us * 1e3))};
   const auto duration = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.seconds * 1e9));
 
-  // The platform's floor first: the same sleeps with nothing to do (measured on its own
-  // thread while this one draws the progress line, on a terminal only).
-  Progress progress("servo-check: the bare sleep loop (floor)", 2.0 * opt.seconds, "s");
+  // The platform's floor first: the same sleeps with nothing to do. On a terminal it is
+  // measured on its own thread while this one draws the progress line; otherwise here.
+  Progress progress("", 0, "s");
   servo::RealtimeReport floor_report;
   DurationHistogram floor;
-  std::exception_ptr floor_error;
-  std::atomic<bool> floor_done{false};
-  std::thread floor_thread([&] {
-    try {
-      floor = servo::measureSleepFloor(opt.rate_hz, duration, realtime, &floor_report);
-    } catch (...) {
-      floor_error = std::current_exception();
+  if (Progress::onTerminal()) {
+    progress.stage("servo-check 1/2: the bare sleep loop (floor)", opt.seconds);
+    std::exception_ptr floor_error;
+    std::atomic<bool> floor_done{false};
+    {
+      std::jthread floor_thread([&] {  // joined at the end of the block, whatever happens
+        try {
+          floor = servo::measureSleepFloor(opt.rate_hz, duration, realtime, &floor_report);
+        } catch (...) {
+          floor_error = std::current_exception();
+        }
+        floor_done.store(true, std::memory_order_release);
+      });
+      waitShowingProgress(progress, opt.seconds, [&] { return floor_done.load(std::memory_order_acquire); });
     }
-    floor_done.store(true, std::memory_order_release);
-  });
-  waitShowingProgress(progress, 0.0, opt.seconds, [&] { return floor_done.load(std::memory_order_acquire); });
-  floor_thread.join();
-  if (floor_error) std::rethrow_exception(floor_error);
+    if (floor_error) std::rethrow_exception(floor_error);
+  } else {
+    floor = servo::measureSleepFloor(opt.rate_hz, duration, realtime, &floor_report);
+  }
 
   // Then the full pipeline: a hand writing circles on the paper through the device.
   render::WorldConfig world = worldConfigOrDefault(opt.world);
@@ -126,9 +134,12 @@ void runServoCheck(const ServoCheckOptions& opt) {
     while (loop.samples().tryPop(s)) ++consumed;
   });
   loop.start();
-  progress.update(opt.seconds, "servo-check: the servo loop");
-  const auto loop_end = std::chrono::steady_clock::now() + duration;
-  waitShowingProgress(progress, opt.seconds, opt.seconds, [] { return false; }, loop_end);
+  if (Progress::onTerminal()) {
+    progress.stage("servo-check 2/2: the servo loop", opt.seconds);
+    waitShowingProgress(progress, opt.seconds, [] { return false; }, std::chrono::steady_clock::now() + duration);
+  } else {
+    std::this_thread::sleep_for(duration);
+  }
   loop.stop();
   progress.finish();
   done = true;

@@ -153,7 +153,7 @@ report::AnalysisOptions analysisOptions(const StudyOptions& opt, Progress& progr
   report::AnalysisOptions a;
   a.band_fraction = opt.band;
   a.progress = [&progress](int scored, int total) {
-    progress.setTotal(total);
+    if (scored == 0) progress.stage(progress.label(), total);
     progress.update(scored);
   };
   return a;
@@ -183,7 +183,7 @@ void runReport(const StudyOptions& opt) {
   const report::StudyAnalysis analysis = report::analyzeStudy(db, analysisOptions(opt, progress));
   report::storeAnalysis(db, analysis);
   report::writeAnalysisCsv(analysis, opt.out);
-  progress.update(0, "study report: writing the report and figures");
+  progress.stage("study report: writing the report and figures", 0);
   const auto html = report::writeStudyReport(db, analysis, opt.out);
   progress.finish();
   std::cout << fmt::format("report: {} (and report.md, figures/, CSV tables beside it)\n", html.string());

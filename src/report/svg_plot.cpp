@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <string_view>
 
 #include <fmt/format.h>
 
@@ -23,6 +25,20 @@ std::vector<double> ticks(double lo, double hi, bool integers = false) {
 }
 
 std::string number(double v) { return fmt::format("{:.4g}", v); }
+
+constexpr std::string_view kClipIdPlaceholder = "@clip@";
+
+/// Replaces the clip-path id placeholder with one made from the figure itself (FNV-1a of the
+/// SVG): unique among a page's figures, and the same figure gets the same id on every run.
+std::string withClipId(std::string svg) {
+  std::uint64_t hash = 0xcbf29ce484222325ULL;
+  for (const char c : svg) hash = (hash ^ static_cast<unsigned char>(c)) * 0x100000001b3ULL;
+  const std::string id = fmt::format("plot-{:016x}", hash);
+  for (auto at = svg.find(kClipIdPlaceholder); at != std::string::npos; at = svg.find(kClipIdPlaceholder, at)) {
+    svg.replace(at, kClipIdPlaceholder.size(), id);
+  }
+  return svg;
+}
 
 }  // namespace
 
@@ -110,9 +126,14 @@ std::string SvgPlot::svg() const {
                        escape(bars_[i].label), X(x), y_top - 4, number(bars_[i].value));
   }
 
-  // Lines and markers, clipped to the plot area.
-  out += fmt::format("<clipPath id=\"c\"><rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"/></clipPath><g clip-path=\"url(#c)\">\n",
-                     left, top, pw, ph);
+  // Lines and markers, clipped to the plot area widened by a marker's radius (a marker on the
+  // frame stays whole). The clip path's id is set below from the figure's content: pages hold
+  // many figures inline, and a shared id would clip every figure with the first one's rectangle.
+  constexpr double kMarkerRoom = 3.0;
+  out += fmt::format("<clipPath id=\"{}\"><rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"/></clipPath>"
+                     "<g clip-path=\"url(#{})\">\n",
+                     kClipIdPlaceholder, left - kMarkerRoom, top - kMarkerRoom, pw + 2 * kMarkerRoom,
+                     ph + 2 * kMarkerRoom, kClipIdPlaceholder);
   for (const auto& s : series_) {
     std::string points;
     for (const auto& [x, y] : s.points) {
@@ -143,7 +164,8 @@ std::string SvgPlot::svg() const {
                        left + pw + 38, ly + 4, escape(s.label));
     ly += 16;
   }
-  return out + "</svg>\n";
+  out += "</svg>\n";
+  return withClipId(out);
 }
 
 }  // namespace hattr::report::detail

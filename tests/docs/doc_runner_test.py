@@ -15,11 +15,11 @@ HERE = Path(__file__).resolve().parent
 HATTR = ""
 
 
-def run_page(text: str) -> subprocess.CompletedProcess[str]:
+def run_page(text: str, *extra: str) -> subprocess.CompletedProcess[str]:
     with tempfile.TemporaryDirectory() as source:
         (Path(source) / "page.md").write_text(textwrap.dedent(text))
         return subprocess.run([sys.executable, str(HERE / "run_doc_commands.py"), "page.md", "--source-dir", source,
-                               "--hattr", HATTR, "--shared", str(Path(source) / "none")],
+                               "--hattr", HATTR, "--shared", str(Path(source) / "none"), *extra],
                               capture_output=True, text=True, timeout=120)
 
 
@@ -81,11 +81,12 @@ class DocRunner(unittest.TestCase):
             ```
 
             ```output
-            world.json: valid
+            world.json: valid; ...
             world.json: renders at 10 kHz
             ```
             """)
         self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+        self.assertNotIn("page.md:7:", r.stderr)
         self.assertIn("page.md:8: expected output line not printed (in this order): 'world.json: renders at 10 kHz'",
                       r.stderr)
 
@@ -102,6 +103,54 @@ class DocRunner(unittest.TestCase):
             """)
         self.assertEqual(r.returncode, 1)
         self.assertIn("page.md:7: expected output line not printed (in this order): 'first'", r.stderr)
+
+    def test_an_expected_line_is_a_whole_line(self):
+        r = run_page("""\
+            ```sh
+            echo "  S03      15/66   done"
+            ```
+
+            ```output
+            S03 ... 5/66 ...
+            ```
+            """)
+        self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+        self.assertIn("page.md:6: expected output line not printed", r.stderr)
+        r = run_page("""\
+            ```sh
+            echo "  S03       5/66   done"
+            ```
+
+            ```output
+            S03 ... 5/66 ...
+            ```
+            """)
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+
+    def test_a_continued_command_is_named_by_its_first_line(self):
+        r = run_page("""\
+            ```sh
+            echo fine
+            hattr world check \\
+                no-such-file.json \\
+                --json
+            ```
+            """)
+        self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+        self.assertIn("page.md:3: command failed (exit 2): hattr world check", r.stderr)
+
+    def test_a_block_that_runs_too_long_is_named(self):
+        r = run_page("""\
+            ```sh
+            echo quick
+            ```
+
+            ```sh
+            sleep 30
+            ```
+            """, "--timeout", "2")
+        self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+        self.assertIn("page.md:5: the page's commands took longer than 2.0 s (this block was running)", r.stderr)
 
     def test_a_synopsis_with_an_unknown_command_or_option_fails(self):
         r = run_page("""\
@@ -149,19 +198,42 @@ class DocRunner(unittest.TestCase):
         self.assertEqual(r.returncode, 2)
         self.assertIn("page.md:1: an unlabelled block starts like a command", r.stderr)
 
-    def test_a_page_reading_absent_shared_data_is_skipped(self):
+    def test_a_block_labelled_bash_is_refused_not_ignored(self):
+        r = run_page("""\
+            ```bash
+            false
+            ```
+            """)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("page.md:1: a block labelled 'bash'", r.stderr)
+
+    def test_blocks_reading_absent_shared_data_are_skipped_and_the_rest_runs(self):
         r = run_page("""\
             ```sh
             hattr import svc2004 ../shared/data/svc2004-task2/U1S1.TXT -o u1s1.csv
             ```
             """)
         self.assertEqual(r.returncode, 77)
-        self.assertIn("SKIPPED: page.md reads ../shared/data", r.stdout)
-
-    def test_a_background_server_left_running_is_stopped(self):
+        self.assertIn("SKIPPED: page.md:1: the block reads ../shared/data", r.stdout)
         r = run_page("""\
             ```sh
-            sleep 300 &
+            hattr import svc2004 ../shared/data/svc2004-task2/U1S1.TXT -o u1s1.csv
+            ```
+
+            ```sh
+            hattr wrld defaults
+            ```
+            """)
+        self.assertEqual(r.returncode, 1)
+        self.assertIn("SKIPPED: page.md:1:", r.stdout)
+        self.assertIn("page.md:6: command failed", r.stderr)
+
+    def test_a_server_left_running_in_its_own_session_is_stopped(self):
+        # setsid: out of the page's process group, as the jobs of a build tool or a daemon are.
+        r = run_page("""\
+            ```sh
+            setsid sleep 301.25 &
+            sleep 0.2
             echo started
             ```
             """)
@@ -169,7 +241,7 @@ class DocRunner(unittest.TestCase):
         still_running = []
         for proc in Path("/proc").glob("[0-9]*"):
             try:
-                if (proc / "cmdline").read_bytes() == b"sleep\x00300\x00":
+                if (proc / "cmdline").read_bytes() == b"sleep\x00301.25\x00":
                     still_running.append(proc.name)
             except OSError:
                 pass

@@ -7,13 +7,19 @@ The page's fenced blocks say what they are by their info string:
                (variables and files carry from block to block). A block whose first line is
                "# not runnable here: REASON", or right below the comment line
                "<!-- not runnable here: REASON -->", is skipped, and REASON is printed.
-  ```output    lines the sh block just above prints, in order; "..." inside a line stands for
-               any text (numbers that change from run to run).
+  ```output    lines the sh block just above prints, in order, each a whole line (leading and
+               trailing blanks aside); "..." stands for any text (numbers that change from run
+               to run; a line's start or end).
   ```synopsis  usage lines ("hattr CMD [--option ...]"): each command must exist and each
                --option must appear in its --help.
 
 Any other block (json, cpp, text, diagrams) is not run; an unlabelled block that starts like a
-command fails the page (say sh, synopsis or output).
+command, or a block labelled bash, shell or console, fails the page (say sh, synopsis or output).
+A block that reads ../shared/data (the SVC2004 recordings) is skipped, saying so, when the data
+is absent.
+
+What fails a block: a command whose exit status is not 0, as bash's ERR trap sees it (not the
+left side of && or ||, nor a command in an if condition).
 
 Exit status: 0 every command ran and matched; 1 a command failed or an output or synopsis
 did not match (the message names the page and line); 2 the page itself is malformed; 77 the
@@ -25,6 +31,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import shlex
 import shutil
 import signal
 import subprocess
@@ -34,7 +41,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 SKIP_MARK = re.compile(r"^(?:#\s*)?not runnable here(?: as written)?:\s*(.*)$")
-COMMAND_START = re.compile(r"^\s*(\$?hattr\b|build/|make\b|cmake\b|ctest\b)")
+COMMAND_START = re.compile(r"^\s*(\$?hattr\b|build/|\./|make\b|cmake\b|ctest\b|python3?\b|time\b|/usr/bin/|cd\b|sudo\b|apt(-get)?\b)")
+SHELL_LABELS = {"bash", "shell", "console", "zsh", "shell-session", "sh-session"}
 COMMAND_WORD = re.compile(r"^[a-z][a-z0-9-]*$")
 OPTION = re.compile(r"(?<![\w-])(--[a-z][a-z0-9-]*)")
 SKIPPED_EXIT = 77
@@ -96,6 +104,9 @@ def check_page_form(page: Page) -> None:
     """Refuses blocks that would hide a command from the test."""
     for b in page.blocks:
         first = next((l for l in b.lines if l.strip() and not l.strip().startswith("#")), "")
+        if b.info in SHELL_LABELS:
+            raise PageError(f"{page.name}:{b.line}: a block labelled {b.info!r}: label commands sh (run), "
+                            f"synopsis (usage) or output")
         if b.info == "" and COMMAND_START.match(first):
             raise PageError(f"{page.name}:{b.line}: an unlabelled block starts like a command "
                             f"({first.strip()!r}): label it sh (run), synopsis (usage) or output")
@@ -115,6 +126,16 @@ def skip_reason(block: Block) -> str | None:
     return None
 
 
+def tracked_entries(source: Path) -> list[str]:
+    """The source tree's top-level entries under version control (what a clone has), so a
+    page's outputs never land on a developer's own files of the same name; without git, every
+    entry but the build, demo and git folders."""
+    listed = subprocess.run(["git", "-C", str(source), "ls-files"], capture_output=True, text=True)
+    if listed.returncode == 0 and listed.stdout.strip():
+        return sorted({line.split("/", 1)[0] for line in listed.stdout.splitlines() if line})
+    return sorted(e.name for e in source.iterdir() if e.name not in {"build", ".git", "demo-out"})
+
+
 def make_scratch(source: Path, hattr: Path, build: Path, shared: Path | None) -> tuple[Path, Path]:
     """A scratch folder laid out like a clone beside ../shared: the source tree's entries by
     link, and build/release/ holding copies of the programs under test (copies, so nothing a
@@ -122,10 +143,8 @@ def make_scratch(source: Path, hattr: Path, build: Path, shared: Path | None) ->
     root = Path(tempfile.mkdtemp(prefix="hattr-doc-"))
     clone = root / "hattr"
     clone.mkdir()
-    for entry in source.iterdir():
-        if entry.name in {"build", ".git", "demo-out"}:
-            continue
-        (clone / entry.name).symlink_to(entry)
+    for name in tracked_entries(source):
+        (clone / name).symlink_to(source / name)
     release = clone / "build" / "release"
     (release / "apps" / "hattr").mkdir(parents=True)
     shutil.copy2(hattr, release / "apps" / "hattr" / "hattr")
@@ -164,17 +183,22 @@ def build_script(page: Page, runnable: list[tuple[int, Block]], out_dir: Path, f
     lines = [
         "set -o pipefail",
         "set -E",
-        f"__doc_fail() {{ echo \"$1 $2\" > '{fail_file}'; exit 1; }}",
+        f"__doc_fail() {{ echo \"$1 $2\" > {shlex.quote(str(fail_file))}; exit 1; }}",
         "trap '__doc_fail $LINENO $?' ERR",
     ]
     page_line: dict[int, int] = {}
     for k, block in runnable:
-        lines.append(f"echo {k} > '{out_dir}/current'")
+        lines.append(f"echo {k} > {shlex.quote(str(out_dir / 'current'))}")
         lines.append("{")
+        command_start = None
         for i, text in enumerate(block.lines):
             lines.append(text)
-            page_line[len(lines)] = block.content_line(i)
-        lines.append(f"}} > '{out_dir}/{k}.txt' 2>&1")
+            # Every line of a command continued with "\\" names the command's first line.
+            command_start = command_start if command_start is not None else block.content_line(i)
+            page_line[len(lines)] = command_start
+            if not text.rstrip().endswith("\\"):
+                command_start = None
+        lines.append(f"}} > {shlex.quote(str(out_dir / f'{k}.txt'))} 2>&1")
     return "\n".join(lines) + "\n", page_line
 
 
@@ -195,7 +219,7 @@ def check_output(page: Page, output: str, block: Block) -> list[str]:
     failures = []
     at = 0
     for line_no, pattern, text in expected_lines(block):
-        match = next((k for k in range(at, len(found_lines)) if pattern.search(found_lines[k])), None)
+        match = next((k for k in range(at, len(found_lines)) if pattern.fullmatch(found_lines[k].strip())), None)
         if match is None:
             failures.append(f"{page.name}:{line_no}: expected output line not printed (in this order): {text!r}")
         else:
@@ -221,7 +245,8 @@ def synopsis_failures(page: Page, block: Block, hattr: Path, env: dict[str, str]
             if not COMMAND_WORD.match(w):
                 break
             command.append(w)
-        result = subprocess.run([str(hattr), *command, "--help"], capture_output=True, text=True, env=env, cwd=cwd)
+        result = subprocess.run([str(hattr), *command, "--help"], capture_output=True, text=True, env=env, cwd=cwd,
+                                timeout=60)
         if result.returncode != 0:
             failures.append(f"{page.name}:{line_no}: `hattr {' '.join(command)} --help` failed "
                             f"(exit {result.returncode}): {result.stderr.strip()[:300]}")
@@ -265,6 +290,7 @@ def run_page(args: argparse.Namespace) -> int:
     shared = Path(args.shared).resolve() if args.shared else (source.parent / "shared")
 
     runnable = []
+    data_absent = 0
     for k, b in enumerate(page.blocks):
         if b.info != "sh":
             continue
@@ -272,10 +298,13 @@ def run_page(args: argparse.Namespace) -> int:
         if reason is not None:
             print(f"{page.name}:{b.line}: skipped: not runnable here: {reason}")
             continue
+        if "../shared/data" in "\n".join(b.lines) and not (shared / "data").is_dir():
+            print(f"SKIPPED: {page.name}:{b.line}: the block reads ../shared/data (the SVC2004 recordings), "
+                  f"absent here: {shared / 'data'}")
+            data_absent += 1
+            continue
         runnable.append((k, b))
-    needs_shared = any("../shared/" in "\n".join(b.lines) for _, b in runnable)
-    if needs_shared and not (shared / "data").is_dir():
-        print(f"SKIPPED: {page.name} reads ../shared/data (the SVC2004 recordings), absent here: {shared / 'data'}")
+    if data_absent and not runnable and not any(b.info == "synopsis" for b in page.blocks):
         return SKIPPED_EXIT
 
     root, clone = make_scratch(source, hattr, build, shared if shared.is_dir() else None)
@@ -295,7 +324,13 @@ def run_page(args: argparse.Namespace) -> int:
         fail_file = root / "failed"
         script, page_line = build_script(page, runnable, out_dir, fail_file)
         (root / "page.sh").write_text(script)
-        result = run_script(root / "page.sh", clone, env, args.timeout)
+        try:
+            result = run_script(root / "page.sh", clone, env, args.timeout)
+        except subprocess.TimeoutExpired:
+            running = page.blocks[int((out_dir / "current").read_text())]
+            failures.append(f"{page.name}:{running.line}: the page's commands took longer than {args.timeout} s "
+                            f"(this block was running)")
+            return 1
         failed_block = None
         if fail_file.exists():
             script_line, status = (fail_file.read_text().split() + ["?"])[:2]
@@ -325,8 +360,8 @@ def run_page(args: argparse.Namespace) -> int:
     finally:
         if not args.keep:
             shutil.rmtree(root, ignore_errors=True)
-    for f in failures:
-        print(f, file=sys.stderr)
+        for f in failures:
+            print(f, file=sys.stderr)
     return 1 if failures else 0
 
 

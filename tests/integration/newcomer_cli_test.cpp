@@ -58,6 +58,13 @@ TEST(Newcomer, AMistypedCommandIsNamedWithTheClosestOne) {
   const RunResult optional_level = runPiped(dir, "devices chek sim://pen");
   EXPECT_EQ(optional_level.exit_code, 2);
   EXPECT_THAT(optional_level.err, HasSubstr("did you mean \"hattr devices check\"?"));
+  const RunResult alias = runPiped(dir, "device chek sim://pen");  // `device` is the alias of `devices`
+  EXPECT_EQ(alias.exit_code, 2);
+  EXPECT_THAT(alias.err, HasSubstr("unknown command \"chek\" after \"hattr devices\": did you mean"));
+
+  // Options before the command word are CLI11's to judge; a known command still runs.
+  EXPECT_EQ(runPiped(dir, "--version").exit_code, 0);
+  EXPECT_EQ(runPiped(dir, "world --help").exit_code, 0);
 
   // Nothing close: no guess, the list of commands.
   const RunResult far = runPiped(dir, "xyzzy");
@@ -97,13 +104,13 @@ TEST(Newcomer, ServoCheckShowsItsTwoPhasesOnATerminalAndNothingInAPipe) {
   test::TempDir dir;
   const RunResult terminal = runOnTerminal(dir, "servo-check --seconds 0.3");
   ASSERT_EQ(terminal.exit_code, 0) << terminal.out;
-  EXPECT_THAT(terminal.out, HasSubstr("servo-check: the bare sleep loop (floor) ["));
-  EXPECT_THAT(terminal.out, HasSubstr("servo-check: the servo loop ["));
-  EXPECT_THAT(terminal.out, HasSubstr("/0.6 s"));
+  EXPECT_THAT(terminal.out, HasSubstr("servo-check 1/2: the bare sleep loop (floor) ["));
+  EXPECT_THAT(terminal.out, HasSubstr("servo-check 2/2: the servo loop ["));
+  EXPECT_THAT(terminal.out, HasSubstr("0.0/0.3 s"));
 
   const RunResult piped = runPiped(dir, "servo-check --seconds 0.3");
   ASSERT_EQ(piped.exit_code, 0) << piped.err;
-  EXPECT_THAT(piped.err, Not(HasSubstr("servo-check: the")));
+  EXPECT_THAT(piped.err, Not(HasSubstr("servo-check 1/2")));
   EXPECT_THAT(piped.err, Not(HasSubstr("\r")));
 }
 

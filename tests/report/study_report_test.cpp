@@ -127,6 +127,27 @@ TEST(StudyReport, WritesASelfContainedHtmlAndMarkdownWithEveryFigure) {
   EXPECT_TRUE(std::filesystem::exists(study.dir / "report" / "table1.csv"));
 }
 
+TEST(StudyReport, EveryInlineFigureClipsWithItsOwnRectangle) {
+  // One page holds every figure inline: a clip-path id shared by two figures made the browser
+  // clip all of them with the first one's rectangle (issue 18).
+  CompletedStudy study;
+  auto db = session::StudyDatabase::open(study.dir / "s.sqlite", session::OpenMode::kReadWrite);
+  const StudyAnalysis a = analyzeStudy(db);
+  const std::string html = test::readText(writeStudyReport(db, a, study.dir / "report"));
+  std::vector<std::string> ids;
+  for (auto at = html.find("<clipPath id=\""); at != std::string::npos; at = html.find("<clipPath id=\"", at + 1)) {
+    const auto begin = at + std::string("<clipPath id=\"").size();
+    ids.push_back(html.substr(begin, html.find('"', begin) - begin));
+  }
+  ASSERT_GE(ids.size(), 10u);
+  for (const std::string& id : ids) {
+    EXPECT_EQ(std::count(ids.begin(), ids.end(), id), 1) << "clip-path id used by several figures: " << id;
+    EXPECT_NE(html.find("clip-path=\"url(#" + id + ")\""), std::string::npos) << id;
+  }
+  // The same figure gets the same id on every run: a report is reproducible byte for byte.
+  EXPECT_EQ(test::readText(writeStudyReport(db, a, study.dir / "report-again")), html);
+}
+
 TEST(StudyAnalysis, RefusesAnUnfinishedStudyNamingWhatIsMissing) {
   test::TempDir dir;
   HapticProfile expert({.skill = "c"});
