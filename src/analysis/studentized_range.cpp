@@ -19,6 +19,7 @@
 #include <numbers>
 #include <string_view>
 
+#include <boost/math/distributions/students_t.hpp>
 #include <boost/math/tools/toms748_solve.hpp>
 
 #include "hattr/core/error.hpp"
@@ -176,6 +177,12 @@ double studentizedRangeQuantile(double p, int groups, double df) {
   const auto [a, b] = boost::math::tools::toms748_solve(
       excess, low, high, boost::math::tools::eps_tolerance<double>(50), max_iterations);
   return 0.5 * (a + b);
+}
+
+double studentTQuantile(double p, double df) {
+  HATTR_THROW_UNLESS(p > 0.0 && p < 1.0 && df > 0.0 && std::isfinite(df),
+                     "studentTQuantile: expected 0 < p < 1 and df > 0, got p = {}, df = {}", p, df);
+  return boost::math::quantile(boost::math::students_t_distribution<double>(df), p);
 }
 
 }  // namespace hattr::analysis

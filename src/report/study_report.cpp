@@ -1,10 +1,15 @@
 #include "hattr/report/study_report.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <map>
+#include <tuple>
+#include <utility>
 
 #include <fmt/format.h>
 
+#include "hattr/analysis/studentized_range.hpp"
 #include "hattr/core/units.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/report/paper_comparison.hpp"
@@ -23,6 +28,43 @@ std::string modeColour(const std::string& mode) {
   if (mode == "PCONTROL") return "#2ca02c";
   if (mode == "ALPHA") return "#d62728";
   return "#7f7f7f";
+}
+
+/// The modes in the study file's order (the paper's: BASIC, PCONTROL, ALPHA), for every
+/// table, legend and bar; a mode the study does not name goes last.
+std::vector<std::string> modeOrder(const session::StudyDefinition& study) {
+  std::vector<std::string> order;
+  for (const auto mode : study.modes) order.emplace_back(guidance::modeName(mode));
+  return order;
+}
+std::size_t modeRank(const std::vector<std::string>& order, const std::string& mode) {
+  return static_cast<std::size_t>(std::find(order.begin(), order.end(), mode) - order.begin());
+}
+
+/// Mean and the half-width of its 95 % confidence interval (Student's t; NaN below 2 values).
+std::pair<double, double> meanWithCi(const std::vector<double>& values) {
+  const auto n = static_cast<double>(values.size());
+  double mean = 0.0;
+  for (const double v : values) mean += v / n;
+  if (values.size() < 2) return {mean, std::numeric_limits<double>::quiet_NaN()};
+  double ss = 0.0;
+  for (const double v : values) ss += (v - mean) * (v - mean);
+  return {mean, analysis::studentTQuantile(0.975, n - 1.0) * std::sqrt(ss / (n - 1.0) / n)};
+}
+
+/// A recall cost of one metric: "trajectory" or "force".
+double costOf(const TrialCost& c, const std::string& metric) { return metric == "trajectory" ? c.trajectory() : c.forceProfile(); }
+
+/// Each subject's mean recall cost of one metric in one mode (subjects in id order).
+std::map<std::string, double> subjectMeans(const std::vector<TrialCost>& costs, const std::string& mode,
+                                           const std::string& metric) {
+  std::map<std::string, std::vector<double>> values;
+  for (const TrialCost& c : costs) {
+    if (c.mode == mode) values[c.subject].push_back(costOf(c, metric));
+  }
+  std::map<std::string, double> means;
+  for (const auto& [subject, v] : values) means[subject] = meanWithCi(v).first;
+  return means;
 }
 
 std::string p(double v) { return std::isfinite(v) ? (v < 0.001 ? "< 0.001" : fmt::format("{:.3f}", v)) : ""; }
@@ -115,6 +157,22 @@ std::string metricUnit(const std::string& metric) {
 
 }  // namespace
 
+namespace {
+/// The least-squares slope of values[i] over i (0 for fewer than 2 values).
+double leastSquaresSlope(const std::vector<double>& values) {
+  const double n = static_cast<double>(values.size());
+  if (values.size() < 2) return 0.0;
+  double mean_x = (n - 1.0) / 2.0, mean_y = 0.0;
+  for (const double v : values) mean_y += v / n;
+  double sxy = 0.0, sxx = 0.0;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    sxy += (static_cast<double>(i) - mean_x) * (values[i] - mean_y);
+    sxx += (static_cast<double>(i) - mean_x) * (static_cast<double>(i) - mean_x);
+  }
+  return sxy / sxx;
+}
+}  // namespace
+
 std::vector<std::string> conclusions(const StudyAnalysis& a, double alpha) {
   std::vector<std::string> out;
   for (const MetricResult* m : {&a.trajectory, &a.force}) {
@@ -136,15 +194,23 @@ std::vector<std::string> conclusions(const StudyAnalysis& a, double alpha) {
       out.push_back(fmt::format("Subjects differed {}significantly on the {} metric ({}).",
                                 subject->p < alpha ? "" : "not ", what, pIs(subject->p)));
     }
-    // Training effect within each mode: the trial factor of the per-mode ANOVA.
+    // Training effect within each mode: the trial factor of the per-mode ANOVA, with its
+    // direction (the least-squares slope of the mean cost over the recall trials): costs that
+    // rise over recall are forgetting or fatigue, not learning.
     std::vector<std::string> trained;
     for (const auto& [mode_name, table] : m->per_mode) {
-      if (const analysis::AnovaRow* trial = findRow(table, "trial"); trial && trial->p < alpha) trained.push_back(mode_name);
+      const analysis::AnovaRow* trial = findRow(table, "trial");
+      if (!trial || !(trial->p < alpha)) continue;
+      const auto means = m->mean_by_trial.find(mode_name);
+      const double slope = means == m->mean_by_trial.end() ? 0.0 : leastSquaresSlope(means->second);
+      trained.push_back(fmt::format("{} ({}, {:+.3g} per trial: {})", mode_name, pIs(trial->p), slope,
+                                    slope > 0.0 ? "costs rose over the recall trials, forgetting or fatigue, not learning"
+                                                : "costs fell over the recall trials"));
     }
     out.push_back(trained.empty()
                       ? fmt::format("No mode showed a significant change over the recall trials on the {} metric.", what)
                       : fmt::format("Recall trial number had a significant effect on the {} metric in: {}.", what,
-                                    fmt::join(trained, ", ")));
+                                    fmt::join(trained, "; ")));
   }
   return out;
 }
@@ -232,7 +298,8 @@ std::filesystem::path writeStudyReport(const session::StudyDatabase& db, const S
   for (const auto& [subject, mode] : a.trajectory.best_mode) table1.rows.push_back({subject, mode, a.force.best_mode.at(subject)});
   doc.table(table1);
 
-  // Per metric: ANOVA tables and figures 5/6.
+  // Per metric: ANOVA tables and figures 5/6, modes in the study's order.
+  const std::vector<std::string> order = modeOrder(study);
   for (const MetricResult* m : {&a.trajectory, &a.force}) {
     const std::string title = m->metric == "trajectory" ? "Trajectory" : "Haptic profile (force)";
     doc.heading(fmt::format("{}: mode × subject ANOVA (subject random)", title));
@@ -244,29 +311,80 @@ std::filesystem::path writeStudyReport(const session::StudyDatabase& db, const S
       doc.table(t);
     }
     doc.heading(fmt::format("{}: per mode, trial × subject ANOVA (effect of training, difference between subjects)", title), 3);
-    for (const auto& [mode, table] : m->per_mode) {
-      doc.paragraph(mode + ":");
-      doc.table(anovaTable(table));
+    for (const std::string& mode : order) {
+      if (const auto table = m->per_mode.find(mode); table != m->per_mode.end()) {
+        doc.paragraph(mode + ":");
+        doc.table(anovaTable(table->second));
+      }
     }
 
-    // Figure: mean cost per recall trial, per mode.
+    // Figure: mean cost per recall trial, per mode, with the 95 % confidence interval over
+    // subjects at each trial.
     SvgPlot means(fmt::format("{}: mean recall cost per trial", title), "recall trial", metricUnit(m->metric), 600);
     means.integerX();
-    for (const auto& [mode, values] : m->mean_by_trial) {
+    for (const std::string& mode : order) {
+      std::map<int, std::vector<double>> by_trial;
+      for (const TrialCost& c : a.costs) {
+        if (c.mode == mode) by_trial[c.trial].push_back(costOf(c, m->metric));
+      }
       Series s{mode, modeColour(mode), {}, 2.0, false, true};
-      for (std::size_t i = 0; i < values.size(); ++i) s.points.emplace_back(static_cast<double>(i + 1), values[i]);
-      means.add(s);
+      for (const auto& [trial, values] : by_trial) {
+        const auto [mean, ci] = meanWithCi(values);
+        s.points.emplace_back(static_cast<double>(trial), mean);
+        s.errors.push_back(ci);
+      }
+      if (!s.points.empty()) means.add(s);
     }
     doc.figure(m->metric + "_mean_by_trial", means.svg(),
-               fmt::format("Mean {} cost over subjects for each recall trial, per mode (the paper's figures 5 and 6).", m->metric),
+               fmt::format("Mean {} cost over subjects for each recall trial, per mode, with 95 % confidence intervals "
+                           "over subjects (the paper's figures 5 and 6). The axis starts where the data do, not at zero.",
+                           m->metric),
                files);
-    // Figure: mean and inter-subject variance per mode.
+    // Figure: mean per mode with the 95 % confidence interval of the subjects' means (subjects
+    // are the random factor, so they are the unit of replication), and the inter-subject variance.
     std::vector<detail::Bar> mean_bars, var_bars;
-    for (const auto& gs : m->per_mode_stats) mean_bars.push_back({gs.a_level, modeColour(gs.a_level), gs.stats.mean});
+    for (const std::string& mode : order) {
+      std::vector<double> subject_means;
+      for (const auto& [subject, mean] : subjectMeans(a.costs, mode, m->metric)) subject_means.push_back(mean);
+      if (subject_means.empty()) continue;
+      const auto [mean, ci] = meanWithCi(subject_means);
+      mean_bars.push_back({mode, modeColour(mode), mean, ci});
+    }
+    // Figure: the mode × subject interaction, each subject's mean per mode (x: the modes in
+    // order), over the modes' means.
+    std::string legend;
+    for (std::size_t k = 0; k < order.size(); ++k) legend += fmt::format("{}{} = {}", k == 0 ? "" : ", ", k + 1, order[k]);
+    SvgPlot interaction(fmt::format("{}: each subject's mean per mode", title), fmt::format("mode ({})", legend),
+                        metricUnit(m->metric), 600);
+    interaction.integerX();
+    std::map<std::string, Series> by_subject_line;
+    Series mode_means{"mean of the subjects", "#000000", {}, 3.0, false, true};
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      std::vector<double> subject_means;
+      for (const auto& [subject, mean] : subjectMeans(a.costs, order[k], m->metric)) {
+        subject_means.push_back(mean);
+        auto& line = by_subject_line.try_emplace(subject, Series{"a subject", "#9a9a9a", {}, 1.0, false, true}).first->second;
+        line.points.emplace_back(static_cast<double>(k + 1), mean);
+      }
+      if (!subject_means.empty()) mode_means.points.emplace_back(static_cast<double>(k + 1), meanWithCi(subject_means).first);
+    }
+    for (auto& [subject, line] : by_subject_line) interaction.add(std::move(line));
+    interaction.add(mode_means);
     for (const auto& v : m->inter_subject) var_bars.push_back({v.level, modeColour(v.level), v.variance});
+    std::sort(var_bars.begin(), var_bars.end(),
+              [&order](const auto& x, const auto& y) { return modeRank(order, x.label) < modeRank(order, y.label); });
     SvgPlot mean_plot(fmt::format("{}: mean recall cost per mode", title), "mode", metricUnit(m->metric), 420, 300);
     mean_plot.bars(mean_bars);
-    doc.figure(m->metric + "_mean_per_mode", mean_plot.svg(), fmt::format("Mean {} cost per mode over all recall trials.", m->metric), files);
+    doc.figure(m->metric + "_mean_per_mode", mean_plot.svg(),
+               fmt::format("Mean {} cost per mode over all recall trials, with the 95 % confidence interval of the "
+                           "subjects' means (Student's t, subjects − 1 degrees of freedom).",
+                           m->metric),
+               files);
+    doc.figure(m->metric + "_mode_by_subject", interaction.svg(),
+               fmt::format("The mode × subject interaction on the {} metric: each subject's mean recall cost in each "
+                           "mode (grey), and the mean over subjects (black). Lines that cross are the interaction.",
+                           m->metric),
+               files);
     SvgPlot var_plot(fmt::format("{}: inter-subject variance per mode", title), "mode", "variance of subject means", 420, 300);
     var_plot.bars(var_bars);
     doc.figure(m->metric + "_variance_per_mode", var_plot.svg(),
@@ -289,8 +407,10 @@ std::filesystem::path writeStudyReport(const session::StudyDatabase& db, const S
     Series e{"expert", "#000000", {}, 2.0};
     for (const Sample& s : expert.samples()) e.points.emplace_back(s.t_s, channelValue(s, *channelFromName(axes[k])));
     plot.add(e);
-    for (const auto& [key, cost] : last_recall) {
-      if (cost->subject != first_subject) continue;
+    for (const std::string& mode : order) {
+      const auto found = last_recall.find(first_subject + "/" + mode);
+      if (found == last_recall.end()) continue;
+      const TrialCost* cost = found->second;
       const HapticProfile trial = db.trialProfile(cost->trial_id);
       Series s{cost->mode, modeColour(cost->mode), {}, 1.2};
       for (const Sample& x : trial.samples()) s.points.emplace_back(x.t_s, channelValue(x, *channelFromName(axes[k])));
@@ -298,6 +418,34 @@ std::filesystem::path writeStudyReport(const session::StudyDatabase& db, const S
     }
     doc.figure(fmt::format("profile_{}", axes[k]), plot.svg(),
                fmt::format("The expert's {} and one subject's last recall trial in each mode (the paper's figure 3).", axes[k]),
+               files);
+  }
+  // The paper's figure 3: one subject's haptic profile on two occasions (there a week apart;
+  // here the subject's first and last analyzed recall trial of the first mode), and the expert's.
+  const TrialCost* first_occasion = nullptr;
+  const TrialCost* last_occasion = nullptr;
+  for (const TrialCost& c : a.costs) {
+    if (c.subject != first_subject || order.empty() || c.mode != order.front()) continue;
+    if (!first_occasion || c.trial < first_occasion->trial) first_occasion = &c;
+    if (!last_occasion || c.trial > last_occasion->trial) last_occasion = &c;
+  }
+  if (first_occasion && last_occasion && first_occasion != last_occasion) {
+    SvgPlot plot(fmt::format("Force fz of {} on two occasions ({} recall trials {} and {}) and the expert's", first_subject,
+                             order.front(), first_occasion->trial, last_occasion->trial),
+                 "time [s]", "fz [N] (force on the paper)", 640);
+    Series e{"expert", "#000000", {}, 2.0};
+    for (const Sample& s : expert.samples()) e.points.emplace_back(s.t_s, s.f_user_W.z());
+    plot.add(e);
+    for (const auto& [occasion, colour, dashed] : {std::tuple{first_occasion, "#ff7f0e", true}, std::tuple{last_occasion, "#1f77b4", false}}) {
+      Series s{fmt::format("recall trial {}", occasion->trial), colour, {}, 1.2, dashed};
+      const HapticProfile trial = db.trialProfile(occasion->trial_id);
+      for (const Sample& x : trial.samples()) s.points.emplace_back(x.t_s, x.f_user_W.z());
+      plot.add(s);
+    }
+    doc.figure("profile_two_occasions", plot.svg(),
+               fmt::format("One subject's haptic profile (fz) on two occasions, the first and last analyzed recall trials "
+                           "after {} training, with the expert's (the paper's figure 3: the same subject a week apart).",
+                           order.front()),
                files);
   }
   for (const auto mode : study.modes) {

@@ -28,6 +28,13 @@ std::string number(double v) { return fmt::format("{:.4g}", v); }
 
 constexpr std::string_view kClipIdPlaceholder = "@clip@";
 
+/// An error bar: a vertical line from y_low to y_high with short caps, at x (pixels).
+std::string whisker(double x, double y_low, double y_high, const std::string& colour = "#222") {
+  return fmt::format("<path d=\"M{0:.1f},{1:.1f}V{2:.1f}M{3:.1f},{1:.1f}H{4:.1f}M{3:.1f},{2:.1f}H{4:.1f}\" "
+                     "stroke=\"{5}\" stroke-width=\"1.2\" fill=\"none\"/>\n",
+                     x, y_low, y_high, x - 4, x + 4, colour);
+}
+
 /// Replaces the clip-path id placeholder with one made from the figure itself (FNV-1a of the
 /// SVG): unique among a page's figures, and the same figure gets the same id on every run.
 std::string withClipId(std::string svg) {
@@ -65,16 +72,22 @@ std::string SvgPlot::svg() const {
   const double pw = width_ - left - right, ph = height_ - top - bottom;
 
   // Data ranges (bars: categories 0..n-1 and values from 0).
+  // (Error bars count: a whisker is never cut by the frame.)
   double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
   for (const auto& s : series_) {
-    for (const auto& [x, y] : s.points) {
+    for (std::size_t i = 0; i < s.points.size(); ++i) {
+      const auto [x, y] = s.points[i];
       if (!std::isfinite(x) || !std::isfinite(y)) continue;
-      x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+      const double e = i < s.errors.size() && std::isfinite(s.errors[i]) ? s.errors[i] : 0.0;
+      x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y - e), y1 = std::max(y1, y + e);
     }
   }
   if (!bars_.empty()) {
     x0 = -0.5, x1 = static_cast<double>(bars_.size()) - 0.5, y0 = std::min(0.0, y0), y1 = std::max(y1, 0.0);
-    for (const auto& b : bars_) y0 = std::min(y0, b.value), y1 = std::max(y1, b.value);
+    for (const auto& b : bars_) {
+      const double e = std::isfinite(b.error) ? b.error : 0.0;
+      y0 = std::min(y0, b.value - e), y1 = std::max(y1, b.value + e);
+    }
   }
   if (!std::isfinite(x0)) x0 = 0, x1 = 1, y0 = 0, y1 = 1;
   if (x1 - x0 < 1e-12) x0 -= 0.5, x1 += 0.5;
@@ -90,11 +103,15 @@ std::string SvgPlot::svg() const {
   const auto X = [&](double x) { return left + (x - x0) * sx; };
   const auto Y = [&](double y) { return top + ph - (y - y0) * sy; };
 
+  // The title from the left edge, smaller when it would not fit (about 0.6 em per character).
+  const double title_chars = static_cast<double>(
+      std::count_if(title_.begin(), title_.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
+  const double title_size = std::clamp((width_ - 20.0) / (0.6 * std::max(1.0, title_chars)), 8.0, 13.0);
   std::string out = fmt::format(
       "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" viewBox=\"0 0 {} {}\" "
       "font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
-      "<text x=\"{}\" y=\"18\" font-size=\"13\" font-weight=\"bold\">{}</text>\n",
-      width_, height_, width_, height_, left, escape(title_));
+      "<text x=\"10\" y=\"18\" font-size=\"{:.1f}\" font-weight=\"bold\">{}</text>\n",
+      width_, height_, width_, height_, title_size, escape(title_));
 
   // Axes, ticks and grid.
   for (const double t : ticks(y0, y1)) {
@@ -123,7 +140,9 @@ std::string SvgPlot::svg() const {
                        "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>"
                        "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\" font-size=\"10\">{}</text>\n",
                        X(x - 0.3), y_top, 0.6 * sx, std::max(1.0, y_base - y_top), bars_[i].colour, X(x), top + ph + 16,
-                       escape(bars_[i].label), X(x), y_top - 4, number(bars_[i].value));
+                       escape(bars_[i].label), X(x) + (std::isfinite(bars_[i].error) ? 0.17 * sx : 0.0), y_top - 4,
+                       number(bars_[i].value));
+    if (std::isfinite(bars_[i].error)) out += whisker(X(x), Y(bars_[i].value - bars_[i].error), Y(bars_[i].value + bars_[i].error));
   }
 
   // Lines and markers, clipped to the plot area widened by a marker's radius (a marker on the
@@ -141,6 +160,12 @@ std::string SvgPlot::svg() const {
     }
     out += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"{}\"{} points=\"{}\"/>\n", s.colour, s.width,
                        s.dashed ? " stroke-dasharray=\"5,3\"" : "", points);
+    for (std::size_t i = 0; i < s.errors.size() && i < s.points.size(); ++i) {
+      const auto [x, y] = s.points[i];
+      if (std::isfinite(x) && std::isfinite(y) && std::isfinite(s.errors[i])) {
+        out += whisker(X(x), Y(y - s.errors[i]), Y(y + s.errors[i]), s.colour);
+      }
+    }
     if (s.markers) {
       for (const auto& [x, y] : s.points) {
         if (std::isfinite(x) && std::isfinite(y)) {

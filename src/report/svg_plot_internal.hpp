@@ -2,6 +2,7 @@
 // A small SVG plot for the study report: axes with ticks, labels with units, a legend, lines,
 // points and bars. Self-contained SVG text, no scripts, no network.
 
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -15,12 +16,15 @@ struct Series {
   double width = 1.5;
   bool dashed = false;
   bool markers = false;
+  /// Half-widths of error bars at each point (empty: none; NaN: none at that point).
+  std::vector<double> errors;
 };
 
 struct Bar {
   std::string label;   ///< category under the bar
   std::string colour;
   double value;
+  double error = std::numeric_limits<double>::quiet_NaN();  ///< error bar's half-width (NaN: none)
 };
 
 class SvgPlot {

@@ -672,6 +672,16 @@ TEST(StudentizedRange, QuantileInvertsTheCdfAsRDoes) {
   }
 }
 
+TEST(StudentT, QuantileMatchesRsQt) {
+  // R 4.2.2: print(qt(c(0.975, 0.975, 0.025, 0.995), c(9, 2, 5, 30)), digits = 17)
+  EXPECT_NEAR(analysis::studentTQuantile(0.975, 9), 2.2621571627982049, 1e-13);
+  EXPECT_NEAR(analysis::studentTQuantile(0.975, 2), 4.3026527297494619, 1e-13);
+  EXPECT_NEAR(analysis::studentTQuantile(0.025, 5), -2.5705818356363150, 1e-13);
+  EXPECT_NEAR(analysis::studentTQuantile(0.995, 30), 2.7499956535672254, 1e-13);
+  EXPECT_THROW((void)analysis::studentTQuantile(1.0, 5), InputError);
+  EXPECT_THROW((void)analysis::studentTQuantile(0.5, 0), InputError);
+}
+
 TEST(StudentizedRange, HasTheLimitsOfADistribution) {
   EXPECT_EQ(studentizedRangeCdf(0.0, 3, 10), 0.0);
   EXPECT_EQ(studentizedRangeCdf(-1.0, 3, 10), 0.0);

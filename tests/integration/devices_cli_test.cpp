@@ -146,8 +146,10 @@ TEST(DevicesCli, ADeviceFaultMidTrialExitsOneAndKeepsWhatWasRecorded) {
   EXPECT_THAT(r.err, HasSubstr("the trial failed after"));
   EXPECT_THAT(r.err, HasSubstr("fake SDK: amplifier fault (SDK error 513)"));
   const HapticProfile partial = io::readProfileCsv(dir / "partial.csv");
-  EXPECT_GT(partial.duration_s(), 0.15);
-  EXPECT_LT(partial.duration_s(), 0.5);
+  // Kept up to the fault: some samples, and fewer than the 600 ticks after which the device
+  // failed (ticks, not seconds: a stalled host stretches time, not the tick count).
+  EXPECT_GT(partial.size(), 0u);
+  EXPECT_LT(partial.size(), 600u);
   EXPECT_THAT(partial.metadata().extra.at("failed"), HasSubstr("amplifier fault"));
 }
 

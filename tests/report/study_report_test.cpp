@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <map>
 
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -16,6 +19,7 @@ namespace hattr::report {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 /// A completed small study: 3 scripted subjects (each trial offset at random), 3 modes,
 /// 1 training + 3 recall trials each.
@@ -146,6 +150,105 @@ TEST(StudyReport, EveryInlineFigureClipsWithItsOwnRectangle) {
   }
   // The same figure gets the same id on every run: a report is reproducible byte for byte.
   EXPECT_EQ(test::readText(writeStudyReport(db, a, study.dir / "report-again")), html);
+}
+
+/// Analyzes `study` and writes its report into study.dir / "report".
+StudyAnalysis writeReportOf(const CompletedStudy& study) {
+  const auto db = session::StudyDatabase::open(study.dir / "s.sqlite", session::OpenMode::kReadOnly);
+  StudyAnalysis a = analyzeStudy(db);
+  (void)writeStudyReport(db, a, study.dir / "report");
+  return a;
+}
+
+TEST(StudyReport, ModesComeInTheStudysOrderEverywhere) {
+  CompletedStudy study;  // modes: the paper's BASIC, PCONTROL, ALPHA
+  (void)writeReportOf(study);
+  const std::string html = test::readText(study.dir / "report" / "report.html");
+  const auto in_order = [](const std::string& text, const std::string& a1, const std::string& b1, const std::string& c1) {
+    const auto pa = text.find(a1), pb = text.find(b1), pc = text.find(c1);
+    return pa != std::string::npos && pa < pb && pb != std::string::npos && pb < pc && pc != std::string::npos;
+  };
+  EXPECT_TRUE(in_order(html, "<p>BASIC:</p>", "<p>PCONTROL:</p>", "<p>ALPHA:</p>"));  // the per-mode ANOVA tables
+  for (const char* figure : {"trajectory_mean_by_trial", "force_mean_per_mode", "force_variance_per_mode", "profile_fz"}) {
+    const std::string svg = test::readText(study.dir / "report" / "figures" / (std::string(figure) + ".svg"));
+    EXPECT_TRUE(in_order(svg, ">BASIC<", ">PCONTROL<", ">ALPHA<")) << figure;
+  }
+}
+
+/// The error bars' pixel half-heights in an SVG written by the report (each "<path d=...").
+std::vector<double> whiskerHeights(const std::string& svg) {
+  std::vector<double> out;
+  for (auto at = svg.find("<path d=\"M"); at != std::string::npos; at = svg.find("<path d=\"M", at + 1)) {
+    double x = 0, y_low = 0, y_high = 0;
+    if (std::sscanf(svg.c_str() + at, "<path d=\"M%lf,%lfV%lf", &x, &y_low, &y_high) == 3) out.push_back((y_low - y_high) / 2);
+  }
+  return out;
+}
+
+TEST(StudyReport, MeansCarryTheirConfidenceIntervalsOverSubjects) {
+  CompletedStudy study;
+  const StudyAnalysis a = writeReportOf(study);
+  // One error bar per mode on the bars, one per mode and recall trial on the lines.
+  const std::string bars = test::readText(study.dir / "report" / "figures" / "trajectory_mean_per_mode.svg");
+  const std::string lines = test::readText(study.dir / "report" / "figures" / "trajectory_mean_by_trial.svg");
+  ASSERT_EQ(whiskerHeights(bars).size(), 3u);
+  EXPECT_EQ(whiskerHeights(lines).size(), 3u * 2u);  // analyzed recall trials 2 and 3
+  // Their lengths are in proportion to t(0.975, subjects - 1) · sd / √n of the subjects' means.
+  std::vector<double> expected;
+  for (const std::string mode : {"BASIC", "PCONTROL", "ALPHA"}) {
+    std::map<std::string, std::vector<double>> by_subject;
+    for (const auto& c : a.costs) {
+      if (c.mode == mode) by_subject[c.subject].push_back(c.trajectory());
+    }
+    std::vector<double> means;
+    for (const auto& [s, v] : by_subject) means.push_back((v[0] + v[1]) / 2);
+    const double m = (means[0] + means[1] + means[2]) / 3;
+    double ss = 0;
+    for (const double x : means) ss += (x - m) * (x - m);
+    expected.push_back(4.302652729749462 * std::sqrt(ss / 2 / 3));
+  }
+  const std::vector<double> drawn = whiskerHeights(bars);
+  ASSERT_GT(drawn[0], 2.0);  // pixels: long enough to compare
+  for (std::size_t k = 1; k < 3; ++k) {
+    const double ratio = expected[k] / expected[0];
+    EXPECT_NEAR(drawn[k] / drawn[0], ratio, 0.03 * ratio + 0.15 / drawn[0]) << k;  // SVG coordinates have 0.1 px
+  }
+}
+
+TEST(StudyReport, ShowsTheInteractionAndOneSubjectOnTwoOccasions) {
+  CompletedStudy study;
+  (void)writeReportOf(study);
+  const std::string interaction = test::readText(study.dir / "report" / "figures" / "force_mode_by_subject.svg");
+  std::size_t subject_lines = 0;
+  for (auto at = interaction.find("<polyline fill=\"none\" stroke=\"#9a9a9a\""); at != std::string::npos;
+       at = interaction.find("<polyline fill=\"none\" stroke=\"#9a9a9a\"", at + 1)) {
+    ++subject_lines;
+  }
+  EXPECT_EQ(subject_lines, 3u);
+  EXPECT_THAT(interaction, HasSubstr("mode (1 = BASIC, 2 = PCONTROL, 3 = ALPHA)"));
+  const std::string occasions = test::readText(study.dir / "report" / "figures" / "profile_two_occasions.svg");
+  EXPECT_THAT(occasions, HasSubstr("BASIC recall trials 2 and 3"));
+  EXPECT_THAT(occasions, HasSubstr(">recall trial 2<"));
+  EXPECT_THAT(occasions, HasSubstr(">recall trial 3<"));
+}
+
+TEST(StudyAnalysis, ConclusionsSayWhichWayTheRecallTrialsWent) {
+  // A significant trial effect with costs rising is forgetting, not learning; falling is the other.
+  StudyAnalysis a;
+  a.trajectory.metric = "trajectory";
+  a.force.metric = "force";
+  a.trajectory.per_mode["BASIC"].rows.push_back({.source = "trial", .p = 0.01});
+  a.trajectory.mean_by_trial["BASIC"] = {10.0, 11.0, 12.5};
+  a.force.per_mode["ALPHA"].rows.push_back({.source = "trial", .p = 0.02});
+  a.force.mean_by_trial["ALPHA"] = {9.0, 8.0, 7.0};
+  a.force.per_mode["PCONTROL"].rows.push_back({.source = "trial", .p = 0.2});
+  a.force.mean_by_trial["PCONTROL"] = {9.0, 10.0, 11.0};
+  const auto lines = conclusions(a);
+  const std::string text = fmt::format("{}", fmt::join(lines, "\n"));
+  EXPECT_THAT(text, HasSubstr("trajectory (shape) metric in: BASIC (p = 0.010, +1.25 per trial: costs rose over the recall "
+                              "trials, forgetting or fatigue, not learning)"));
+  EXPECT_THAT(text, HasSubstr("haptic-profile (force) metric in: ALPHA (p = 0.020, -1 per trial: costs fell over the recall trials)"));
+  EXPECT_THAT(text, Not(HasSubstr("PCONTROL (")));
 }
 
 TEST(StudyAnalysis, RefusesAnUnfinishedStudyNamingWhatIsMissing) {

@@ -16,6 +16,7 @@
 #include "studio_test_support.hpp"
 #include "ui/main_window.hpp"
 #include "ui/paper_view.hpp"
+#include "ui/profile_plot.hpp"
 
 using namespace hattr;
 using namespace hattr::studio;
@@ -174,6 +175,10 @@ class StudioSmokeTest : public QObject {
     QVERIFY(w.stopRecording());
     QVERIFY(w.take().has_value());
     QVERIFY(w.take()->penDownCount() > 100);
+    // Loading a reference now shows the reference alone: the take's force curves go (issue 18).
+    QVERIFY(!w.plot()->trainee().empty());
+    QVERIFY2(w.loadReference(QString::fromStdString(expert_file_.string())), qPrintable(w.lastError()));
+    QVERIFY(w.plot()->trainee().empty());
     const QString file = QString::fromStdString((dir_ / "take.csv").string());
     QVERIFY2(w.saveTake(file), qPrintable(w.lastError()));
     const HapticProfile saved = io::readProfileCsv(file.toStdString());
@@ -230,7 +235,26 @@ class StudioSmokeTest : public QObject {
     QTest::qWait(300);
     QVERIFY(!w.paperView()->trail().empty());
     w.grab().save(QStringLiteral(HATTR_STUDIO_SCREENSHOT_DIR "/studio_review.png"));
-    w.abortActivity();
+
+    // Opening a study after Review leaves nothing of the reviewed trial on show (it was drawn
+    // in orange), and stops its playback (issue 18).
+    QVERIFY2(w.openStudy(QString::fromStdString(db_file.string())), qPrintable(w.lastError()));
+    QCOMPARE(w.activity(), MainWindow::Activity::kFree);
+    QVERIFY(w.paperView()->overlay().empty());
+    QVERIFY(w.paperView()->trail().empty());
+    w.closeStudy();
+
+    // Opening another study for review forgets the first one's trial and scores.
+    QVERIFY2(w.showReviewTrial(db.trials("P01")[0].id), qPrintable(w.lastError()));
+    auto* scores = w.findChild<QLabel*>("review_scores");
+    QVERIFY(scores != nullptr);
+    QVERIFY(!scores->text().isEmpty());
+    const auto other = dir_ / "other-review.sqlite";
+    std::filesystem::copy_file(db_file, other, std::filesystem::copy_options::overwrite_existing);
+    QVERIFY2(w.openReview(QString::fromStdString(other.string())), qPrintable(w.lastError()));
+    QVERIFY(scores->text().isEmpty());
+    QVERIFY(w.paperView()->overlay().empty());
+    w.togglePlayback();  // nothing to play: the old trial is gone
     QCOMPARE(w.activity(), MainWindow::Activity::kFree);
   }
 
@@ -265,8 +289,14 @@ class StudioSmokeTest : public QObject {
     QVERIFY2(w.openStudy(QString::fromStdString(db_file.string())), qPrintable(w.lastError()));
     QVERIFY2(w.selectStudySubject("P01"), qPrintable(w.lastError()));
     QCOMPARE(w.study()->completedCount(), 1);
+    w.setMode(guidance::TrainingMode::kForceControl);  // the Train tab's mode, not the trial's
     QVERIFY(w.studyNext());  // cuts the rest short
     QCOMPARE(w.activity(), MainWindow::Activity::kStudyTrial);
+    // A recall trial runs unassisted, and the status bar says so whatever the Train tab's mode (issue 18).
+    QCOMPARE(w.rig().spec().guidance.mode, guidance::TrainingMode::kBasic);
+    auto* activity_status = w.findChild<QLabel*>("status_activity");
+    QVERIFY(activity_status != nullptr);
+    QTRY_VERIFY_WITH_TIMEOUT(activity_status->text().contains("mode BASIC"), 1000);
     writeUntilStopped(w, MainWindow::Activity::kStudyTrial, stop_key);
     QCOMPARE(w.activity(), MainWindow::Activity::kFree);
     QCOMPARE(w.study()->state(), StudySession::State::kFinished);

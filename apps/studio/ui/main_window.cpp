@@ -166,6 +166,7 @@ void MainWindow::buildUi() {
   status_input_ = new QLabel;
   status_loop_ = new QLabel;
   status_activity_ = new QLabel;
+  status_activity_->setObjectName("status_activity");
   statusBar()->addWidget(status_activity_, 1);
   statusBar()->addPermanentWidget(status_input_);
   statusBar()->addPermanentWidget(status_loop_);
@@ -418,6 +419,7 @@ void MainWindow::buildReviewTab() {
   connect(report_button_, &QPushButton::clicked, this, [this] { (void)openReport(); });
   layout->addWidget(report_button_);
   review_scores_ = wrappedLabel();
+  review_scores_->setObjectName("review_scores");
   layout->addWidget(review_scores_);
   tabs_->addTab(page, tr("Review"));
 }
@@ -862,9 +864,12 @@ void MainWindow::onStatus() {
   }
   last_status_s_ = now;
   static const char* kNames[] = {"writing", "recording", "training trial", "study trial", "playback", "mentoring"};
+  // The mode the loop runs: a study trial's own (a recall trial is BASIC whatever its mode),
+  // otherwise the Train tab's.
+  const guidance::TrainingMode shown = activity_ == Activity::kStudyTrial ? rig_.spec().guidance.mode : mode_;
   status_activity_->setText(tr("Activity: %1 · mode %2")
                                 .arg(QString::fromLatin1(kNames[static_cast<int>(activity_)]))
-                                .arg(mode_combo_->currentText()));
+                                .arg(qs(std::string(guidance::modeName(shown)))));
 }
 
 void MainWindow::refreshButtons() {

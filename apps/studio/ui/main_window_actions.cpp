@@ -60,6 +60,12 @@ bool MainWindow::loadReference(const QString& file) {
     if (activity_ == Activity::kFree || activity_ == Activity::kRecording) {
       showReference(&*reference_profile_);
       paper_->setReferenceShown(show_reference_check_->isChecked());
+      // The new reference alone on the plot: the last take's curves go; it stays until the pen writes.
+      plot_->setTrainee({});
+      plot_->setCursorTime(std::nullopt);
+      plot_->setTimeWindow(std::nullopt);
+      plot_->setTitle(tr("Reference"));
+      plot_holds_result_ = true;
       plot_->setExpert(ForceSeries::fromProfile(*reference_profile_, 4000, -reference_profile_->samples().front().t_s));
     }
     refreshButtons();
@@ -547,6 +553,11 @@ bool MainWindow::openStudy(const QString& file) {
                             .arg(study.protocol.recall_trials)
                             .arg(study.protocol.rest_s));
   fillStudySubjects();
+  // Nothing of the tab used before stays on show: a reviewed trial (orange), a take, a playback.
+  if (activity_ == Activity::kPlayback) abortActivity();
+  paper_->overlay().clear();
+  paper_->trail().clear();
+  plot_->clear();
   (void)rig_.finish();
   useEnvironment(study_->environment());
   showReference(nullptr);
@@ -585,6 +596,7 @@ bool MainWindow::selectStudySubject(const QString& subject) {
   showReference(&study_->expert());
   paper_->setReferenceShown(false);
   paper_->trail().clear();
+  paper_->overlay().clear();
   plot_->clear();
   refreshStudyPanel();
   refreshButtons();
@@ -690,6 +702,13 @@ bool MainWindow::openReview(const QString& file) {
     showError(tr("The study could not be opened for review"), what(e));
     return false;
   }
+  // The previous study's trial, expert and scores go with it (the playback held a pointer to it).
+  if (activity_ == Activity::kPlayback) abortActivity();
+  if (review_trial_ && playback_.profile() == &*review_trial_) playback_.load(nullptr);
+  review_trial_.reset();
+  review_expert_.reset();
+  review_scores_->clear();
+  paper_->overlay().clear();
   review_label_->setText(
       tr("<b>%1</b> (%2)")
           .arg(qs(review_db_->study().name).toHtmlEscaped(), QFileInfo(file).fileName().toHtmlEscaped()));

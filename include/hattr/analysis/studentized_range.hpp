@@ -28,4 +28,8 @@ namespace hattr::analysis {
 /// studentizedRangeCdf().
 [[nodiscard]] double studentizedRangeQuantile(double p, int groups, double df);
 
+/// Student's t quantile: the t with P(T <= t) = p for `df` degrees of freedom (R's qt()),
+/// for confidence intervals. Throws InputError unless 0 < p < 1 and df > 0.
+[[nodiscard]] double studentTQuantile(double p, double df);
+
 }  // namespace hattr::analysis
