@@ -136,7 +136,7 @@ void writeRecording(const HapticProfile& profile, const std::filesystem::path& f
   }
 }
 
-// The progress line: drawn with a carriage return, cleared with spaces at the end.
+// The progress line: drawn after a carriage return and an erase-line (ESC [K), cleared the same way.
 Progress::Progress(std::string label, double total, std::string unit)
     : label_(std::move(label)), total_(total), unit_(std::move(unit)), shown_(onTerminal()) {}
 

@@ -69,8 +69,6 @@ nlohmann::json reportJson(const servo::RealtimeReport& r) {
           {"timer_slack_minimal", r.timer_slack_minimal}, {"notes", r.notes}};
 }
 
-/// Sleeps in steps of at most 0.1 s until `done()` or `deadline`, moving `progress` from
-/// `start` by the seconds passed (at most `seconds`).
 /// Draws `progress` (the seconds passed, at most `seconds`) every 0.1 s until `done()` or
 /// `deadline`.
 void waitShowingProgress(Progress& progress, double seconds, const std::function<bool()>& done,
