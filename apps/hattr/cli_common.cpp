@@ -161,7 +161,7 @@ void Progress::update(double done, const std::string& label) {
   }
   // The bar, the count and an estimate of the time left from the rate so far.
   constexpr int kWidth = 30;
-  const double fraction = total_ > 0.0 ? std::clamp(done / total_, 0.0, 1.0) : 1.0;
+  const double fraction = std::clamp(done / total_, 0.0, 1.0);
   const int filled = static_cast<int>(fraction * kWidth);
   const double elapsed = std::chrono::duration<double>(now - start_).count();
   std::string eta;
