@@ -29,12 +29,6 @@ struct DtwCommandOptions {
   bool json = false;
 };
 
-analysis::Normalization parseNormalization(const std::string& text) {
-  if (text == "paper") return analysis::Normalization::kPaper;
-  if (text == "zscore") return analysis::Normalization::kZScore;
-  return analysis::Normalization::kNone;
-}
-
 std::vector<std::string> splitList(const std::string& text) {
   std::vector<std::string> out;
   std::stringstream in(text);
@@ -46,9 +40,8 @@ std::vector<std::string> splitList(const std::string& text) {
 
 /// --score: the paper's two scores through the one scorer the report and the studio use.
 void runScore(const DtwCommandOptions& opt, const HapticProfile& expert, const HapticProfile& trial) {
-  const analysis::TrialScorer scorer(expert, {.normalization = parseNormalization(opt.preprocess),
-                                              .cost = opt.cost == "sq" ? analysis::DtwCost::kSquared
-                                                                       : analysis::DtwCost::kAbsolute,
+  const analysis::TrialScorer scorer(expert, {.normalization = analysis::parseNormalization(opt.preprocess),
+                                              .cost = analysis::parseDtwCost(opt.cost),
                                               .band_fraction = opt.band});
   const analysis::TrialScore s = scorer.score(trial);
   const analysis::TimeSpan span = analysis::writingSpan(trial);
@@ -74,9 +67,9 @@ void runDtw(const DtwCommandOptions& opt) {
   const std::vector<std::string> channels = splitList(opt.channels);
   HATTR_THROW_UNLESS(!channels.empty(), "--channels: expected a comma-separated list such as x,y,z,fx,fy,fz, got \"{}\"",
                      opt.channels);
-  analysis::DtwOptions dtw{.cost = opt.cost == "sq" ? analysis::DtwCost::kSquared : analysis::DtwCost::kAbsolute,
+  analysis::DtwOptions dtw{.cost = analysis::parseDtwCost(opt.cost),
                            .band_fraction = opt.band, .want_path = opt.path};
-  const auto normalization = parseNormalization(opt.preprocess);
+  const auto normalization = analysis::parseNormalization(opt.preprocess);
 
   // The paper's preprocessing: B onto A's time steps, each normalized; then DTW per channel.
   const std::vector<double> a_t = a.channel(Channel::kTime);

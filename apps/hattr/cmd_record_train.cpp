@@ -1,6 +1,5 @@
 // hattr record | train: one trial through the whole pipeline, written as a haptic profile.
 
-#include <algorithm>
 #include <iostream>
 
 #include <fmt/format.h>
@@ -71,26 +70,26 @@ void runTrialCommand(const TrialOptions& opt, bool training) {
   device::ProfileHandScript hand(script);
   session::TrialEnvironment env(opt.device, worldConfigOrDefault(opt.world), opt.rate_hz);
 
-  session::TrialSetup setup;
-  setup.duration_s = hand.duration_s() + opt.tail_s;
-  if (opt.pen_up_end_s > 0.0) {  // the trial ends when the writer is done
-    setup.pen_up_end_s = opt.pen_up_end_s;
-    setup.duration_s = opt.max_duration_s > 0.0 ? opt.max_duration_s : std::min(3.0 * hand.duration_s(), 3600.0);
-  }
-  setup.clock = opt.clock == "sim" ? session::Clock::kSimulated : session::Clock::kRealTime;
-  setup.metadata.subject = opt.subject.empty() ? (training ? "trainee" : "expert") : opt.subject;
-  setup.metadata.skill = opt.skill.empty() ? script.metadata().skill : opt.skill;
-  setup.metadata.extra["hand_script"] = opt.hand;
+  session::ScriptedTrialOptions scripted{.rate_hz = opt.rate_hz,
+                                         .tail_s = opt.tail_s,
+                                         .pen_up_end_s = opt.pen_up_end_s,
+                                         .max_duration_s = opt.max_duration_s,
+                                         .clock = opt.clock == "sim" ? session::Clock::kSimulated
+                                                                     : session::Clock::kRealTime,
+                                         .subject = opt.subject,
+                                         .skill = opt.skill,
+                                         .hand_label = opt.hand};
+  HapticProfile expert;
   if (training) {
-    const HapticProfile expert = io::readProfileCsv(opt.reference);
-    setup.reference = std::make_shared<guidance::ReferenceTrajectory>(expert, opt.rate_hz);
-    setup.guidance.mode = guidance::parseMode(opt.mode);
-    setup.guidance.playback.indexing = guidance::parseIndexing(opt.indexing);
-    setup.guidance.playback.speed = opt.speed;
-    setup.metadata.extra["reference"] = opt.reference;
-    setup.metadata.extra["trial"] = fmt::format("{}", opt.trial);
-    if (setup.metadata.skill.empty()) setup.metadata.skill = expert.metadata().skill;
+    expert = io::readProfileCsv(opt.reference);
+    scripted.expert = &expert;
+    scripted.reference_label = opt.reference;
+    scripted.mode = guidance::parseMode(opt.mode);
+    scripted.indexing = guidance::parseIndexing(opt.indexing);
+    scripted.speed = opt.speed;
+    scripted.trial = opt.trial;
   }
+  const session::TrialSetup setup = session::scriptedTrialSetup(hand, script, scripted);
   const session::TrialResult result = session::runTrial(env, setup, hand);
   for (const auto& c : result.clamps) std::cerr << "hattr: clamped: " << c << '\n';
   // A trial the device broke off keeps what it recorded (marked failed) and exits 1.

@@ -62,16 +62,6 @@ nlohmann::json statusJson(const session::StudyDatabase& db) {
           {"trials_interrupted", interrupted}, {"trials_running", running}, {"runner_active", runner_active}};
 }
 
-std::unique_ptr<session::Participant> makeParticipant(const session::SubjectRecord& subject, const HapticProfile& expert) {
-  if (subject.spec.participant == "script") return session::makeScriptParticipant(subject, expert);
-  if (subject.spec.participant == "simulated") return sim::makeSimulatedParticipant(subject, expert);
-  if (subject.spec.participant == "person") {
-    throw InputError(fmt::format("subject {} is a person: run their trials from the studio (hattr studio)", subject.id));
-  }
-  throw InputError(fmt::format("subject {}: participant \"{}\" is not available in this build", subject.id,
-                               subject.spec.participant));
-}
-
 void runInit(const StudyOptions& opt) {
   const session::StudyDefinition study = session::loadStudy(opt.study_file);
   const session::StudyDatabase db = session::StudyDatabase::create(opt.db, study);
@@ -93,7 +83,7 @@ int trialsToRun(const session::StudyDatabase& db, const StudyOptions& opt) {
 
 void runRun(const StudyOptions& opt) {
   session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kRunner);
-  session::StudyRunner runner(db, makeParticipant);
+  session::StudyRunner runner(db, sim::makeUnattendedParticipant);
   session::RunOptions run{.only_subject = opt.subject,
                           .clock = opt.clock == "sim" ? session::Clock::kSimulated : session::Clock::kRealTime,
                           .max_trials = opt.max_trials};

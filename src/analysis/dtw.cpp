@@ -17,6 +17,14 @@
 #include "hattr/core/error.hpp"
 
 namespace hattr::analysis {
+
+std::string_view dtwCostName(DtwCost cost) { return cost == DtwCost::kSquared ? "sq" : "abs"; }
+
+DtwCost parseDtwCost(std::string_view name) {
+  if (name == "abs") return DtwCost::kAbsolute;
+  if (name == "sq") return DtwCost::kSquared;
+  throw InputError(fmt::format("DTW cost \"{}\": expected abs or sq", name));
+}
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();

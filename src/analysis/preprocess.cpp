@@ -10,6 +10,22 @@
 #include "hattr/core/error.hpp"
 
 namespace hattr::analysis {
+
+std::string_view normalizationName(Normalization how) {
+  switch (how) {
+    case Normalization::kPaper: return "paper";
+    case Normalization::kZScore: return "zscore";
+    case Normalization::kNone: return "none";
+  }
+  return "none";
+}
+
+Normalization parseNormalization(std::string_view name) {
+  for (const Normalization how : {Normalization::kPaper, Normalization::kZScore, Normalization::kNone}) {
+    if (name == normalizationName(how)) return how;
+  }
+  throw InputError(fmt::format("normalization \"{}\": expected paper, zscore or none", name));
+}
 namespace {
 
 // Non-empty and finite; `what` names the function and the series.

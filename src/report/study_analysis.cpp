@@ -200,11 +200,9 @@ nlohmann::json analysisToJson(const StudyAnalysis& a) {
                        {"disturbed", f.disturbed}, {"disturbed_attempts", f.disturbed_attempts},
                        {"analyzed", f.analyzed}});
   }
-  const char* norm = a.options.normalization == analysis::Normalization::kPaper    ? "paper"
-                     : a.options.normalization == analysis::Normalization::kZScore ? "zscore"
-                                                                                    : "none";
   return {{"options",
-           {{"normalization", norm}, {"cost_fn", a.options.cost == analysis::DtwCost::kAbsolute ? "abs" : "sq"},
+           {{"normalization", analysis::normalizationName(a.options.normalization)},
+            {"cost_fn", analysis::dtwCostName(a.options.cost)},
             {"band", number(a.options.band_fraction < 0 ? NAN : a.options.band_fraction)}}},
           {"analyzed_recall_trials", a.analyzed_recall_trials},
           {"disturbed_policy", a.disturbed_policy},

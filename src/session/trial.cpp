@@ -1,5 +1,6 @@
 #include "hattr/session/trial.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <thread>
 
@@ -188,6 +189,34 @@ void noteTrialEnd(TrialResult& result, Recorder& recorder, bool stopped) {
     extra["writing_begin_s"] = fmt::format("{}", result.writing_begin_s);
     extra["writing_end_s"] = fmt::format("{}", result.writing_end_s);
   }
+}
+
+TrialSetup scriptedTrialSetup(const device::ProfileHandScript& hand, const HapticProfile& script,
+                              const ScriptedTrialOptions& options) {
+  TrialSetup setup;
+  // The end: the script's length plus the tail, or the end rule with its longest trial.
+  setup.duration_s = hand.duration_s() + options.tail_s;
+  if (options.pen_up_end_s > 0.0) {
+    setup.pen_up_end_s = options.pen_up_end_s;
+    setup.duration_s = options.max_duration_s > 0.0 ? options.max_duration_s
+                                                     : std::min(3.0 * hand.duration_s(), 3600.0);
+  }
+  setup.clock = options.clock;
+  // What the recording says about itself.
+  const bool training = options.expert != nullptr;
+  setup.metadata.subject = !options.subject.empty() ? options.subject : training ? "trainee" : "expert";
+  setup.metadata.skill = options.skill.empty() ? script.metadata().skill : options.skill;
+  setup.metadata.extra["hand_script"] = options.hand_label;
+  if (!training) return setup;
+  // Training: the expert resampled at the servo rate, and the mode's guidance.
+  setup.reference = std::make_shared<guidance::ReferenceTrajectory>(*options.expert, options.rate_hz);
+  setup.guidance.mode = options.mode;
+  setup.guidance.playback.indexing = options.indexing;
+  setup.guidance.playback.speed = options.speed;
+  setup.metadata.extra["reference"] = options.reference_label;
+  setup.metadata.extra["trial"] = fmt::format("{}", options.trial);
+  if (setup.metadata.skill.empty()) setup.metadata.skill = options.expert->metadata().skill;
+  return setup;
 }
 
 TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::HandScript& hand) {

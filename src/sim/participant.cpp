@@ -62,4 +62,15 @@ std::unique_ptr<session::Participant> makeSimulatedParticipant(const session::Su
   return makeSimulatedParticipant(subject, expert, loadTraineeModel(model_file));
 }
 
+std::unique_ptr<session::Participant> makeUnattendedParticipant(const session::SubjectRecord& subject,
+                                                                const HapticProfile& expert) {
+  if (subject.spec.participant == "script") return session::makeScriptParticipant(subject, expert);
+  if (subject.spec.participant == "simulated") return makeSimulatedParticipant(subject, expert);
+  if (subject.spec.participant == "person") {
+    throw InputError(fmt::format("subject {} is a person: run their trials from the studio (hattr studio)", subject.id));
+  }
+  throw InputError(fmt::format("subject {}: participant \"{}\" is not available in this build", subject.id,
+                               subject.spec.participant));
+}
+
 }  // namespace hattr::sim

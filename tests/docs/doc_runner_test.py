@@ -63,6 +63,43 @@ class DocRunner(unittest.TestCase):
         self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
         self.assertIn("page.md:5: command failed (exit 2): hattr world check no-such-file.json", r.stderr)
 
+    def test_python_blocks_run_in_order_with_the_shell_blocks_and_their_output_is_checked(self):
+        r = run_page("""\
+            ```sh
+            echo 0.5 > half.txt
+            ```
+
+            ```python
+            import pathlib
+            value = float(pathlib.Path("half.txt").read_text())
+            print(f"twice is {2 * value}")
+            pathlib.Path("one.txt").write_text(str(2 * value))
+            ```
+
+            ```output
+            twice is 1.0
+            ```
+
+            ```sh
+            test "$(cat one.txt)" = 1.0
+            ```
+            """)
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        self.assertIn("3 block(s) run", r.stdout)
+
+    def test_a_failing_python_block_names_its_first_line(self):
+        r = run_page("""\
+            # Title
+
+            ```python
+            x = 1
+            raise ValueError("no such trial")
+            ```
+            """)
+        self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+        self.assertIn("page.md:4", r.stdout + r.stderr)
+        self.assertIn("no such trial", r.stdout + r.stderr)
+
     def test_a_renamed_command_fails(self):
         r = run_page("""\
             ```sh

@@ -7,7 +7,10 @@ The page's fenced blocks say what they are by their info string:
                (variables and files carry from block to block). A block whose first line is
                "# not runnable here: REASON", or right below the comment line
                "<!-- not runnable here: REASON -->", is skipped, and REASON is printed.
-  ```output    lines the sh block just above prints, in order, each a whole line (leading and
+  ```python    a Python script, run after the sh blocks above it and before those below, by the
+               interpreter running this one, with the build's hattr package importable; each
+               python block runs on its own (define what it uses). Skipped as a sh block is.
+  ```output    lines the sh or python block just above prints, in order, each a whole line (leading and
                trailing blanks aside); "..." stands for any text (numbers that change from run
                to run; a line's start or end).
   ```synopsis  usage lines ("hattr CMD [--option ...]"): each command must exist and each
@@ -42,6 +45,7 @@ from pathlib import Path
 
 SKIP_MARK = re.compile(r"^(?:#\s*)?not runnable here(?: as written)?:\s*(.*)$")
 COMMAND_START = re.compile(r"^\s*(\$?hattr\b|build/|\./|make\b|cmake\b|ctest\b|python3?\b|time\b|/usr/bin/|cd\b|sudo\b|apt(-get)?\b)")
+RUNNABLE_LABELS = {"sh", "python"}  # run in order; python blocks by the interpreter running this script
 SHELL_LABELS = {"bash", "shell", "console", "zsh", "shell-session", "sh-session"}
 COMMAND_WORD = re.compile(r"^[a-z][a-z0-9-]*$")
 OPTION = re.compile(r"(?<![\w-])(--[a-z][a-z0-9-]*)")
@@ -53,7 +57,7 @@ class Block:
     info: str            # the info string's first word ("" when unlabelled)
     line: int            # 1-based line of the opening fence
     lines: list[str]     # the content
-    after_sh: bool = False  # directly below a sh block (blank lines between at most)
+    after_sh: bool = False  # directly below a sh or python block (blank lines between at most)
     note: str = ""          # the line just above the fence when it is an HTML comment
 
     def content_line(self, i: int) -> int:
@@ -92,7 +96,7 @@ def parse_page(path: Path, name: str) -> Page:
             raise PageError(f"{name}:{i + 1}: a fenced block is never closed")
         blank_between = all(not t.strip() for t in text[last_block_end + 1:i])
         above = text[i - 1].strip() if i > 0 else ""
-        block = Block(opening.group(3).lower(), i + 1, text[i + 1:j], blank_between and last_kind == "sh",
+        block = Block(opening.group(3).lower(), i + 1, text[i + 1:j], blank_between and last_kind in RUNNABLE_LABELS,
                       above if above.startswith("<!--") else "")
         page.blocks.append(block)
         last_block_end, last_kind = j, block.info
@@ -111,8 +115,8 @@ def check_page_form(page: Page) -> None:
             raise PageError(f"{page.name}:{b.line}: an unlabelled block starts like a command "
                             f"({first.strip()!r}): label it sh (run), synopsis (usage) or output")
         if b.info == "output" and not b.after_sh:
-            raise PageError(f"{page.name}:{b.line}: an output block must follow a sh block (blank lines between at most)")
-        if b.info == "sh" and skip_reason(b) == "":
+            raise PageError(f"{page.name}:{b.line}: an output block must follow a sh or python block (blank lines between at most)")
+        if b.info in RUNNABLE_LABELS and skip_reason(b) == "":
             raise PageError(f"{page.name}:{b.line}: \"not runnable here\" needs its reason")
 
 
@@ -153,6 +157,8 @@ def make_scratch(source: Path, hattr: Path, build: Path, shared: Path | None) ->
         for program in sorted((build / sub).glob(pattern)) if (build / sub).is_dir() else []:
             if program.is_file():
                 shutil.copy2(program, release / sub / program.name)
+    if (build / "python" / "hattr").is_dir():  # the Python package, for python blocks
+        shutil.copytree(build / "python", release / "python")
     if shared is not None and shared.is_dir():
         (root / "shared").symlink_to(shared)
     (root / "bin").mkdir()
@@ -190,6 +196,13 @@ def build_script(page: Page, runnable: list[tuple[int, Block]], out_dir: Path, f
     for k, block in runnable:
         lines.append(f"echo {k} > {shlex.quote(str(out_dir / 'current'))}")
         lines.append("{")
+        if block.info == "python":  # the whole block is one script for the interpreter running this one
+            lines.append(f"{shlex.quote(sys.executable)} - <<'__HATTR_DOC_PYTHON__'")
+            page_line[len(lines)] = block.content_line(0)
+            lines += block.lines
+            lines.append("__HATTR_DOC_PYTHON__")
+            lines.append(f"}} > {shlex.quote(str(out_dir / f'{k}.txt'))} 2>&1")
+            continue
         command_start = None
         for i, text in enumerate(block.lines):
             lines.append(text)
@@ -292,7 +305,7 @@ def run_page(args: argparse.Namespace) -> int:
     runnable = []
     data_absent = 0
     for k, b in enumerate(page.blocks):
-        if b.info != "sh":
+        if b.info not in RUNNABLE_LABELS:
             continue
         reason = skip_reason(b)
         if reason is not None:
@@ -315,6 +328,8 @@ def run_page(args: argparse.Namespace) -> int:
         env.pop("TERM", None)
         # Benchmarks run briefly: the page's commands are checked, not its figures.
         env["BENCHMARK_MIN_TIME"] = "0.001"
+        # python blocks import the build's package (copied into the scratch clone).
+        env["PYTHONPATH"] = str(clone / "build" / "release" / "python")
         for b in page.blocks:
             if b.info == "synopsis":
                 failures += synopsis_failures(page, b, hattr, env, clone)

@@ -19,6 +19,7 @@
 #include <limits>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace hattr::analysis {
@@ -28,6 +29,11 @@ enum class DtwCost {
   kAbsolute,  ///< |x - y|, the paper's metric (default)
   kSquared,   ///< (x - y)^2
 };
+
+/// The name of a local cost as files, the CLI and Python spell it: "abs", "sq".
+[[nodiscard]] std::string_view dtwCostName(DtwCost cost);
+/// The cost with that name; throws InputError listing the names otherwise.
+[[nodiscard]] DtwCost parseDtwCost(std::string_view name);
 
 /// Options of every DTW function.
 struct DtwOptions {

@@ -10,6 +10,7 @@
 /// throws hattr::InputError saying which series, which index, what was expected and got.
 
 #include <span>
+#include <string_view>
 #include <vector>
 
 namespace hattr::analysis {
@@ -25,6 +26,11 @@ enum class Normalization {
   /// Values unchanged.
   kNone,
 };
+
+/// The name of a normalization as files, the CLI and Python spell it: "paper", "zscore", "none".
+[[nodiscard]] std::string_view normalizationName(Normalization how);
+/// The normalization with that name; throws InputError listing the names otherwise.
+[[nodiscard]] Normalization parseNormalization(std::string_view name);
 
 /// The values normalized as `how` says. Throws InputError if empty or not all finite.
 [[nodiscard]] std::vector<double> normalize(std::span<const double> values, Normalization how);

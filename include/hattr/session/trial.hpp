@@ -188,6 +188,31 @@ ProfileMetadata trialMetadata(ProfileMetadata base, const TrialEnvironment& envi
 /// (end_reason, writing_begin_s, writing_end_s). runTrial and the studio's live rig use it.
 void noteTrialEnd(TrialResult& result, Recorder& recorder, bool stopped);
 
+/// A trial of a hand script, as `hattr record`, `hattr train` and Python's hattr.run_trial set
+/// it up. Without an expert it records (no guidance); with one it trains in `mode`.
+struct ScriptedTrialOptions {
+  double rate_hz = 1000.0;       ///< the servo rate the reference is resampled to [Hz]
+  double tail_s = 0.3;           ///< without an end rule: recorded this long after the script [s]
+  double pen_up_end_s = 0.0;     ///< > 0: the end rule (TrialSetup::pen_up_end_s) [s]
+  double max_duration_s = 0.0;   ///< with the end rule: the longest trial [s] (0: 3 x the script)
+  Clock clock = Clock::kSimulated;
+  std::string subject;           ///< "" : "expert" when recording, "trainee" when training
+  std::string skill;             ///< "" : the script's skill, else the expert's
+  std::string hand_label;        ///< recorded as metadata `hand_script` (a file name)
+  const HapticProfile* expert = nullptr;  ///< the reference to train against; null: record
+  std::string reference_label;   ///< recorded as metadata `reference`
+  guidance::TrainingMode mode = guidance::TrainingMode::kBasic;
+  guidance::Indexing indexing = guidance::Indexing::kTime;
+  double speed = 1.0;            ///< reference playback speed (time indexing)
+  int trial = 0;                 ///< trial number recorded when training
+};
+
+/// The set-up of a scripted trial: its duration (the script's plus the tail, or the end rule's
+/// maximum), clock, metadata, and when training, the reference and the mode's guidance. Throws
+/// InputError for a bad expert profile.
+TrialSetup scriptedTrialSetup(const device::ProfileHandScript& hand, const HapticProfile& script,
+                              const ScriptedTrialOptions& options);
+
 /// Runs one trial: the settle phase, then recorded until the end rule (pen_up_end_s), the
 /// stop request (real time) or `duration_s`, whichever comes first. A simulated pen starts 3 mm
 /// above the hand's first target. On a real-time clock the trial ends early, with

@@ -25,4 +25,11 @@ std::unique_ptr<session::Participant> makeSimulatedParticipant(const session::Su
 std::unique_ptr<session::Participant> makeSimulatedParticipant(const session::SubjectRecord& subject,
                                                                const HapticProfile& expert, const TraineeModel& model);
 
+/// The participant a study runs without a person at the pen, by the subject's `participant`:
+/// "script" (session::makeScriptParticipant) or "simulated" (above). A "person" is refused
+/// (their trials run from the studio), as is any other kind: InputError naming the subject.
+/// `hattr study run` and Python's hattr.run_study use it.
+std::unique_ptr<session::Participant> makeUnattendedParticipant(const session::SubjectRecord& subject,
+                                                                const HapticProfile& expert);
+
 }  // namespace hattr::sim

@@ -1,0 +1,129 @@
+// Simulation from Python: one trial on the simulated pen (a hand script, a mode, simulated
+// time), as `hattr record` and `hattr train` run it, and the paper's whole study in silico,
+// as `hattr demo` runs it.
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include "bindings.hpp"
+#include "hattr/core/error.hpp"
+#include "hattr/io/profile_csv.hpp"
+#include "hattr/report/study_analysis.hpp"
+#include "hattr/session/trial.hpp"
+#include "hattr/sim/in_silico.hpp"
+
+namespace hattr::python {
+namespace {
+
+/// A profile given as a HapticProfile or a file; `label` becomes the file's name when it is one.
+HapticProfile profileOf(const py::object& given, std::string& label) {
+  if (py::isinstance<HapticProfile>(given)) return given.cast<HapticProfile>();
+  const auto path = given.cast<std::filesystem::path>();
+  if (label.empty()) label = path.string();
+  return io::readProfileCsv(path);
+}
+
+/// A world configuration: the defaults (None), a dict of the world file's JSON, or a file.
+render::WorldConfig worldOf(const py::object& world) {
+  if (world.is_none()) return {};
+  if (py::isinstance<py::dict>(world)) return render::parseWorldConfig(fromPython(world).dump(), "world dict");
+  return render::loadWorldConfig(world.cast<std::filesystem::path>());
+}
+
+session::Clock clockOf(const std::string& clock) {
+  if (clock == "sim") return session::Clock::kSimulated;
+  if (clock == "real") return session::Clock::kRealTime;
+  throw InputError(fmt::format("run_trial: clock \"{}\": expected sim or real", clock));
+}
+
+py::dict trialRecord(session::TrialResult result) {
+  return py::dict(py::arg("profile") = std::move(result.profile), py::arg("clamps") = result.clamps,
+                  py::arg("ticks") = result.ticks, py::arg("missed_samples") = result.missed_samples,
+                  py::arg("overruns") = result.overruns, py::arg("faults") = result.faults,
+                  py::arg("link_faults") = result.link_faults, py::arg("stalls") = result.stalls,
+                  py::arg("clock") = result.clock, py::arg("end_reason") = result.end_reason,
+                  py::arg("failure") = result.failure);
+}
+
+}  // namespace
+
+void bindSimulation(py::module_& m) {
+  m.def(
+      "run_trial",
+      [](const py::object& hand, const py::object& reference, const std::string& mode, const py::object& world,
+         const std::string& device, double rate_hz, const std::string& clock, double tail_s, double pen_up_end_s,
+         double max_duration_s, const std::string& indexing, double speed, const std::string& subject,
+         const std::string& skill, int trial) {
+        session::ScriptedTrialOptions options{.rate_hz = rate_hz, .tail_s = tail_s, .pen_up_end_s = pen_up_end_s,
+                                              .max_duration_s = max_duration_s, .clock = clockOf(clock),
+                                              .subject = subject, .skill = skill};
+        const HapticProfile script = profileOf(hand, options.hand_label);
+        std::optional<HapticProfile> expert;
+        if (!reference.is_none()) {
+          expert = profileOf(reference, options.reference_label);
+          options.expert = &*expert;
+          options.mode = guidance::parseMode(mode);
+          options.indexing = guidance::parseIndexing(indexing);
+          options.speed = speed;
+          options.trial = trial;
+        } else {
+          HATTR_THROW_UNLESS(guidance::parseMode(mode) == guidance::TrainingMode::kBasic,
+                             "run_trial: mode {} needs a reference (the expert's profile)", mode);
+        }
+        render::WorldConfig world_config = worldOf(world);
+        session::TrialResult result;
+        {
+          py::gil_scoped_release unlocked;
+          device::ProfileHandScript hand_script(script);
+          session::TrialEnvironment environment(device, std::move(world_config), rate_hz);
+          const session::TrialSetup setup = session::scriptedTrialSetup(hand_script, script, options);
+          result = session::runTrial(environment, setup, hand_script);
+        }
+        return trialRecord(std::move(result));
+      },
+      py::arg("hand"), py::arg("reference") = py::none(), py::arg("mode") = "basic", py::kw_only(),
+      py::arg("world") = py::none(), py::arg("device") = "sim://pen", py::arg("rate_hz") = 1000.0,
+      py::arg("clock") = "sim", py::arg("tail_s") = 0.3, py::arg("pen_up_end_s") = 0.0,
+      py::arg("max_duration_s") = 0.0, py::arg("indexing") = "time", py::arg("speed") = 1.0,
+      py::arg("subject") = "", py::arg("skill") = "", py::arg("trial") = 0,
+      "One trial as `hattr train` (with a reference) or `hattr record` (without) runs it: the simulated hand "
+      "writes `hand` (a HapticProfile or a profile file) on the paper, with the mode's guidance toward "
+      "`reference` ('basic', 'pcontrol', 'alpha'). Simulated time unless clock='real'. The trial lasts the "
+      "script plus tail_s [s], or with pen_up_end_s > 0 [s] ends once the pen has been up that long. world: "
+      "None (defaults), a dict or a world file. Returns {profile, clamps, ticks, missed_samples, overruns, "
+      "faults, link_faults, stalls, clock, end_reason, failure}. Releases the GIL.");
+
+  m.def(
+      "simulate_study",
+      [](const std::filesystem::path& out_dir, int subjects, std::uint64_t seed, int training_trials,
+         int recall_trials, bool guidance, const std::string& glyph, bool write_report) {
+        const sim::InSilicoOptions options{.out_dir = out_dir, .glyph = glyph, .subjects = subjects, .seed = seed,
+                                           .training_trials = training_trials, .recall_trials = recall_trials,
+                                           .guidance = guidance, .write_report = write_report};
+        sim::InSilicoResult result;
+        nlohmann::json analysis;
+        {
+          py::gil_scoped_release unlocked;
+          result = sim::runInSilicoStudy(options);
+          analysis = report::analysisToJson(result.analysis);
+        }
+        return py::dict(py::arg("database") = result.database,
+                        py::arg("report_html") = result.report_html.empty() ? py::none() : py::cast(result.report_html),
+                        py::arg("trials") = result.trials, py::arg("servo_ticks") = result.servo_ticks,
+                        py::arg("analysis") = toPython(analysis));
+      },
+      py::arg("out_dir"), py::kw_only(), py::arg("subjects") = 10, py::arg("seed") = 1,
+      py::arg("training_trials") = 11, py::arg("recall_trials") = 11, py::arg("guidance") = true,
+      py::arg("glyph") = "na", py::arg("write_report") = true,
+      "The paper's study in silico, as `hattr demo`: the simulated expert, a study with the paper's protocol, "
+      "simulated trainees through the real pipeline, the analysis and (write_report) the report, all in out_dir "
+      "(an existing study there is kept under a new name). guidance=False is the A/A check. Returns {database, "
+      "report_html, trials, servo_ticks, analysis}. Releases the GIL.");
+}
+
+}  // namespace hattr::python

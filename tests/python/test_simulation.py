@@ -1,0 +1,58 @@
+"""Trials on the simulated pen from Python: the same recording as the hattr command's, bit for bit."""
+
+import numpy as np
+import pytest
+
+import hattr
+from conftest import run_cli
+
+# Metadata that differs between two runs of one trial: when it was made.
+VOLATILE = {"created_utc"}
+
+
+def assert_same_recording(mine, theirs):
+    assert len(mine) == len(theirs)
+    for name in theirs.channel_names:
+        np.testing.assert_array_equal(mine.channel(name), theirs.channel(name), err_msg=name)
+    strip = lambda m: {k: v for k, v in m.items() if k not in VOLATILE}  # noqa: E731
+    assert strip(mine.metadata) == strip(theirs.metadata)
+
+
+@pytest.mark.parametrize("mode", ["basic", "pcontrol", "alpha"])
+def test_a_training_trial_through_python_equals_one_through_the_cli(tmp_path, expert_files, mode):
+    expert, script = expert_files
+    run_cli("train", "--hand", script, "--reference", expert, "--mode", mode, "--trial", 3, "--subject", "S01",
+            "-o", tmp_path / "cli.csv")
+    run = hattr.run_trial(str(script), str(expert), mode, trial=3, subject="S01")
+    assert run["clock"] == "simulated" and run["failure"] == ""
+    assert_same_recording(run["profile"], hattr.read_profile(tmp_path / "cli.csv"))
+    guided = np.abs(run["profile"].f_guide_W_N).max()
+    assert (guided == 0.0) == (mode == "basic")
+
+
+def test_a_recording_with_the_end_rule_equals_the_clis(tmp_path, expert_files):
+    _, script = expert_files
+    run_cli("record", "--hand", script, "--pen-up-end", 0.5, "--rate", 2000, "-o", tmp_path / "cli.csv")
+    run = hattr.run_trial(str(script), pen_up_end_s=0.5, rate_hz=2000.0)
+    assert run["end_reason"] == "pen lifted"
+    assert_same_recording(run["profile"], hattr.read_profile(tmp_path / "cli.csv"))
+
+
+def test_profiles_in_memory_drive_the_same_trial_as_their_files(expert_files):
+    expert, script = expert_files
+    from_files = hattr.run_trial(str(script), str(expert), "alpha")["profile"]
+    from_objects = hattr.run_trial(hattr.read_profile(script), hattr.read_profile(expert), "alpha")["profile"]
+    for name in from_files.channel_names:
+        np.testing.assert_array_equal(from_objects.channel(name), from_files.channel(name), err_msg=name)
+
+
+def test_bad_trial_settings_raise_input_error(expert_files):
+    expert, script = expert_files
+    with pytest.raises(hattr.InputError, match="needs a reference"):
+        hattr.run_trial(str(script), mode="alpha")
+    with pytest.raises(hattr.InputError, match="basic, pcontrol, alpha"):
+        hattr.run_trial(str(script), str(expert), "gamma")
+    with pytest.raises(hattr.InputError):
+        hattr.run_trial(str(script), device="bogus://pen")
+    with pytest.raises(hattr.InputError, match="sim or real"):
+        hattr.run_trial(str(script), clock="wall")
