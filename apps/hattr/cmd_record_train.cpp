@@ -74,8 +74,7 @@ void runTrialCommand(const TrialOptions& opt, bool training) {
                                          .tail_s = opt.tail_s,
                                          .pen_up_end_s = opt.pen_up_end_s,
                                          .max_duration_s = opt.max_duration_s,
-                                         .clock = opt.clock == "sim" ? session::Clock::kSimulated
-                                                                     : session::Clock::kRealTime,
+                                         .clock = session::parseClock(opt.clock),
                                          .subject = opt.subject,
                                          .skill = opt.skill,
                                          .hand_label = opt.hand};

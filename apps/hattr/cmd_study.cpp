@@ -85,7 +85,7 @@ void runRun(const StudyOptions& opt) {
   session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kRunner);
   session::StudyRunner runner(db, sim::makeUnattendedParticipant);
   session::RunOptions run{.only_subject = opt.subject,
-                          .clock = opt.clock == "sim" ? session::Clock::kSimulated : session::Clock::kRealTime,
+                          .clock = session::parseClock(opt.clock),
                           .max_trials = opt.max_trials};
   // The expert's station for the mentored modes' training trials (the study file's mentor).
   const session::StudyDefinition& study = db.study();

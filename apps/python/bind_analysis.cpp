@@ -2,12 +2,9 @@
 // two-way ANOVA and Tukey's HSD. Long calls release the GIL, so Python threads run them in
 // parallel. Statistics come back as plain records (dicts) that pandas.DataFrame takes as they are.
 
-#include <algorithm>
 #include <limits>
 #include <optional>
-#include <semaphore>
 #include <span>
-#include <thread>
 #include <string>
 #include <vector>
 
@@ -25,7 +22,7 @@
 namespace hattr::python {
 namespace {
 
-using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using Array = FloatArray;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 /// A 1-D float64 array's values, without copying (the array outlives the call that reads them).
@@ -33,23 +30,6 @@ std::span<const double> valuesOf(const Array& array, std::string_view name) {
   HATTR_THROW_UNLESS(array.ndim() == 1, "{}: expected a one-dimensional array; got {} dimensions", name, array.ndim());
   return {array.data(), static_cast<std::size_t>(array.size())};
 }
-
-/// A core to compute on. Python threads that call DTW at once run at most one per hardware thread
-/// and the others wait (without the GIL): more at once only time-slice the cores and evict each
-/// other's rows from the caches (measured: 4 threads on 2 cores 1.56x one thread, 2 threads 1.93x).
-class ComputeSlot {
- public:
-  ComputeSlot() { slots().acquire(); }
-  ~ComputeSlot() { slots().release(); }
-  ComputeSlot(const ComputeSlot&) = delete;
-  ComputeSlot& operator=(const ComputeSlot&) = delete;
-
- private:
-  static std::counting_semaphore<>& slots() {
-    static std::counting_semaphore<> free_slots(std::max<std::ptrdiff_t>(1, std::thread::hardware_concurrency()));
-    return free_slots;
-  }
-};
 
 /// Many 1-D arrays as the library's series. Reads the arrays' memory only: call it with the GIL
 /// released, while the arrays (held by the caller's arguments) are alive.
@@ -60,30 +40,35 @@ std::vector<std::vector<double>> seriesOf(const std::vector<Array>& arrays) {
   return series;
 }
 
-/// Every array one-dimensional (InputError naming the argument and index otherwise).
-void checkOneDimensional(const std::vector<Array>& arrays, std::string_view name) {
-  for (std::size_t i = 0; i < arrays.size(); ++i) {
-    HATTR_THROW_UNLESS(arrays[i].ndim() == 1, "{}[{}]: expected a one-dimensional array; got {} dimensions", name, i,
-                       arrays[i].ndim());
+/// A sequence of numeric series as float64 arrays, each checked (InputError naming name[i]).
+std::vector<Array> arraysOf(const py::sequence& sequence, std::string_view name) {
+  HATTR_THROW_UNLESS(!py::isinstance<py::str>(sequence), "{}: expected a sequence of series, got a string", name);
+  std::vector<Array> arrays;
+  for (std::size_t i = 0; i < sequence.size(); ++i) {
+    const std::string item = fmt::format("{}[{}]", name, i);
+    arrays.push_back(floatArray(sequence[i], item));
+    HATTR_THROW_UNLESS(arrays.back().ndim() == 1, "{}: expected a one-dimensional array; got {} dimensions", item,
+                       arrays.back().ndim());
   }
+  return arrays;
 }
 
 py::array_t<double> toArray(std::vector<double> values) { return py::array_t<double>(py::cast(std::move(values))); }
 
-/// None (no band) as the library's negative band fraction.
-double bandOf(const std::optional<double>& band_fraction) { return band_fraction.value_or(-1.0); }
-
 /// Level names from any iterable (a list, a pandas column of strings or numbers), as text.
-std::vector<std::string> levelsOf(const py::iterable& values) {
+std::vector<std::string> levelsOf(const py::iterable& values, std::string_view name) {
+  HATTR_THROW_UNLESS(!py::isinstance<py::str>(values) && !py::isinstance<py::bytes>(values),
+                     "{}: expected one level per observation (a list or a column), got a string", name);
   std::vector<std::string> out;
   for (const py::handle value : values) out.emplace_back(py::str(value));
   return out;
 }
 
-analysis::TwoWayData twoWayData(const py::iterable& a, const py::iterable& b, const Array& y, const std::string& a_name,
-                                const std::string& b_name) {
-  const std::span<const double> response = valuesOf(y, "y");
-  return {.a_name = a_name, .b_name = b_name, .a = levelsOf(a), .b = levelsOf(b),
+analysis::TwoWayData twoWayData(const py::iterable& a, const py::iterable& b, const py::object& y,
+                                const std::string& a_name, const std::string& b_name) {
+  const Array y_array = floatArray(y, "y");
+  const std::span<const double> response = valuesOf(y_array, "y");
+  return {.a_name = a_name, .b_name = b_name, .a = levelsOf(a, "a"), .b = levelsOf(b, "b"),
           .y = std::vector<double>(response.begin(), response.end())};
 }
 
@@ -108,30 +93,30 @@ analysis::Factor factorOf(const std::string& name, const analysis::TwoWayData& d
 
 void bindPreprocessing(py::module_& m) {
   m.def(
-      "normalize", [](const Array& values, const std::string& how) {
-        return toArray(analysis::normalize(valuesOf(values, "values"), analysis::parseNormalization(how)));
+      "normalize", [](const py::object& values, const std::string& how) {
+        return toArray(analysis::normalize(valuesOf(floatArray(values, "values"), "values"), analysis::parseNormalization(how)));
       },
       py::arg("values"), py::arg("how") = "paper",
       "The values normalized: 'paper' ((x − mean) / (max − min), hattr's reading of the paper), 'zscore' "
       "((x − mean) / sd, R's scale()) or 'none'. Dimensionless (none: unchanged).");
   m.def(
-      "time_scale", [](const Array& trial_t_s, const Array& expert_t_s) {
-        return toArray(analysis::timeScale(valuesOf(trial_t_s, "trial_t_s"), valuesOf(expert_t_s, "expert_t_s")));
+      "time_scale", [](const py::object& trial_t_s, const py::object& expert_t_s) {
+        return toArray(analysis::timeScale(valuesOf(floatArray(trial_t_s, "trial_t_s"), "trial_t_s"), valuesOf(floatArray(expert_t_s, "expert_t_s"), "expert_t_s")));
       },
       py::arg("trial_t_s"), py::arg("expert_t_s"),
       "The trial's time stamps [s] mapped linearly onto the expert's span (first to first, last to last).");
   m.def(
-      "interpolate_at", [](const Array& t_s, const Array& values, const Array& at_t_s) {
-        return toArray(analysis::interpolateAt(valuesOf(t_s, "t_s"), valuesOf(values, "values"),
-                                               valuesOf(at_t_s, "at_t_s")));
+      "interpolate_at", [](const py::object& t_s, const py::object& values, const py::object& at_t_s) {
+        return toArray(analysis::interpolateAt(valuesOf(floatArray(t_s, "t_s"), "t_s"), valuesOf(floatArray(values, "values"), "values"),
+                                               valuesOf(floatArray(at_t_s, "at_t_s"), "at_t_s")));
       },
       py::arg("t_s"), py::arg("values"), py::arg("at_t_s"),
       "Linear interpolation of (t_s, values) at the times at_t_s [s], each within [t_s[0], t_s[-1]].");
   m.def(
       "preprocess_trial",
-      [](const Array& trial_t_s, const Array& trial_values, const Array& expert_t_s, const std::string& how) {
-        return toArray(analysis::preprocessTrial(valuesOf(trial_t_s, "trial_t_s"), valuesOf(trial_values, "trial_values"),
-                                                 valuesOf(expert_t_s, "expert_t_s"), analysis::parseNormalization(how)));
+      [](const py::object& trial_t_s, const py::object& trial_values, const py::object& expert_t_s, const std::string& how) {
+        return toArray(analysis::preprocessTrial(valuesOf(floatArray(trial_t_s, "trial_t_s"), "trial_t_s"), valuesOf(floatArray(trial_values, "trial_values"), "trial_values"),
+                                                 valuesOf(floatArray(expert_t_s, "expert_t_s"), "expert_t_s"), analysis::parseNormalization(how)));
       },
       py::arg("trial_t_s"), py::arg("trial_values"), py::arg("expert_t_s"), py::arg("how") = "paper",
       "The paper's preprocessing of one trial channel: normalized, time-scaled onto the expert's span and "
@@ -141,12 +126,12 @@ void bindPreprocessing(py::module_& m) {
 void bindDtw(py::module_& m) {
   m.def(
       "dtw",
-      [](const Array& a, const Array& b, const std::string& cost, std::optional<double> band_fraction,
+      [](const py::object& a, const py::object& b, const std::string& cost, std::optional<double> band_fraction,
          double abandon_above) {
-        const auto options = dtwOptions(cost, bandOf(band_fraction), abandon_above);
-        const std::span<const double> va = valuesOf(a, "a"), vb = valuesOf(b, "b");
+        const auto options = dtwOptions(cost, band_fraction, abandon_above);
+        const Array a_array = floatArray(a, "a"), b_array = floatArray(b, "b");
+        const std::span<const double> va = valuesOf(a_array, "a"), vb = valuesOf(b_array, "b");
         py::gil_scoped_release unlocked;
-        const ComputeSlot slot;
         return analysis::dtwDistance(va, vb, options);
       },
       py::arg("a"), py::arg("b"), py::kw_only(), py::arg("cost") = "abs", py::arg("band_fraction") = py::none(),
@@ -156,10 +141,11 @@ void bindDtw(py::module_& m) {
       "series' unit (its square for 'sq'). Releases the GIL.");
   m.def(
       "dtw_with_path",
-      [](const Array& a, const Array& b, const std::string& cost, std::optional<double> band_fraction) {
-        auto options = dtwOptions(cost, bandOf(band_fraction), kInfinity);
+      [](const py::object& a, const py::object& b, const std::string& cost, std::optional<double> band_fraction) {
+        auto options = dtwOptions(cost, band_fraction, kInfinity);
         options.want_path = true;
-        const std::span<const double> va = valuesOf(a, "a"), vb = valuesOf(b, "b");
+        const Array a_array = floatArray(a, "a"), b_array = floatArray(b, "b");
+        const std::span<const double> va = valuesOf(a_array, "a"), vb = valuesOf(b_array, "b");
         analysis::DtwResult result;
         {
           py::gil_scoped_release unlocked;
@@ -178,30 +164,28 @@ void bindDtw(py::module_& m) {
       "j into b) from (0, 0) to (len(a) − 1, len(b) − 1). Releases the GIL.");
   m.def(
       "dtw_batch",
-      [](const std::vector<Array>& a, const std::vector<Array>& b, const std::string& cost,
-         std::optional<double> band_fraction, double abandon_above) {
-        const auto options = dtwOptions(cost, bandOf(band_fraction), abandon_above);
-        checkOneDimensional(a, "a");
-        checkOneDimensional(b, "b");
+      [](const py::sequence& a_series, const py::sequence& b_series, const std::string& cost,
+         std::optional<double> band_fraction, double abandon_above, unsigned threads) {
+        const auto options = dtwOptions(cost, band_fraction, abandon_above);
+        const std::vector<Array> a = arraysOf(a_series, "a"), b = arraysOf(b_series, "b");
         std::vector<double> costs;
         {
           py::gil_scoped_release unlocked;
-          const ComputeSlot slot;
-          costs = analysis::dtwBatch(seriesOf(a), seriesOf(b), options);
+          costs = analysis::dtwBatch(seriesOf(a), seriesOf(b), options, threads);
         }
         return toArray(std::move(costs));
       },
       py::arg("a"), py::arg("b"), py::kw_only(), py::arg("cost") = "abs", py::arg("band_fraction") = py::none(),
-      py::arg("abandon_above") = kInfinity,
-      "DTW costs of many pairs: result[p] = dtw(a[p], b[p]). Pairs of equal lengths share SIMD lanes. Float64 "
-      "arrays are read without the GIL (other types are converted first): run batches from several Python "
-      "threads to use every core.");
+      py::arg("abandon_above") = kInfinity, py::arg("threads") = 1,
+      "DTW costs of many pairs: result[p] = dtw(a[p], b[p]). Pairs of equal lengths share SIMD lanes; `threads` "
+      "threads share the pairs (the same costs, to the bit, on any number). Float64 arrays are read without "
+      "the GIL (other types are converted first), so batches from several Python threads also run in parallel.");
   m.def(
       "dtw_cost_matrix",
-      [](const std::vector<Array>& series, const std::string& cost, std::optional<double> band_fraction,
+      [](const py::sequence& series_list, const std::string& cost, std::optional<double> band_fraction,
          unsigned threads) {
-        const auto options = dtwOptions(cost, bandOf(band_fraction), kInfinity);
-        checkOneDimensional(series, "series");
+        const auto options = dtwOptions(cost, band_fraction, kInfinity);
+        const std::vector<Array> series = arraysOf(series_list, "series");
         py::gil_scoped_release unlocked;
         return analysis::dtwCostMatrix(seriesOf(series), options, threads);
       },
@@ -221,7 +205,7 @@ void bindScorer(py::module_& m) {
                        std::optional<double> band_fraction) {
              return analysis::TrialScorer(expert, {.normalization = analysis::parseNormalization(normalization),
                                                    .cost = analysis::parseDtwCost(cost),
-                                                   .band_fraction = bandOf(band_fraction)});
+                                                   .band_fraction = band_fraction.value_or(-1.0)});
            }),
            py::arg("expert"), py::kw_only(), py::arg("normalization") = "paper", py::arg("cost") = "abs",
            py::arg("band_fraction") = py::none())
@@ -238,7 +222,17 @@ void bindScorer(py::module_& m) {
           py::arg("trial"), "One trial's costs: {x, y, z, fx, fy, fz, shape, force}. Releases the GIL.")
       .def(
           "score_all",
-          [](const analysis::TrialScorer& scorer, const std::vector<const HapticProfile*>& trials, unsigned threads) {
+          [](const analysis::TrialScorer& scorer, const py::sequence& trial_list, unsigned threads) {
+            // The profiles, held here (the caller may change its list while the GIL is released).
+            std::vector<py::object> held;
+            std::vector<const HapticProfile*> trials;
+            for (std::size_t i = 0; i < trial_list.size(); ++i) {
+              held.push_back(trial_list[i]);
+              HATTR_THROW_UNLESS(py::isinstance<HapticProfile>(held.back()),
+                                 "score_all: trials[{}]: expected a hattr.HapticProfile, got {}", i,
+                                 std::string(py::str(py::type::of(held.back()).attr("__name__"))));
+              trials.push_back(held.back().cast<const HapticProfile*>());
+            }
             std::vector<analysis::TrialScore> scores;
             {
               py::gil_scoped_release unlocked;
@@ -293,7 +287,7 @@ void bindStatistics(py::module_& m) {
 
   m.def(
       "two_way_anova",
-      [](const py::iterable& a, const py::iterable& b, const Array& y, const std::string& a_name,
+      [](const py::iterable& a, const py::iterable& b, const py::object& y, const std::string& a_name,
          const std::string& b_name, bool b_random) {
         return analysis::twoWayAnova(twoWayData(a, b, y, a_name, b_name), {.b_random = b_random});
       },
@@ -304,7 +298,7 @@ void bindStatistics(py::module_& m) {
       "random and A is tested against A:B. InputError for an unbalanced design, naming the cells.");
   m.def(
       "tukey_hsd",
-      [](const py::iterable& a, const py::iterable& b, const Array& y, const std::string& factor,
+      [](const py::iterable& a, const py::iterable& b, const py::object& y, const std::string& factor,
          const std::string& a_name, const std::string& b_name, bool b_random, double confidence) {
         const analysis::TwoWayData data = twoWayData(a, b, y, a_name, b_name);
         return analysis::tukeyHsd(data, factorOf(factor, data), {.b_random = b_random}, confidence);
@@ -314,7 +308,7 @@ void bindStatistics(py::module_& m) {
       "Tukey HSD between the levels of one factor ('a', 'b' or its name), with the error term the ANOVA uses.");
   m.def(
       "describe_groups",
-      [](const py::iterable& a, const py::iterable& b, const Array& y, const std::string& by) {
+      [](const py::iterable& a, const py::iterable& b, const py::object& y, const std::string& by) {
         const analysis::Grouping grouping = by == "a" ? analysis::Grouping::kA
                                             : by == "b" ? analysis::Grouping::kB
                                             : by == "cells"

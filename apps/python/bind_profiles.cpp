@@ -5,11 +5,13 @@
 // no copy, strided by one sample, valid as long as any array or the profile itself is alive
 // (the array keeps the profile alive). Derived channels (speed, |f|) and flags (contact,
 // pen_down) are computed, so they are copies. A profile's samples never change once it exists
-// in Python, so a view never dangles.
+// in Python (metadata
+// included: with_metadata() makes a new profile), so a view never dangles.
 
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include <fmt/format.h>
@@ -28,7 +30,7 @@
 namespace hattr::python {
 namespace {
 
-using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using Array = FloatArray;
 
 static_assert(sizeof(Vec3) == 3 * sizeof(double), "a Vec3 is three packed doubles (the views rely on it)");
 
@@ -115,15 +117,21 @@ py::dict metadataDict(const ProfileMetadata& m) {
   return d;
 }
 
-/// The inverse of metadataDict: named fields by name, everything else as text in extra.
+/// The inverse of metadataDict: named fields by name, everything else as text in extra. Values
+/// are text or numbers (written as text); nominal_rate_hz a number. InputError otherwise.
 ProfileMetadata metadataFromDict(const py::dict& d) {
   ProfileMetadata m;
   for (const auto& [key_object, value] : d) {
     const std::string key = py::str(key_object);
+    const bool number = (py::isinstance<py::int_>(value) || py::isinstance<py::float_>(value)) &&
+                        !py::isinstance<py::bool_>(value);
     if (key == "nominal_rate_hz") {
+      HATTR_THROW_UNLESS(number, "metadata: nominal_rate_hz: expected a number [Hz], got {}", std::string(py::repr(value)));
       m.nominal_rate_hz = value.cast<double>();
       continue;
     }
+    HATTR_THROW_UNLESS(number || py::isinstance<py::str>(value), "metadata: {}: expected text or a number, got {}", key,
+                       std::string(py::repr(value)));
     const std::string text = py::str(value);
     if (key == "subject") m.subject = text;
     else if (key == "skill") m.skill = text;
@@ -135,62 +143,65 @@ ProfileMetadata metadataFromDict(const py::dict& d) {
   return m;
 }
 
-/// Rows of an (n, 3) array, or zeros when absent; InputError when the shape is wrong.
+/// An optional (n, 3) numeric array (InputError naming it when the shape is wrong).
+std::optional<Array> vectorsOf(const py::object& values, py::ssize_t n, std::string_view name) {
+  if (values.is_none()) return std::nullopt;
+  Array array = floatArray(values, name);
+  const bool ok = array.ndim() == 2 && array.shape(0) == n && array.shape(1) == 3;
+  HATTR_THROW_UNLESS(ok, "HapticProfile.from_arrays: {} must have shape ({}, 3), one row per time stamp; got {}", name,
+                     n, std::string(py::str(array.attr("shape"))));
+  return array;
+}
+
 Vec3 rowOf(const std::optional<Array>& array, py::ssize_t row) {
   if (!array) return Vec3::Zero();
   return {array->at(row, 0), array->at(row, 1), array->at(row, 2)};
 }
 
-void checkShape(const std::optional<Array>& array, py::ssize_t n, std::string_view name) {
-  if (!array) return;
-  const bool ok = array->ndim() == 2 && array->shape(0) == n && array->shape(1) == 3;
-  HATTR_THROW_UNLESS(ok, "HapticProfile.from_arrays: {} must have shape ({}, 3), one row per time stamp; got {}", name,
-                     n, std::string(py::str(py::tuple(py::cast(std::vector<py::ssize_t>(
-                            array->shape(), array->shape() + array->ndim()))))));
-}
-
 /// A profile from arrays (SI units); velocity by finite differences when not given.
-HapticProfile profileFromArrays(const Array& t_s, const Array& p_WT_m, const std::optional<Array>& v_WT_m_per_s,
-                                const std::optional<Array>& f_user_W_N, const std::optional<py::array_t<bool>>& pen_down,
+HapticProfile profileFromArrays(const py::object& t_s, const py::object& p_WT_m, const py::object& v_WT_m_per_s,
+                                const py::object& f_user_W_N, const py::object& pen_down,
                                 const std::optional<py::dict>& metadata) {
-  HATTR_THROW_UNLESS(t_s.ndim() == 1, "HapticProfile.from_arrays: t_s must be one-dimensional; got {} dimensions",
-                     t_s.ndim());
-  const py::ssize_t n = t_s.shape(0);
-  checkShape(p_WT_m, n, "p_WT_m");
-  checkShape(v_WT_m_per_s, n, "v_WT_m_per_s");
-  checkShape(f_user_W_N, n, "f_user_W_N");
-  HATTR_THROW_UNLESS(!pen_down || (pen_down->ndim() == 1 && pen_down->shape(0) == n),
-                     "HapticProfile.from_arrays: pen_down must have shape ({},); got {} values", n,
-                     pen_down ? pen_down->size() : 0);
-  HapticProfile profile(metadata ? metadataFromDict(*metadata) : ProfileMetadata{});
+  const Array times = floatArray(t_s, "t_s");
+  HATTR_THROW_UNLESS(times.ndim() == 1, "HapticProfile.from_arrays: t_s must be one-dimensional; got {} dimensions",
+                     times.ndim());
+  const py::ssize_t n = times.shape(0);
+  const std::optional<Array> positions = vectorsOf(p_WT_m, n, "p_WT_m");
+  HATTR_THROW_UNLESS(positions.has_value(), "HapticProfile.from_arrays: p_WT_m is required");
+  const std::optional<Array> velocities = vectorsOf(v_WT_m_per_s, n, "v_WT_m_per_s");
+  const std::optional<Array> forces = vectorsOf(f_user_W_N, n, "f_user_W_N");
+  std::optional<py::array_t<bool>> down;
+  if (!pen_down.is_none()) {
+    const py::array flags = py::array::ensure(pen_down);
+    HATTR_THROW_UNLESS(flags && flags.dtype().kind() == 'b' && flags.ndim() == 1 && flags.shape(0) == n,
+                       "HapticProfile.from_arrays: pen_down must be booleans of shape ({},); got {}", n,
+                       flags ? fmt::format("{} of shape {}", std::string(py::str(flags.dtype())),
+                                           std::string(py::str(flags.attr("shape"))))
+                             : std::string(py::str(py::type::of(pen_down))));
+    down = py::array_t<bool>::ensure(flags);
+  }
   std::vector<Sample> samples(static_cast<std::size_t>(n));
   for (py::ssize_t i = 0; i < n; ++i) {
     Sample& s = samples[static_cast<std::size_t>(i)];
-    s.t_s = t_s.at(i);
-    s.p_WT = rowOf(p_WT_m, i);
-    s.v_WT = rowOf(v_WT_m_per_s, i);
-    s.f_user_W = rowOf(f_user_W_N, i);
-    s.pen_down = pen_down ? pen_down->at(i) : true;
+    s.t_s = times.at(i);
+    s.p_WT = rowOf(positions, i);
+    s.v_WT = rowOf(velocities, i);
+    s.f_user_W = rowOf(forces, i);
+    s.pen_down = down ? down->at(i) : true;
     s.in_contact = s.pen_down;
   }
-  // The library checks the samples (finite values, increasing times) before any velocity is derived.
-  profile.reserve(samples.size());
-  for (const Sample& s : samples) profile.append(s);
-  if (v_WT_m_per_s) return profile;
-  fillVelocityByFiniteDifferences(samples);
-  HapticProfile with_velocity(profile.metadata());
-  with_velocity.reserve(samples.size());
-  for (const Sample& s : samples) with_velocity.append(s);
-  return with_velocity;
+  return HapticProfile::fromSamples(metadata ? metadataFromDict(*metadata) : ProfileMetadata{}, {}, std::move(samples),
+                                    !velocities.has_value());
 }
 
 /// A tablet calibration: the format's defaults, overridden by a dict or a JSON file.
-io::TabletCalibration calibrationOf(const py::object& overrides, const io::TabletCalibration& defaults) {
-  if (overrides.is_none()) return defaults;
-  if (py::isinstance<py::dict>(overrides)) {
-    return io::parseCalibration(fromPython(overrides).dump(), "calibration dict", defaults);
+using CalibrationOverrides = std::optional<std::variant<py::dict, std::filesystem::path>>;
+io::TabletCalibration calibrationOf(const CalibrationOverrides& overrides, const io::TabletCalibration& defaults) {
+  if (!overrides) return defaults;
+  if (const auto* fields = std::get_if<py::dict>(&*overrides)) {
+    return io::parseCalibration(fromPython(*fields).dump(), "calibration dict", defaults);
   }
-  return io::loadCalibration(overrides.cast<std::filesystem::path>(), defaults);
+  return io::loadCalibration(std::get<std::filesystem::path>(*overrides), defaults);
 }
 
 }  // namespace
@@ -206,17 +217,27 @@ void bindProfiles(py::module_& m) {
                   "(n, 3); velocities [m/s] (n, 3), by finite differences when omitted; the force the pen exerts "
                   "[N] (n, 3), zero when omitted; pen_down flags (n,), all down when omitted. Copies the data.")
       .def("__len__", &HapticProfile::size)
-      .def("__eq__", [](const HapticProfile& a, const HapticProfile& b) { return a == b; })
+      .def("__eq__", [](const HapticProfile& a, const HapticProfile& b) { return a == b; }, py::is_operator())
       .def("__repr__",
            [](const HapticProfile& p) {
              return fmt::format("<hattr.HapticProfile subject='{}' skill='{}' samples={} duration_s={:.3f}>",
                                 p.metadata().subject, p.metadata().skill, p.size(), p.duration_s());
            })
-      .def_property(
+      .def_property_readonly(
           "metadata", [](const HapticProfile& p) { return metadataDict(p.metadata()); },
-          [](HapticProfile& p, const py::dict& d) { p.metadata() = metadataFromDict(d); },
           "Metadata as a dict (a copy): subject, skill, device, source, created_utc, nominal_rate_hz [Hz] and "
-          "every other key (mode, trial, writing_begin_s, ...) as text. Assign a dict to change it.")
+          "every other key (mode, trial, writing_begin_s, ...) as text. A profile never changes: "
+          "with_metadata() gives a new one.")
+      .def(
+          "with_metadata",
+          [](const HapticProfile& p, const py::dict& metadata) {
+            HapticProfile copy = p;
+            copy.metadata() = metadataFromDict(metadata);
+            return copy;
+          },
+          py::arg("metadata"),
+          "A copy of this profile with these metadata (a dict as `metadata` gives: text or numbers; "
+          "nominal_rate_hz a number [Hz]).")
       .def_property_readonly(
           "raw_channels", [](const HapticProfile& p) {
             return py::dict(py::arg("pressure") = p.rawChannels().pressure, py::arg("tilt") = p.rawChannels().tilt);
@@ -280,7 +301,7 @@ void bindProfiles(py::module_& m) {
       "InputError raised unless overwrite=True.");
   m.def(
       "import_svc2004",
-      [](const std::filesystem::path& path, const py::object& calibration) {
+      [](const std::filesystem::path& path, const CalibrationOverrides& calibration) {
         return io::importSvc2004(path, calibrationOf(calibration, io::svc2004Calibration()));
       },
       py::arg("path"), py::kw_only(), py::arg("calibration") = py::none(),
@@ -288,7 +309,7 @@ void bindProfiles(py::module_& m) {
       "a dict of fields to override ({'pressure_max_N': 3.5}) or a JSON file (docs/file-formats.md).");
   m.def(
       "import_susig",
-      [](const std::filesystem::path& path, const py::object& calibration) {
+      [](const std::filesystem::path& path, const CalibrationOverrides& calibration) {
         return io::importSusig(path, calibrationOf(calibration, io::susigCalibration()));
       },
       py::arg("path"), py::kw_only(), py::arg("calibration") = py::none(),

@@ -6,6 +6,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <variant>
 
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
@@ -21,24 +22,22 @@ namespace hattr::python {
 namespace {
 
 /// A profile given as a HapticProfile or a file; `label` becomes the file's name when it is one.
-HapticProfile profileOf(const py::object& given, std::string& label) {
-  if (py::isinstance<HapticProfile>(given)) return given.cast<HapticProfile>();
-  const auto path = given.cast<std::filesystem::path>();
-  if (label.empty()) label = path.string();
+using ProfileSource = std::variant<HapticProfile, std::filesystem::path>;
+HapticProfile profileOf(const ProfileSource& given, std::string& label) {
+  if (const auto* profile = std::get_if<HapticProfile>(&given)) return *profile;
+  const auto& path = std::get<std::filesystem::path>(given);
+  label = path.string();
   return io::readProfileCsv(path);
 }
 
 /// A world configuration: the defaults (None), a dict of the world file's JSON, or a file.
-render::WorldConfig worldOf(const py::object& world) {
-  if (world.is_none()) return {};
-  if (py::isinstance<py::dict>(world)) return render::parseWorldConfig(fromPython(world).dump(), "world dict");
-  return render::loadWorldConfig(world.cast<std::filesystem::path>());
-}
-
-session::Clock clockOf(const std::string& clock) {
-  if (clock == "sim") return session::Clock::kSimulated;
-  if (clock == "real") return session::Clock::kRealTime;
-  throw InputError(fmt::format("run_trial: clock \"{}\": expected sim or real", clock));
+using WorldSource = std::optional<std::variant<py::dict, std::filesystem::path>>;
+render::WorldConfig worldOf(const WorldSource& world) {
+  if (!world) return {};
+  if (const auto* json = std::get_if<py::dict>(&*world)) {
+    return render::parseWorldConfig(fromPython(*json).dump(), "world dict");
+  }
+  return render::loadWorldConfig(std::get<std::filesystem::path>(*world));
 }
 
 py::dict trialRecord(session::TrialResult result) {
@@ -55,25 +54,20 @@ py::dict trialRecord(session::TrialResult result) {
 void bindSimulation(py::module_& m) {
   m.def(
       "run_trial",
-      [](const py::object& hand, const py::object& reference, const std::string& mode, const py::object& world,
-         const std::string& device, double rate_hz, const std::string& clock, double tail_s, double pen_up_end_s,
-         double max_duration_s, const std::string& indexing, double speed, const std::string& subject,
-         const std::string& skill, int trial) {
+      [](const ProfileSource& hand, const std::optional<ProfileSource>& reference, const std::string& mode,
+         const WorldSource& world, const std::string& device, double rate_hz, const std::string& clock,
+         double tail_s, double pen_up_end_s, double max_duration_s, const std::string& indexing, double speed,
+         const std::string& subject, const std::string& skill, int trial) {
         session::ScriptedTrialOptions options{.rate_hz = rate_hz, .tail_s = tail_s, .pen_up_end_s = pen_up_end_s,
-                                              .max_duration_s = max_duration_s, .clock = clockOf(clock),
-                                              .subject = subject, .skill = skill};
+                                              .max_duration_s = max_duration_s, .clock = session::parseClock(clock),
+                                              .subject = subject, .skill = skill, .mode = guidance::parseMode(mode),
+                                              .indexing = guidance::parseIndexing(indexing), .speed = speed,
+                                              .trial = trial};
         const HapticProfile script = profileOf(hand, options.hand_label);
         std::optional<HapticProfile> expert;
-        if (!reference.is_none()) {
-          expert = profileOf(reference, options.reference_label);
+        if (reference) {
+          expert = profileOf(*reference, options.reference_label);
           options.expert = &*expert;
-          options.mode = guidance::parseMode(mode);
-          options.indexing = guidance::parseIndexing(indexing);
-          options.speed = speed;
-          options.trial = trial;
-        } else {
-          HATTR_THROW_UNLESS(guidance::parseMode(mode) == guidance::TrainingMode::kBasic,
-                             "run_trial: mode {} needs a reference (the expert's profile)", mode);
         }
         render::WorldConfig world_config = worldOf(world);
         session::TrialResult result;

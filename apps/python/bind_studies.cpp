@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include <pybind11/stl.h>
@@ -44,63 +45,83 @@ py::dict trialRecord(const session::TrialRecord& t) {
 
 /// A study file given as a path or as a dict (the file's JSON; relative expert paths resolve
 /// against `base_dir`).
-session::StudyDefinition definitionOf(const py::object& study, const std::filesystem::path& base_dir) {
-  if (py::isinstance<py::dict>(study)) return session::parseStudy(fromPython(study).dump(), "study dict", base_dir);
-  return session::loadStudy(study.cast<std::filesystem::path>());
+using StudySource = std::variant<py::dict, std::filesystem::path>;
+session::StudyDefinition definitionOf(const StudySource& study, const std::filesystem::path& base_dir) {
+  if (const auto* json = std::get_if<py::dict>(&study)) {
+    return session::parseStudy(fromPython(*json).dump(), "study dict", base_dir);
+  }
+  return session::loadStudy(std::get<std::filesystem::path>(study));
 }
+
+/// A study database open read-only until closed (close(), or the end of a `with` block).
+class OpenStudy {
+ public:
+  explicit OpenStudy(const std::filesystem::path& path)
+      : db_(StudyDatabase::open(path, session::OpenMode::kReadOnly)) {}
+  /// The database; InputError once closed.
+  [[nodiscard]] const StudyDatabase& db() const {
+    HATTR_THROW_UNLESS(db_.has_value(), "the study is closed");
+    return *db_;
+  }
+  void close() { db_.reset(); }
+
+ private:
+  std::optional<StudyDatabase> db_;
+};
 
 }  // namespace
 
 void bindStudies(py::module_& m) {
-  py::class_<StudyDatabase>(m, "Study",
-                            "A study database opened read-only: its definition, subjects, trials and recordings. "
-                            "Another process may run the study meanwhile.")
+  py::class_<OpenStudy>(m, "Study",
+                        "A study database opened read-only: its definition, subjects, trials and recordings. "
+                        "Another process may run the study meanwhile. close() (or a `with` block) closes it.")
       .def_static(
-          "open", [](const std::filesystem::path& path) { return StudyDatabase::open(path, session::OpenMode::kReadOnly); },
-          py::arg("path"),
+          "open", [](const std::filesystem::path& path) { return OpenStudy(path); }, py::arg("path"),
           "Opens a study database (a file `hattr study init` or `hattr demo` made) read-only. InputError for a file "
           "that is not a hattr study or comes from a newer hattr.")
-      .def_property_readonly("path", &StudyDatabase::file)
-      .def_property_readonly("name", [](const StudyDatabase& db) { return db.study().name; })
-      .def_property_readonly("skill", [](const StudyDatabase& db) { return db.study().skill; })
-      .def_property_readonly("schema_version", &StudyDatabase::schemaVersion)
+      .def_property_readonly("path", [](const OpenStudy& s) { return s.db().file(); })
+      .def_property_readonly("name", [](const OpenStudy& s) { return s.db().study().name; })
+      .def_property_readonly("skill", [](const OpenStudy& s) { return s.db().study().skill; })
+      .def_property_readonly("schema_version", [](const OpenStudy& s) { return s.db().schemaVersion(); })
       .def_property_readonly(
-          "definition", [](const StudyDatabase& db) { return toPython(session::studyToJson(db.study())); },
+          "definition", [](const OpenStudy& s) { return toPython(session::studyToJson(s.db().study())); },
           "The study's definition as stored (the study file's JSON), a dict.")
       .def(
           "subjects",
-          [](const StudyDatabase& db) {
+          [](const OpenStudy& s) {
             py::list rows;
-            for (const session::SubjectRecord& s : db.subjects()) rows.append(subjectRecord(s));
+            for (const session::SubjectRecord& subject : s.db().subjects()) rows.append(subjectRecord(subject));
             return rows;
           },
           "Records {id, position, participant, seed, mode_order, options}, in the study's order.")
       .def(
           "trials",
-          [](const StudyDatabase& db, const std::optional<std::string>& subject) {
+          [](const OpenStudy& s, const std::optional<std::string>& subject) {
             py::list rows;
-            for (const session::TrialRecord& t : db.trials(subject.value_or(""))) rows.append(trialRecord(t));
+            for (const session::TrialRecord& t : s.db().trials(subject.value_or(""))) rows.append(trialRecord(t));
             return rows;
           },
           py::arg("subject") = py::none(),
           "Records {trial_id, subject, sequence, mode, phase, trial, status, attempts, interruptions, started_utc, "
           "ended_utc, outcome, sample_count, disturbed, disturbed_attempts}: every trial, or one subject's.")
-      .def("trial_profile", &StudyDatabase::trialProfile, py::arg("trial_id"),
-           "The recording of a completed trial, exactly as stored. InputError for a trial that has none.")
+      .def(
+          "trial_profile", [](const OpenStudy& s, std::int64_t trial_id) { return s.db().trialProfile(trial_id); },
+          py::arg("trial_id"), "The recording of a completed trial, exactly as stored. InputError for a trial that has none.")
       .def(
           "expert",
-          [](const StudyDatabase& db, const std::optional<std::string>& skill) {
-            return db.expert(skill.value_or(db.study().skill));
+          [](const OpenStudy& s, const std::optional<std::string>& skill) {
+            return s.db().expert(skill.value_or(s.db().study().skill));
           },
           py::arg("skill") = py::none(), "The expert reference of a skill (default: the study's).")
       .def(
           "analyze",
-          [](const StudyDatabase& db, const std::string& normalization, const std::string& cost,
+          [](const OpenStudy& s, const std::string& normalization, const std::string& cost,
              std::optional<double> band_fraction, unsigned threads) {
             const report::AnalysisOptions options{.normalization = analysis::parseNormalization(normalization),
                                                   .cost = analysis::parseDtwCost(cost),
                                                   .band_fraction = band_fraction.value_or(-1.0),
                                                   .threads = threads};
+            const StudyDatabase& db = s.db();
             nlohmann::json json;
             {
               py::gil_scoped_release unlocked;
@@ -113,17 +134,23 @@ void bindStudies(py::module_& m) {
           "The paper's analysis of the recall trials, as `hattr study analyze --json` prints it (a dict): "
           "recall_costs (records), and per metric ('trajectory', 'force') the ANOVAs, Tukey HSD, per-mode "
           "statistics and each subject's best mode. Nothing is written. Releases the GIL.")
-      .def("__enter__", [](StudyDatabase& db) -> StudyDatabase& { return db; }, py::return_value_policy::reference)
-      .def("__exit__", [](StudyDatabase&, const py::args&) { return false; });
+      .def("close", &OpenStudy::close, "Closes the database; the study can no longer be read through this object.")
+      .def("__enter__", [](OpenStudy& s) -> OpenStudy& { return s; }, py::return_value_policy::reference)
+      .def("__exit__", [](OpenStudy& s, const py::args&) {
+        s.close();
+        return false;
+      });
 
   m.def(
       "create_study",
-      [](const std::filesystem::path& path, const py::object& study, const std::filesystem::path& base_dir) {
-        return StudyDatabase::create(path, definitionOf(study, base_dir));
+      [](const std::filesystem::path& path, const StudySource& study, const std::filesystem::path& base_dir) {
+        { (void)StudyDatabase::create(path, definitionOf(study, base_dir)); }
+        return OpenStudy(path);
       },
       py::arg("path"), py::arg("study"), py::kw_only(), py::arg("base_dir") = std::filesystem::path("."),
       "Creates a study database at path from a study file (a path) or its JSON as a dict (expert paths relative "
-      "to base_dir), as `hattr study init`; returns it open. InputError for an existing file or a bad study.");
+      "to base_dir), as `hattr study init`; returns it opened read-only. InputError for an existing file or a bad "
+      "study.");
   m.def(
       "run_study",
       [](const std::filesystem::path& path, const std::optional<std::string>& subject, std::optional<int> max_trials) {

@@ -2,14 +2,15 @@
 // The Python module hattr._hattr (docs/python.md): pybind11 over the library. The binding
 // layer converts and delegates; what a function computes is the library's.
 
+#include <optional>
 #include <string>
 #include <string_view>
 
 #include <nlohmann/json.hpp>
+#include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
 #include "hattr/analysis/dtw.hpp"
-#include "hattr/analysis/preprocess.hpp"
 
 namespace hattr::python {
 
@@ -26,11 +27,16 @@ py::object toPython(const nlohmann::json& json);
 /// A Python object (a dict of JSON values) as the library's JSON, through Python's json.
 nlohmann::json fromPython(const py::handle& object);
 
-/// Option strings as the CLI spells them: "paper", "zscore", "none"; "abs", "sq". Anything
-/// else throws InputError naming the argument and the accepted values.
-analysis::Normalization parseNormalization(std::string_view text);
-analysis::DtwCost parseCost(std::string_view text);
-/// The band as a fraction of the longer series; None (no band) arrives as a negative value.
-analysis::DtwOptions dtwOptions(std::string_view cost, double band_fraction, double abandon_above);
+/// Float64 arrays, C-contiguous (a NumPy view of another layout or type is copied into one).
+using FloatArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+/// A numeric argument (a NumPy array, a list of numbers, a pandas column) as a float64 array.
+/// Anything else (text, complex numbers, objects) throws InputError naming `name`; a copy is
+/// made only when the layout or type needs one.
+FloatArray floatArray(const py::handle& values, std::string_view name);
+
+/// The DTW options from Python's arguments: cost "abs" or "sq", the band as a fraction of the
+/// longer series (None: no band), the abandon bound.
+analysis::DtwOptions dtwOptions(std::string_view cost, std::optional<double> band_fraction, double abandon_above);
 
 }  // namespace hattr::python

@@ -18,8 +18,18 @@ nlohmann::json fromPython(const py::handle& object) {
   return nlohmann::json::parse(text);
 }
 
-analysis::DtwOptions dtwOptions(std::string_view cost, double band_fraction, double abandon_above) {
-  return {.cost = analysis::parseDtwCost(cost), .band_fraction = band_fraction, .abandon_above = abandon_above};
+FloatArray floatArray(const py::handle& values, std::string_view name) {
+  const py::array array = py::array::ensure(values);
+  const char kind = array ? array.dtype().kind() : 'O';
+  HATTR_THROW_UNLESS(kind == 'f' || kind == 'i' || kind == 'u',
+                     "{}: expected numbers (an array or a sequence of real numbers), got {}", name,
+                     array ? std::string(py::str(array.dtype())) : std::string(py::str(py::type::of(values))));
+  return FloatArray::ensure(array);
+}
+
+analysis::DtwOptions dtwOptions(std::string_view cost, std::optional<double> band_fraction, double abandon_above) {
+  return {.cost = analysis::parseDtwCost(cost), .band_fraction = band_fraction.value_or(-1.0),
+          .abandon_above = abandon_above};
 }
 
 namespace {
@@ -27,11 +37,13 @@ namespace {
 /// hattr.Error (a RuntimeError) for every hattr error, and hattr.InputError, also a ValueError,
 /// for bad input; each carries the library's message unchanged.
 void registerExceptions(py::module_& m) {
-  static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
+  // Kept for the life of the process, never destroyed (their destructors would run after the
+  // interpreter is gone).
+  static auto& error = *new py::exception<Error>(m, "Error", PyExc_RuntimeError);
   error.doc() = "Base of every error hattr raises: the library's message, unchanged.";
   error.attr("__module__") = "hattr";
   const py::tuple input_bases = py::make_tuple(error, py::handle(PyExc_ValueError));
-  static py::exception<InputError> input_error(m, "InputError", input_bases);
+  static auto& input_error = *new py::exception<InputError>(m, "InputError", input_bases);
   input_error.doc() =
       "Bad input (a file, an argument, a study): what, where, what was expected and what was found. "
       "A ValueError and a hattr.Error.";

@@ -11,6 +11,7 @@
 #include <mutex>
 #include <string_view>
 #include <thread>
+#include <tuple>
 #include <utility>
 
 #include "dtw_internal.hpp"
@@ -321,26 +322,80 @@ double dtwIndependentSum(Channels a, Channels b, const DtwOptions& options) {
   return sum > options.abandon_above ? kInf : sum;
 }
 
+namespace {
+
+/// Runs `chunk_costs(first, last)` over the pairs [0, count) in chunks of `chunk`, taken in turn
+/// by `threads` threads (this one among them), at most as many as the hardware runs at once:
+/// more would only time-slice the cores and evict each other's rows from their caches. The
+/// first exception a chunk throws is rethrown here once every thread has stopped.
+template <class ChunkCosts>
+void forEachChunk(std::size_t count, std::size_t chunk, unsigned threads, const ChunkCosts& chunk_costs) {
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+  const auto work = [&] {
+    try {
+      for (std::size_t first = next.fetch_add(chunk); first < count; first = next.fetch_add(chunk)) {
+        chunk_costs(first, std::min(count, first + chunk));
+      }
+    } catch (...) {
+      const std::lock_guard lock(failure_mutex);
+      if (!failure) failure = std::current_exception();
+    }
+  };
+  const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
+  std::vector<std::thread> workers;
+  for (unsigned t = 1; t < std::min(threads, hardware) && t * chunk < count; ++t) workers.emplace_back(work);
+  work();
+  for (auto& worker : workers) worker.join();
+  if (failure) std::rethrow_exception(failure);
+}
+
+/// Pairs [first, last) of `pair_of(p)` = (series a, series b), as the kernel takes them.
+struct PairBlock {
+  std::vector<const double*> a_ptr, b_ptr;
+  std::vector<std::size_t> a_len, b_len;
+  template <class PairOf>
+  void fill(std::size_t first, std::size_t last, const PairOf& pair_of) {
+    a_ptr.clear();
+    b_ptr.clear();
+    a_len.clear();
+    b_len.clear();
+    for (std::size_t p = first; p < last; ++p) {
+      const auto& [a, b] = pair_of(p);
+      a_ptr.push_back(a.data());
+      b_ptr.push_back(b.data());
+      a_len.push_back(a.size());
+      b_len.push_back(b.size());
+    }
+  }
+};
+
+}  // namespace
+
 std::vector<double> dtwBatch(std::span<const std::vector<double>> a,
-                             std::span<const std::vector<double>> b, const DtwOptions& options) {
+                             std::span<const std::vector<double>> b, const DtwOptions& options,
+                             unsigned threads) {
   HATTR_THROW_UNLESS(a.size() == b.size(),
                      "dtwBatch: expected as many series in a as in b, got {} and {}", a.size(),
                      b.size());
+  HATTR_THROW_UNLESS(threads >= 1, "dtwBatch: threads: expected at least 1, got {}", threads);
   checkOptions("dtwBatch", options);
-  std::vector<const double*> a_ptr;
-  std::vector<const double*> b_ptr;
-  std::vector<std::size_t> a_len;
-  std::vector<std::size_t> b_len;
   for (std::size_t p = 0; p < a.size(); ++p) {
     checkSeries("dtwBatch", fmt::format("a[{}]", p), a[p]);
     checkSeries("dtwBatch", fmt::format("b[{}]", p), b[p]);
-    a_ptr.push_back(a[p].data());
-    b_ptr.push_back(b[p].data());
-    a_len.push_back(a[p].size());
-    b_len.push_back(b[p].size());
   }
+  // Each thread takes an equal share, a whole number of the kernel's blocks of pairs, so the
+  // pairs are blocked as on one thread and the costs are the same to the bit.
+  const std::size_t width = detail::batchWidth();
+  const std::size_t share = (a.size() + threads - 1) / threads;
+  const std::size_t chunk = std::max<std::size_t>(width, (share + width - 1) / width * width);
   std::vector<double> costs(a.size());
-  if (!a.empty()) costsOfPairs(a_ptr, b_ptr, a_len, b_len, options, costs.data());
+  forEachChunk(a.size(), chunk, threads, [&](std::size_t first, std::size_t last) {
+    PairBlock block;
+    block.fill(first, last, [&](std::size_t p) { return std::tie(a[p], b[p]); });
+    costsOfPairs(block.a_ptr, block.b_ptr, block.a_len, block.b_len, options, costs.data() + first);
+  });
   return costs;
 }
 
@@ -359,51 +414,18 @@ Eigen::MatrixXd dtwCostMatrix(std::span<const std::vector<double>> series,
   for (std::size_t i = 0; i < series.size(); ++i) {
     for (std::size_t j = i + 1; j < series.size(); ++j) pairs.emplace_back(i, j);
   }
-  constexpr std::size_t kChunk = 64;
-  std::atomic<std::size_t> next_chunk{0};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
-
-  const auto work = [&] {
-    try {
-      std::vector<const double*> a_ptr, b_ptr;
-      std::vector<std::size_t> a_len, b_len;
-      std::vector<double> out;
-      for (std::size_t first = next_chunk.fetch_add(kChunk); first < pairs.size();
-           first = next_chunk.fetch_add(kChunk)) {
-        const std::size_t last = std::min(pairs.size(), first + kChunk);
-        a_ptr.clear();
-        b_ptr.clear();
-        a_len.clear();
-        b_len.clear();
-        for (std::size_t p = first; p < last; ++p) {
-          const auto& a = series[pairs[p].first];
-          const auto& b = series[pairs[p].second];
-          a_ptr.push_back(a.data());
-          b_ptr.push_back(b.data());
-          a_len.push_back(a.size());
-          b_len.push_back(b.size());
-        }
-        out.resize(last - first);
-        costsOfPairs(a_ptr, b_ptr, a_len, b_len, options, out.data());
-        for (std::size_t p = first; p < last; ++p) {
-          const auto i = static_cast<Eigen::Index>(pairs[p].first);
-          const auto j = static_cast<Eigen::Index>(pairs[p].second);
-          costs(i, j) = out[p - first];
-          costs(j, i) = out[p - first];
-        }
-      }
-    } catch (...) {
-      const std::lock_guard lock(failure_mutex);
-      if (!failure) failure = std::current_exception();
+  forEachChunk(pairs.size(), 64, threads, [&](std::size_t first, std::size_t last) {
+    PairBlock block;
+    block.fill(first, last, [&](std::size_t p) { return std::tie(series[pairs[p].first], series[pairs[p].second]); });
+    std::vector<double> out(last - first);
+    costsOfPairs(block.a_ptr, block.b_ptr, block.a_len, block.b_len, options, out.data());
+    for (std::size_t p = first; p < last; ++p) {
+      const auto i = static_cast<Eigen::Index>(pairs[p].first);
+      const auto j = static_cast<Eigen::Index>(pairs[p].second);
+      costs(i, j) = out[p - first];
+      costs(j, i) = out[p - first];
     }
-  };
-
-  std::vector<std::thread> workers;
-  for (unsigned t = 1; t < threads; ++t) workers.emplace_back(work);
-  work();
-  for (auto& worker : workers) worker.join();
-  if (failure) std::rethrow_exception(failure);
+  });
   return costs;
 }
 

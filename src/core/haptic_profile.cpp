@@ -40,6 +40,19 @@ void HapticProfile::append(const Sample& sample) {
   samples_.push_back(sample);
 }
 
+HapticProfile HapticProfile::fromSamples(ProfileMetadata metadata, RawChannels raw, std::vector<Sample> samples,
+                                        bool derive_velocity) {
+  HapticProfile profile(std::move(metadata), raw);
+  profile.reserve(samples.size());
+  for (const Sample& s : samples) profile.append(s);
+  // Positions finite and times strictly increasing (checked): the differences are finite.
+  if (derive_velocity) {
+    fillVelocityByFiniteDifferences(samples);
+    profile.samples_ = std::move(samples);
+  }
+  return profile;
+}
+
 double HapticProfile::duration_s() const {
   return samples_.size() < 2 ? 0.0 : samples_.back().t_s - samples_.front().t_s;
 }

@@ -191,8 +191,17 @@ void noteTrialEnd(TrialResult& result, Recorder& recorder, bool stopped) {
   }
 }
 
+Clock parseClock(std::string_view name) {
+  if (name == "sim") return Clock::kSimulated;
+  if (name == "real") return Clock::kRealTime;
+  throw InputError(fmt::format("clock \"{}\": expected sim or real", name));
+}
+
 TrialSetup scriptedTrialSetup(const device::ProfileHandScript& hand, const HapticProfile& script,
                               const ScriptedTrialOptions& options) {
+  HATTR_THROW_UNLESS(options.expert != nullptr || options.mode == guidance::TrainingMode::kBasic,
+                     "a trial in mode {} needs a reference (the expert's profile); only BASIC runs without one",
+                     guidance::modeName(options.mode));
   TrialSetup setup;
   // The end: the script's length plus the tail, or the end rule with its longest trial.
   setup.duration_s = hand.duration_s() + options.tail_s;

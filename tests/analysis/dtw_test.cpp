@@ -426,6 +426,24 @@ TEST(DtwBatch, EqualsPairByPairCostsForEqualAndMixedLengths) {
   EXPECT_TRUE(dtwBatch({}, {}).empty());
 }
 
+TEST(DtwBatch, GivesTheSameCostsToTheBitOnAnyNumberOfThreads) {
+  const std::uint64_t seed = test::testSeed(17);
+  SCOPED_TRACE(seedNote(seed));
+  std::mt19937_64 rng(seed);
+  for (const bool mixed : {false, true}) {
+    std::vector<std::vector<double>> as, bs;
+    for (int p = 0; p < 77; ++p) {  // not a whole number of SIMD blocks
+      as.push_back(randomWalk(rng, mixed ? 1 + rng() % 60 : 50));
+      bs.push_back(randomWalk(rng, mixed ? 1 + rng() % 60 : 41));
+    }
+    const auto one_thread = dtwBatch(as, bs);
+    for (const unsigned threads : {2u, 3u, 4u, 200u}) {
+      EXPECT_EQ(dtwBatch(as, bs, {}, threads), one_thread) << "mixed " << mixed << ", " << threads << " threads";
+    }
+  }
+  EXPECT_THROW((void)dtwBatch({}, {}, {}, 0), InputError);
+}
+
 TEST(DtwCostMatrix, IsSymmetricWithAZeroDiagonalAndHoldsThePairCosts) {
   const std::uint64_t seed = test::testSeed(14);
   SCOPED_TRACE(seedNote(seed));

@@ -143,7 +143,7 @@ def tracked_entries(source: Path) -> list[str]:
 def make_scratch(source: Path, hattr: Path, build: Path, shared: Path | None) -> tuple[Path, Path]:
     """A scratch folder laid out like a clone beside ../shared: the source tree's entries by
     link, and build/release/ holding copies of the programs under test (copies, so nothing a
-    page runs can write into the real build tree), and bin/ with hattr on PATH."""
+    page runs can write into the real build tree), and bin/ with hattr and python3 on PATH."""
     root = Path(tempfile.mkdtemp(prefix="hattr-doc-"))
     clone = root / "hattr"
     clone.mkdir()
@@ -163,6 +163,8 @@ def make_scratch(source: Path, hattr: Path, build: Path, shared: Path | None) ->
         (root / "shared").symlink_to(shared)
     (root / "bin").mkdir()
     (root / "bin" / "hattr").symlink_to(release / "apps" / "hattr" / "hattr")
+    # python3 is the interpreter the build chose (running this script), whatever else is on PATH.
+    (root / "bin" / "python3").symlink_to(sys.executable)
     return root, clone
 
 

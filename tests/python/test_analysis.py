@@ -51,8 +51,9 @@ def test_the_trial_scorer_equals_the_clis_score(expert_files, trial_file):
     score = hattr.TrialScorer(hattr.read_profile(expert_files[0])).score(hattr.read_profile(trial_file))
     for name in CHANNELS:
         assert score[name] == pytest.approx(cli["cost"][name], rel=0, abs=1e-12), name
-    assert score["shape"] == pytest.approx(score["x"] + score["y"], rel=1e-15)
-    assert score["force"] == pytest.approx(score["fx"] + score["fy"] + score["fz"], rel=1e-15)
+    scores = hattr.TrialScorer(hattr.read_profile(expert_files[0])).score_all([hattr.read_profile(trial_file)] * 3,
+                                                                               threads=2)
+    assert scores == [score] * 3
 
 
 def test_a_batch_and_a_cost_matrix_give_each_pairs_dtw():
@@ -62,6 +63,7 @@ def test_a_batch_and_a_cost_matrix_give_each_pairs_dtw():
     batch = hattr.dtw_batch(a, b)
     singles = [hattr.dtw(x, y) for x, y in zip(a, b)]
     np.testing.assert_allclose(batch, singles, rtol=0, atol=1e-12)
+    assert np.array_equal(hattr.dtw_batch(a, b, threads=4), batch)  # the same to the bit on any number of threads
     matrix = hattr.dtw_cost_matrix(a, threads=2)
     assert matrix.shape == (9, 9) and np.all(np.diag(matrix) == 0) and np.array_equal(matrix, matrix.T)
     assert matrix[2, 5] == pytest.approx(hattr.dtw(a[2], a[5]), rel=0, abs=1e-12)
@@ -79,6 +81,15 @@ def test_bad_series_and_options_raise_input_error():
         hattr.normalize([1.0, 2.0], "minmax")
     with pytest.raises(hattr.InputError, match="one-dimensional"):
         hattr.dtw(np.zeros((2, 2)), [1.0])
+    with pytest.raises(hattr.InputError, match="a: expected numbers"):
+        hattr.dtw(["1", "2"], [1.0, 3.0])
+    with pytest.raises(hattr.InputError, match=r"b\[1\]: expected numbers"):
+        hattr.dtw_batch([[1.0], [2.0]], [[1.0], ["x"]])
+    with pytest.raises(hattr.InputError, match="got a string"):
+        hattr.two_way_anova("aabb", "abab", [1.0, 2.0, 3.0, 4.0])
+    scorer = hattr.TrialScorer(hattr.HapticProfile.from_arrays([0.0, 1.0], np.zeros((2, 3))))
+    with pytest.raises(hattr.InputError, match=r"trials\[0\]: expected a hattr.HapticProfile, got NoneType"):
+        scorer.score_all([None])
 
 
 def write_table(path, rows):
@@ -115,8 +126,14 @@ def test_anova_and_tukey_equal_the_clis(replicated_table):
                     assert np.isnan(mine[key])
                 else:
                     assert mine[key] == pytest.approx(theirs[cli_key], rel=0, abs=1e-12), (random, key)
+        for mine, theirs in zip(table.rows, cli["rows"]):
+            assert mine["error_term"] == theirs["error_term"]
+            if theirs["partial_eta_sq"] is not None:
+                assert mine["partial_eta_sq"] == pytest.approx(theirs["partial_eta_sq"], rel=0, abs=1e-12)
         tukey = hattr.tukey_hsd(mode, subject, np.array(cost), factor="mode", a_name="mode", b_name="subject",
                                 b_random=random)
+        assert tukey.error_term == cli["tukey"]["error_term"]
+        assert len(tukey.comparisons) == len(cli["tukey"]["comparisons"]) == 3
         for mine, theirs in zip(tukey.comparisons, cli["tukey"]["comparisons"]):
             assert mine["comparison"] == theirs["comparison"]
             for key, cli_key in (("diff", "diff"), ("lower", "lwr"), ("upper", "upr"), ("p_adjusted", "p_adj")):

@@ -42,10 +42,15 @@ def test_stored_channels_are_read_only_views_that_keep_the_profile_alive():
     assert not x.flags.writeable
     with pytest.raises(ValueError):
         x[0] = 1.0
+    with pytest.raises(ValueError):
+        x.setflags(write=True)  # the profile's memory stays read-only
+    # The view owns a reference to the profile: it stays alive as long as the view does.
+    assert type(x.base) is hattr.HapticProfile and x.base is positions.base
     expected = x.copy()
     del profile, positions
     gc.collect()
-    np.testing.assert_array_equal(x, expected)  # the view still reads the profile's samples
+    assert type(x.base) is hattr.HapticProfile and len(x.base) == len(expected)
+    np.testing.assert_array_equal(x, expected)
 
 
 def test_derived_channels_and_flags_are_copies_with_the_libraries_values():
@@ -80,6 +85,22 @@ def test_a_profile_built_from_arrays_gets_velocity_by_finite_differences():
     assert profile.metadata["nominal_rate_hz"] == 100.0
 
 
+def test_arguments_of_the_wrong_kind_are_refused_not_converted():
+    t = np.array([0.0, 0.1, 0.2])
+    with pytest.raises(hattr.InputError, match="t_s: expected numbers"):
+        hattr.HapticProfile.from_arrays(["0", "0.1", "0.2"], np.zeros((3, 3)))
+    with pytest.raises(hattr.InputError, match="pen_down must be booleans"):
+        hattr.HapticProfile.from_arrays(t, np.zeros((3, 3)), pen_down=[0.5, 2, -1])
+    with pytest.raises(hattr.InputError, match="nominal_rate_hz: expected a number"):
+        hattr.HapticProfile.from_arrays(t, np.zeros((3, 3)), metadata={"nominal_rate_hz": "fast"})
+    with pytest.raises(hattr.InputError, match="subject: expected text or a number"):
+        hattr.HapticProfile.from_arrays(t, np.zeros((3, 3)), metadata={"subject": None})
+    with pytest.raises(TypeError):
+        hattr.import_svc2004(HANDMADE, calibration=3)
+    profile = hattr.read_profile(HANDMADE)
+    assert (profile == None) is False and profile != "a profile"  # noqa: E711
+
+
 def test_arrays_a_profile_cannot_hold_are_refused_with_the_reason():
     t = np.array([0.0, 0.1, 0.1])
     with pytest.raises(hattr.InputError, match="time"):
@@ -90,12 +111,15 @@ def test_arrays_a_profile_cannot_hold_are_refused_with_the_reason():
         hattr.HapticProfile.from_arrays(np.array([0.0, 0.1]), np.array([[0.0, 0.0, np.nan], [0.0, 0.0, 0.0]]))
 
 
-def test_metadata_assigned_in_python_is_written_to_the_file(tmp_path):
-    profile = hattr.read_profile(HANDMADE)
-    metadata = profile.metadata
-    metadata["trial"] = "7"
+def test_metadata_given_in_python_is_written_to_the_file(tmp_path):
+    original = hattr.read_profile(HANDMADE)
+    metadata = original.metadata
+    metadata["trial"] = 7
     metadata["subject"] = "S09"
-    profile.metadata = metadata
+    profile = original.with_metadata(metadata)
+    assert original.metadata["subject"] == "example"  # a profile never changes
+    with pytest.raises(AttributeError):
+        original.metadata = metadata
     hattr.write_profile(profile, tmp_path / "m.csv")
     stdout, _ = run_cli("profile", "info", tmp_path / "m.csv", "--json")
     assert '"S09"' in stdout
@@ -137,3 +161,19 @@ def test_a_calibration_dict_overrides_the_formats_defaults():
     np.testing.assert_allclose(halved.f_user_W_N[down], default.f_user_W_N[down] / 2, rtol=1e-12, atol=1e-15)
     with pytest.raises(hattr.InputError, match="pressure_max_N"):
         hattr.import_svc2004(source, calibration={"pressure_max_N": -1})
+
+
+def test_a_susig_import_equals_the_clis(tmp_path):
+    source = tmp_path / "sig.txt"
+    source.write_text("X, Y, TStamp, Pres., EndPts\nDataSize: 4\n"
+                      "100, 200, 0, 128, 0\n110, 205, 10, 255, 1\n300, 200, 50, 64, 0\n310, 210, 60, 0, 1\n")
+    run_cli("import", "susig", source, "-o", tmp_path / "cli.csv")
+    cli = hattr.read_profile(tmp_path / "cli.csv")
+    imported = hattr.import_susig(source)
+    assert imported.channel_names == cli.channel_names and imported.raw_channels["pressure"]
+    for name in cli.channel_names:
+        np.testing.assert_array_equal(imported.channel(name), cli.channel(name), err_msg=name)
+    assert imported.metadata["strokes"] == "2"
+    source.write_text("X, Y, TStamp, Pres., EndPts\nDataSize: 3\n100, 200, 0, 128, 0\n")
+    with pytest.raises(hattr.InputError, match="sig.txt"):
+        hattr.import_susig(source)

@@ -44,6 +44,8 @@ def test_profiles_in_memory_drive_the_same_trial_as_their_files(expert_files):
     from_objects = hattr.run_trial(hattr.read_profile(script), hattr.read_profile(expert), "alpha")["profile"]
     for name in from_files.channel_names:
         np.testing.assert_array_equal(from_objects.channel(name), from_files.channel(name), err_msg=name)
+    # Only files have names to record.
+    assert from_files.metadata["hand_script"] == str(script) and from_objects.metadata["hand_script"] == ""
 
 
 def test_bad_trial_settings_raise_input_error(expert_files):
@@ -56,3 +58,7 @@ def test_bad_trial_settings_raise_input_error(expert_files):
         hattr.run_trial(str(script), device="bogus://pen")
     with pytest.raises(hattr.InputError, match="sim or real"):
         hattr.run_trial(str(script), clock="wall")
+    with pytest.raises(hattr.InputError, match="time or progress|indexing"):
+        hattr.run_trial(str(script), indexing="bogus")
+    with pytest.raises(TypeError):
+        hattr.run_trial(5)

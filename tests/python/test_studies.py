@@ -63,9 +63,8 @@ def test_a_study_created_and_run_through_python_equals_one_run_by_the_cli(tmp_pa
     run_cli("study", "init", tmp_path / "study.json", "--db", tmp_path / "cli.sqlite")
     run_cli("study", "run", "--db", tmp_path / "cli.sqlite", "--quiet")
 
-    created = hattr.create_study(tmp_path / "py.sqlite", definition)
-    assert created.name == definition["name"]
-    del created
+    with hattr.create_study(tmp_path / "py.sqlite", definition) as created:
+        assert created.name == definition["name"]
     assert hattr.run_study(tmp_path / "py.sqlite", max_trials=5) == 5
     assert hattr.run_study(tmp_path / "py.sqlite") == len(hattr.Study.open(tmp_path / "py.sqlite").trials()) - 5
     assert hattr.run_study(tmp_path / "py.sqlite") == 0
@@ -76,6 +75,13 @@ def test_a_study_created_and_run_through_python_equals_one_run_by_the_cli(tmp_pa
         pa, pb = mine.trial_profile(a["trial_id"]), theirs.trial_profile(b["trial_id"])
         for name in pb.channel_names:
             np.testing.assert_array_equal(pa.channel(name), pb.channel(name), err_msg=name)
+
+
+def test_a_closed_study_says_so(small_study):
+    with hattr.Study.open(small_study["database"]) as study:
+        assert len(study.trials()) == 24
+    with pytest.raises(hattr.InputError, match="closed"):
+        study.trials()
 
 
 def test_study_errors_raise_input_error(tmp_path, small_study):

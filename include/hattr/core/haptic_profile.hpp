@@ -44,6 +44,12 @@ class HapticProfile {
   /// the last sample's, and every value is finite. Not for the servo thread.
   void append(const Sample& sample);
   void reserve(std::size_t n) { samples_.reserve(n); }
+  /// A profile from samples, each checked as append() checks it; with `derive_velocity`, their
+  /// velocities are then set from their positions (fillVelocityByFiniteDifferences). For
+  /// sources that build all samples first (Python's HapticProfile.from_arrays). Throws
+  /// InputError naming the first bad sample. Not for the servo thread.
+  static HapticProfile fromSamples(ProfileMetadata metadata, RawChannels raw, std::vector<Sample> samples,
+                                   bool derive_velocity);
   void clear() { samples_.clear(); }
 
   [[nodiscard]] const std::vector<Sample>& samples() const { return samples_; }

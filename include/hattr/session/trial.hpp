@@ -24,6 +24,8 @@ namespace hattr::session {
 /// (sim://pen, the sim and replay plugins); any other device runs the trial in real time, on
 /// the loop's thread or the device's own clock (TrialResult::clock says which ran).
 enum class Clock { kSimulated, kRealTime };
+/// The clock named "sim" or "real" (as the CLI and Python spell it); InputError otherwise.
+Clock parseClock(std::string_view name);
 
 /// What stays the same from trial to trial: the device model, the paper (built once: the
 /// relief and texture take a moment), the rate. Clamps are applied on construction.
