@@ -31,6 +31,14 @@ std::span<const double> valuesOf(const Array& array, std::string_view name) {
   return {array.data(), static_cast<std::size_t>(array.size())};
 }
 
+/// Many 1-D arrays as spans over their memory (the arrays outlive the call that reads them).
+std::vector<std::span<const double>> spansOf(const std::vector<Array>& arrays) {
+  std::vector<std::span<const double>> spans;
+  spans.reserve(arrays.size());
+  for (const Array& array : arrays) spans.emplace_back(array.data(), static_cast<std::size_t>(array.size()));
+  return spans;
+}
+
 /// Many 1-D arrays as the library's series. Reads the arrays' memory only: call it with the GIL
 /// released, while the arrays (held by the caller's arguments) are alive.
 std::vector<std::vector<double>> seriesOf(const std::vector<Array>& arrays) {
@@ -171,15 +179,16 @@ void bindDtw(py::module_& m) {
         std::vector<double> costs;
         {
           py::gil_scoped_release unlocked;
-          costs = analysis::dtwBatch(seriesOf(a), seriesOf(b), options, threads);
+          costs = analysis::dtwBatch(spansOf(a), spansOf(b), options, threads);
         }
         return toArray(std::move(costs));
       },
       py::arg("a"), py::arg("b"), py::kw_only(), py::arg("cost") = "abs", py::arg("band_fraction") = py::none(),
       py::arg("abandon_above") = kInfinity, py::arg("threads") = 1,
-      "DTW costs of many pairs: result[p] = dtw(a[p], b[p]). Pairs of equal lengths share SIMD lanes; `threads` "
-      "threads share the pairs (the same costs, to the bit, on any number). Float64 arrays are read without "
-      "the GIL (other types are converted first), so batches from several Python threads also run in parallel.");
+      "DTW costs of many pairs: result[p] = dtw(a[p], b[p]). Pairs of equal lengths share SIMD lanes; up to "
+      "`threads` threads (never more than the hardware runs at once) share the pairs, with the same costs, to "
+      "the bit, on any number. Contiguous float64 arrays are read in place without the GIL (others are "
+      "converted first), so batches from several Python threads also run in parallel.");
   m.def(
       "dtw_cost_matrix",
       [](const py::sequence& series_list, const std::string& cost, std::optional<double> band_fraction,

@@ -373,9 +373,12 @@ struct PairBlock {
 
 }  // namespace
 
-std::vector<double> dtwBatch(std::span<const std::vector<double>> a,
-                             std::span<const std::vector<double>> b, const DtwOptions& options,
-                             unsigned threads) {
+namespace {
+
+/// dtwBatch over any kind of series (vectors, spans): checked, then shared by the threads.
+template <class Series>
+std::vector<double> batchCosts(std::span<const Series> a, std::span<const Series> b, const DtwOptions& options,
+                               unsigned threads) {
   HATTR_THROW_UNLESS(a.size() == b.size(),
                      "dtwBatch: expected as many series in a as in b, got {} and {}", a.size(),
                      b.size());
@@ -397,6 +400,19 @@ std::vector<double> dtwBatch(std::span<const std::vector<double>> a,
     costsOfPairs(block.a_ptr, block.b_ptr, block.a_len, block.b_len, options, costs.data() + first);
   });
   return costs;
+}
+
+}  // namespace
+
+std::vector<double> dtwBatch(std::span<const std::vector<double>> a,
+                             std::span<const std::vector<double>> b, const DtwOptions& options,
+                             unsigned threads) {
+  return batchCosts(a, b, options, threads);
+}
+
+std::vector<double> dtwBatch(std::span<const std::span<const double>> a, std::span<const std::span<const double>> b,
+                             const DtwOptions& options, unsigned threads) {
+  return batchCosts(a, b, options, threads);
 }
 
 Eigen::MatrixXd dtwCostMatrix(std::span<const std::vector<double>> series,

@@ -423,7 +423,7 @@ TEST(DtwBatch, EqualsPairByPairCostsForEqualAndMixedLengths) {
       }
     }
   }
-  EXPECT_TRUE(dtwBatch({}, {}).empty());
+  EXPECT_TRUE(dtwBatch(std::vector<std::vector<double>>{}, std::vector<std::vector<double>>{}).empty());
 }
 
 TEST(DtwBatch, GivesTheSameCostsToTheBitOnAnyNumberOfThreads) {
@@ -440,8 +440,12 @@ TEST(DtwBatch, GivesTheSameCostsToTheBitOnAnyNumberOfThreads) {
     for (const unsigned threads : {2u, 3u, 4u, 200u}) {
       EXPECT_EQ(dtwBatch(as, bs, {}, threads), one_thread) << "mixed " << mixed << ", " << threads << " threads";
     }
+    // The same over spans of the caller's memory (Python's arrays).
+    const std::vector<std::span<const double>> a_spans(as.begin(), as.end()), b_spans(bs.begin(), bs.end());
+    EXPECT_EQ(dtwBatch(a_spans, b_spans, {}, 3), one_thread) << "mixed " << mixed << ", spans";
   }
-  EXPECT_THROW((void)dtwBatch({}, {}, {}, 0), InputError);
+  const std::vector<std::vector<double>> none;
+  EXPECT_THROW((void)dtwBatch(none, none, {}, 0), InputError);
 }
 
 TEST(DtwCostMatrix, IsSymmetricWithAZeroDiagonalAndHoldsThePairCosts) {

@@ -125,6 +125,10 @@ using Channels = std::span<const std::vector<double>>;
 [[nodiscard]] std::vector<double> dtwBatch(std::span<const std::vector<double>> a,
                                            std::span<const std::vector<double>> b,
                                            const DtwOptions& options = {}, unsigned threads = 1);
+/// The same over series the caller owns (NumPy arrays from Python): read in place, not copied.
+[[nodiscard]] std::vector<double> dtwBatch(std::span<const std::span<const double>> a,
+                                           std::span<const std::span<const double>> b,
+                                           const DtwOptions& options = {}, unsigned threads = 1);
 
 /// The symmetric matrix of DTW costs between every two of `series`, with a zero
 /// diagonal; entry (i, j) = dtwDistance(series[i], series[j], options) for i < j.
