@@ -26,6 +26,7 @@ DtwCost parseDtwCost(std::string_view name) {
   if (name == "sq") return DtwCost::kSquared;
   throw InputError(fmt::format("DTW cost \"{}\": expected abs or sq", name));
 }
+
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -187,12 +188,13 @@ detail::KernelProblem univariateProblem(const double* const* a, const double* co
 // Costs of the checked pairs (a[p], b[p]) into out[p]. When all lengths agree, whole
 // blocks of pairs go to the lane-batched kernel; a last partial block goes there too if
 // it fills at least half the lanes, else its pairs run one by one, as do pairs of
-// differing lengths.
+// differing lengths and, without `lanes_allowed`, every pair.
 void costsOfPairs(std::span<const double* const> a, std::span<const double* const> b,
                   std::span<const std::size_t> a_len, std::span<const std::size_t> b_len,
-                  const DtwOptions& options, double* out) {
+                  const DtwOptions& options, double* out, bool lanes_allowed = true) {
   const std::size_t count = a.size();
   const bool equal_lengths =
+      lanes_allowed &&
       std::all_of(a_len.begin(), a_len.end(), [&](std::size_t n) { return n == a_len[0]; }) &&
       std::all_of(b_len.begin(), b_len.end(), [&](std::size_t m) { return m == b_len[0]; });
   std::size_t batched = 0;
@@ -371,10 +373,6 @@ struct PairBlock {
   }
 };
 
-}  // namespace
-
-namespace {
-
 /// dtwBatch over any kind of series (vectors, spans): checked, then shared by the threads.
 template <class Series>
 std::vector<double> batchCosts(std::span<const Series> a, std::span<const Series> b, const DtwOptions& options,
@@ -389,7 +387,12 @@ std::vector<double> batchCosts(std::span<const Series> a, std::span<const Series
     checkSeries("dtwBatch", fmt::format("b[{}]", p), b[p]);
   }
   // Each thread takes an equal share, a whole number of the kernel's blocks of pairs, so the
-  // pairs are blocked as on one thread and the costs are the same to the bit.
+  // pairs are blocked as on one thread and the costs are the same to the bit: lanes only when
+  // every pair of the batch (not just of a share) has the same lengths.
+  const auto same_lengths = [](std::span<const Series> series) {
+    return std::all_of(series.begin(), series.end(), [&](const Series& s) { return s.size() == series[0].size(); });
+  };
+  const bool lanes = same_lengths(a) && same_lengths(b);
   const std::size_t width = detail::batchWidth();
   const std::size_t share = (a.size() + threads - 1) / threads;
   const std::size_t chunk = std::max<std::size_t>(width, (share + width - 1) / width * width);
@@ -397,7 +400,7 @@ std::vector<double> batchCosts(std::span<const Series> a, std::span<const Series
   forEachChunk(a.size(), chunk, threads, [&](std::size_t first, std::size_t last) {
     PairBlock block;
     block.fill(first, last, [&](std::size_t p) { return std::tie(a[p], b[p]); });
-    costsOfPairs(block.a_ptr, block.b_ptr, block.a_len, block.b_len, options, costs.data() + first);
+    costsOfPairs(block.a_ptr, block.b_ptr, block.a_len, block.b_len, options, costs.data() + first, lanes);
   });
   return costs;
 }

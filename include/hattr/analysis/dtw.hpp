@@ -120,8 +120,8 @@ using Channels = std::span<const std::vector<double>>;
 /// a[p] share one length and all b[p] another, SIMD lanes run different pairs (the
 /// fastest way to compute many costs); otherwise each pair runs on its own. Up to `threads`
 /// (>= 1) threads, never more than the hardware runs at once, share the pairs in whole SIMD
-/// blocks, so the costs are the same to the bit for any number of threads. want_path is ignored. Throws InputError if a and b differ in size, if
-/// threads == 0, and as dtw().
+/// blocks, so the costs are the same to the bit for any number of threads. want_path is
+/// ignored. Throws InputError if a and b differ in size, if threads == 0, and as dtw().
 [[nodiscard]] std::vector<double> dtwBatch(std::span<const std::vector<double>> a,
                                            std::span<const std::vector<double>> b,
                                            const DtwOptions& options = {}, unsigned threads = 1);
@@ -133,8 +133,8 @@ using Channels = std::span<const std::vector<double>>;
 /// The symmetric matrix of DTW costs between every two of `series`, with a zero
 /// diagonal; entry (i, j) = dtwDistance(series[i], series[j], options) for i < j.
 /// Up to `threads` (>= 1) worker threads share the pairs, never more than the hardware runs at
-/// once. want_path is ignored. Throws
-/// InputError on a bad series (naming its index) or threads == 0.
+/// once. want_path is ignored. Throws InputError on a bad series (naming its index) or
+/// threads == 0.
 [[nodiscard]] Eigen::MatrixXd dtwCostMatrix(std::span<const std::vector<double>> series,
                                             const DtwOptions& options = {}, unsigned threads = 2);
 
