@@ -51,7 +51,7 @@ nlohmann::json statsJson(const net::DeviceServerStats& s) {
           {"commands_applied", s.commands_applied}, {"command_timeouts", s.command_timeouts},
           {"states_sent", s.states_sent},   {"drops", drops},
           {"ticks", s.ticks},               {"overruns", s.overruns},
-          {"faults", s.faults}};
+          {"stalls", s.stalls},             {"faults", s.faults}};
 }
 
 // Serves until SIGINT/SIGTERM (or --seconds), then prints what happened.
@@ -110,7 +110,7 @@ void runServe(const ServeOptions& opt) {
                            s.session_timeouts, s.busy_refusals)
             << fmt::format("commands applied {}, command timeouts {}, states sent {}\n", s.commands_applied,
                            s.command_timeouts, s.states_sent)
-            << fmt::format("drops: {}\nticks {}, overruns {}, faults {}\n", drops, s.ticks, s.overruns, s.faults);
+            << fmt::format("drops: {}\nticks {}, overruns {}, stalls {}, faults {}\n", drops, s.ticks, s.overruns, s.stalls, s.faults);
 }
 
 void runKeygen(const KeygenOptions& opt) {
@@ -152,7 +152,7 @@ void registerDeviceServeCommands(CLI::App& devices) {
   serve->add_option("--cpu", opt->cpu, "Pin the servo thread to this CPU (-1: no pinning)")->capture_default_str();
   serve->add_flag("--json", opt->json,
                   "At exit print JSON: sessions, session_timeouts, byes, busy_refusals, commands_applied, "
-                  "command_timeouts, states_sent, drops {reason: count}, ticks, overruns, faults");
+                  "command_timeouts, states_sent, drops {reason: count}, ticks, overruns, stalls, faults");
   serve->callback([opt] { runServe(*opt); });
 
   auto keygen_opt = std::make_shared<KeygenOptions>();

@@ -368,6 +368,7 @@ DeviceServerStats DeviceServer::stats() const {
   const auto& c = i.loop_.counters();
   s.ticks = c.ticks.load();
   s.overruns = c.overruns.load();
+  s.stalls = c.stalls.load();
   s.faults = c.faults.load();
   return s;
 }

@@ -25,6 +25,16 @@ void Recorder::take(const TickSample& item) {
   last_tick_ = item.tick;
   consumer_time_s_.store(sample.t_s, std::memory_order_release);
 
+  // The loop-time window: nothing before it; its end ends the recording.
+  const double half_period = 0.5 * config_.nominal_period_s;  // time stamps are not exact multiples
+  if (sample.t_s >= config_.window_end_s - half_period) {
+    recording_ = false;
+    finished_ = true;
+    reached_end_.store(true, std::memory_order_release);
+    return;
+  }
+  if (sample.t_s < config_.window_begin_s - half_period) return;
+
   // Start and stop.
   const bool armed = armed_.load(std::memory_order_acquire);
   if (config_.trigger == RecordTrigger::kCommand) {
@@ -35,8 +45,7 @@ void Recorder::take(const TickSample& item) {
     recording_ = true;
   } else if (recording_) {
     pen_up_since_s_ = sample.pen_down ? -1.0 : (pen_up_since_s_ < 0.0 ? sample.t_s : pen_up_since_s_);
-    const double half_tick = 0.5 * config_.nominal_period_s;  // time stamps are not exact multiples
-    if (pen_up_since_s_ >= 0.0 && sample.t_s - pen_up_since_s_ >= config_.pen_up_stop_s - half_tick) {
+    if (pen_up_since_s_ >= 0.0 && sample.t_s - pen_up_since_s_ >= config_.pen_up_stop_s - half_period) {
       recording_ = false;
       finished_ = true;
       // Nothing more is recorded: with an end rule, writing is over here (its own check below
@@ -65,9 +74,8 @@ void Recorder::take(const TickSample& item) {
   } else if (writing_begin_s_ >= 0.0 && writing_up_since_s_ < 0.0) {
     writing_up_since_s_ = kept.t_s;
   }
-  const double half_tick = 0.5 * config_.nominal_period_s;
   if (config_.end_after_pen_up_s > 0.0 && writing_up_since_s_ >= 0.0 &&
-      kept.t_s - writing_up_since_s_ >= config_.end_after_pen_up_s - half_tick) {
+      kept.t_s - writing_up_since_s_ >= config_.end_after_pen_up_s - half_period) {
     recording_ = false;
     finished_ = true;
     writing_over_.store(true, std::memory_order_release);
@@ -125,6 +133,7 @@ void Recorder::reset() {
   writing_up_since_s_ = -1.0;
   last_kept_s_ = -1.0;
   writing_over_.store(false, std::memory_order_release);
+  reached_end_.store(false, std::memory_order_release);
   t_origin_s_ = 0.0;
   missed_ = 0;
   rejected_ = 0;

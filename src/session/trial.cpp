@@ -41,6 +41,10 @@ constexpr auto kGiveUpAfter = std::chrono::milliseconds(50);
 /// again. Only a loop stuck this long ends the trial.
 constexpr auto kOwnLoopStuckAfter = std::chrono::seconds(1);
 
+/// A real-time trial ends with its recording window (loop time); the wall clock ends it this
+/// long after the window would have ended had the loop kept pace, whatever the loop's time says.
+constexpr double kWindowEndBackstop_s = 2.0;
+
 /// How a real-time wait ended: a failure (why), the end rule, a stop request, or the time ran out.
 struct WaitEnd {
   std::string failure;
@@ -55,7 +59,8 @@ constexpr auto kWatcherLate = std::chrono::milliseconds(10);
 
 /// Waits `seconds` of a real-time run, watching every 2 ms for what ends a trial early: a
 /// latched fault, a device lost for longer than kGiveUpAfter, a device clock that stopped
-/// calling for as long, our own loop stuck for kOwnLoopStuckAfter; and, when given, the recorder's end rule and a stop request.
+/// calling for as long, our own loop stuck for kOwnLoopStuckAfter; and, when given, the
+/// recorder's end rule, the end of its window and a stop request.
 WaitEnd waitForEnd(const servo::ServoLoop& loop, const device::Device& device, double seconds,
                    const Recorder* recorder = nullptr, const TrialStop* stop = nullptr) {
   using Clock = std::chrono::steady_clock;
@@ -83,6 +88,7 @@ WaitEnd waitForEnd(const servo::ServoLoop& loop, const device::Device& device, d
       return {fmt::format("device fault: {}", reason.empty() ? "the safety path latched a fault" : reason)};
     }
     if (recorder != nullptr && recorder->writingOver()) return {.writing_over = true};
+    if (recorder != nullptr && recorder->reachedEnd()) return {};
     if (stop != nullptr && stop->requested()) return {.stopped = true};
     // Lost: disconnected without a break for the give-up time.
     if (!c.disconnected.load()) {
@@ -268,6 +274,12 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
   RecorderConfig recorder_config{.trigger = setup.trigger, .nominal_period_s = 1.0 / env.rate_hz()};
   recorder_config.end_after_pen_up_s = setup.pen_up_end_s;
   if (setup.pen_up_end_s > 0.0) recorder_config.pen_up_stop_s = setup.pen_up_end_s;
+  // In real time the recording is the loop-time window [settle, settle + duration): its
+  // length does not depend on when this thread wakes to start and stop it.
+  if (clock == Clock::kRealTime) {
+    recorder_config.window_begin_s = settle_s;
+    recorder_config.window_end_s = settle_s + setup.duration_s;
+  }
   Recorder recorder(loop.samples(), recorder_config, metadata);
 
   const auto settle_ticks = static_cast<std::size_t>(std::llround(settle_s * env.rate_hz()));
@@ -299,18 +311,21 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
   } else {
     loop.requireConsumer(&recorder.consumerTime());
     recorder.startThread();
+    recorder.start();  // armed from the first tick: the window decides what is kept
     loop.start();
     result.failure = waitForEnd(loop, *device, settle_s).failure;
     if (result.failure.empty() && live) result.failure = live->unavailable();
-    if (result.failure.empty()) {
-      recorder.start();
-      const WaitEnd end = waitForEnd(loop, *device, setup.duration_s, &recorder, setup.stop);
+    const bool settled = result.failure.empty();
+    if (settled) {
+      // Until the window's end; the wall clock only backs it up for a loop far behind it.
+      const WaitEnd end = waitForEnd(loop, *device, setup.duration_s + kWindowEndBackstop_s, &recorder, setup.stop);
       result.failure = end.failure;
       stopped = end.stopped;
     }
     recorder.stop();  // nothing after the end (a stop request) is recorded
     loop.stop();
     recorder.stopThread();
+    if (!settled) recorder.reset();  // failed while settling: nothing is recorded, as in simulated time
   }
   recorder.stop();
 

@@ -10,7 +10,7 @@
 //       positions are NaN), stall_after=N (frames after which
 //       the scheduler stops calling), block_read_at=N&block_read_ms=M (read N blocks for M ms,
 //       once: an SDK call that hangs for a while on the loop's own thread).
-// Test hooks (extern "C"): fake_vendor_last_force_D, fake_vendor_frames.
+// Test hooks (extern "C"): fake_vendor_last_force_D, fake_vendor_frames, fake_vendor_reset_total_reads.
 
 #include <atomic>
 #include <cmath>
@@ -151,5 +151,6 @@ extern "C" __attribute__((visibility("default"))) void fake_vendor_last_force_D(
   for (int i = 0; i < 3; ++i) out[i] = g_force_D[i].load();
 }
 extern "C" __attribute__((visibility("default"))) std::uint64_t fake_vendor_frames() { return g_frames.load(); }
+extern "C" __attribute__((visibility("default"))) void fake_vendor_reset_total_reads() { g_total_reads.store(0); }
 
 HATTR_EXPORT_DEVICE_PLUGIN("fake-vendor", "a fake vendor SDK for the adapter's tests", openVendorDevice<FakeVendor>)

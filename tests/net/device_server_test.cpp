@@ -52,14 +52,20 @@ struct Rig {
 std::chrono::nanoseconds sinceStart(Clock::time_point start) { return Clock::now() - start; }
 
 /// Polls read()+write() every 0.5 ms until `until` says stop or `limit` passes; returns
-/// the time it took and the last status.
+/// the time it took and the last status. `largest_gap`, when given, gets the longest time
+/// between two polls (the host holding this thread up).
 template <typename Until>
 std::pair<std::chrono::nanoseconds, DeviceStatus> poll(device::UdpDevice& client, Until until,
-                                                       std::chrono::milliseconds limit, Vec3 force = Vec3::Zero()) {
+                                                       std::chrono::milliseconds limit, Vec3 force = Vec3::Zero(),
+                                                       std::chrono::nanoseconds* largest_gap = nullptr) {
   const auto start = Clock::now();
+  auto last = start;
   DeviceStatus status = DeviceStatus::kOk;
   PenState pen;
   while (Clock::now() - start < limit) {
+    const auto now = Clock::now();
+    if (largest_gap != nullptr) *largest_gap = std::max(*largest_gap, std::chrono::nanoseconds(now - last));
+    last = now;
     status = client.read(sinceStart(start), pen);
     (void)client.write(force);
     if (until(status)) break;
@@ -259,33 +265,38 @@ TEST(DeviceServer, HostilePacketsAreDroppedCountedByReasonAndChangeNothing) {
 }
 
 TEST(DeviceServer, TheClientFaultsWithin20msOfASilentServerAndRecoversWhenItReturns) {
-  Rig rig;
-  DeviceServer server(rig.config());
-  server.start();
-  auto client = rig.client(server);
-  ASSERT_EQ(poll(*client, [](DeviceStatus) { return false; }, std::chrono::milliseconds(30)).second,
-            DeviceStatus::kOk);
+  (void)test::passesUnlessTheHostStalls([&](std::uint64_t& stalls) {
+    Rig rig;
+    DeviceServer server(rig.config());
+    server.start();
+    auto client = rig.client(server);
+    ASSERT_EQ(poll(*client, [](DeviceStatus) { return false; }, std::chrono::milliseconds(30)).second,
+              DeviceStatus::kOk);
 
-  // The server's loop stops without a word, as if the process had been killed.
-  server.loop().stop();
-  const auto [took, status] =
-      poll(*client, [](DeviceStatus s) { return s == DeviceStatus::kDisconnected; }, std::chrono::milliseconds(200));
-  ASSERT_EQ(status, DeviceStatus::kDisconnected);
-  EXPECT_LE(took, std::chrono::milliseconds(20));
-  EXPECT_THAT(client->faultReason(), HasSubstr("link lost: no state from " + server.endpoint().text() + " for "));
+    // The server's loop stops without a word, as if the process had been killed. The time
+    // to the fault is measured by this thread: the host holding it up 10 ms is a stall.
+    server.loop().stop();
+    std::chrono::nanoseconds largest_gap{0};
+    const auto [took, status] = poll(
+        *client, [](DeviceStatus s) { return s == DeviceStatus::kDisconnected; }, std::chrono::milliseconds(200),
+        Vec3::Zero(), &largest_gap);
+    stalls = server.stats().stalls + (largest_gap > std::chrono::milliseconds(10) ? 1 : 0);
+    ASSERT_EQ(status, DeviceStatus::kDisconnected);
+    EXPECT_LE(took, std::chrono::milliseconds(20));
+    EXPECT_THAT(client->faultReason(), HasSubstr("link lost: no state from " + server.endpoint().text() + " for "));
 
-  // It stays away long enough for the client to give up on the session (50 ms), then comes
-  // back: the client's new hello is answered and it is served again.
-  (void)poll(*client, [](DeviceStatus) { return false; }, std::chrono::milliseconds(80));
-  server.loop().start();
-  const auto back = poll(*client, [](DeviceStatus s) { return s == DeviceStatus::kOk; }, std::chrono::seconds(1));
-  EXPECT_EQ(back.second, DeviceStatus::kOk);
-  // The old session's states come first; the answer to the hello queued behind a backlog of
-  // commands follows within a few server ticks.
-  (void)poll(*client, [](DeviceStatus) { return false; }, std::chrono::milliseconds(30));
-  EXPECT_EQ(client->linkStats().reconnects, 1u);
-  EXPECT_GE(client->linkStats().disconnected_reads, 1u);
-
+    // It stays away long enough for the client to give up on the session (50 ms), then comes
+    // back: the client's new hello is answered and it is served again.
+    (void)poll(*client, [](DeviceStatus) { return false; }, std::chrono::milliseconds(80));
+    server.loop().start();
+    const auto back = poll(*client, [](DeviceStatus s) { return s == DeviceStatus::kOk; }, std::chrono::seconds(1));
+    EXPECT_EQ(back.second, DeviceStatus::kOk);
+    // The old session's states come first; the answer to the hello queued behind a backlog of
+    // commands follows within a few server ticks.
+    (void)poll(*client, [](DeviceStatus) { return false; }, std::chrono::milliseconds(30));
+    EXPECT_EQ(client->linkStats().reconnects, 1u);
+    EXPECT_GE(client->linkStats().disconnected_reads, 1u);
+  });
 }
 
 TEST(DeviceServer, AStoppedServerEndsTheSessionAndANewServerOnThePortServesTheClientAgain) {

@@ -177,5 +177,27 @@ TEST(Recorder, PenDownTriggerRecordsFromTouchDownToALongLift) {
   EXPECT_EQ(p.metadata().extra.at("t_origin_s"), "0.1");
 }
 
+TEST(Recorder, KeepsOnlyItsLoopTimeWindowWhenArmedBeforeIt) {
+  SpscRing<TickSample> ring(4096);
+  Recorder recorder(ring, RecorderConfig{.nominal_period_s = 1e-3, .window_begin_s = 0.3, .window_end_s = 0.8},
+                    ProfileMetadata{});
+  recorder.start();
+  for (int i = 0; i < 1000; ++i) {
+    Sample s;
+    s.t_s = i * 1e-3 + ((i % 3) - 1) * 1e-7;  // time stamps a little off the multiples
+    ASSERT_TRUE(ring.tryPush(TickSample{static_cast<std::uint64_t>(i), s}));
+    if (i == 700) {
+      recorder.drain();
+      EXPECT_FALSE(recorder.reachedEnd());
+    }
+  }
+  recorder.drain();
+  EXPECT_TRUE(recorder.reachedEnd());
+  EXPECT_FALSE(recorder.writingOver());  // the window's end is not the end rule's
+  const HapticProfile p = recorder.takeProfile();
+  EXPECT_EQ(p.size(), 500u);  // samples 300 to 799
+  EXPECT_NEAR(std::stod(p.metadata().extra.at("t_origin_s")), 0.3, 1e-6);
+}
+
 }  // namespace
 }  // namespace hattr::session

@@ -125,6 +125,29 @@ TEST(TrialEnd, ARealTimeTrialEndsWhenStopped) {
   });
 }
 
+TEST(TrialEnd, ARealTimeTrialRecordsTheWindowOfLoopTimeFromTheSettlesEndToTheTrials) {
+  // The recording is the loop-time window [0.3 s, 0.9 s), up to the lateness of the ticks at
+  // its edges: not whatever the trial's own thread, waking every 2 ms, saw between them.
+  TrialEnvironment env("sim://pen", flatWorld(), 1000.0);
+  test::passesUnlessTheHostStalls([&](std::uint64_t& host_stalls) {
+    device::ProfileHandScript hand(writeThenLift(0.4, 0.5));
+    TrialSetup setup{.duration_s = 0.6};
+    setup.clock = Clock::kRealTime;
+    const TrialResult r = runTrial(env, setup, hand);
+    host_stalls = r.stalls;
+    ASSERT_EQ(r.failure, "");
+    EXPECT_EQ(r.end_reason, "maximum duration");
+    EXPECT_EQ(r.missed_samples, 0u);
+    const double late_s = r.max_period_error_s + 0.5e-3;  // a tick's lateness, and half a period
+    const double first_s = std::stod(r.profile.metadata().extra.at("t_origin_s"));
+    const double last_s = first_s + r.profile.samples().back().t_s;
+    EXPECT_GE(first_s, 0.3 - 0.5e-3);
+    EXPECT_LE(first_s, 0.3 + late_s) << "max period error " << r.max_period_error_s;
+    EXPECT_LT(last_s, 0.9 - 0.5e-3);
+    EXPECT_GE(last_s, 0.9 - 1e-3 - late_s) << "max period error " << r.max_period_error_s;
+  });
+}
+
 TEST(TrialEnd, RefusesABadPenUpTime) {
   TrialEnvironment env("sim://pen", flatWorld(), 1000.0);
   device::ProfileHandScript hand(writeThenLift(0.5, 0.6));

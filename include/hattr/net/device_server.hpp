@@ -43,6 +43,7 @@ struct DeviceServerStats {
   std::array<std::uint64_t, device::net::kDropReasonCount> drops{};  ///< by device::net::DropReason
   std::uint64_t ticks = 0;
   std::uint64_t overruns = 0;
+  std::uint64_t stalls = 0;  ///< gaps in the loop's ticks beyond its watchdog (a host that held it up)
   std::uint64_t faults = 0;
 };
 

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <limits>
 #include <thread>
 
 #include "hattr/core/haptic_profile.hpp"
@@ -27,6 +28,12 @@ struct RecorderConfig {
   /// recording's first pen-down sample); recording stops with that sample and writingOver()
   /// becomes true. 0: off. Decided per sample, so the same samples give the same end.
   double end_after_pen_up_s = 0.0;
+  /// The loop-time window [s] that may be recorded: samples before `window_begin_s` are not
+  /// kept, and the first sample at or past `window_end_s` ends the recording (reachedEnd()).
+  /// A real-time trial sets it so that its length does not depend on when the threads that
+  /// start and stop the recorder are scheduled. Within half a period of each bound.
+  double window_begin_s = -std::numeric_limits<double>::infinity();
+  double window_end_s = std::numeric_limits<double>::infinity();
 };
 
 class Recorder {
@@ -54,6 +61,8 @@ class Recorder {
   [[nodiscard]] bool recording() const noexcept { return recording_; }
   /// True once writing is over (RecorderConfig::end_after_pen_up_s). Any thread.
   [[nodiscard]] bool writingOver() const noexcept { return writing_over_.load(std::memory_order_acquire); }
+  /// True once a sample at or past RecorderConfig::window_end_s was taken. Any thread.
+  [[nodiscard]] bool reachedEnd() const noexcept { return reached_end_.load(std::memory_order_acquire); }
   /// The profile times [s] of the first pen-down sample recorded and of the last pen-up (the
   /// first pen-up sample after the last pen-down; the last sample's time if the pen was still
   /// down); negative if the pen never went down. After stopThread(), or from the consumer thread.
@@ -85,6 +94,7 @@ class Recorder {
   double writing_up_since_s_ = -1.0;  // profile time the pen last went up after writing began
   double last_kept_s_ = -1.0;
   std::atomic<bool> writing_over_{false};
+  std::atomic<bool> reached_end_{false};
   double t_origin_s_ = 0.0;
   std::uint64_t missed_ = 0;
   std::uint64_t rejected_ = 0;
