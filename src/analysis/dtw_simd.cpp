@@ -159,22 +159,36 @@ double diagonalKernel(const KernelProblem& p) {
   return result > p.bound ? kInf : result;
 }
 
-// One step of the row recurrence for one vector of pairs at column j.
-template <DtwCost kCost, bool kAbandon>
-HWY_INLINE void batchStep(Tag d, Vd a_i, const double* b_j, double* cell, Vd& diag, Vd& left,
-                          Vd& row_min) {
-  const Vd up = hn::LoadU(d, cell);
-  const Vd value =
-      hn::Add(localCost<kCost>(a_i, hn::LoadU(d, b_j)), hn::Min(hn::Min(up, diag), left));
-  diag = up;
-  left = value;
-  hn::StoreU(value, d, cell);
-  if constexpr (kAbandon) row_min = hn::Min(row_min, value);
+// One cell D(i, j) of one vector of pairs, inside a strip of rows: `up` is D(i-1, j), `diag`
+// D(i-1, j-1), and `left` (in L1) holds the row's D(i, j-1), which the cell replaces; `diag`
+// becomes that old value, the next row's diagonal. Returns the cell: the next row's `up`.
+template <DtwCost kCost>
+HWY_INLINE Vd stripCell(Tag d, Vd a_i, Vd b_j, Vd up, Vd& diag, double* left) {
+  const Vd old = hn::LoadU(d, left);
+  const Vd value = hn::Add(localCost<kCost>(a_i, b_j), hn::Min(hn::Min(up, diag), old));
+  diag = old;
+  hn::StoreU(value, d, left);
+  return value;
 }
 
+// A cell outside the band: +inf, with the same hand-over of `left` and `diag` as stripCell.
+HWY_INLINE Vd stripCellOutside(Tag d, Vd& diag, double* left) {
+  diag = hn::LoadU(d, left);
+  const Vd inf = hn::Set(d, kInf);
+  hn::StoreU(inf, d, left);
+  return inf;
+}
+
+constexpr std::size_t kStripRows = 16;  // rows of D computed together, column by column
+
 // Many univariate pairs of equal lengths; lane s of the block holds pair block + s.
-// Series are interleaved (element i of every pair of the block side by side) and one row
-// of D per lane is kept; four vectors of pairs advance together along each row.
+// Series are interleaved (element i of every pair of the block side by side). D is computed
+// in strips of kStripRows rows, column by column: each column's b_j is loaded once for the
+// strip, the strip's rows keep their D(i, j-1) in a small buffer in L1, and the full-width
+// row of D (the strip's last row, the next strip's top) is read and written once per strip,
+// not once per row: the block stays within the core's own caches. Four vectors of pairs
+// advance together, so the chain down a column overlaps four ways. Every cell is the same
+// expression as the other kernels', so the costs do not depend on the order.
 template <DtwCost kCost, bool kAbandon>
 void batchKernel(const KernelProblem& p, double* out) {
   const Tag d;
@@ -186,6 +200,7 @@ void batchKernel(const KernelProblem& p, double* out) {
   std::vector<double> a_int(n * width);
   std::vector<double> b_int(m * width);
   std::vector<double> row(m * width);
+  std::vector<double> left(kStripRows * width);
   const Vd inf = hn::Set(d, kInf);
 
   for (std::size_t block = 0; block < p.count; block += width) {
@@ -198,44 +213,75 @@ void batchKernel(const KernelProblem& p, double* out) {
     std::fill(row.begin(), row.end(), kInf);
 
     bool abandoned = false;
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t j_lo = i > r ? i - r : 0;
-      const std::size_t j_hi = std::min(m - 1, i + r);
-      const double* a_i = a_int.data() + i * width;
-      const Vd a0 = hn::LoadU(d, a_i);
-      const Vd a1 = hn::LoadU(d, a_i + lanes);
-      const Vd a2 = hn::LoadU(d, a_i + 2 * lanes);
-      const Vd a3 = hn::LoadU(d, a_i + 3 * lanes);
-      // diag starts as D(i-1, j_lo-1): row i-1's value there, D(-1, -1) = 0 on row 0,
-      // +inf left of column 0 otherwise.
-      Vd diag0 = i == 0 ? hn::Zero(d) : inf;
-      Vd diag1 = diag0;
-      Vd diag2 = diag0;
-      Vd diag3 = diag0;
-      if (j_lo > 0) {
-        const double* c = row.data() + (j_lo - 1) * width;
-        diag0 = hn::LoadU(d, c);
-        diag1 = hn::LoadU(d, c + lanes);
-        diag2 = hn::LoadU(d, c + 2 * lanes);
-        diag3 = hn::LoadU(d, c + 3 * lanes);
+    for (std::size_t i0 = 0; i0 < n && !abandoned; i0 += kStripRows) {
+      const std::size_t rows = std::min(kStripRows, n - i0);
+      const std::size_t i_last = i0 + rows - 1;
+      // The strip's columns: from its first row's band to its last row's. Left of them every
+      // row's D(i, j-1) is outside the band: +inf.
+      const std::size_t j_first = i0 > r ? i0 - r : 0;
+      const std::size_t j_last = std::min(m - 1, i_last + r);
+      std::fill(left.begin(), left.begin() + static_cast<std::ptrdiff_t>(rows * width), kInf);
+      // D(i0-1, j_first-1), the first row's diagonal: D(-1, -1) = 0 on row 0, +inf left of
+      // column 0 otherwise.
+      Vd top0 = i0 == 0 ? hn::Zero(d) : inf;
+      Vd top1 = top0, top2 = top0, top3 = top0;
+      if (j_first > 0) {
+        const double* c = row.data() + (j_first - 1) * width;
+        top0 = hn::LoadU(d, c);
+        top1 = hn::LoadU(d, c + lanes);
+        top2 = hn::LoadU(d, c + 2 * lanes);
+        top3 = hn::LoadU(d, c + 3 * lanes);
       }
-      Vd left0 = inf, left1 = inf, left2 = inf, left3 = inf;
       Vd min0 = inf, min1 = inf, min2 = inf, min3 = inf;
-      for (std::size_t j = j_lo; j <= j_hi; ++j) {
+      for (std::size_t j = j_first; j <= j_last; ++j) {
         const double* b_j = b_int.data() + j * width;
+        const Vd b0 = hn::LoadU(d, b_j);
+        const Vd b1 = hn::LoadU(d, b_j + lanes);
+        const Vd b2 = hn::LoadU(d, b_j + 2 * lanes);
+        const Vd b3 = hn::LoadU(d, b_j + 3 * lanes);
+        // Down the column: up starts as D(i0-1, j) from the row above the strip.
         double* cell = row.data() + j * width;
-        batchStep<kCost, kAbandon>(d, a0, b_j, cell, diag0, left0, min0);
-        batchStep<kCost, kAbandon>(d, a1, b_j + lanes, cell + lanes, diag1, left1, min1);
-        batchStep<kCost, kAbandon>(d, a2, b_j + 2 * lanes, cell + 2 * lanes, diag2, left2, min2);
-        batchStep<kCost, kAbandon>(d, a3, b_j + 3 * lanes, cell + 3 * lanes, diag3, left3, min3);
+        Vd up0 = hn::LoadU(d, cell);
+        Vd up1 = hn::LoadU(d, cell + lanes);
+        Vd up2 = hn::LoadU(d, cell + 2 * lanes);
+        Vd up3 = hn::LoadU(d, cell + 3 * lanes);
+        Vd diag0 = top0, diag1 = top1, diag2 = top2, diag3 = top3;
+        top0 = up0;
+        top1 = up1;
+        top2 = up2;
+        top3 = up3;
+        for (std::size_t k = 0; k < rows; ++k) {
+          const std::size_t i = i0 + k;
+          double* l = left.data() + k * width;
+          if (j + r >= i && j <= i + r) {  // |i - j| <= r
+            const double* a_i = a_int.data() + i * width;
+            up0 = stripCell<kCost>(d, hn::LoadU(d, a_i), b0, up0, diag0, l);
+            up1 = stripCell<kCost>(d, hn::LoadU(d, a_i + lanes), b1, up1, diag1, l + lanes);
+            up2 = stripCell<kCost>(d, hn::LoadU(d, a_i + 2 * lanes), b2, up2, diag2, l + 2 * lanes);
+            up3 = stripCell<kCost>(d, hn::LoadU(d, a_i + 3 * lanes), b3, up3, diag3, l + 3 * lanes);
+          } else {
+            up0 = stripCellOutside(d, diag0, l);
+            up1 = stripCellOutside(d, diag1, l + lanes);
+            up2 = stripCellOutside(d, diag2, l + 2 * lanes);
+            up3 = stripCellOutside(d, diag3, l + 3 * lanes);
+          }
+        }
+        // The strip's last row becomes the row above the next strip.
+        hn::StoreU(up0, d, cell);
+        hn::StoreU(up1, d, cell + lanes);
+        hn::StoreU(up2, d, cell + 2 * lanes);
+        hn::StoreU(up3, d, cell + 3 * lanes);
+        if constexpr (kAbandon) {
+          min0 = hn::Min(min0, up0);
+          min1 = hn::Min(min1, up1);
+          min2 = hn::Min(min2, up2);
+          min3 = hn::Min(min3, up3);
+        }
       }
-      // Every path crosses every row: stop when all lanes' rows exceed the bound.
+      // Every path crosses the strip's last row: stop when all lanes' rows exceed the bound.
       if constexpr (kAbandon) {
         const Vd all = hn::Min(hn::Min(min0, min1), hn::Min(min2, min3));
-        if (hn::GetLane(hn::MinOfLanes(d, all)) > p.bound) {
-          abandoned = true;
-          break;
-        }
+        abandoned = hn::GetLane(hn::MinOfLanes(d, all)) > p.bound;
       }
     }
 

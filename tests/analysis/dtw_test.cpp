@@ -403,6 +403,45 @@ TEST(DtwIndependent, SumsPerChannelCostsAndNeverExceedsDependentDtw) {
 
 // ---- Batches and cost matrices --------------------------------------------------------------
 
+TEST(DtwBatch, EqualsTheReferenceAcrossStripEdgesBandsAndBounds) {
+  // The batch kernel computes D in strips of rows: lengths below, at and around a strip's
+  // height, the band's edges crossing strips, and a bound that abandons some pairs.
+  const std::uint64_t seed = test::testSeed(21);
+  SCOPED_TRACE(seedNote(seed));
+  std::mt19937_64 rng(seed);
+  for (const auto& [n, m] : std::vector<std::pair<std::size_t, std::size_t>>{
+           {1, 1}, {1, 5}, {5, 1}, {3, 3}, {15, 16}, {16, 16}, {17, 9}, {33, 40}, {70, 64}}) {
+    std::vector<std::vector<double>> as, bs;
+    for (int p = 0; p < 37; ++p) {
+      as.push_back(randomWalk(rng, n));
+      bs.push_back(randomWalk(rng, m));
+    }
+    for (const DtwOptions& options :
+         {DtwOptions{}, DtwOptions{.band_fraction = 0.0}, DtwOptions{.band_fraction = 0.15},
+          DtwOptions{.cost = DtwCost::kSquared, .band_fraction = 0.4}}) {
+      std::vector<double> truth;
+      for (std::size_t p = 0; p < as.size(); ++p) truth.push_back(dtwReference(as[p], bs[p], options));
+      std::vector<double> sorted = truth;
+      std::sort(sorted.begin(), sorted.end());
+      // A bound between two pairs' costs (the reference may round differently in the last bit).
+      const double between = 0.5 * (sorted[sorted.size() / 2] + sorted[sorted.size() / 2 + 1]);
+      for (const double bound : {kInf, between}) {
+        DtwOptions bounded = options;
+        bounded.abandon_above = bound;
+        const auto costs = dtwBatch(as, bs, bounded);
+        for (std::size_t p = 0; p < as.size(); ++p) {
+          const std::string note = fmt::format("{}x{} band {} bound {} pair {}", n, m, options.band_fraction, bound, p);
+          if (truth[p] > bound) {
+            EXPECT_EQ(costs[p], kInf) << note;
+          } else {
+            expectNear(costs[p], truth[p], note);
+          }
+        }
+      }
+    }
+  }
+}
+
 TEST(DtwBatch, EqualsPairByPairCostsForEqualAndMixedLengths) {
   const std::uint64_t seed = test::testSeed(13);
   SCOPED_TRACE(seedNote(seed));
