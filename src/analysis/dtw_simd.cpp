@@ -8,9 +8,10 @@
 //  - diagonalKernel: one pair. The cells of an anti-diagonal k = i + j depend only on the
 //    two previous anti-diagonals, so a whole anti-diagonal is one stream of independent
 //    SIMD operations. Three anti-diagonal buffers: O(band) memory.
-//  - batchKernel: many pairs of equal lengths. SIMD lanes are different pairs, each lane
-//    runs the plain row recurrence; four vectors of pairs are interleaved to hide the
-//    latency of the sequential D(i, j-1) dependency.
+//  - batchKernel: many pairs of equal lengths. SIMD lanes are different pairs; D is computed
+//    in strips of rows, column by column, so a block's full-width row of D is read and
+//    written once per strip; four vectors of pairs are interleaved to hide the latency of
+//    the sequential dependency down each column of a strip.
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "analysis/dtw_simd.cpp"

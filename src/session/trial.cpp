@@ -315,8 +315,7 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
     loop.start();
     result.failure = waitForEnd(loop, *device, settle_s).failure;
     if (result.failure.empty() && live) result.failure = live->unavailable();
-    const bool settled = result.failure.empty();
-    if (settled) {
+    if (result.failure.empty()) {
       // Until the window's end; the wall clock only backs it up for a loop far behind it.
       const WaitEnd end = waitForEnd(loop, *device, setup.duration_s + kWindowEndBackstop_s, &recorder, setup.stop);
       result.failure = end.failure;
@@ -325,7 +324,6 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
     recorder.stop();  // nothing after the end (a stop request) is recorded
     loop.stop();
     recorder.stopThread();
-    if (!settled) recorder.reset();  // failed while settling: nothing is recorded, as in simulated time
   }
   recorder.stop();
 

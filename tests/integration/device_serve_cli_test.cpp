@@ -182,17 +182,25 @@ TEST(DeviceServeCli, KillingTheServerWithSigkillFaultsTheClientWithTheLinkReason
     const std::string uri = "udp://" + server.address() + "?key=" + key;
     // servo-check measures the floor for 1 s, then opens the device and runs the loop over the
     // link for 3 s; the server dies 0.5 s after the client's session opened.
+    bool session_opened = false;
     std::chrono::steady_clock::time_point killed_at{};
     std::thread killer([&] {
-      if (server.waitForSession(dir, 2, std::chrono::seconds(20))) std::this_thread::sleep_for(std::chrono::milliseconds(500));
+      session_opened = server.waitForSession(dir, 2, std::chrono::seconds(20));
+      if (session_opened) std::this_thread::sleep_for(std::chrono::milliseconds(500));
       killed_at = std::chrono::steady_clock::now();
       server.signal(SIGKILL);
     });
+    const auto check_started = std::chrono::steady_clock::now();
     const RunResult check = runHattr(dir, "servo-check --realtime skip --seconds 3 --json --device '" + uri + "'");
     const auto check_ended = std::chrono::steady_clock::now();
     killer.join();
-    // A host that held this test up until the check was over left nothing to fault.
-    stalls = killed_at >= check_ended ? 1 : 0;
+    // Only a host that held this test up until a check that ran its whole 4 s was over left
+    // nothing to fault; a session that never opened, or a check that ended early, fails.
+    stalls = session_opened && check.exit_code == 0 && check_ended - check_started >= std::chrono::seconds(4) &&
+                     killed_at >= check_ended
+                 ? 1
+                 : 0;
+    ASSERT_TRUE(session_opened) << "the client's session never opened: " << test::readText(dir / "serve.err");
     EXPECT_EQ(server.wait(), 128 + SIGKILL);
     ASSERT_EQ(check.exit_code, 0) << check.err;
     const auto json = nlohmann::json::parse(check.out);

@@ -4,8 +4,11 @@
 // or throttled host a force-dependent expectation can then miss. Such a test runs its
 // attempt again; only a counted stall excuses a failure.
 
+#include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <functional>
+#include <thread>
 
 namespace hattr::test {
 
@@ -17,5 +20,25 @@ using RealTimeAttempt = std::function<void(std::uint64_t& host_stalls)>;
 /// stalls, the test is reported skipped with the last attempt's failures, never passed.
 /// Returns whether an attempt passed.
 bool passesUnlessTheHostStalls(const RealTimeAttempt& attempt, int tries = 3);
+
+/// A floor measured beside a real-time test: a thread of the test's own process that sleeps
+/// 1 ms at a time and counts the wake-ups that came more than `gap` late (the host held the
+/// process's threads up). On destruction it adds its count to `host_stalls`, so an attempt
+/// that returns early from a failed assertion still reports what the host did.
+class HostStallWatch {
+ public:
+  explicit HostStallWatch(std::uint64_t& host_stalls, std::chrono::milliseconds gap = std::chrono::milliseconds(10));
+  ~HostStallWatch();
+  HostStallWatch(const HostStallWatch&) = delete;
+  HostStallWatch& operator=(const HostStallWatch&) = delete;
+  /// Late wake-ups so far.
+  [[nodiscard]] std::uint64_t stalls() const noexcept { return stalls_.load(); }
+
+ private:
+  std::uint64_t& host_stalls_;
+  std::atomic<std::uint64_t> stalls_{0};
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
 
 }  // namespace hattr::test

@@ -135,4 +135,23 @@ bool passesUnlessTheHostStalls(const RealTimeAttempt& attempt, int tries) {
   return false;
 }
 
+HostStallWatch::HostStallWatch(std::uint64_t& host_stalls, std::chrono::milliseconds gap) : host_stalls_(host_stalls) {
+  thread_ = std::thread([this, gap] {
+    constexpr auto kNap = std::chrono::milliseconds(1);
+    auto last = std::chrono::steady_clock::now();
+    while (!stop_.load()) {
+      std::this_thread::sleep_for(kNap);
+      const auto now = std::chrono::steady_clock::now();
+      if (now - last > kNap + gap) stalls_.fetch_add(1);
+      last = now;
+    }
+  });
+}
+
+HostStallWatch::~HostStallWatch() {
+  stop_.store(true);
+  thread_.join();
+  host_stalls_ += stalls_.load();
+}
+
 }  // namespace hattr::test
