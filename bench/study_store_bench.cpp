@@ -1,39 +1,38 @@
-// Storing a finished trial in the study database: a 4 s trial at 1 kHz (4 000 samples with
-// tilt), committed in its own transaction with WAL and synchronous=FULL, as the runner does.
+// Storing and reading a finished trial in the study database, as the runner and the analysis
+// do: the simulated expert writing 'Na' (about 4.5 s at 1 kHz with tilt, like the demo's
+// trials), committed in its own transaction with WAL and synchronous=FULL, compressed losslessly
+// (docs/study-store.md); read back whole by trialProfile.
 //   build/release/bench/bench_study_store
 
-#include <cmath>
 #include <filesystem>
 
 #include <benchmark/benchmark.h>
 
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/session/study_database.hpp"
+#include "hattr/sim/data_dir.hpp"
+#include "hattr/sim/expert.hpp"
+#include "hattr/sim/glyph.hpp"
 
 namespace {
 
 using namespace hattr;
 
-HapticProfile trial(std::size_t samples) {
-  HapticProfile p({.subject = "S01", .skill = "na", .nominal_rate_hz = 1000.0}, RawChannels{.tilt = true});
-  for (std::size_t i = 0; i < samples; ++i) {
-    Sample s;
-    s.t_s = static_cast<double>(i) * 1e-3;
-    s.p_WT = Vec3(0.01 * std::sin(s.t_s), 0.01 * std::cos(s.t_s), -0.002);
-    s.f_user_W = Vec3(0.1, 0.2, -1.2 - 0.1 * std::sin(s.t_s));
-    s.pen_down = s.in_contact = true;
-    s.tilt_altitude_rad = 1.0;
-    p.append(s);
-  }
-  return p;
+/// The simulated expert's recording, made once.
+const HapticProfile& trial() {
+  static const HapticProfile recorded = [] {
+    session::TrialEnvironment env("sim://pen", render::WorldConfig{}, 1000.0);
+    const HapticProfile script = sim::expertScript(sim::loadGlyph(sim::defaultDataDir() / "glyphs" / "na.json"));
+    return sim::recordExpert(env, script, {.subject = "S01", .skill = "na"});
+  }();
+  return recorded;
 }
 
-void BM_StoreTrial4sAt1kHz(benchmark::State& state) {
-  const auto dir = std::filesystem::temp_directory_path() / "hattr-bench-study";
+/// A study of one subject with 1000 planned trials, in a fresh folder.
+session::StudyDatabase freshStudy(const std::filesystem::path& dir) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
-  const HapticProfile profile = trial(4000);
-  io::writeProfileCsv(profile, dir / "expert.csv");
+  io::writeProfileCsv(trial(), dir / "expert.csv");
   session::StudyDefinition study;
   study.name = "bench";
   study.skill = "na";
@@ -43,17 +42,34 @@ void BM_StoreTrial4sAt1kHz(benchmark::State& state) {
   study.protocol.recall_trials = 2;  // the smallest protocol the study file allows (recall 1 is a warm-up)
   study.subjects = {{"S01", "script", 1, nlohmann::json::object()}};
   { (void)session::StudyDatabase::create(dir / "s.sqlite", study); }
-  session::StudyDatabase db = session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kRunner);
+  return session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kRunner);
+}
+
+void BM_StoreTrial(benchmark::State& state) {
+  const auto dir = std::filesystem::temp_directory_path() / "hattr-bench-study";
+  session::StudyDatabase db = freshStudy(dir);
   const auto trials = db.trials();
   std::size_t next = 0;
   for (auto _ : state) {
-    db.completeTrial(trials[next % trials.size()].id, profile, "bench");
+    db.completeTrial(trials[next % trials.size()].id, trial(), "bench");
     ++next;
   }
+  state.counters["samples"] = static_cast<double>(trial().size());
   std::filesystem::remove_all(dir);
 }
 
-BENCHMARK(BM_StoreTrial4sAt1kHz)->Unit(benchmark::kMillisecond)->Iterations(200)->Repetitions(3)->ReportAggregatesOnly(true);
+void BM_ReadTrial(benchmark::State& state) {
+  const auto dir = std::filesystem::temp_directory_path() / "hattr-bench-study-read";
+  session::StudyDatabase db = freshStudy(dir);
+  const auto id = db.trials().front().id;
+  db.completeTrial(id, trial(), "bench");
+  for (auto _ : state) benchmark::DoNotOptimize(db.trialProfile(id));
+  state.counters["samples"] = static_cast<double>(trial().size());
+  std::filesystem::remove_all(dir);
+}
+
+BENCHMARK(BM_StoreTrial)->Unit(benchmark::kMillisecond)->Iterations(200)->Repetitions(3)->ReportAggregatesOnly(true);
+BENCHMARK(BM_ReadTrial)->Unit(benchmark::kMillisecond)->Iterations(200)->Repetitions(3)->ReportAggregatesOnly(true);
 
 }  // namespace
 

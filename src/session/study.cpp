@@ -198,7 +198,8 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
   StudyDefinition study;
 
   static const std::set<std::string> kKeys{"format", "name",  "skill",   "experts",  "modes",    "protocol", "order",
-                                           "device", "world", "rate_hz", "indexing", "subjects", "mentor"};
+                                           "device", "world", "rate_hz", "indexing", "subjects", "mentor",
+                                           "storage"};
   for (const auto& item : root.items()) {
     if (!kKeys.contains(item.key())) problems.add(fmt::format("unknown key \"{}\"", item.key()));
   }
@@ -322,6 +323,24 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
     else study.world = *it;
   }
 
+  // How the samples are stored: lossless, or at a declared resolution.
+  if (const auto it = root.find("storage"); it != root.end()) {
+    if (!it->is_object()) {
+      problems.add(fmt::format("storage: expected {{\"resolution\": ...}}, got {}", jsonExcerpt(*it)));
+    } else {
+      for (const auto& item : it->items()) {
+        if (item.key() != "resolution") problems.add(fmt::format("storage: unknown key \"{}\": expected resolution", item.key()));
+      }
+      if (const auto r = it->find("resolution"); r != it->end()) {
+        try {
+          study.resolution = io::parseResolution(r->dump(), "storage.resolution");
+        } catch (const InputError& e) {
+          problems.add(e.what());
+        }
+      }
+    }
+  }
+
   // Subjects: a list, or {"count": N, "prefix": "S", "participant": "simulated"}.
   const auto subjects = root.find("subjects");
   if (subjects == root.end()) {
@@ -423,6 +442,7 @@ nlohmann::json studyToJson(const StudyDefinition& s) {
           {"world", s.world},
           {"rate_hz", s.rate_hz},
           {"indexing", std::string(guidance::indexingName(s.indexing))},
+          {"storage", {{"resolution", json::parse(io::resolutionJson(s.resolution))}}},
           {"subjects", subjects},
           {"mentor",
            {{"expert", s.mentor.expert},

@@ -152,12 +152,22 @@ CREATE TABLE disturbed_attempts (id INTEGER PRIMARY KEY, trial INTEGER NOT NULL 
                                  sample_count INTEGER NOT NULL, data BLOB NOT NULL);
 )";
 
-constexpr std::string_view kMigrations[] = {kMigrationV1ToV2, kMigrationV2ToV3};
+/// Migration 3 -> 4: each block of samples says its encoding; those of schema 3 (rows of
+/// doubles) are rewritten in the compact encoding by compactStoredSamples, losslessly.
+constexpr std::string_view kMigrationV3ToV4 = R"(
+ALTER TABLE samples ADD COLUMN encoding TEXT NOT NULL DEFAULT 'f64-rows';
+ALTER TABLE disturbed_attempts ADD COLUMN encoding TEXT NOT NULL DEFAULT 'f64-rows';
+)";
+
+constexpr std::string_view kMigrations[] = {kMigrationV1ToV2, kMigrationV2ToV3, kMigrationV3ToV4};
+
+void compactStoredSamples(sqlite3* db);
 
 void migrate(sqlite3* db, int from_version) {
   for (int v = from_version; v < kStudySchemaVersion; ++v) {
     Transaction t(db);
     exec(db, kMigrations[v - 1]);
+    if (v + 1 == 4) compactStoredSamples(db);
     exec(db, fmt::format("PRAGMA user_version = {}", v + 1));
     t.commit();
   }
@@ -283,22 +293,15 @@ std::string_view trialStatusName(TrialStatus status) {
 
 // ---- Sample packing -------------------------------------------------------------------------
 
-std::string encodeSamples(const HapticProfile& profile) {
-  static_assert(std::endian::native == std::endian::little, "the samples table stores little-endian doubles");
-  const auto channels = storedChannels(profile.rawChannels());
-  std::string bytes(profile.size() * channels.size() * sizeof(double), '\0');
-  char* out = bytes.data();
-  for (const Sample& s : profile.samples()) {
-    for (const Channel c : channels) {
-      const double v = channelValue(s, c);
-      std::memcpy(out, &v, sizeof v);
-      out += sizeof v;
-    }
-  }
-  return bytes;
+std::string encodeTrialSamples(const HapticProfile& profile, const io::ChannelResolution& resolution) {
+  return io::encodeSamples(profile.samples(), storedChannels(profile.rawChannels()), resolution);
 }
 
-std::vector<Sample> decodeSamples(std::string_view bytes, const RawChannels& raw, std::size_t count) {
+namespace {
+
+/// Schema 3's rows of little-endian doubles, one row per sample.
+std::vector<Sample> decodeRowSamples(std::string_view bytes, const RawChannels& raw, std::size_t count) {
+  static_assert(std::endian::native == std::endian::little, "the samples table stores little-endian doubles");
   const auto channels = storedChannels(raw);
   HATTR_THROW_UNLESS(count <= bytes.size() && bytes.size() == count * channels.size() * sizeof(double),
                      "samples: {} bytes stored, expected {} samples × {} channels × 8", bytes.size(), count,
@@ -315,6 +318,61 @@ std::vector<Sample> decodeSamples(std::string_view bytes, const RawChannels& raw
   }
   return samples;
 }
+
+}  // namespace
+
+std::vector<Sample> decodeTrialSamples(std::string_view bytes, std::string_view encoding, const RawChannels& raw,
+                                       std::size_t count) {
+  if (encoding == kCompactSamples) return io::decodeSamples(bytes, storedChannels(raw), count);
+  if (encoding == kRowSamples) return decodeRowSamples(bytes, raw, count);
+  throw InputError(fmt::format("samples: encoding \"{}\": expected {} or {}", encoding, kCompactSamples, kRowSamples));
+}
+
+namespace {
+
+/// Every block of samples still in schema 3's rows, rewritten in the compact encoding
+/// (lossless), in the caller's transaction; each is decoded again and compared bit for bit
+/// with the rows before it replaces them.
+void compactTable(sqlite3* db, std::string_view table, std::string_view key) {
+  // The rows to rewrite first (a cursor must not walk rows its own connection updates).
+  std::vector<std::int64_t> ids;
+  {
+    Statement list(db, fmt::format("SELECT {} FROM {} WHERE encoding = '{}'", key, table, kRowSamples));
+    while (list.step()) ids.push_back(list.integer(0));
+  }
+  for (const std::int64_t id : ids) {
+    Statement rows(db, fmt::format("SELECT raw_pressure, raw_tilt, sample_count, data FROM {} WHERE {} = ?", table, key));
+    rows.bind(1, id);
+    HATTR_DEMAND(rows.step(), "a row listed for the migration is gone");
+    const RawChannels raw{rows.integer(0) != 0, rows.integer(1) != 0};
+    const auto count = static_cast<std::size_t>(std::max<std::int64_t>(rows.integer(2), 0));
+    const auto channels = storedChannels(raw);
+    std::vector<Sample> samples;
+    try {
+      samples = decodeRowSamples(rows.blob(3), raw, count);
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("migrating to schema 4: {} {} is damaged: {}", table, id, e.what()));
+    }
+    const std::string compact = io::encodeSamples(samples, channels);
+    const auto back = io::decodeSamples(compact, channels, count);
+    for (std::size_t i = 0; i < count; ++i) {
+      for (const Channel c : channels) {
+        HATTR_DEMAND(std::bit_cast<std::uint64_t>(channelValue(back[i], c)) ==
+                         std::bit_cast<std::uint64_t>(channelValue(samples[i], c)),
+                     "the compact encoding did not give back every sample of a stored trial");
+      }
+    }
+    Statement update(db, fmt::format("UPDATE {} SET data = ?, encoding = ? WHERE {} = ?", table, key));
+    update.bindBlob(1, compact).bind(2, std::string(kCompactSamples)).bind(3, id).run();
+  }
+}
+
+void compactStoredSamples(sqlite3* db) {
+  compactTable(db, "samples", "trial");
+  compactTable(db, "disturbed_attempts", "id");
+}
+
+}  // namespace
 
 // ---- Opening -------------------------------------------------------------------------------
 
@@ -559,7 +617,7 @@ std::optional<TrialRecord> StudyDatabase::nextTrial(const std::string& subject) 
 
 HapticProfile StudyDatabase::trialProfile(std::int64_t trial_id) const {
   Statement s(db_,
-              "SELECT s.raw_pressure, s.raw_tilt, s.sample_count, s.data, t.metadata, t.subject, t.sequence "
+              "SELECT s.raw_pressure, s.raw_tilt, s.sample_count, s.data, t.metadata, t.subject, t.sequence, s.encoding "
               "FROM samples s JOIN trials t ON t.id = s.trial WHERE s.trial = ?");
   s.bind(1, trial_id);
   HATTR_THROW_UNLESS(s.step(), "{}: trial {} has no recorded samples", file_.string(), trial_id);
@@ -571,7 +629,8 @@ HapticProfile StudyDatabase::trialProfile(std::int64_t trial_id) const {
                              meta.at("created_utc"), meta.at("rate_hz").get<double>(),
                              meta.at("extra").get<std::map<std::string, std::string>>()};
     HapticProfile profile(std::move(metadata), raw);
-    const auto samples = decodeSamples(s.blob(3), raw, static_cast<std::size_t>(std::max<std::int64_t>(s.integer(2), 0)));
+    const auto samples =
+        decodeTrialSamples(s.blob(3), s.text(7), raw, static_cast<std::size_t>(std::max<std::int64_t>(s.integer(2), 0)));
     profile.reserve(samples.size());
     for (const Sample& sample : samples) profile.append(sample);
     return profile;
@@ -625,7 +684,7 @@ json metadataJson(const ProfileMetadata& m) {
 
 void StudyDatabase::completeTrial(std::int64_t trial_id, const HapticProfile& profile, const std::string& outcome,
                                   const std::string& disturbed) {
-  const std::string data = encodeSamples(profile);
+  const std::string data = encodeTrialSamples(profile, study_.resolution);
   Transaction t(db_);
   Statement trial(db_, "UPDATE trials SET status = 'completed', ended_utc = ?, outcome = ?, metadata = ?, disturbed = ? "
                        "WHERE id = ? AND status != 'completed'");
@@ -638,19 +697,21 @@ void StudyDatabase::completeTrial(std::int64_t trial_id, const HapticProfile& pr
   trial.bind(5, trial_id).run();
   refuseCompleted(trial.changes(), trial_id, "replaced");
   Statement samples(db_,
-                    "INSERT OR REPLACE INTO samples (trial, raw_pressure, raw_tilt, sample_count, data) VALUES (?, ?, ?, ?, ?)");
+                    "INSERT OR REPLACE INTO samples (trial, raw_pressure, raw_tilt, sample_count, data, encoding) "
+                    "VALUES (?, ?, ?, ?, ?, ?)");
   samples.bind(1, trial_id).bind(2, profile.rawChannels().pressure ? 1 : 0).bind(3, profile.rawChannels().tilt ? 1 : 0)
-      .bind(4, static_cast<std::int64_t>(profile.size())).bindBlob(5, data).run();
+      .bind(4, static_cast<std::int64_t>(profile.size())).bindBlob(5, data).bind(6, std::string(kCompactSamples)).run();
   t.commit();
 }
 
 void StudyDatabase::keepDisturbedAttempt(std::int64_t trial_id, const HapticProfile& profile, const std::string& reason) {
   Statement s(db_,
               "INSERT INTO disturbed_attempts (trial, reason, ended_utc, metadata, raw_pressure, raw_tilt, sample_count, "
-              "data) VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
+              "data, encoding) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)");
   s.bind(1, trial_id).bind(2, reason).bind(3, utcNowIso8601()).bind(4, metadataJson(profile.metadata()).dump())
       .bind(5, profile.rawChannels().pressure ? 1 : 0).bind(6, profile.rawChannels().tilt ? 1 : 0)
-      .bind(7, static_cast<std::int64_t>(profile.size())).bindBlob(8, encodeSamples(profile)).run();
+      .bind(7, static_cast<std::int64_t>(profile.size())).bindBlob(8, encodeTrialSamples(profile, study_.resolution))
+      .bind(9, std::string(kCompactSamples)).run();
 }
 
 void StudyDatabase::failTrial(std::int64_t trial_id, const std::string& reason) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <random>
 #include <set>
 
 #include <gmock/gmock.h>
@@ -17,6 +18,7 @@
 namespace hattr::session {
 namespace {
 
+using ::testing::AllOf;
 using ::testing::HasSubstr;
 using ::testing::Not;
 
@@ -170,7 +172,7 @@ TEST(StudyDatabase, RefusesFilesThatAreNotStudiesOrAreNewer) {
     (void)StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kReadWrite);
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("study schema version 99 is newer than this build of hattr reads (1 to 3)"));
+    EXPECT_THAT(e.what(), HasSubstr("study schema version 99 is newer than this build of hattr reads (1 to 4)"));
   }
 }
 
@@ -182,6 +184,7 @@ TEST(StudyDatabase, MigratesTheFirstReleasedSchema) {
   ASSERT_EQ(sqlite3_open((folder.dir / "s.sqlite").c_str(), &db), SQLITE_OK);
   ASSERT_EQ(sqlite3_exec(db,
                          "DROP TABLE disturbed_attempts; ALTER TABLE trials DROP COLUMN disturbed; DROP TABLE results; "
+                         "ALTER TABLE samples DROP COLUMN encoding; "
                          "ALTER TABLE trials DROP COLUMN interruptions; PRAGMA user_version = 1;",
                          nullptr, nullptr, nullptr),
             SQLITE_OK);
@@ -495,7 +498,9 @@ TEST(StudyDatabase, AnOlderSchemaOpenedForReadingSaysHowToUpdateIt) {
   { (void)StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json")); }
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open((folder.dir / "s.sqlite").c_str(), &db), SQLITE_OK);
-  ASSERT_EQ(sqlite3_exec(db, "DROP TABLE disturbed_attempts; ALTER TABLE trials DROP COLUMN disturbed; PRAGMA user_version = 2;",
+  ASSERT_EQ(sqlite3_exec(db,
+                         "DROP TABLE disturbed_attempts; ALTER TABLE trials DROP COLUMN disturbed; "
+                         "ALTER TABLE samples DROP COLUMN encoding; PRAGMA user_version = 2;",
                          nullptr, nullptr, nullptr),
             SQLITE_OK);
   sqlite3_close(db);
@@ -509,14 +514,125 @@ TEST(StudyDatabase, AnOlderSchemaOpenedForReadingSaysHowToUpdateIt) {
   EXPECT_NO_THROW((void)StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kReadOnly).trials());
 }
 
-TEST(SamplePacking, IsExact) {
+TEST(SamplePacking, IsExactLosslessAndWholeStepsAtAResolution) {
   std::mt19937_64 rng(test::testSeed(17));
   for (const RawChannels raw : {RawChannels{}, RawChannels{true, true}}) {
     const HapticProfile p = test::randomProfile(rng, 300, raw);
-    const auto back = decodeSamples(encodeSamples(p), raw, p.size());
-    EXPECT_EQ(back, p.samples());
+    EXPECT_EQ(decodeTrialSamples(encodeTrialSamples(p), kCompactSamples, raw, p.size()), p.samples());
+    const auto stepped = decodeTrialSamples(encodeTrialSamples(p, io::defaultResolution()), kCompactSamples, raw, p.size());
+    ASSERT_EQ(stepped.size(), p.size());
+    EXPECT_EQ(stepped[7].p_WT.x(), static_cast<double>(std::llround(p.samples()[7].p_WT.x() / 1e-6)) * 1e-6);
   }
-  EXPECT_THROW((void)decodeSamples("short", RawChannels{}, 1), InputError);
+  EXPECT_THROW((void)decodeTrialSamples("short", kCompactSamples, RawChannels{}, 1), InputError);
+  EXPECT_THROW((void)decodeTrialSamples("short", kRowSamples, RawChannels{}, 1), InputError);
+  try {
+    (void)decodeTrialSamples("", "gzip", RawChannels{}, 0);
+    FAIL() << "decoded";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("samples: encoding \"gzip\": expected hsc1 or f64-rows"));
+  }
+}
+
+/// Schema 3's encoding of a profile's samples: one row of little-endian doubles per sample.
+std::string rowSamples(const HapticProfile& profile) {
+  std::string bytes;
+  for (const Sample& s : profile.samples()) {
+    for (const auto& info : allChannels()) {
+      if (info.derived || needsRawChannel(info.channel, profile.rawChannels())) continue;
+      const double v = channelValue(s, info.channel);
+      bytes.append(reinterpret_cast<const char*>(&v), sizeof v);
+    }
+  }
+  return bytes;
+}
+
+TEST(StudyDatabase, MigratesSchema3InPlaceRewritingEveryStoredTrialCompactlyAndLosslessly) {
+  StudyFolder folder;
+  std::mt19937_64 rng(test::testSeed(23));
+  std::vector<HapticProfile> kept;
+  {
+    StudyDatabase db = StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json"));
+    db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);
+    const auto trials = db.trials("S01");
+    const std::int64_t session = db.beginSession("S01");
+    for (std::size_t i = 0; i < 3; ++i) {
+      kept.push_back(test::randomProfile(rng, 500 + 100 * i, RawChannels{.tilt = i != 1}));
+      db.markRunning(trials[i].id, session);
+      if (i == 2) db.keepDisturbedAttempt(trials[i].id, kept.back(), "1 stall");
+      db.completeTrial(trials[i].id, kept.back(), "ok");
+    }
+  }
+  // Back to schema 3, as it stored samples: rows of doubles, no encoding column.
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open((folder.dir / "s.sqlite").c_str(), &db), SQLITE_OK);
+  {
+    StudyDatabase reader = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kReadOnly);
+    const auto trials = reader.trials("S01");
+    for (std::size_t i = 0; i < 3; ++i) {
+      for (const char* sql : {"UPDATE samples SET data = ? WHERE trial = ?", "UPDATE disturbed_attempts SET data = ? WHERE trial = ?"}) {
+        sqlite3_stmt* st = nullptr;
+        ASSERT_EQ(sqlite3_prepare_v2(db, sql, -1, &st, nullptr), SQLITE_OK);
+        const std::string rows = rowSamples(kept[i]);
+        sqlite3_bind_blob(st, 1, rows.data(), static_cast<int>(rows.size()), SQLITE_TRANSIENT);
+        sqlite3_bind_int64(st, 2, trials[i].id);
+        ASSERT_EQ(sqlite3_step(st), SQLITE_DONE);
+        sqlite3_finalize(st);
+      }
+    }
+  }
+  ASSERT_EQ(sqlite3_exec(db,
+                         "ALTER TABLE samples DROP COLUMN encoding; ALTER TABLE disturbed_attempts DROP COLUMN encoding; "
+                         "PRAGMA user_version = 3;",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+
+  // Opened for writing, it is brought to schema 4: every block rewritten, nothing lost.
+  StudyDatabase migrated = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kReadWrite);
+  EXPECT_EQ(migrated.schemaVersion(), 4);
+  const auto trials = migrated.trials("S01");
+  for (std::size_t i = 0; i < 3; ++i) {
+    const HapticProfile back = migrated.trialProfile(trials[i].id);
+    EXPECT_EQ(back.samples(), kept[i].samples()) << "trial " << i;
+    EXPECT_EQ(back.rawChannels(), kept[i].rawChannels());
+  }
+  ASSERT_EQ(sqlite3_open((folder.dir / "s.sqlite").c_str(), &db), SQLITE_OK);
+  const auto count = [&](const char* sql) {
+    sqlite3_stmt* st = nullptr;
+    EXPECT_EQ(sqlite3_prepare_v2(db, sql, -1, &st, nullptr), SQLITE_OK);
+    EXPECT_EQ(sqlite3_step(st), SQLITE_ROW);
+    const std::int64_t n = sqlite3_column_int64(st, 0);
+    sqlite3_finalize(st);
+    return n;
+  };
+  EXPECT_EQ(count("SELECT COUNT(*) FROM samples WHERE encoding = 'hsc1'"), 3);
+  EXPECT_EQ(count("SELECT COUNT(*) FROM disturbed_attempts WHERE encoding = 'hsc1'"), 1);
+  EXPECT_EQ(count("SELECT COUNT(*) FROM samples WHERE hex(substr(data, 1, 4)) = '48534301'"), 3);  // "HSC\x01"
+  sqlite3_close(db);
+}
+
+TEST(StudyDatabase, AStudyWithADeclaredResolutionStoresItsTrialsInWholeSteps) {
+  std::string definition = smallStudy();
+  definition.insert(definition.rfind('}'), R"(, "storage": {"resolution": {"x": 1e-5}})");
+  StudyFolder folder(definition);
+  StudyDatabase db = StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json"));
+  db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);
+  EXPECT_EQ(db.study().resolution.at(Channel::kX), 1e-5);
+  EXPECT_EQ(db.study().resolution.at(Channel::kY), 1e-6);  // the default's
+  std::mt19937_64 rng(test::testSeed(29));
+  const HapticProfile p = test::randomProfile(rng, 400, RawChannels{.tilt = true});
+  const auto trial = db.trials("S01").front();
+  db.markRunning(trial.id, db.beginSession("S01"));
+  db.completeTrial(trial.id, p, "ok");
+  const HapticProfile back = db.trialProfile(trial.id);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    ASSERT_EQ(back.samples()[i].p_WT.x(), static_cast<double>(std::llround(p.samples()[i].p_WT.x() / 1e-5)) * 1e-5);
+  }
+  EXPECT_THAT(studyError(R"({"name": "x", "skill": "na", "experts": {"na": "e.csv"}, "modes": ["basic"],
+      "protocol": {"training_trials": 1, "recall_trials": 2}, "subjects": {"count": 1},
+      "storage": {"resolution": {"x": -1}, "codec": "gzip"}})", folder.dir.path()),
+              AllOf(HasSubstr("storage.resolution: \"x\": expected a step > 0 in m, got -1"),
+                    HasSubstr("storage: unknown key \"codec\": expected resolution")));
 }
 
 }  // namespace

@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "hattr/guidance/training_guidance.hpp"
+#include "hattr/io/sample_codec.hpp"
 
 namespace hattr::session {
 
@@ -108,6 +109,9 @@ struct StudyDefinition {
   guidance::Indexing indexing = guidance::Indexing::kTime;
   std::vector<SubjectSpec> subjects;
   StudyMentor mentor;                                       ///< used by mentored modes only
+  /// storage.resolution: the samples' declared per-channel resolution; empty: lossless
+  /// (docs/study-store.md).
+  io::ChannelResolution resolution;
   /// Whether any mode is a mentored one (then the study file's mentor block applies).
   [[nodiscard]] bool hasMentoredModes() const noexcept {
     return std::any_of(modes.begin(), modes.end(), [](auto m) { return guidance::isMentored(m); });

@@ -28,7 +28,7 @@ struct sqlite3;
 namespace hattr::session {
 
 /// The schema this build writes; it reads every version from 1 up to this one.
-inline constexpr int kStudySchemaVersion = 3;
+inline constexpr int kStudySchemaVersion = 4;
 /// SQLite application_id of hattr study files ("hatt").
 inline constexpr std::int32_t kStudyApplicationId = 0x68617474;
 
@@ -129,9 +129,17 @@ class StudyDatabase {
   StudyDefinition study_;
 };
 
-/// Packs a profile's samples into bytes (little-endian IEEE doubles, one row per sample, the
-/// stored channels in file-column order) and back, exactly. For the samples table.
-std::string encodeSamples(const HapticProfile& profile);
-std::vector<Sample> decodeSamples(std::string_view bytes, const RawChannels& raw, std::size_t count);
+/// The samples tables' encodings: "hsc1", io/sample_codec's compact blocks (since schema 4),
+/// and "f64-rows", schema 3's little-endian doubles, one row per sample (read, and rewritten as
+/// hsc1 by the migration to schema 4).
+inline constexpr std::string_view kCompactSamples = "hsc1";
+inline constexpr std::string_view kRowSamples = "f64-rows";
+
+/// A profile's samples as the samples table stores them: io::encodeSamples on the profile's
+/// stored channels, lossless or at `resolution`.
+std::string encodeTrialSamples(const HapticProfile& profile, const io::ChannelResolution& resolution = {});
+/// A stored block back into samples, from either encoding; throws InputError for a damaged one.
+std::vector<Sample> decodeTrialSamples(std::string_view bytes, std::string_view encoding, const RawChannels& raw,
+                                       std::size_t count);
 
 }  // namespace hattr::session
