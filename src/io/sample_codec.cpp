@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cfloat>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -19,12 +20,13 @@ namespace hattr::io {
 namespace {
 
 static_assert(std::endian::native == std::endian::little, "the sample encoding is little-endian");
+static_assert(FLT_EVAL_METHOD == 0, "the predictions must round to double at every step (no x87 extended precision)");
 
 constexpr char kMagic[4] = {'H', 'S', 'C', '\x01'};  // hattr sample columns, version 1
 constexpr std::size_t kHeaderBytes = 12;             // magic, u32 count, u16 channels, u8 flags, u8 0
 constexpr std::size_t kChannelBytes = 10;            // u8 channel, u8 predictor, f64 step
 constexpr std::uint8_t kQuantized = 1;
-constexpr double kLargestSteps = 4503599627370496.0;  // 2^52: k·step is exact below it
+constexpr double kLargestSteps = 2251799813685248.0;  // 2^51: below it llround(k·step / step) is k again
 
 /// How a channel's value is predicted from what was decoded before it.
 enum class Predictor : std::uint8_t {
@@ -200,6 +202,22 @@ ZSTD_DCtx* decompressionContext() {
   return context.get();
 }
 
+/// One whole zstd frame (RFC 8878) that declares `content_size` bytes, with its content's
+/// checksum, and small enough to hold them: checked before anything is allocated.
+void checkFrame(std::string_view frame, std::uint64_t content_size) {
+  HATTR_THROW_UNLESS(ZSTD_getFrameContentSize(frame.data(), frame.size()) == content_size,
+                     "samples: the compressed residuals are not one zstd frame of {} bytes", content_size);
+  const std::size_t whole = ZSTD_findFrameCompressedSize(frame.data(), frame.size());
+  HATTR_THROW_UNLESS(!ZSTD_isError(whole) && whole == frame.size(),
+                     "samples: the compressed residuals are not exactly one zstd frame ({} bytes stored)", frame.size());
+  // The frame header descriptor follows the 4-byte magic number; bit 2 says a checksum ends it.
+  HATTR_THROW_UNLESS(frame.size() > 4 && (static_cast<unsigned char>(frame[4]) & 0x04) != 0,
+                     "samples: the compressed residuals carry no checksum");
+  // A zstd block of at most 128 KiB takes at least 4 bytes (an RLE block): no more content fits.
+  HATTR_THROW_UNLESS(content_size <= (frame.size() / 4 + 1) * 131072,
+                     "samples: {} bytes of compressed residuals cannot hold {} bytes", frame.size(), content_size);
+}
+
 /// The columns in the order they can be decoded: every commanded force after its parts.
 std::vector<std::size_t> decodingOrder(std::span<const Predictor> predictors) {
   std::vector<std::size_t> order;
@@ -325,16 +343,18 @@ std::string encodeSamples(std::span<const Sample> samples, std::span<const Chann
     for (std::size_t c = 0; c < m; ++c) {
       const auto [user, guide] = commandParts(channels[c]);
       const bool command = predictors[c] == Predictor::kCommand;
-      encodeColumn<Doubles>(predictors[c], &values[c * n], command ? &values[columnOf(channels, guide) * n] : nullptr,
-                            command ? &values[columnOf(channels, user) * n] : nullptr, &words[c * n], n);
+      encodeColumn<Doubles>(predictors[c], values.get() + c * n, command ? values.get() + columnOf(channels, guide) * n : nullptr,
+                            command ? values.get() + columnOf(channels, user) * n : nullptr, words.get() + c * n, n);
     }
   } else {
     const auto k = std::make_unique_for_overwrite<std::uint64_t[]>(n * m);
     for (std::size_t c = 0; c < m; ++c) {
       for (std::size_t i = 0; i < n; ++i) {
         const double v = values[c * n + i] / steps[c];
+        HATTR_THROW_UNLESS(std::isfinite(values[c * n + i]), "sample encoding: channel {}, sample {}: not a number: {}",
+                           nameOf(channels[c]), i, values[c * n + i]);
         HATTR_THROW_UNLESS(std::abs(v) <= kLargestSteps,
-                           "sample encoding: channel {}, sample {}: {} {} is beyond 2^52 steps of {} {}", nameOf(channels[c]),
+                           "sample encoding: channel {}, sample {}: {} {} is beyond 2^51 steps of {} {}", nameOf(channels[c]),
                            i, values[c * n + i], channelInfo(channels[c]).unit, steps[c], channelInfo(channels[c]).unit);
         k[c * n + i] = static_cast<std::uint64_t>(std::llround(v));
       }
@@ -343,13 +363,13 @@ std::string encodeSamples(std::span<const Sample> samples, std::span<const Chann
       const auto [user, guide] = commandParts(channels[c]);
       const Predictor p = stepPredictor(predictors[c], channels, steps, c);
       const bool command = p == Predictor::kCommand;
-      encodeColumn<Steps>(p, &k[c * n], command ? &k[columnOf(channels, guide) * n] : nullptr,
-                          command ? &k[columnOf(channels, user) * n] : nullptr, &words[c * n], n);
+      encodeColumn<Steps>(p, k.get() + c * n, command ? k.get() + columnOf(channels, guide) * n : nullptr,
+                          command ? k.get() + columnOf(channels, user) * n : nullptr, words.get() + c * n, n);
     }
   }
 
-  // Byte planes, compressed.
-  const std::string planes = shuffled(words.get(), n * m);
+  // The header again, then the byte planes, compressed: zstd's checksum covers both.
+  const std::string planes = blob + shuffled(words.get(), n * m);
   put<std::uint64_t>(blob, planes.size());
   const std::size_t at = blob.size();
   blob.resize(at + ZSTD_compressBound(planes.size()));
@@ -372,7 +392,11 @@ std::vector<Sample> decodeSamples(std::string_view blob, std::span<const Channel
                      kHeaderBytes, blob.size());
   const std::size_t n = get<std::uint32_t>(blob, 4);
   const std::size_t m = get<std::uint16_t>(blob, 8);
-  const bool quantized = (get<std::uint8_t>(blob, 10) & kQuantized) != 0;
+  const auto flags = get<std::uint8_t>(blob, 10);
+  const bool quantized = (flags & kQuantized) != 0;
+  HATTR_THROW_UNLESS((flags & ~kQuantized) == 0 && get<std::uint8_t>(blob, 11) == 0,
+                     "samples: the encoded block's flags are {:#04x} {:#04x}, expected 0x00 or 0x01, then 0x00", flags,
+                     get<std::uint8_t>(blob, 11));
   HATTR_THROW_UNLESS(n == count, "samples: the encoded block holds {} samples, expected {}", n, count);
   HATTR_THROW_UNLESS(m == channels.size(), "samples: the encoded block holds {} channels, expected {}", m,
                      channels.size());
@@ -388,31 +412,31 @@ std::vector<Sample> decodeSamples(std::string_view blob, std::span<const Channel
     HATTR_THROW_UNLESS(channel == static_cast<std::uint8_t>(channels[c]),
                        "samples: encoded channel {} is number {}, expected {} ({})", c, channel,
                        static_cast<int>(channels[c]), nameOf(channels[c]));
-    HATTR_THROW_UNLESS(predictor <= static_cast<std::uint8_t>(Predictor::kCommand) &&
-                           (predictor != static_cast<std::uint8_t>(Predictor::kCommand) ||
-                            predictorOf(channels[c], channels) == Predictor::kCommand),
-                       "samples: channel {}: unknown predictor {}", nameOf(channels[c]), predictor);
+    const Predictor expected = predictorOf(channels[c], channels);
+    HATTR_THROW_UNLESS(predictor == static_cast<std::uint8_t>(expected), "samples: channel {}: predictor {}, expected {}",
+                       nameOf(channels[c]), predictor, static_cast<int>(expected));
     HATTR_THROW_UNLESS(quantized ? std::isfinite(steps[c]) && steps[c] > 0.0 : steps[c] == 0.0,
                        "samples: channel {}: step {} in a {} block", nameOf(channels[c]), steps[c],
                        quantized ? "quantized" : "lossless");
     predictors[c] = static_cast<Predictor>(predictor);
   }
 
-  // The byte planes.
+  // The frame: the header's copy and the byte planes, under zstd's checksum.
   const std::size_t payload_at = kHeaderBytes + m * kChannelBytes;
-  const std::uint64_t planes_size = get<std::uint64_t>(blob, payload_at);
-  HATTR_THROW_UNLESS(planes_size == n * m * 8, "samples: the encoded block says {} bytes of residuals, expected {}",
-                     planes_size, n * m * 8);
+  const std::uint64_t content_size = get<std::uint64_t>(blob, payload_at);
+  HATTR_THROW_UNLESS(content_size == payload_at + n * m * 8,
+                     "samples: the encoded block says {} bytes of header and residuals, expected {}", content_size,
+                     payload_at + n * m * 8);
   const std::string_view frame = blob.substr(payload_at + 8);
-  const unsigned long long content = ZSTD_getFrameContentSize(frame.data(), frame.size());
-  HATTR_THROW_UNLESS(content == planes_size, "samples: the compressed residuals are not one zstd frame of {} bytes",
-                     planes_size);
-  const auto planes = std::make_unique_for_overwrite<char[]>(planes_size);
-  const std::size_t got = ZSTD_decompressDCtx(decompressionContext(), planes.get(), planes_size, frame.data(), frame.size());
-  HATTR_THROW_UNLESS(!ZSTD_isError(got) && got == planes_size, "samples: the compressed residuals are damaged: {}",
+  checkFrame(frame, content_size);
+  const auto content = std::make_unique_for_overwrite<char[]>(content_size);
+  const std::size_t got = ZSTD_decompressDCtx(decompressionContext(), content.get(), content_size, frame.data(), frame.size());
+  HATTR_THROW_UNLESS(!ZSTD_isError(got) && got == content_size, "samples: the compressed residuals are damaged: {}",
                      ZSTD_isError(got) ? ZSTD_getErrorName(got) : "short");
+  HATTR_THROW_UNLESS(std::memcmp(content.get(), blob.data(), payload_at) == 0,
+                     "samples: the encoded block's header is damaged (it differs from its checksummed copy)");
   const auto words = std::make_unique_for_overwrite<std::uint64_t[]>(n * m);
-  unshuffle(std::string_view(planes.get(), planes_size), words.get());
+  unshuffle(std::string_view(content.get() + payload_at, n * m * 8), words.get());
 
   // Each column from its residuals and predictions, the commanded forces after their parts.
   const auto values = std::make_unique_for_overwrite<double[]>(n * m);
@@ -420,8 +444,8 @@ std::vector<Sample> decodeSamples(std::string_view blob, std::span<const Channel
     for (const std::size_t c : decodingOrder(predictors)) {
       const auto [user, guide] = commandParts(channels[c]);
       const bool command = predictors[c] == Predictor::kCommand;
-      decodeColumn<Doubles>(predictors[c], &words[c * n], command ? &values[columnOf(channels, guide) * n] : nullptr,
-                            command ? &values[columnOf(channels, user) * n] : nullptr, &values[c * n], n);
+      decodeColumn<Doubles>(predictors[c], words.get() + c * n, command ? values.get() + columnOf(channels, guide) * n : nullptr,
+                            command ? values.get() + columnOf(channels, user) * n : nullptr, values.get() + c * n, n);
     }
   } else {
     const auto k = std::make_unique_for_overwrite<std::uint64_t[]>(n * m);
@@ -429,8 +453,8 @@ std::vector<Sample> decodeSamples(std::string_view blob, std::span<const Channel
       const auto [user, guide] = commandParts(channels[c]);
       const Predictor p = stepPredictor(predictors[c], channels, steps, c);
       const bool command = p == Predictor::kCommand;
-      decodeColumn<Steps>(p, &words[c * n], command ? &k[columnOf(channels, guide) * n] : nullptr,
-                          command ? &k[columnOf(channels, user) * n] : nullptr, &k[c * n], n);
+      decodeColumn<Steps>(p, words.get() + c * n, command ? k.get() + columnOf(channels, guide) * n : nullptr,
+                          command ? k.get() + columnOf(channels, user) * n : nullptr, k.get() + c * n, n);
       for (std::size_t i = 0; i < n; ++i) {
         values[c * n + i] = static_cast<double>(static_cast<std::int64_t>(k[c * n + i])) * steps[c];
       }

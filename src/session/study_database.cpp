@@ -8,6 +8,7 @@
 #include <bit>
 #include <cerrno>
 #include <cstring>
+#include <limits>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -166,6 +167,8 @@ void compactStoredSamples(sqlite3* db);
 void migrate(sqlite3* db, int from_version) {
   for (int v = from_version; v < kStudySchemaVersion; ++v) {
     Transaction t(db);
+    // Another writer may have taken this step while we waited for the lock.
+    if (scalar(db, "PRAGMA user_version") > v) continue;
     exec(db, kMigrations[v - 1]);
     if (v + 1 == 4) compactStoredSamples(db);
     exec(db, fmt::format("PRAGMA user_version = {}", v + 1));
@@ -293,8 +296,33 @@ std::string_view trialStatusName(TrialStatus status) {
 
 // ---- Sample packing -------------------------------------------------------------------------
 
+namespace {
+
+/// Whether the profile's times stay strictly increasing in whole steps of `step`.
+bool timesStayIncreasing(const HapticProfile& profile, double step) {
+  long long last = std::numeric_limits<long long>::min();
+  for (const Sample& s : profile.samples()) {
+    const long long k = std::llround(s.t_s / step);
+    if (k <= last) return false;
+    last = k;
+  }
+  return true;
+}
+
+}  // namespace
+
 std::string encodeTrialSamples(const HapticProfile& profile, const io::ChannelResolution& resolution) {
-  return io::encodeSamples(profile.samples(), storedChannels(profile.rawChannels()), resolution);
+  const auto channels = storedChannels(profile.rawChannels());
+  // At the declared resolution, unless a value lies beyond its range or two samples' times
+  // would fall on one step: then losslessly (the block says which), so nothing is lost and
+  // every stored profile reads back.
+  if (!resolution.empty() && timesStayIncreasing(profile, resolution.at(Channel::kTime))) {
+    try {
+      return io::encodeSamples(profile.samples(), channels, resolution);
+    } catch (const InputError&) {
+    }
+  }
+  return io::encodeSamples(profile.samples(), channels);
 }
 
 namespace {
@@ -332,7 +360,7 @@ namespace {
 
 /// Every block of samples still in schema 3's rows, rewritten in the compact encoding
 /// (lossless), in the caller's transaction; each is decoded again and compared bit for bit
-/// with the rows before it replaces them.
+/// with the rows before it replaces them. A block that does not decode is left as it is.
 void compactTable(sqlite3* db, std::string_view table, std::string_view key) {
   // The rows to rewrite first (a cursor must not walk rows its own connection updates).
   std::vector<std::int64_t> ids;
@@ -347,11 +375,13 @@ void compactTable(sqlite3* db, std::string_view table, std::string_view key) {
     const RawChannels raw{rows.integer(0) != 0, rows.integer(1) != 0};
     const auto count = static_cast<std::size_t>(std::max<std::int64_t>(rows.integer(2), 0));
     const auto channels = storedChannels(raw);
+    // A damaged block stays as it was: it is reported when it is read, as before, and the
+    // rest of the study migrates.
     std::vector<Sample> samples;
     try {
       samples = decodeRowSamples(rows.blob(3), raw, count);
-    } catch (const InputError& e) {
-      throw InputError(fmt::format("migrating to schema 4: {} {} is damaged: {}", table, id, e.what()));
+    } catch (const InputError&) {
+      continue;
     }
     const std::string compact = io::encodeSamples(samples, channels);
     const auto back = io::decodeSamples(compact, channels, count);

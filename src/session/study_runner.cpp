@@ -198,7 +198,9 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
                       fmt::format("ok: {} samples, {} missed, {} faults{}", result.profile.size(),
                                   result.missed_samples, result.faults, disturbed.empty() ? "" : "; disturbed"),
                       disturbed);
-    participant->trialCompleted(plan, result.profile);
+    // The participant learns from what was stored (at a declared resolution, not what was
+    // measured), as it does on resume: a resumed study stays bit-identical.
+    participant->trialCompleted(plan, study.resolution.empty() ? result.profile : db_.trialProfile(record.id));
     if (study.protocol.show_scores && options.score_text) participant->prompt(options.score_text(plan, result.profile));
     ++ran;
     if (options.progress) {

@@ -1,6 +1,7 @@
 #include "hattr/io/sample_codec.hpp"
 
 #include <bit>
+#include <cstring>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -121,7 +122,7 @@ TEST(SampleCodec, AValueBeyondTheResolutionsRangeIsRefusedNamingTheChannel) {
     (void)encodeSamples(samples, channels, defaultResolution());
     FAIL() << "encoded";
   } catch (const InputError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("channel x, sample 1: 1000000000000 m is beyond 2^52 steps of 1e-06 m"));
+    EXPECT_THAT(e.what(), HasSubstr("channel x, sample 1: 1000000000000 m is beyond 2^51 steps of 1e-06 m"));
   }
   ChannelResolution missing = {{Channel::kTime, 1e-6}};
   EXPECT_THROW((void)encodeSamples(samples, channels, missing), InputError);
@@ -150,6 +151,43 @@ TEST(SampleCodec, ADamagedOrForeignBlockIsRefusedWithWhatIsWrong) {
   std::string flipped = blob;
   flipped[flipped.size() - 20] = static_cast<char>(flipped[flipped.size() - 20] ^ 0x5A);
   EXPECT_NE(message(flipped, channels, 500), "decoded");
+  EXPECT_THAT(message(blob + "x", channels, 500), HasSubstr("not exactly one zstd frame"));
+  // The header outside the frame is checked against its copy under the checksum.
+  std::string predictor = blob;
+  predictor[12 + 10 * 1 + 1] = 1;  // x's quadratic said to be a line
+  EXPECT_THAT(message(predictor, channels, 500), HasSubstr("channel x: predictor 1, expected 2"));
+  std::string reserved = blob;
+  reserved[11] = 7;
+  EXPECT_THAT(message(reserved, channels, 500), HasSubstr("flags are 0x00 0x07"));
+}
+
+TEST(SampleCodec, AQuantizedStepChangedOutsideTheChecksumIsRefused) {
+  const auto channels = everyStoredChannel();
+  const auto samples = stroke(300, 6);
+  std::string blob = encodeSamples(samples, channels, defaultResolution());
+  const double coarser = 2e-6;  // x's step, 1 µm, made 2 µm
+  std::memcpy(blob.data() + 12 + 10 * 1 + 2, &coarser, sizeof coarser);
+  try {
+    (void)decodeSamples(blob, channels, samples.size());
+    FAIL() << "decoded";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("header is damaged"));
+  }
+}
+
+TEST(SampleCodec, ACommandedForceWithItsOwnStepIsPredictedAsTheOthers) {
+  // Steps that differ from its parts' leave the commanded force to the quadratic, both ways.
+  const auto channels = everyStoredChannel();
+  const auto samples = stroke(800, 7);
+  ChannelResolution steps = defaultResolution();
+  steps[Channel::kCmdFx] = 1e-4;
+  const std::string blob = encodeSamples(samples, channels, steps);
+  const auto read = decodeSamples(blob, channels, samples.size());
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    ASSERT_EQ(read[i].f_cmd_W.x(), static_cast<double>(std::llround(samples[i].f_cmd_W.x() / 1e-4)) * 1e-4) << i;
+    ASSERT_EQ(read[i].f_cmd_W.y(), static_cast<double>(std::llround(samples[i].f_cmd_W.y() / 1e-3)) * 1e-3) << i;
+  }
+  EXPECT_EQ(encodeSamples(read, channels, steps), blob);
 }
 
 TEST(SampleCodec, ResolutionsReadFromJsonAndSayWhatIsWrong) {

@@ -611,6 +611,71 @@ TEST(StudyDatabase, MigratesSchema3InPlaceRewritingEveryStoredTrialCompactlyAndL
   sqlite3_close(db);
 }
 
+TEST(StudyDatabase, AMigrationLeavesADamagedSchema3BlockAsItWasAndMigratesTheRest) {
+  StudyFolder folder;
+  std::mt19937_64 rng(test::testSeed(31));
+  std::vector<HapticProfile> kept;
+  {
+    StudyDatabase db = StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json"));
+    db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);
+    const auto trials = db.trials("S01");
+    const std::int64_t session = db.beginSession("S01");
+    for (std::size_t i = 0; i < 2; ++i) {
+      kept.push_back(test::randomProfile(rng, 300, RawChannels{.tilt = true}));
+      db.markRunning(trials[i].id, session);
+      db.completeTrial(trials[i].id, kept.back(), "ok");
+    }
+  }
+  // Schema 3 again; the second trial's rows cut short by 8 bytes.
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open((folder.dir / "s.sqlite").c_str(), &db), SQLITE_OK);
+  std::vector<std::int64_t> ids;
+  {
+    StudyDatabase reader = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kReadOnly);
+    for (const auto& t : reader.trials("S01")) ids.push_back(t.id);
+  }
+  for (std::size_t i = 0; i < 2; ++i) {
+    sqlite3_stmt* st = nullptr;
+    ASSERT_EQ(sqlite3_prepare_v2(db, "UPDATE samples SET data = ? WHERE trial = ?", -1, &st, nullptr), SQLITE_OK);
+    std::string rows = rowSamples(kept[i]);
+    if (i == 1) rows.resize(rows.size() - 8);
+    sqlite3_bind_blob(st, 1, rows.data(), static_cast<int>(rows.size()), SQLITE_TRANSIENT);
+    sqlite3_bind_int64(st, 2, ids[i]);
+    ASSERT_EQ(sqlite3_step(st), SQLITE_DONE);
+    sqlite3_finalize(st);
+  }
+  ASSERT_EQ(sqlite3_exec(db,
+                         "ALTER TABLE samples DROP COLUMN encoding; ALTER TABLE disturbed_attempts DROP COLUMN encoding; "
+                         "PRAGMA user_version = 3;",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+
+  StudyDatabase migrated = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kReadWrite);
+  EXPECT_EQ(migrated.schemaVersion(), 4);
+  EXPECT_EQ(migrated.trialProfile(ids[0]).samples(), kept[0].samples());
+  try {
+    (void)migrated.trialProfile(ids[1]);
+    FAIL() << "read a damaged trial";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("is damaged: samples: 47992 bytes stored, expected 300 samples"));
+  }
+}
+
+TEST(StudyDatabase, ATrialWhoseTimesAResolutionWouldMergeIsStoredLosslessly) {
+  std::string definition = smallStudy();
+  definition.insert(definition.rfind('}'), R"(, "storage": {"resolution": {"t": 0.01}})");
+  StudyFolder folder(definition);
+  StudyDatabase db = StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json"));
+  db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);
+  std::mt19937_64 rng(test::testSeed(37));
+  const HapticProfile p = test::randomProfile(rng, 200, RawChannels{.tilt = true});  // samples 1 ms apart
+  const auto trial = db.trials("S01").front();
+  db.markRunning(trial.id, db.beginSession("S01"));
+  db.completeTrial(trial.id, p, "ok");
+  EXPECT_EQ(db.trialProfile(trial.id).samples(), p.samples());
+}
+
 TEST(StudyDatabase, AStudyWithADeclaredResolutionStoresItsTrialsInWholeSteps) {
   std::string definition = smallStudy();
   definition.insert(definition.rfind('}'), R"(, "storage": {"resolution": {"x": 1e-5}})");

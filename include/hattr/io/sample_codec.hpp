@@ -32,15 +32,15 @@ using ChannelResolution = std::map<Channel, double>;
 /// 10 µm/s, 1 mN (every force), 1e-4 rad, and whole units for flags and raw pressure.
 const ChannelResolution& defaultResolution();
 
-/// Reads a resolution from its JSON form: "lossless", "default", or an object of channel
-/// name -> step (every stored channel, steps finite and > 0). Throws InputError naming
-/// `where`, the channel and what was expected.
+/// Reads a resolution from its JSON form: "lossless", "default", or an object of channel name
+/// -> step (steps finite and > 0; the channels not named keep the default's step). Throws
+/// InputError naming `where`, the channel and what was expected.
 ChannelResolution parseResolution(std::string_view json_text, std::string_view where);
 /// Its JSON form, as parseResolution reads it ("lossless" when empty).
 std::string resolutionJson(const ChannelResolution& resolution);
 
 /// Encodes `samples` on `channels` (the stored channels, in order). With a resolution, it must
-/// give a step for every channel, and every value must be within 2^52 steps of zero. `level`
+/// give a step for every channel, and every value must be within 2^51 steps of zero. `level`
 /// is zstd's (1–19). Throws InputError for what cannot be encoded.
 std::string encodeSamples(std::span<const Sample> samples, std::span<const Channel> channels,
                           const ChannelResolution& resolution = {}, int level = 1);
