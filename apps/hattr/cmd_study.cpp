@@ -24,6 +24,7 @@ struct StudyOptions {
   std::string from;
   std::string clock = "sim";
   int max_trials = -1;
+  int subjects_at_once = 1;
   double band = -1.0;
   bool json = false;
   bool quiet = false;
@@ -86,7 +87,8 @@ void runRun(const StudyOptions& opt) {
   session::StudyRunner runner(db, sim::makeUnattendedParticipant);
   session::RunOptions run{.only_subject = opt.subject,
                           .clock = session::parseClock(opt.clock),
-                          .max_trials = opt.max_trials};
+                          .max_trials = opt.max_trials,
+                          .subjects_at_once = opt.subjects_at_once};
   // The expert's station for the mentored modes' training trials (the study file's mentor).
   const session::StudyDefinition& study = db.study();
   std::unique_ptr<session::LiveGuidance> mentor;
@@ -206,6 +208,11 @@ void registerStudyCommands(CLI::App& app) {
       ->check(CLI::IsMember({"sim", "real"}))
       ->capture_default_str();
   run->add_option("--max-trials", opt->max_trials, "Stop after this many trials");
+  run->add_option("--subjects-at-once", opt->subjects_at_once,
+                  "Simulated subjects run at once on their own threads (--clock sim, all subjects, no --max-trials, "
+                  "no mentor; otherwise one at a time); the trials are the same to the bit")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
   run->add_flag("--quiet", opt->quiet, "No progress line");
   run->add_flag("--json", opt->json, "Print the status as JSON when done");
   run->callback([opt] { runRun(*opt); });

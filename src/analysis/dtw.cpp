@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "dtw_internal.hpp"
+#include "parallel.hpp"
 #include "hattr/core/error.hpp"
 
 namespace hattr::analysis {
@@ -326,33 +327,6 @@ double dtwIndependentSum(Channels a, Channels b, const DtwOptions& options) {
 
 namespace {
 
-/// Runs `chunk_costs(first, last)` over the pairs [0, count) in chunks of `chunk`, taken in turn
-/// by `threads` threads (this one among them), at most as many as the hardware runs at once:
-/// more would only time-slice the cores and evict each other's rows from their caches. The
-/// first exception a chunk throws is rethrown here once every thread has stopped.
-template <class ChunkCosts>
-void forEachChunk(std::size_t count, std::size_t chunk, unsigned threads, const ChunkCosts& chunk_costs) {
-  std::atomic<std::size_t> next{0};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
-  const auto work = [&] {
-    try {
-      for (std::size_t first = next.fetch_add(chunk); first < count; first = next.fetch_add(chunk)) {
-        chunk_costs(first, std::min(count, first + chunk));
-      }
-    } catch (...) {
-      const std::lock_guard lock(failure_mutex);
-      if (!failure) failure = std::current_exception();
-    }
-  };
-  const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
-  std::vector<std::thread> workers;
-  for (unsigned t = 1; t < std::min(threads, hardware) && t * chunk < count; ++t) workers.emplace_back(work);
-  work();
-  for (auto& worker : workers) worker.join();
-  if (failure) std::rethrow_exception(failure);
-}
-
 /// Pairs [first, last) of `pair_of(p)` = (series a, series b), as the kernel takes them.
 struct PairBlock {
   std::vector<const double*> a_ptr, b_ptr;
@@ -397,7 +371,7 @@ std::vector<double> batchCosts(std::span<const Series> a, std::span<const Series
   const std::size_t share = (a.size() + threads - 1) / threads;
   const std::size_t chunk = std::max<std::size_t>(width, (share + width - 1) / width * width);
   std::vector<double> costs(a.size());
-  forEachChunk(a.size(), chunk, threads, [&](std::size_t first, std::size_t last) {
+  detail::forEachChunk(a.size(), chunk, threads, [&](std::size_t first, std::size_t last) {
     PairBlock block;
     block.fill(first, last, [&](std::size_t p) { return std::tie(a[p], b[p]); });
     costsOfPairs(block.a_ptr, block.b_ptr, block.a_len, block.b_len, options, costs.data() + first, lanes);
@@ -433,7 +407,7 @@ Eigen::MatrixXd dtwCostMatrix(std::span<const std::vector<double>> series,
   for (std::size_t i = 0; i < series.size(); ++i) {
     for (std::size_t j = i + 1; j < series.size(); ++j) pairs.emplace_back(i, j);
   }
-  forEachChunk(pairs.size(), 64, threads, [&](std::size_t first, std::size_t last) {
+  detail::forEachChunk(pairs.size(), 64, threads, [&](std::size_t first, std::size_t last) {
     PairBlock block;
     block.fill(first, last, [&](std::size_t p) { return std::tie(series[pairs[p].first], series[pairs[p].second]); });
     std::vector<double> out(last - first);
@@ -447,6 +421,8 @@ Eigen::MatrixXd dtwCostMatrix(std::span<const std::vector<double>> series,
   });
   return costs;
 }
+
+std::size_t dtwBatchWidth() { return detail::batchWidth(); }
 
 std::string dtwSimdTarget() { return detail::simdTargetName(); }
 

@@ -11,7 +11,11 @@
 //  - batchKernel: many pairs of equal lengths. SIMD lanes are different pairs; D is computed
 //    in strips of rows, column by column, so a block's full-width row of D is read and
 //    written once per strip; four vectors of pairs are interleaved to hide the latency of
-//    the sequential dependency down each column of a strip.
+//    the sequential dependency down each column of a strip. Cells that cannot lie on the
+//    best path are skipped (pruned DTW, Silva & Batista 2016): each pair's cost along one
+//    simple path bounds its DTW cost, and a strip's columns left and right of every cell
+//    within the bound are not computed. The cells within it are computed exactly as
+//    without pruning, so the costs are the same to the bit.
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "analysis/dtw_simd.cpp"
@@ -19,8 +23,10 @@
 #include <hwy/highway.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 #include "dtw_internal.hpp"
@@ -181,6 +187,37 @@ HWY_INLINE Vd stripCellOutside(Tag d, Vd& diag, double* left) {
 }
 
 constexpr std::size_t kStripRows = 16;  // rows of D computed together, column by column
+// The narrow band whose costs bound a wide problem's (pruning): a twentieth of the length.
+constexpr std::size_t kPrepassBand(std::size_t longer) { return (longer + 19) / 20; }
+
+// The pruning threshold of one pair: its cost along the path that goes diagonally, then
+// straight to the corner (inside any band, which covers |n - m|), accumulated in the
+// kernels' order so that D(n-1, m-1) <= it, plus a margin for a compiler's different
+// rounding (fused multiply-adds): every cell above it is off the best path.
+template <DtwCost kCost>
+double pathBound(const double* a, const double* b, std::size_t n, std::size_t m) {
+  const auto cost = [&](std::size_t i, std::size_t j) {
+    const double diff = a[i] - b[j];
+    return kCost == DtwCost::kAbsolute ? std::abs(diff) : diff * diff;
+  };
+  double sum = cost(0, 0);
+  for (std::size_t i = 0, j = 0; i + 1 < n || j + 1 < m;) {
+    if (i + 1 < n) ++i;
+    if (j + 1 < m) ++j;
+    sum = cost(i, j) + sum;
+  }
+  return sum * (1.0 + 4.0 * static_cast<double>(n + m) * std::numeric_limits<double>::epsilon());
+}
+
+// Whether any lane of the four vectors is within its pair's threshold.
+HWY_INLINE bool anyWithin(Tag d, const double* v, const double* threshold) {
+  const std::size_t lanes = hn::Lanes(d);
+  auto within = hn::Le(hn::LoadU(d, v), hn::LoadU(d, threshold));
+  for (std::size_t g = 1; g < kBatchGroups; ++g) {
+    within = hn::Or(within, hn::Le(hn::LoadU(d, v + g * lanes), hn::LoadU(d, threshold + g * lanes)));
+  }
+  return !hn::AllFalse(d, within);
+}
 
 // Many univariate pairs of equal lengths; lane s of the block holds pair block + s.
 // Series are interleaved (element i of every pair of the block side by side). D is computed
@@ -190,6 +227,39 @@ constexpr std::size_t kStripRows = 16;  // rows of D computed together, column b
 // not once per row: the block stays within the core's own caches. Four vectors of pairs
 // advance together, so the chain down a column overlaps four ways. Every cell is the same
 // expression as the other kernels', so the costs do not depend on the order.
+//
+// Pruning: a cell above its pair's threshold (pathBound) is off the best path, and so is
+// every cell whose three predecessors all are. A strip starts at the first column where the
+// row above it has a cell within some pair's threshold (left of it every cell of the strip
+// is above), and stops after a column that is wholly above while the row above is too
+// (right of it, all are). Cells left out read as +inf, which changes only cells above the
+// threshold: those within it are exact.
+template <DtwCost kCost, bool kAbandon>
+void batchKernel(const KernelProblem& p, double* out);
+
+// The block's thresholds lowered to its pairs' costs within a narrow band, when the problem's
+// band is much wider: a path in the narrow band is a path in the wide one, computed by the
+// same cells, so the full cost never exceeds it.
+template <DtwCost kCost>
+void tightenThresholds(const KernelProblem& p, std::size_t block, std::size_t width, double* threshold) {
+  const std::size_t longer = std::max(p.n, p.m);
+  const std::size_t narrow = std::max(kPrepassBand(longer), longer - std::min(p.n, p.m));
+  if (std::min(p.radius, longer) <= 2 * narrow) return;
+  KernelProblem q = p;
+  q.a = p.a + block;
+  q.b = p.b + block;
+  q.count = std::min(width, p.count - block);
+  q.radius = narrow;
+  q.bound = kInf;
+  std::vector<double> banded(q.count);
+  batchKernel<kCost, false>(q, banded.data());
+  for (std::size_t s = 0; s < width; ++s) {
+    const double cost = banded[std::min(s, q.count - 1)];
+    const double margin = 4.0 * static_cast<double>(p.n + p.m) * std::numeric_limits<double>::epsilon();
+    threshold[s] = std::min(threshold[s], cost * (1.0 + margin));
+  }
+}
+
 template <DtwCost kCost, bool kAbandon>
 void batchKernel(const KernelProblem& p, double* out) {
   const Tag d;
@@ -202,6 +272,7 @@ void batchKernel(const KernelProblem& p, double* out) {
   std::vector<double> b_int(m * width);
   std::vector<double> row(m * width);
   std::vector<double> left(kStripRows * width);
+  std::vector<double> threshold(width);
   const Vd inf = hn::Set(d, kInf);
 
   for (std::size_t block = 0; block < p.count; block += width) {
@@ -210,23 +281,45 @@ void batchKernel(const KernelProblem& p, double* out) {
       const std::size_t pair = std::min(block + s, p.count - 1);
       for (std::size_t i = 0; i < n; ++i) a_int[i * width + s] = p.a[pair][i];
       for (std::size_t j = 0; j < m; ++j) b_int[j * width + s] = p.b[pair][j];
+      threshold[s] = pathBound<kCost>(p.a[pair], p.b[pair], n, m);
     }
-    std::fill(row.begin(), row.end(), kInf);
+    tightenThresholds<kCost>(p, block, width, threshold.data());
+    const Vd th0 = hn::LoadU(d, threshold.data());
+    const Vd th1 = hn::LoadU(d, threshold.data() + lanes);
+    const Vd th2 = hn::LoadU(d, threshold.data() + 2 * lanes);
+    const Vd th3 = hn::LoadU(d, threshold.data() + 3 * lanes);
 
+    // The columns [above_first, above_last] of the row above the strip that were computed;
+    // the others are above every threshold. Above the first strip: only D(-1, -1) = 0.
+    std::size_t above_first = 0;
+    std::size_t above_last = 0;
+    bool first_strip = true;
     bool abandoned = false;
-    for (std::size_t i0 = 0; i0 < n && !abandoned; i0 += kStripRows) {
+    for (std::size_t i0 = 0; i0 < n && !abandoned; i0 += kStripRows, first_strip = false) {
       const std::size_t rows = std::min(kStripRows, n - i0);
       const std::size_t i_last = i0 + rows - 1;
-      // The strip's columns: from its first row's band to its last row's. Left of them every
-      // row's D(i, j-1) is outside the band: +inf.
-      const std::size_t j_first = i0 > r ? i0 - r : 0;
+      // The strip's columns: from its first row's band to its last row's, and from the first
+      // column where the row above has a cell within a threshold. Left of them every row's
+      // D(i, j-1) is outside the band or above the thresholds: +inf.
+      // The strip may stop once it is right of the row above's last cell within a threshold.
+      std::size_t j_first = i0 > r ? i0 - r : 0;
+      std::size_t above_within_last = 0;
+      if (!first_strip) {
+        std::size_t start = above_first;
+        while (start < above_last && !anyWithin(d, row.data() + start * width, threshold.data())) ++start;
+        j_first = std::max(j_first, start);
+        above_within_last = above_last;
+        while (above_within_last > start && !anyWithin(d, row.data() + above_within_last * width, threshold.data())) {
+          --above_within_last;
+        }
+      }
       const std::size_t j_last = std::min(m - 1, i_last + r);
       std::fill(left.begin(), left.begin() + static_cast<std::ptrdiff_t>(rows * width), kInf);
-      // D(i0-1, j_first-1), the first row's diagonal: D(-1, -1) = 0 on row 0, +inf left of
-      // column 0 otherwise.
-      Vd top0 = i0 == 0 ? hn::Zero(d) : inf;
+      // D(i0-1, j_first-1), the first row's diagonal: D(-1, -1) = 0 on row 0; +inf left of
+      // column 0 and where the row above was not computed.
+      Vd top0 = first_strip && j_first == 0 ? hn::Zero(d) : inf;
       Vd top1 = top0, top2 = top0, top3 = top0;
-      if (j_first > 0) {
+      if (!first_strip && j_first > above_first && j_first - 1 <= above_last) {
         const double* c = row.data() + (j_first - 1) * width;
         top0 = hn::LoadU(d, c);
         top1 = hn::LoadU(d, c + lanes);
@@ -234,38 +327,58 @@ void batchKernel(const KernelProblem& p, double* out) {
         top3 = hn::LoadU(d, c + 3 * lanes);
       }
       Vd min0 = inf, min1 = inf, min2 = inf, min3 = inf;
-      for (std::size_t j = j_first; j <= j_last; ++j) {
+      std::size_t j = j_first;
+      for (; j <= j_last; ++j) {
         const double* b_j = b_int.data() + j * width;
         const Vd b0 = hn::LoadU(d, b_j);
         const Vd b1 = hn::LoadU(d, b_j + lanes);
         const Vd b2 = hn::LoadU(d, b_j + 2 * lanes);
         const Vd b3 = hn::LoadU(d, b_j + 3 * lanes);
-        // Down the column: up starts as D(i0-1, j) from the row above the strip.
+        // Down the column: up starts as D(i0-1, j) from the row above the strip (+inf where
+        // it was not computed).
         double* cell = row.data() + j * width;
-        Vd up0 = hn::LoadU(d, cell);
-        Vd up1 = hn::LoadU(d, cell + lanes);
-        Vd up2 = hn::LoadU(d, cell + 2 * lanes);
-        Vd up3 = hn::LoadU(d, cell + 3 * lanes);
+        const bool above_computed = !first_strip && j >= above_first && j <= above_last;
+        Vd up0 = above_computed ? hn::LoadU(d, cell) : inf;
+        Vd up1 = above_computed ? hn::LoadU(d, cell + lanes) : inf;
+        Vd up2 = above_computed ? hn::LoadU(d, cell + 2 * lanes) : inf;
+        Vd up3 = above_computed ? hn::LoadU(d, cell + 3 * lanes) : inf;
         Vd diag0 = top0, diag1 = top1, diag2 = top2, diag3 = top3;
         top0 = up0;
         top1 = up1;
         top2 = up2;
         top3 = up3;
-        for (std::size_t k = 0; k < rows; ++k) {
-          const std::size_t i = i0 + k;
-          double* l = left.data() + k * width;
-          if (j + r >= i && j <= i + r) {  // |i - j| <= r
-            const double* a_i = a_int.data() + i * width;
-            up0 = stripCell<kCost>(d, hn::LoadU(d, a_i), b0, up0, diag0, l);
-            up1 = stripCell<kCost>(d, hn::LoadU(d, a_i + lanes), b1, up1, diag1, l + lanes);
-            up2 = stripCell<kCost>(d, hn::LoadU(d, a_i + 2 * lanes), b2, up2, diag2, l + 2 * lanes);
-            up3 = stripCell<kCost>(d, hn::LoadU(d, a_i + 3 * lanes), b3, up3, diag3, l + 3 * lanes);
-          } else {
-            up0 = stripCellOutside(d, diag0, l);
-            up1 = stripCellOutside(d, diag1, l + lanes);
-            up2 = stripCellOutside(d, diag2, l + 2 * lanes);
-            up3 = stripCellOutside(d, diag3, l + 3 * lanes);
+        // Down the strip; right of the row above's last cell within a threshold, also the
+        // column's smallest cells (kTrack), to find where the strip may stop.
+        Vd column0 = inf, column1 = inf, column2 = inf, column3 = inf;
+        const auto down = [&](auto track) {
+          for (std::size_t k = 0; k < rows; ++k) {
+            const std::size_t i = i0 + k;
+            double* l = left.data() + k * width;
+            if (j + r >= i && j <= i + r) {  // |i - j| <= r
+              const double* a_i = a_int.data() + i * width;
+              up0 = stripCell<kCost>(d, hn::LoadU(d, a_i), b0, up0, diag0, l);
+              up1 = stripCell<kCost>(d, hn::LoadU(d, a_i + lanes), b1, up1, diag1, l + lanes);
+              up2 = stripCell<kCost>(d, hn::LoadU(d, a_i + 2 * lanes), b2, up2, diag2, l + 2 * lanes);
+              up3 = stripCell<kCost>(d, hn::LoadU(d, a_i + 3 * lanes), b3, up3, diag3, l + 3 * lanes);
+            } else {
+              up0 = stripCellOutside(d, diag0, l);
+              up1 = stripCellOutside(d, diag1, l + lanes);
+              up2 = stripCellOutside(d, diag2, l + 2 * lanes);
+              up3 = stripCellOutside(d, diag3, l + 3 * lanes);
+            }
+            if constexpr (decltype(track)::value) {
+              column0 = hn::Min(column0, up0);
+              column1 = hn::Min(column1, up1);
+              column2 = hn::Min(column2, up2);
+              column3 = hn::Min(column3, up3);
+            }
           }
+        };
+        const bool right_of_above = first_strip || j > above_within_last;
+        if (right_of_above) {
+          down(std::true_type{});
+        } else {
+          down(std::false_type{});
         }
         // The strip's last row becomes the row above the next strip.
         hn::StoreU(up0, d, cell);
@@ -278,7 +391,16 @@ void batchKernel(const KernelProblem& p, double* out) {
           min2 = hn::Min(min2, up2);
           min3 = hn::Min(min3, up3);
         }
+        // There, a column wholly above the thresholds ends the strip: the next column's up,
+        // diagonal and left are all above them.
+        if (right_of_above) {
+          const auto within = hn::Or(hn::Or(hn::Le(column0, th0), hn::Le(column1, th1)),
+                                     hn::Or(hn::Le(column2, th2), hn::Le(column3, th3)));
+          if (hn::AllFalse(d, within)) break;
+        }
       }
+      above_first = j_first;
+      above_last = std::min(j, j_last);
       // Every path crosses the strip's last row: stop when all lanes' rows exceed the bound.
       if constexpr (kAbandon) {
         const Vd all = hn::Min(hn::Min(min0, min1), hn::Min(min2, min3));
@@ -286,9 +408,12 @@ void batchKernel(const KernelProblem& p, double* out) {
       }
     }
 
+    // The corner was computed unless the last strip stopped before it (then it is above
+    // every threshold, which no pair's cost is: unreachable, but never read stale).
     const double* last = row.data() + (m - 1) * width;
     for (std::size_t s = 0; s < width && block + s < p.count; ++s) {
-      out[block + s] = abandoned || last[s] > p.bound ? kInf : last[s];
+      const bool corner_computed = above_last == m - 1;
+      out[block + s] = abandoned || !corner_computed || last[s] > p.bound ? kInf : last[s];
     }
   }
 }

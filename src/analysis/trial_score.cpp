@@ -3,11 +3,10 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <exception>
 #include <string>
-#include <thread>
 
 #include "hattr/core/error.hpp"
+#include "parallel.hpp"
 
 namespace hattr::analysis {
 namespace {
@@ -75,42 +74,24 @@ TrialScore TrialScorer::score(const HapticProfile& trial) const {
 }
 
 std::vector<TrialScore> TrialScorer::scoreAll(std::span<const HapticProfile* const> trials, unsigned threads) const {
-  // Each trial's span preprocessed onto the expert's time steps.
+  // Each trial's span preprocessed onto the expert's time steps, the trials shared by the threads.
+  const unsigned workers = std::max(1u, threads);
   std::array<std::vector<std::vector<double>>, 6> prepared;
-  for (const HapticProfile* trial : trials) {
-    const Cropped c = crop(*trial, "trial");
+  for (auto& channel : prepared) channel.resize(trials.size());
+  detail::forEachChunk(trials.size(), 1, workers, [&](std::size_t i, std::size_t) {
+    const Cropped c = crop(*trials[i], "trial");
     for (std::size_t k = 0; k < kScoredChannels.size(); ++k) {
-      prepared[k].push_back(preprocessTrial(c.t_s, c.series[k], expert_t_, options_.normalization));
+      prepared[k][i] = preprocessTrial(c.t_s, c.series[k], expert_t_, options_.normalization);
     }
-  }
+  });
 
   // DTW per channel, each channel's trials as one batch, the channels shared by the threads.
   const DtwOptions dtw{.cost = options_.cost, .band_fraction = options_.band_fraction};
   std::array<std::vector<double>, 6> costs;
-  const auto channelCosts = [&](std::size_t k) {
+  detail::forEachChunk(costs.size(), 1, workers, [&](std::size_t k, std::size_t) {
     const std::vector<std::vector<double>> expert(trials.size(), expert_series_[k]);
     costs[k] = dtwBatch(expert, prepared[k], dtw);
-  };
-  const unsigned workers_wanted = std::clamp(threads, 1u, 6u);
-  if (workers_wanted == 1) {
-    for (std::size_t k = 0; k < 6; ++k) channelCosts(k);
-  } else {
-    std::vector<std::thread> workers;
-    std::vector<std::exception_ptr> errors(workers_wanted);
-    for (unsigned w = 0; w < workers_wanted; ++w) {
-      workers.emplace_back([&, w] {
-        try {
-          for (std::size_t k = w; k < 6; k += workers_wanted) channelCosts(k);
-        } catch (...) {
-          errors[w] = std::current_exception();
-        }
-      });
-    }
-    for (auto& t : workers) t.join();
-    for (const auto& e : errors) {
-      if (e) std::rethrow_exception(e);
-    }
-  }
+  });
 
   std::vector<TrialScore> scores(trials.size());
   for (std::size_t i = 0; i < trials.size(); ++i) {

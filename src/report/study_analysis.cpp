@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "hattr/analysis/dtw.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/io/table_csv.hpp"
 
@@ -131,11 +132,13 @@ StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptio
   const analysis::TrialScorer scorer(db.expert(study.skill), {.normalization = options.normalization,
                                                               .cost = options.cost,
                                                               .band_fraction = options.band_fraction});
-  constexpr std::size_t kChunk = 16;
+  // A chunk is whole SIMD blocks of the DTW batch kernel (32 pairs or more): no idle lanes.
+  const std::size_t width = analysis::dtwBatchWidth();
+  const std::size_t chunk = (32 + width - 1) / width * width;
   const int total = static_cast<int>(out.costs.size());
   if (options.progress) options.progress(0, total);
-  for (std::size_t first = 0; first < out.costs.size(); first += kChunk) {
-    const std::size_t last = std::min(out.costs.size(), first + kChunk);
+  for (std::size_t first = 0; first < out.costs.size(); first += chunk) {
+    const std::size_t last = std::min(out.costs.size(), first + chunk);
     std::vector<HapticProfile> profiles;
     for (std::size_t i = first; i < last; ++i) profiles.push_back(db.trialProfile(out.costs[i].trial_id));
     std::vector<const HapticProfile*> pointers;

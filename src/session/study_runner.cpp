@@ -1,6 +1,8 @@
 #include "hattr/session/study_runner.hpp"
 
+#include <algorithm>
 #include <random>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -111,8 +113,7 @@ std::unique_ptr<Participant> makeScriptParticipant(const SubjectRecord& subject,
 StudyRunner::StudyRunner(StudyDatabase& db, ParticipantFactory factory) : db_(db), factory_(std::move(factory)) {
   const StudyDefinition& study = db_.study();
   expert_ = db_.expert(study.skill);
-  environment_ = std::make_unique<TrialEnvironment>(study.device, render::parseWorldConfig(study.world.dump(), "study world"),
-                                                    study.rate_hz);
+  world_ = render::parseWorldConfig(study.world.dump(), "study world");
   reference_ = std::make_shared<guidance::ReferenceTrajectory>(expert_, study.rate_hz);
 }
 
@@ -120,43 +121,83 @@ int StudyRunner::run(const RunOptions& options) {
   HATTR_THROW_UNLESS(options.mentor != nullptr || !db_.study().hasMentoredModes(),
                      "study \"{}\" has mentored modes: their training trials need the expert's station (the study "
                      "file's mentor block), which this app did not provide", db_.study().name);
+  HATTR_THROW_UNLESS(options.subjects_at_once >= 1, "subjects at once: expected at least 1, got {}",
+                     options.subjects_at_once);
+  stopping_ = false;
+  const std::vector<SubjectRecord> subjects = db_.subjects();
+  if (options.subjects_at_once > 1 && options.clock == Clock::kSimulated && options.mentor == nullptr &&
+      options.max_trials < 0 && options.only_subject.empty()) {
+    return runSubjectsAtOnce(subjects, options);
+  }
   int ran = 0;
   bool found = options.only_subject.empty();
-  for (const SubjectRecord& subject : db_.subjects()) {
+  for (const SubjectRecord& subject : subjects) {
     if (!options.only_subject.empty() && subject.id != options.only_subject) continue;
     found = true;
     const int budget = options.max_trials < 0 ? -1 : options.max_trials - ran;
     if (budget == 0) break;
-    ran += runSubject(subject, options, budget);
+    ran += runSubject(subject, options, budget, environment_);
   }
   HATTR_THROW_UNLESS(found, "--subject {}: no such subject in the study", options.only_subject);
   return ran;
 }
 
-int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& options, int budget) {
+int StudyRunner::runSubjectsAtOnce(const std::vector<SubjectRecord>& subjects, const RunOptions& options) {
+  // Workers take the subjects in turn; each keeps its own paper and device.
+  std::atomic<std::size_t> next{0};
+  std::atomic<int> ran{0};
+  std::exception_ptr failure;
+  const auto work = [&](EnvironmentSlot& environment) {
+    try {
+      for (std::size_t s = next++; s < subjects.size() && !stopping_; s = next++) {
+        ran += runSubject(subjects[s], options, -1, environment);
+      }
+    } catch (...) {
+      const std::lock_guard lock(db_mutex_);
+      if (!failure) failure = std::current_exception();
+      stopping_ = true;
+    }
+  };
+  const auto workers_wanted = std::min<std::size_t>(static_cast<std::size_t>(options.subjects_at_once), subjects.size());
+  std::vector<EnvironmentSlot> environments(workers_wanted);
+  std::vector<std::thread> workers;
+  for (std::size_t w = 1; w < workers_wanted; ++w) workers.emplace_back(work, std::ref(environments[w]));
+  work(environment_);
+  for (auto& worker : workers) worker.join();
+  if (failure) std::rethrow_exception(failure);
+  return ran;
+}
+
+// Every use of the database goes through withDatabase: other subjects may run beside this one.
+int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& options, int budget,
+                            EnvironmentSlot& environment) {
   const StudyDefinition& study = db_.study();
+  const auto profileOf = [this](std::int64_t id) { return withDatabase([id](StudyDatabase& db) { return db.trialProfile(id); }); };
+  std::vector<TrialRecord> trials = withDatabase([&](StudyDatabase& db) { return db.trials(subject.id); });
+  // A finished subject costs nothing: no participant is made and nothing is relived.
+  const auto left = std::count_if(trials.begin(), trials.end(),
+                                  [](const TrialRecord& t) { return t.status != TrialStatus::kCompleted; });
+  if (left == 0) return 0;
   const auto participant = factory_(subject, expert_);
-  std::vector<TrialRecord> trials = db_.trials(subject.id);
 
   // Resume: the participant relives the trials already done, in order.
   int completed = 0;
   for (const TrialRecord& t : trials) {
     if (t.status != TrialStatus::kCompleted) break;
-    participant->trialCompleted(t.plan, db_.trialProfile(t.id));
+    participant->trialCompleted(t.plan, profileOf(t.id));
     ++completed;
   }
-  if (completed == static_cast<int>(trials.size())) return 0;
 
-  const std::int64_t session = db_.beginSession(subject.id);
+  const std::int64_t session = withDatabase([&](StudyDatabase& db) { return db.beginSession(subject.id); });
   int ran = 0;
   for (std::size_t i = static_cast<std::size_t>(completed); i < trials.size(); ++i) {
-    if (budget >= 0 && ran >= budget) break;
+    if ((budget >= 0 && ran >= budget) || stopping_) break;
     const TrialRecord& record = trials[i];
     const TrialPlan& plan = record.plan;
     // A trial completed after a gap (an earlier one left pending) is never run again: the
     // participant relives it in its place, as on resume.
     if (record.status == TrialStatus::kCompleted) {
-      participant->trialCompleted(plan, db_.trialProfile(record.id));
+      participant->trialCompleted(plan, profileOf(record.id));
       continue;
     }
     if (i > static_cast<std::size_t>(completed) || completed > 0) participant->rest(study.protocol.rest_s);
@@ -176,12 +217,15 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
     for (int attempt = 0;; ++attempt) {
       setup.inject_stall_at_s = options.inject_stall_at_s ? options.inject_stall_at_s(plan, attempt) : -1.0;
       setup.live_seed = studyLiveSeed(subject.spec, plan, attempt);
-      db_.markRunning(record.id, session);
-      result = runTrial(*environment_, setup, participant->handForTrial(plan));
+      withDatabase([&](StudyDatabase& db) { db.markRunning(record.id, session); });
+      if (!environment) environment = std::make_unique<TrialEnvironment>(study.device, world_, study.rate_hz);
+      result = runTrial(*environment, setup, participant->handForTrial(plan));
       // A trial the device broke off is not data: mark it, keep everything stored, and stop.
       if (!result.failure.empty()) {
-        db_.failTrial(record.id, result.failure);
-        db_.endSession(session);
+        withDatabase([&](StudyDatabase& db) {
+          db.failTrial(record.id, result.failure);
+          db.endSession(session);
+        });
         throw Error(fmt::format("subject {}: {} trial {} with {} failed: {}; completed trials are kept, and `study "
                                 "run` repeats this one",
                                 subject.id, phaseName(plan.phase), plan.index, guidance::modeName(plan.mode),
@@ -191,25 +235,26 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
       result.profile.metadata().created_utc = "";
       disturbed = noteLoopCounters(result);
       if (!repeatDisturbedTrial(study.protocol, disturbed, attempt)) break;
-      db_.keepDisturbedAttempt(record.id, result.profile, disturbed);
+      withDatabase([&](StudyDatabase& db) { db.keepDisturbedAttempt(record.id, result.profile, disturbed); });
       participant->prompt(fmt::format("That trial was disturbed ({}): once more", disturbed));
     }
-    db_.completeTrial(record.id, result.profile,
-                      fmt::format("ok: {} samples, {} missed, {} faults{}", result.profile.size(),
-                                  result.missed_samples, result.faults, disturbed.empty() ? "" : "; disturbed"),
-                      disturbed);
+    const std::string outcome = fmt::format("ok: {} samples, {} missed, {} faults{}", result.profile.size(),
+                                            result.missed_samples, result.faults, disturbed.empty() ? "" : "; disturbed");
+    withDatabase([&](StudyDatabase& db) { db.completeTrial(record.id, result.profile, outcome, disturbed); });
     // The participant learns from what was stored (at a declared resolution, not what was
     // measured), as it does on resume: a resumed study stays bit-identical.
-    participant->trialCompleted(plan, study.resolution.empty() ? result.profile : db_.trialProfile(record.id));
+    participant->trialCompleted(plan, study.resolution.empty() ? result.profile : profileOf(record.id));
     if (study.protocol.show_scores && options.score_text) participant->prompt(options.score_text(plan, result.profile));
     ++ran;
     if (options.progress) {
       TrialRecord done = record;
       done.status = TrialStatus::kCompleted;
-      options.progress({subject.id, static_cast<int>(i) + 1, static_cast<int>(trials.size()), &done});
+      withDatabase([&](StudyDatabase&) {  // one progress call at a time
+        options.progress({subject.id, static_cast<int>(i) + 1, static_cast<int>(trials.size()), &done});
+      });
     }
   }
-  db_.endSession(session);
+  withDatabase([&](StudyDatabase& db) { db.endSession(session); });
   return ran;
 }
 

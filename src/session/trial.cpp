@@ -44,6 +44,8 @@ constexpr auto kOwnLoopStuckAfter = std::chrono::seconds(1);
 /// A real-time trial ends with its recording window (loop time); the wall clock ends it this
 /// long after the window would have ended had the loop kept pace, whatever the loop's time says.
 constexpr double kWindowEndBackstop_s = 2.0;
+/// Ticks a simulated-time trial runs between drains of the loop's sample ring.
+constexpr std::size_t kSimulatedChunk = 64;
 
 /// How a real-time wait ended: a failure (why), the end rule, a stop request, or the time ran out.
 struct WaitEnd {
@@ -264,7 +266,11 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
   const auto device = openTrialDevice(env.deviceUri(), settling);
   const Clock clock = device->clocking() == device::DeviceClocking::kSimulatable ? setup.clock : Clock::kRealTime;
   env.paper().reset();
-  servo::ServoLoop loop(*device, servo::ServoConfig{.rate_hz = env.rate_hz()});
+  // In simulated time the recorder drains the ring every kSimulatedChunk ticks, so a small
+  // ring does (a real-time loop keeps the default, seconds of samples, for a late consumer).
+  servo::ServoConfig servo_config{.rate_hz = env.rate_hz()};
+  if (clock == Clock::kSimulated) servo_config.sample_ring_capacity = 16 * kSimulatedChunk;
+  servo::ServoLoop loop(*device, servo_config);
   loop.setWorld(&env.paper());
   loop.setGuidance(&stage);
   ProfileMetadata metadata = trialMetadata(setup.metadata, env, config, result.clamps, clock);
@@ -288,10 +294,9 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
   // sample that ends the trial); between chunks, or every 2 ms in real time, we stop the loop.
   bool stopped = false;
   if (clock == Clock::kSimulated) {
-    constexpr std::size_t kChunk = 64;  // drain well before the ring could fill
     const auto run = [&](std::size_t count) {
-      for (std::size_t done = 0; done < count && !recorder.writingOver(); done += kChunk) {
-        loop.runSimulated(std::min(kChunk, count - done));
+      for (std::size_t done = 0; done < count && !recorder.writingOver(); done += kSimulatedChunk) {
+        loop.runSimulated(std::min(kSimulatedChunk, count - done));
         recorder.drain();
       }
     };

@@ -1,6 +1,8 @@
 #include "hattr/sim/in_silico.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <thread>
 
 #include <fmt/chrono.h>
 #include <fmt/format.h>
@@ -114,6 +116,8 @@ InSilicoResult runInSilicoStudy(const InSilicoOptions& o) {
   int done = 0;
   InSilicoResult result;
   session::RunOptions run;
+  HATTR_THROW_UNLESS(o.threads >= 0, "threads: expected 0 (as many as the hardware runs) or more, got {}", o.threads);
+  run.subjects_at_once = o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   run.progress = [&](const session::RunProgress&) {
     ++done;
     if (o.progress) o.progress("trials", done, total);

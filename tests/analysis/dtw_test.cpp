@@ -465,6 +465,55 @@ TEST(DtwBatch, EqualsPairByPairCostsForEqualAndMixedLengths) {
   EXPECT_TRUE(dtwBatch(std::vector<std::vector<double>>{}, std::vector<std::vector<double>>{}).empty());
 }
 
+// A copy of `a` warped in time (by up to `warp` of its length, smoothly) plus noise: as a
+// trial is to the expert, similar enough that the batch kernel prunes most cells.
+std::vector<double> warpedCopy(std::mt19937_64& rng, const std::vector<double>& a, std::size_t m, double warp) {
+  std::normal_distribution<double> noise(0.0, 0.3);
+  const double phase = std::uniform_real_distribution<double>(0.0, 6.28)(rng);
+  std::vector<double> b(m);
+  const double last = static_cast<double>(a.size() - 1);
+  for (std::size_t j = 0; j < m; ++j) {
+    const double u = m == 1 ? 0.0 : static_cast<double>(j) / static_cast<double>(m - 1);
+    const double t = std::clamp(u + warp * std::sin(3.14159 * u) * std::sin(phase + 2.0 * u), 0.0, 1.0) * last;
+    const auto i = static_cast<std::size_t>(t);
+    const double frac = t - static_cast<double>(i);
+    b[j] = a[i] + (i + 1 < a.size() ? frac * (a[i + 1] - a[i]) : 0.0) + noise(rng);
+  }
+  return b;
+}
+
+// The batch kernel skips the cells that cannot be on the best path (pruned DTW): on similar
+// series, where it skips most, and on dissimilar ones, with and without a band, the costs
+// are those of the pair-by-pair kernel to the bit (absolute costs: no rounding differs), and
+// the reference's for squared ones.
+TEST(DtwBatch, PruningLeavesEveryCostAsComputedInFull) {
+  const std::uint64_t seed = test::testSeed(23);
+  SCOPED_TRACE(seedNote(seed));
+  std::mt19937_64 rng(seed);
+  for (const auto& [n, m] : std::vector<std::pair<std::size_t, std::size_t>>{{40, 40}, {300, 300}, {257, 311}, {600, 480}, {100, 300}, {300, 90}}) {
+    for (const double warp : {0.02, 0.15, -1.0}) {  // -1: unrelated series
+      std::vector<std::vector<double>> as, bs;
+      for (int p = 0; p < 40; ++p) {
+        as.push_back(randomWalk(rng, n));
+        bs.push_back(warp < 0.0 ? randomWalk(rng, m) : warpedCopy(rng, as.back(), m, warp));
+      }
+      for (const double band : {-1.0, 0.3}) {
+        const std::string note = fmt::format("{}x{} warp {} band {}", n, m, warp, band);
+        const DtwOptions absolute{.band_fraction = band};
+        const auto costs = dtwBatch(as, bs, absolute);
+        for (std::size_t p = 0; p < as.size(); ++p) {
+          EXPECT_EQ(costs[p], dtwDistance(as[p], bs[p], absolute)) << note << " pair " << p;
+        }
+        const DtwOptions squared{.cost = DtwCost::kSquared, .band_fraction = band};
+        const auto squared_costs = dtwBatch(as, bs, squared);
+        for (std::size_t p = 0; p < as.size(); p += 7) {
+          expectNear(squared_costs[p], dtwReference(as[p], bs[p], squared), fmt::format("{} squared pair {}", note, p));
+        }
+      }
+    }
+  }
+}
+
 TEST(DtwBatch, GivesTheSameCostsToTheBitOnAnyNumberOfThreads) {
   const std::uint64_t seed = test::testSeed(17);
   SCOPED_TRACE(seedNote(seed));

@@ -266,6 +266,81 @@ TEST(StudyRunner, StopsAndResumesAtTheFirstUnfinishedTrial) {
   EXPECT_EQ(runner.run({}), 13);
 }
 
+/// A script participant that counts what the runner asks of it (in `log`).
+struct RunnerLog {
+  int participants = 0;
+  int relived_or_learned = 0;
+};
+class CountingParticipant : public Participant {
+ public:
+  CountingParticipant(std::unique_ptr<Participant> inner, RunnerLog& log) : inner_(std::move(inner)), log_(log) {}
+  device::HandScript& handForTrial(const TrialPlan& plan) override { return inner_->handForTrial(plan); }
+  void trialCompleted(const TrialPlan& plan, const HapticProfile& recorded) override {
+    ++log_.relived_or_learned;
+    inner_->trialCompleted(plan, recorded);
+  }
+
+ private:
+  std::unique_ptr<Participant> inner_;
+  RunnerLog& log_;
+};
+ParticipantFactory countingFactory(RunnerLog& log) {
+  return [&log](const SubjectRecord& subject, const HapticProfile& expert) {
+    ++log.participants;
+    return std::make_unique<CountingParticipant>(makeScriptParticipant(subject, expert), log);
+  };
+}
+
+// A resume costs what is left: a finished subject gets no participant and relives nothing;
+// a subject with trials left relives its own completed trials, then runs the rest.
+TEST(StudyRunner, AResumeRelivesOnlyTheSubjectsWithTrialsLeft) {
+  StudyFolder folder(smallStudy(3));
+  { (void)StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json")); }
+  StudyDatabase db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);
+  RunnerLog first;
+  ASSERT_EQ(StudyRunner(db, countingFactory(first)).run({.max_trials = 9 + 4}), 13);  // S01 whole, S02's first 4
+
+  RunnerLog resumed;
+  EXPECT_EQ(StudyRunner(db, countingFactory(resumed)).run({}), 5 + 9);
+  EXPECT_EQ(resumed.participants, 2);                   // S02 and S03, not S01
+  EXPECT_EQ(resumed.relived_or_learned, 4 + 5 + 9);    // S02's 4 relived, then 14 learned
+
+  RunnerLog finished;
+  EXPECT_EQ(StudyRunner(db, countingFactory(finished)).run({}), 0);
+  EXPECT_EQ(finished.participants, 0);
+  EXPECT_EQ(finished.relived_or_learned, 0);
+}
+
+// Subjects run at once: one whose participant cannot be made fails the run with its error;
+// the others stop after their current trial, and what they completed is kept.
+TEST(StudyRunner, SubjectsAtOnceStopWhenOneFailsAndKeepWhatTheyCompleted) {
+  StudyFolder folder(smallStudy(4));
+  { (void)StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json")); }
+  StudyDatabase db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);
+  const auto failing = [](const SubjectRecord& subject, const HapticProfile& expert) {
+    if (subject.id == "S02") throw InputError("S02 cannot come today");
+    return makeScriptParticipant(subject, expert);
+  };
+  try {
+    (void)StudyRunner(db, failing).run({.subjects_at_once = 2});
+    ADD_FAILURE() << "the run did not fail";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("S02 cannot come today"));
+  }
+  int completed = 0;
+  for (const TrialRecord& t : db.trials()) {
+    EXPECT_NE(t.status, TrialStatus::kRunning) << t.id;
+    if (t.status == TrialStatus::kCompleted) {
+      ++completed;
+      EXPECT_NE(t.plan.subject, "S02");
+      EXPECT_GT(db.trialProfile(t.id).size(), 0u);
+    }
+  }
+  EXPECT_LE(completed, 9);  // S01 at most: no subject is taken up after the failure
+  // The rest, one at a time, once S02 can come: every trial completed once.
+  EXPECT_EQ(StudyRunner(db, makeScriptParticipant).run({}), 4 * 9 - completed);
+}
+
 // A trial list with a gap (an earlier trial pending, later ones completed): the runner runs
 // only the pending one; every completed trial keeps its profile, attempts and end time, and
 // the database itself refuses to run or replace a completed trial.

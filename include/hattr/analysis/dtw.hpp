@@ -138,6 +138,10 @@ using Channels = std::span<const std::vector<double>>;
 [[nodiscard]] Eigen::MatrixXd dtwCostMatrix(std::span<const std::vector<double>> series,
                                             const DtwOptions& options = {}, unsigned threads = 2);
 
+/// Pairs the batch kernel computes together on this machine (one SIMD block): a batch of
+/// equal-length pairs whose count is a multiple of it leaves no lane idle.
+[[nodiscard]] std::size_t dtwBatchWidth();
+
 /// The instruction set the vectorized kernels dispatch to on this machine ("AVX3",
 /// "AVX2", "SSE4", ...), for benchmark reports.
 [[nodiscard]] std::string dtwSimdTarget();

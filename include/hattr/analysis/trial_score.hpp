@@ -49,8 +49,8 @@ class TrialScorer {
   explicit TrialScorer(const HapticProfile& expert, ScoreOptions options = {});
 
   [[nodiscard]] TrialScore score(const HapticProfile& trial) const;
-  /// Every trial at once, the six channels shared by up to `threads` threads; the same
-  /// numbers as score() on each.
+  /// Every trial at once, the trials (preprocessing) and then the six channels (DTW) shared
+  /// by up to `threads` threads; the same numbers as score() on each.
   [[nodiscard]] std::vector<TrialScore> scoreAll(std::span<const HapticProfile* const> trials,
                                                  unsigned threads = 1) const;
   /// The expert time steps each trial is resampled to.

@@ -4,8 +4,10 @@
 /// moment it ends. The same code runs a simulated trainee, a person at the studio or a
 /// person on a real device: what differs is the Participant.
 
+#include <atomic>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <string>
 
 #include "hattr/session/study_database.hpp"
@@ -59,6 +61,11 @@ struct RunOptions {
   /// The expert's station for the training trials of mentored modes (net::makeStudyMentor);
   /// required when the study has one, and such a trial is refused without it.
   LiveGuidance* mentor = nullptr;
+  /// Subjects run at once, each on its own thread with its own paper and device, the database
+  /// written one trial at a time: the trials are the same to the bit as one subject at a time
+  /// (each subject's trials depend only on that subject). Only in simulated time, for all
+  /// subjects, without a mentor or max_trials; otherwise subjects run one at a time.
+  int subjects_at_once = 1;
 };
 
 /// How the servo loop disturbed a trial, for people ("2 stalls (force zeroed) · 3 missed
@@ -95,15 +102,31 @@ class StudyRunner {
   /// `db` must be opened with OpenMode::kRunner.
   StudyRunner(StudyDatabase& db, ParticipantFactory factory);
   /// Runs every unfinished trial (of one subject, or all), resuming where the study stopped:
-  /// the participant first replays the completed trials. Returns trials run now.
+  /// a subject with trials left first relives its completed trials (its participant learns
+  /// from what was stored); a finished subject costs nothing. Returns trials run now. When a
+  /// trial fails, the subjects running beside it stop after their current trial, and the
+  /// first failure is thrown.
   int run(const RunOptions& options);
 
  private:
-  int runSubject(const SubjectRecord& subject, const RunOptions& options, int budget);
+  /// The paper and the device of one thread, made at its first trial (the paper's texture
+  /// takes a while to generate, and a finished study needs none).
+  using EnvironmentSlot = std::unique_ptr<TrialEnvironment>;
+  int runSubject(const SubjectRecord& subject, const RunOptions& options, int budget, EnvironmentSlot& environment);
+  int runSubjectsAtOnce(const std::vector<SubjectRecord>& subjects, const RunOptions& options);
+  /// `f(db_)` with the database to this thread alone.
+  template <class F>
+  auto withDatabase(F&& f) {
+    const std::lock_guard lock(db_mutex_);
+    return f(db_);
+  }
 
   StudyDatabase& db_;
+  std::mutex db_mutex_;
+  std::atomic<bool> stopping_{false};  ///< a trial failed: the other subjects stop
   ParticipantFactory factory_;
-  std::unique_ptr<TrialEnvironment> environment_;
+  render::WorldConfig world_;
+  EnvironmentSlot environment_;
   std::shared_ptr<const guidance::ReferenceTrajectory> reference_;
   HapticProfile expert_;
 };

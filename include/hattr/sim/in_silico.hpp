@@ -26,6 +26,9 @@ struct InSilicoOptions {
   bool guidance = true;                     ///< false: an A/A study (no mode ever guides)
   std::optional<TraineeModel> model;        ///< default: data/sim/trainee_model.json
   bool write_report = true;
+  /// Subjects simulated at once (session::RunOptions::subjects_at_once); 0: as many as the
+  /// hardware runs at once. The trials and the analysis are the same to the bit for any count.
+  int threads = 0;
   /// Progress by stage: "trials" after each trial (done of total), "scoring" as the recall
   /// trials are scored, "report" (0 of 1) before the report is written.
   std::function<void(std::string_view stage, int done, int total)> progress;
