@@ -209,8 +209,8 @@ void registerStudyCommands(CLI::App& app) {
       ->capture_default_str();
   run->add_option("--max-trials", opt->max_trials, "Stop after this many trials");
   run->add_option("--subjects-at-once", opt->subjects_at_once,
-                  "Simulated subjects run at once on their own threads (--clock sim, all subjects, no --max-trials, "
-                  "no mentor; otherwise one at a time); the trials are the same to the bit")
+                  "Simulated subjects run at once on their own threads (the sim:// pen, --clock sim, all subjects, "
+                  "no --max-trials, no mentor; otherwise one at a time); the trials are the same to the bit")
       ->check(CLI::Range(1, 256))
       ->capture_default_str();
   run->add_flag("--quiet", opt->quiet, "No progress line");

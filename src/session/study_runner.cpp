@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/device/device_uri.hpp"
 #include "hattr/io/profile_csv.hpp"
 
 namespace hattr::session {
@@ -125,8 +126,11 @@ int StudyRunner::run(const RunOptions& options) {
                      options.subjects_at_once);
   stopping_ = false;
   const std::vector<SubjectRecord> subjects = db_.subjects();
-  if (options.subjects_at_once > 1 && options.clock == Clock::kSimulated && options.mentor == nullptr &&
-      options.max_trials < 0 && options.only_subject.empty()) {
+  // Only the in-process simulated pen: any other device runs in real time (runTrial), and a
+  // person or a plugin's device is one at a time.
+  const bool simulated_pen = device::parseDeviceUri(db_.study().device).scheme == "sim";
+  if (options.subjects_at_once > 1 && simulated_pen && options.clock == Clock::kSimulated &&
+      options.mentor == nullptr && options.max_trials < 0 && options.only_subject.empty()) {
     return runSubjectsAtOnce(subjects, options);
   }
   int ran = 0;
@@ -161,7 +165,13 @@ int StudyRunner::runSubjectsAtOnce(const std::vector<SubjectRecord>& subjects, c
   const auto workers_wanted = std::min<std::size_t>(static_cast<std::size_t>(options.subjects_at_once), subjects.size());
   std::vector<EnvironmentSlot> environments(workers_wanted);
   std::vector<std::thread> workers;
-  for (std::size_t w = 1; w < workers_wanted; ++w) workers.emplace_back(work, std::ref(environments[w]));
+  try {
+    for (std::size_t w = 1; w < workers_wanted; ++w) workers.emplace_back(work, std::ref(environments[w]));
+  } catch (...) {  // no thread for this one: the others stop, and the error is the run's
+    stopping_ = true;
+    for (auto& worker : workers) worker.join();
+    throw;
+  }
   work(environment_);
   for (auto& worker : workers) worker.join();
   if (failure) std::rethrow_exception(failure);
@@ -178,6 +188,7 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
   const auto left = std::count_if(trials.begin(), trials.end(),
                                   [](const TrialRecord& t) { return t.status != TrialStatus::kCompleted; });
   if (left == 0) return 0;
+  if (stopping_) return 0;  // another subject's trial failed meanwhile
   const auto participant = factory_(subject, expert_);
 
   // Resume: the participant relives the trials already done, in order.
@@ -215,7 +226,9 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
     TrialResult result;
     std::string disturbed;
     for (int attempt = 0;; ++attempt) {
-      setup.inject_stall_at_s = options.inject_stall_at_s ? options.inject_stall_at_s(plan, attempt) : -1.0;
+      setup.inject_stall_at_s = options.inject_stall_at_s
+                                    ? withDatabase([&](StudyDatabase&) { return options.inject_stall_at_s(plan, attempt); })
+                                    : -1.0;
       setup.live_seed = studyLiveSeed(subject.spec, plan, attempt);
       withDatabase([&](StudyDatabase& db) { db.markRunning(record.id, session); });
       if (!environment) environment = std::make_unique<TrialEnvironment>(study.device, world_, study.rate_hz);
@@ -244,7 +257,9 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
     // The participant learns from what was stored (at a declared resolution, not what was
     // measured), as it does on resume: a resumed study stays bit-identical.
     participant->trialCompleted(plan, study.resolution.empty() ? result.profile : profileOf(record.id));
-    if (study.protocol.show_scores && options.score_text) participant->prompt(options.score_text(plan, result.profile));
+    if (study.protocol.show_scores && options.score_text) {
+      participant->prompt(withDatabase([&](StudyDatabase&) { return options.score_text(plan, result.profile); }));
+    }
     ++ran;
     if (options.progress) {
       TrialRecord done = record;

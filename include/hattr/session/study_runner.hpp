@@ -63,8 +63,10 @@ struct RunOptions {
   LiveGuidance* mentor = nullptr;
   /// Subjects run at once, each on its own thread with its own paper and device, the database
   /// written one trial at a time: the trials are the same to the bit as one subject at a time
-  /// (each subject's trials depend only on that subject). Only in simulated time, for all
-  /// subjects, without a mentor or max_trials; otherwise subjects run one at a time.
+  /// (each subject's trials depend only on that subject). Only on the simulated pen (sim://)
+  /// in simulated time, for all subjects, without a mentor or max_trials; otherwise subjects
+  /// run one at a time. The callbacks above are then called one at a time (under the
+  /// database's lock), and each participant only from its subject's thread.
   int subjects_at_once = 1;
 };
 
