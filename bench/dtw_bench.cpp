@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <random>
 #include <string_view>
@@ -72,17 +73,23 @@ void DtwPair(benchmark::State& state) {
 }
 BENCHMARK(DtwPair)->ArgNames({"n", "band_pct"})->Args({1000, 0})->Args({4000, 0})->Args({4000, 10});
 
-void DtwBatch(benchmark::State& state) {
+// dtwBatch on `pairs` pairs (state's arguments n, pairs): a random walk and partner(rng, it).
+template <class Partner>
+void batchOfPairs(benchmark::State& state, std::uint64_t seed, const Partner& partner) {
   const auto n = static_cast<std::size_t>(state.range(0));
   const auto pairs = static_cast<std::size_t>(state.range(1));
-  std::mt19937_64 rng(2);
+  std::mt19937_64 rng(seed);
   std::vector<std::vector<double>> as, bs;
   for (std::size_t p = 0; p < pairs; ++p) {
     as.push_back(randomWalk(rng, n));
-    bs.push_back(randomWalk(rng, n));
+    bs.push_back(partner(rng, as.back()));
   }
   for (auto _ : state) benchmark::DoNotOptimize(dtwBatch(as, bs));
   setCellRate(state, static_cast<double>(n * n * pairs));
+}
+
+void DtwBatch(benchmark::State& state) {
+  batchOfPairs(state, 2, [](std::mt19937_64& rng, const std::vector<double>& a) { return randomWalk(rng, a.size()); });
 }
 BENCHMARK(DtwBatch)
     ->ArgNames({"n", "pairs"})
@@ -105,18 +112,7 @@ std::vector<double> warpedCopy(std::mt19937_64& rng, const std::vector<double>& 
   return b;
 }
 
-void DtwBatchSimilar(benchmark::State& state) {
-  const auto n = static_cast<std::size_t>(state.range(0));
-  const auto pairs = static_cast<std::size_t>(state.range(1));
-  std::mt19937_64 rng(3);
-  std::vector<std::vector<double>> as, bs;
-  for (std::size_t p = 0; p < pairs; ++p) {
-    as.push_back(randomWalk(rng, n));
-    bs.push_back(warpedCopy(rng, as.back()));
-  }
-  for (auto _ : state) benchmark::DoNotOptimize(dtwBatch(as, bs));
-  setCellRate(state, static_cast<double>(n * n * pairs));
-}
+void DtwBatchSimilar(benchmark::State& state) { batchOfPairs(state, 3, warpedCopy); }
 BENCHMARK(DtwBatchSimilar)->ArgNames({"n", "pairs"})->Args({4000, 32})->Unit(benchmark::kMillisecond);
 
 void DtwReference(benchmark::State& state) {
