@@ -1,4 +1,4 @@
-// hattr study init|run|status|export|import|example: training studies in a crash-safe database.
+// hattr study init|run|status|export|import|push|analyze|report|example: training studies in a crash-safe database.
 
 #include <iostream>
 
@@ -25,6 +25,7 @@ struct StudyOptions {
   std::string clock = "sim";
   int max_trials = -1;
   int subjects_at_once = 1;
+  double lease_timeout_s = 30.0;
   double band = -1.0;
   bool json = false;
   bool quiet = false;
@@ -83,7 +84,8 @@ int trialsToRun(const session::StudyDatabase& db, const StudyOptions& opt) {
 }
 
 void runRun(const StudyOptions& opt) {
-  session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kRunner);
+  session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kRunner,
+                                                           {.lease_timeout_s = opt.lease_timeout_s});
   session::StudyRunner runner(db, sim::makeUnattendedParticipant);
   session::RunOptions run{.only_subject = opt.subject,
                           .clock = session::parseClock(opt.clock),
@@ -183,6 +185,19 @@ void runReport(const StudyOptions& opt) {
   for (const auto& line : report::comparisonText(paper)) std::cout << line << '\n';
 }
 
+void runPush(const StudyOptions& opt) {
+  const session::StudyDatabase from = session::StudyDatabase::open(opt.from, session::OpenMode::kReadOnly);
+  session::StudyDatabase to = session::StudyDatabase::open(opt.db, session::OpenMode::kReadWrite);
+  const auto pushed = to.pushFrom(from);
+  if (opt.json) {
+    return printJson({{"from", opt.from}, {"to", opt.db}, {"pushed", pushed.pushed}, {"subjects", pushed.subjects},
+                      {"already_there", pushed.already_there}});
+  }
+  std::cout << fmt::format("pushed {} trial{} of {} subject{} from {} to {}; {} already there\n", pushed.pushed,
+                           pushed.pushed == 1 ? "" : "s", pushed.subjects, pushed.subjects == 1 ? "" : "s", opt.from,
+                           opt.db, pushed.already_there);
+}
+
 void runImport(const StudyOptions& opt) {
   const std::size_t n = session::importStudy(opt.from, opt.db);
   std::cout << fmt::format("imported {} trials into {}\n", n, opt.db);
@@ -197,7 +212,8 @@ void registerStudyCommands(CLI::App& app) {
 
   auto* init = study->add_subcommand("init", "Create a study database from a study file (see `hattr study example`)");
   init->add_option("STUDY", opt->study_file, "Study definition (JSON)")->required();
-  init->add_option("--db", opt->db, "Study database to create")->required();
+  init->add_option("--db", opt->db, "Study database to create: a file, or an empty PostgreSQL database "
+                   "(postgresql://[user@]host/db, no password: see docs/study-store.md)")->required();
   init->add_flag("--json", opt->json, "Print the status as JSON");
   init->callback([opt] { runInit(*opt); });
 
@@ -212,6 +228,11 @@ void registerStudyCommands(CLI::App& app) {
                   "Simulated subjects run at once on their own threads (the sim:// pen, --clock sim, all subjects, "
                   "no --max-trials, no mentor; otherwise one at a time); the trials are the same to the bit")
       ->check(CLI::Range(1, 256))
+      ->capture_default_str();
+  run->add_option("--lease-timeout", opt->lease_timeout_s,
+                  "PostgreSQL stations: seconds after which a station that stopped renewing its subjects' leases "
+                  "loses them to another station")
+      ->check(CLI::Range(1.0, 3600.0))
       ->capture_default_str();
   run->add_flag("--quiet", opt->quiet, "No progress line");
   run->add_flag("--json", opt->json, "Print the status as JSON when done");
@@ -233,6 +254,14 @@ void registerStudyCommands(CLI::App& app) {
   imp->add_option("FOLDER", opt->from, "Export folder")->required();
   imp->add_option("--db", opt->db, "Study database to create")->required();
   imp->callback([opt] { runImport(*opt); });
+
+  auto* push = study->add_subcommand("push", "Copy a study's completed trials into the same study elsewhere (a "
+                                     "station's file run offline, into the lab's PostgreSQL study); idempotent");
+  push->add_option("--from", opt->from, "Study database to copy from")->required();
+  push->add_option("--to", opt->db, "Study database to copy into (the same study, made from the same study file)")
+      ->required();
+  push->add_flag("--json", opt->json, "Print JSON: pushed, subjects, already_there");
+  push->callback([opt] { runPush(*opt); });
 
   auto* analyze = study->add_subcommand(
       "analyze", "DTW costs of every recall trial against the expert, ANOVAs, Tukey HSD and Table 1; stored in the database");

@@ -16,106 +16,19 @@
 #include "hattr/core/error.hpp"
 #include "hattr/core/text_file.hpp"
 #include "hattr/io/profile_csv.hpp"
+#include "sql_connection.hpp"
+#include "study_postgres.hpp"
 
 namespace hattr::session {
 namespace {
 
 using nlohmann::json;
 
-// ---- A thin RAII layer over the SQLite C API --------------------------------------------
-
-/// An SQLite failure as hattr reports it, naming the file: a damaged file (corrupt pages, not
-/// a database, a table or column gone) is bad input (InputError, exit 2); anything else (a
-/// full disk, a read-only file) is a runtime failure.
-[[noreturn]] void throwSqlite(sqlite3* db, int rc, std::string_view doing) {
-  const char* name = sqlite3_db_filename(db, "main");
-  const std::string file = name && *name ? name : "study database";
-  const int primary = rc & 0xff;
-  if (primary == SQLITE_CORRUPT || primary == SQLITE_NOTADB || (primary == SQLITE_ERROR && doing == "prepare")) {
-    // A statement of this build that does not prepare: a table or column is gone.
-    throw InputError(fmt::format("{}: the study database is damaged: {}", file, sqlite3_errmsg(db)));
-  }
-  throw Error(fmt::format("{}: {}: {}", file, doing, sqlite3_errmsg(db)));
-}
-
-class Statement {
- public:
-  Statement(sqlite3* db, std::string_view sql) : db_(db) {
-    const int rc = sqlite3_prepare_v2(db, sql.data(), static_cast<int>(sql.size()), &stmt_, nullptr);
-    if (rc != SQLITE_OK) throwSqlite(db, rc, "prepare");
-  }
-  ~Statement() { sqlite3_finalize(stmt_); }
-  Statement(const Statement&) = delete;
-  Statement& operator=(const Statement&) = delete;
-
-  Statement& bind(int i, std::int64_t v) { return check(sqlite3_bind_int64(stmt_, i, v)); }
-  Statement& bind(int i, int v) { return check(sqlite3_bind_int(stmt_, i, v)); }
-  Statement& bind(int i, double v) { return check(sqlite3_bind_double(stmt_, i, v)); }
-  Statement& bind(int i, std::string_view v) {
-    return check(sqlite3_bind_text(stmt_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT));
-  }
-  Statement& bindNull(int i) { return check(sqlite3_bind_null(stmt_, i)); }
-  Statement& bindBlob(int i, std::string_view v) {
-    return check(sqlite3_bind_blob64(stmt_, i, v.data(), v.size(), SQLITE_TRANSIENT));
-  }
-  /// Steps once: true if a row is available.
-  bool step() {
-    const int rc = sqlite3_step(stmt_);
-    if (rc == SQLITE_ROW) return true;
-    if (rc == SQLITE_DONE) return false;
-    throwSqlite(db_, rc, "step");
-  }
-  void run() {
-    while (step()) {
-    }
-  }
-  /// Rows the last run() changed.
-  [[nodiscard]] std::int64_t changes() const { return sqlite3_changes64(db_); }
-  std::int64_t integer(int col) const { return sqlite3_column_int64(stmt_, col); }
-  std::string text(int col) const {
-    const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(stmt_, col));
-    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, col))) : std::string();
-  }
-  std::string_view blob(int col) const {
-    const auto* p = static_cast<const char*>(sqlite3_column_blob(stmt_, col));
-    return {p, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, col))};
-  }
-
- private:
-  Statement& check(int rc) {
-    if (rc != SQLITE_OK) throw Error(fmt::format("study database: bind failed: {}", sqlite3_errmsg(db_)));
-    return *this;
-  }
-  sqlite3* db_;
-  sqlite3_stmt* stmt_ = nullptr;
-};
-
-void exec(sqlite3* db, std::string_view sql) {
-  const int rc = sqlite3_exec(db, std::string(sql).c_str(), nullptr, nullptr, nullptr);
-  if (rc != SQLITE_OK) throwSqlite(db, rc, "exec");
-}
-
-/// A transaction that rolls back unless committed.
-class Transaction {
- public:
-  explicit Transaction(sqlite3* db) : db_(db) { exec(db_, "BEGIN IMMEDIATE"); }
-  ~Transaction() {
-    if (!done_) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
-  }
-  void commit() {
-    exec(db_, "COMMIT");
-    done_ = true;
-  }
-
- private:
-  sqlite3* db_;
-  bool done_ = false;
-};
-
-std::int64_t scalar(sqlite3* db, std::string_view sql) {
-  Statement s(db, sql);
-  return s.step() ? s.integer(0) : 0;
-}
+using detail::scalar;
+using detail::SqlConnection;
+using detail::SqlDialect;
+using detail::Statement;
+using detail::Transaction;
 
 // ---- Schema -----------------------------------------------------------------------------
 
@@ -162,21 +75,22 @@ ALTER TABLE disturbed_attempts ADD COLUMN encoding TEXT NOT NULL DEFAULT 'f64-ro
 
 constexpr std::string_view kMigrations[] = {kMigrationV1ToV2, kMigrationV2ToV3, kMigrationV3ToV4};
 
-void compactStoredSamples(sqlite3* db);
+void compactStoredSamples(SqlConnection& db);
 
-void migrate(sqlite3* db, int from_version) {
+/// An SQLite study brought from `from_version` up to this build's schema, a step at a time.
+void migrate(SqlConnection& db, int from_version) {
   for (int v = from_version; v < kStudySchemaVersion; ++v) {
     Transaction t(db);
     // Another writer may have taken this step while we waited for the lock.
     if (scalar(db, "PRAGMA user_version") > v) continue;
-    exec(db, kMigrations[v - 1]);
+    db.exec(kMigrations[v - 1]);
     if (v + 1 == 4) compactStoredSamples(db);
-    exec(db, fmt::format("PRAGMA user_version = {}", v + 1));
+    db.exec(fmt::format("PRAGMA user_version = {}", v + 1));
     t.commit();
   }
 }
 
-sqlite3* openSqlite(const std::filesystem::path& file, int flags) {
+sqlite3* openSqliteFile(const std::filesystem::path& file, int flags) {
   sqlite3* db = nullptr;
   if (sqlite3_open_v2(file.c_str(), &db, flags, nullptr) != SQLITE_OK) {
     const std::string message = db ? sqlite3_errmsg(db) : "out of memory";
@@ -205,8 +119,8 @@ sqlite3* openForReading(const std::filesystem::path& file) {
   if (::access(folder.c_str(), W_OK) == 0) {
     // A writable study is read through a query-only read-write connection: SQLite's WAL and
     // shared-memory files go away when it closes, as they do not after a read-only one.
-    if (::access(file.c_str(), W_OK) != 0) return openSqlite(file, SQLITE_OPEN_READONLY);
-    sqlite3* db = openSqlite(file, SQLITE_OPEN_READWRITE);
+    if (::access(file.c_str(), W_OK) != 0) return openSqliteFile(file, SQLITE_OPEN_READONLY);
+    sqlite3* db = openSqliteFile(file, SQLITE_OPEN_READWRITE);
     sqlite3_exec(db, "PRAGMA query_only = 1", nullptr, nullptr, nullptr);
     return db;
   }
@@ -238,7 +152,7 @@ sqlite3* openForReading(const std::filesystem::path& file) {
 
 /// The exclusive runner lock: flock on the database file itself (independent of SQLite's
 /// own POSIX locks on Linux). Returns the descriptor, or throws naming the holder.
-int takeRunnerLock(const std::filesystem::path& file, sqlite3* db) {
+int takeRunnerLock(const std::filesystem::path& file, SqlConnection& db) {
   const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw Error(fmt::format("{}: cannot open for locking: {}", file.string(), std::strerror(errno)));
   // A reader's probe (runnerLockHeld) holds a shared lock for an instant: try a few times.
@@ -259,12 +173,6 @@ int takeRunnerLock(const std::filesystem::path& file, sqlite3* db) {
                                  file.string(), holder));
   }
   return fd;
-}
-
-std::string hostName() {
-  char name[256] = {};
-  ::gethostname(name, sizeof name - 1);
-  return name;
 }
 
 TrialStatus parseStatus(const std::string& text) {
@@ -361,7 +269,7 @@ namespace {
 /// Every block of samples still in schema 3's rows, rewritten in the compact encoding
 /// (lossless), in the caller's transaction; each is decoded again and compared bit for bit
 /// with the rows before it replaces them. A block that does not decode is left as it is.
-void compactTable(sqlite3* db, std::string_view table, std::string_view key) {
+void compactTable(SqlConnection& db, std::string_view table, std::string_view key) {
   // The rows to rewrite first (a cursor must not walk rows its own connection updates).
   std::vector<std::int64_t> ids;
   {
@@ -397,7 +305,7 @@ void compactTable(sqlite3* db, std::string_view table, std::string_view key) {
   }
 }
 
-void compactStoredSamples(sqlite3* db) {
+void compactStoredSamples(SqlConnection& db) {
   compactTable(db, "samples", "trial");
   compactTable(db, "disturbed_attempts", "id");
 }
@@ -406,25 +314,42 @@ void compactStoredSamples(sqlite3* db) {
 
 // ---- Opening -------------------------------------------------------------------------------
 
-StudyDatabase::StudyDatabase(std::filesystem::path file, sqlite3* db, int lock_fd)
-    : file_(std::move(file)), db_(db), lock_fd_(lock_fd) {}
+bool isPostgresStudy(std::string_view location) { return detail::isPostgresLocation(location); }
+
+StudyDatabase::StudyDatabase(std::filesystem::path file, std::unique_ptr<SqlConnection> db)
+    : file_(std::move(file)), db_(std::move(db)) {}
 
 StudyDatabase::StudyDatabase(StudyDatabase&& other) noexcept
-    : file_(std::move(other.file_)), db_(std::exchange(other.db_, nullptr)), lock_fd_(std::exchange(other.lock_fd_, -1)),
+    : file_(std::move(other.file_)), db_(std::move(other.db_)), lock_fd_(std::exchange(other.lock_fd_, -1)),
+      options_(other.options_), station_(std::move(other.station_)), leases_(std::move(other.leases_)),
       study_(std::move(other.study_)) {}
 
 StudyDatabase& StudyDatabase::operator=(StudyDatabase&& other) noexcept {
   std::swap(file_, other.file_);
   std::swap(db_, other.db_);
   std::swap(lock_fd_, other.lock_fd_);
+  std::swap(options_, other.options_);
+  std::swap(station_, other.station_);
+  std::swap(leases_, other.leases_);
   std::swap(study_, other.study_);
   return *this;
 }
 
 StudyDatabase::~StudyDatabase() {
-  if (db_) sqlite3_close(db_);
+  // A station gives its subjects back on the way out (a killed one's leases lapse instead).
+  if (leases_) {
+    leases_.reset();
+    try {
+      Statement s(*db_, "DELETE FROM subject_leases WHERE station = ?");
+      s.bind(1, station_).run();
+    } catch (const std::exception&) {
+    }
+  }
+  db_.reset();  // closed (SQLite: its WAL checked in) before the runner lock is given back
   if (lock_fd_ >= 0) ::close(lock_fd_);
 }
+
+bool StudyDatabase::onPostgres() const noexcept { return db_ && db_->dialect() == SqlDialect::kPostgres; }
 
 namespace {
 
@@ -451,18 +376,27 @@ void publishDatabase(const std::filesystem::path& from, const std::filesystem::p
 
 StudyDatabase StudyDatabase::create(const std::filesystem::path& file, const StudyDefinition& study,
                                     const std::function<void(StudyDatabase&)>& fill) {
-  HATTR_THROW_UNLESS(!std::filesystem::exists(file), "{}: already exists; refusing to overwrite a study database",
-                     file.string());
-  const std::filesystem::path folder = file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
-  HATTR_THROW_UNLESS(std::filesystem::is_directory(folder), "{}: no such folder (for the study database {})",
-                     folder.string(), file.string());
-  // Read the experts first: a bad one leaves no half-made file.
+  const bool postgres = isPostgresStudy(file.string());
+  if (!postgres) {
+    HATTR_THROW_UNLESS(!std::filesystem::exists(file), "{}: already exists; refusing to overwrite a study database",
+                       file.string());
+    const std::filesystem::path folder = file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
+    HATTR_THROW_UNLESS(std::filesystem::is_directory(folder), "{}: no such folder (for the study database {})",
+                       folder.string(), file.string());
+  }
+  // Read the experts first: a bad one leaves nothing half-made.
   std::map<std::string, std::string> expert_csv;
   for (const auto& [skill, path] : study.experts) {
     std::ostringstream text;
     io::writeProfileCsv(io::readProfileCsv(path), text);
     expert_csv[skill] = text.str();
   }
+  return postgres ? createPostgres(file.string(), study, expert_csv, fill) : createSqlite(file, study, expert_csv, fill);
+}
+
+StudyDatabase StudyDatabase::createSqlite(const std::filesystem::path& file, const StudyDefinition& study,
+                                          const std::map<std::string, std::string>& expert_csv,
+                                          const std::function<void(StudyDatabase&)>& fill) {
   // Built under a hidden name beside the file and linked into place only when complete, so a
   // kill, a full disk or a failed fill leaves no stub that blocks the next attempt.
   const std::filesystem::path building =
@@ -470,14 +404,28 @@ StudyDatabase StudyDatabase::create(const std::filesystem::path& file, const Stu
   removeDatabaseFiles(building);
   try {
     {
-      sqlite3* db = openSqlite(building, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
-      StudyDatabase database(building, db, -1);
-      exec(db, "PRAGMA journal_mode = WAL");
-      exec(db, "PRAGMA synchronous = FULL");
-      exec(db, "PRAGMA foreign_keys = ON");
-      database.writeNewStudy(study, expert_csv);
+      StudyDatabase database(building, detail::makeSqliteConnection(openSqliteFile(building, SQLITE_OPEN_READWRITE |
+                                                                                         SQLITE_OPEN_CREATE),
+                                                                    building.string()));
+      SqlConnection& db = *database.db_;
+      db.exec("PRAGMA journal_mode = WAL");
+      db.exec("PRAGMA synchronous = FULL");
+      db.exec("PRAGMA foreign_keys = ON");
+      {
+        Transaction t(db);
+        db.exec(fmt::format("PRAGMA application_id = {}", kStudyApplicationId));
+        db.exec(kSchemaV1);
+        db.exec("PRAGMA user_version = 1");
+        t.commit();
+      }
+      migrate(db, 1);
+      {
+        Transaction t(db);
+        database.writeNewStudy(study, expert_csv);
+        t.commit();
+      }
       if (fill) fill(database);
-      exec(db, "PRAGMA wal_checkpoint(TRUNCATE)");
+      db.exec("PRAGMA wal_checkpoint(TRUNCATE)");
     }  // closed: the WAL is checked in and removed
     publishDatabase(building, file);
   } catch (...) {
@@ -488,46 +436,44 @@ StudyDatabase StudyDatabase::create(const std::filesystem::path& file, const Stu
 }
 
 void StudyDatabase::writeNewStudy(const StudyDefinition& study, const std::map<std::string, std::string>& expert_csv) {
-  sqlite3* db = db_;
-  {
-    Transaction t(db);
-    exec(db, fmt::format("PRAGMA application_id = {}", kStudyApplicationId));
-    exec(db, kSchemaV1);
-    exec(db, "PRAGMA user_version = 1");
-    Statement insert(db, "INSERT INTO study (id, name, definition, created_utc) VALUES (1, ?, ?, ?)");
-    insert.bind(1, study.name).bind(2, studyToJson(study).dump()).bind(3, utcNowIso8601()).run();
-    for (const auto& [skill, csv] : expert_csv) {
-      Statement e(db, "INSERT INTO experts (skill, profile_csv) VALUES (?, ?)");
-      e.bind(1, skill).bind(2, csv).run();
-    }
-    const auto orders = modeOrders(study);
-    for (std::size_t i = 0; i < study.subjects.size(); ++i) {
-      const SubjectSpec& spec = study.subjects[i];
-      json order = json::array();
-      for (const auto m : orders[i]) order.push_back(std::string(guidance::modeName(m)));
-      Statement s(db, "INSERT INTO subjects (id, position, mode_order, spec) VALUES (?, ?, ?, ?)");
-      s.bind(1, spec.id).bind(2, static_cast<int>(i)).bind(3, order.dump())
-          .bind(4, json{{"participant", spec.participant}, {"seed", spec.seed}, {"options", spec.options}}.dump())
-          .run();
-      for (const TrialPlan& p : planTrials(study, spec.id, orders[i])) {
-        Statement tr(db,
-                     "INSERT INTO trials (subject, sequence, mode, phase, trial_index, show_reference, guidance) "
-                     "VALUES (?, ?, ?, ?, ?, ?, ?)");
-        tr.bind(1, p.subject).bind(2, p.sequence).bind(3, guidance::modeName(p.mode)).bind(4, phaseName(p.phase))
-            .bind(5, p.index).bind(6, p.view.show_reference ? 1 : 0).bind(7, p.view.guidance ? 1 : 0).run();
-      }
-    }
-    t.commit();
+  SqlConnection& db = *db_;
+  Statement insert(db, "INSERT INTO study (id, name, definition, created_utc) VALUES (1, ?, ?, ?)");
+  insert.bind(1, study.name).bind(2, studyToJson(study).dump()).bind(3, utcNowIso8601()).run();
+  for (const auto& [skill, csv] : expert_csv) {
+    Statement e(db, "INSERT INTO experts (skill, profile_csv) VALUES (?, ?)");
+    e.bind(1, skill).bind(2, csv).run();
   }
-  migrate(db, 1);
+  const auto orders = modeOrders(study);
+  for (std::size_t i = 0; i < study.subjects.size(); ++i) {
+    const SubjectSpec& spec = study.subjects[i];
+    json order = json::array();
+    for (const auto m : orders[i]) order.push_back(std::string(guidance::modeName(m)));
+    Statement s(db, "INSERT INTO subjects (id, position, mode_order, spec) VALUES (?, ?, ?, ?)");
+    s.bind(1, spec.id).bind(2, static_cast<int>(i)).bind(3, order.dump())
+        .bind(4, json{{"participant", spec.participant}, {"seed", spec.seed}, {"options", spec.options}}.dump())
+        .run();
+    for (const TrialPlan& p : planTrials(study, spec.id, orders[i])) {
+      Statement tr(db,
+                   "INSERT INTO trials (subject, sequence, mode, phase, trial_index, show_reference, guidance) "
+                   "VALUES (?, ?, ?, ?, ?, ?, ?)");
+      tr.bind(1, p.subject).bind(2, p.sequence).bind(3, guidance::modeName(p.mode)).bind(4, phaseName(p.phase))
+          .bind(5, p.index).bind(6, p.view.show_reference ? 1 : 0).bind(7, p.view.guidance ? 1 : 0).run();
+    }
+  }
   loadDefinition();
 }
 
-StudyDatabase StudyDatabase::open(const std::filesystem::path& file, OpenMode mode) {
+StudyDatabase StudyDatabase::open(const std::filesystem::path& file, OpenMode mode, const StoreOptions& options) {
+  if (isPostgresStudy(file.string())) return openPostgres(file.string(), mode, options);
+  return openSqlite(file, mode);
+}
+
+StudyDatabase StudyDatabase::openSqlite(const std::filesystem::path& file, OpenMode mode) {
   HATTR_THROW_UNLESS(std::filesystem::is_regular_file(file), "{}: no such study database (create one with `hattr study init`)",
                      file.string());
-  sqlite3* db = mode == OpenMode::kReadOnly ? openForReading(file) : openSqlite(file, SQLITE_OPEN_READWRITE);
-  StudyDatabase database(file, db, -1);
+  sqlite3* handle = mode == OpenMode::kReadOnly ? openForReading(file) : openSqliteFile(file, SQLITE_OPEN_READWRITE);
+  StudyDatabase database(file, detail::makeSqliteConnection(handle, file.string()));
+  SqlConnection& db = *database.db_;
 
   // Is this a hattr study, and one we can read?
   std::int64_t app_id = 0, version = 0;
@@ -535,12 +481,12 @@ StudyDatabase StudyDatabase::open(const std::filesystem::path& file, OpenMode mo
     app_id = scalar(db, "PRAGMA application_id");
     version = scalar(db, "PRAGMA user_version");
   } catch (const Error&) {
-    const int code = sqlite3_errcode(db) & 0xff;
+    const int code = sqlite3_errcode(handle) & 0xff;
     if (code == SQLITE_NOTADB) {
       throw InputError(fmt::format("{}: not a hattr study database (not an SQLite file)", file.string()));
     }
-    if (code == SQLITE_CORRUPT) throw InputError(fmt::format("{}: the study database is damaged: {}", file.string(), sqlite3_errmsg(db)));
-    throw Error(fmt::format("{}: cannot read the study database: {}", file.string(), sqlite3_errmsg(db)));
+    if (code == SQLITE_CORRUPT) throw InputError(fmt::format("{}: the study database is damaged: {}", file.string(), sqlite3_errmsg(handle)));
+    throw Error(fmt::format("{}: cannot read the study database: {}", file.string(), sqlite3_errmsg(handle)));
   }
   HATTR_THROW_UNLESS(app_id == kStudyApplicationId,
                      "{}: not a hattr study database (SQLite application id {:#x}, expected {:#x})", file.string(),
@@ -554,16 +500,16 @@ StudyDatabase StudyDatabase::open(const std::filesystem::path& file, OpenMode mo
                      "opened for writing (`hattr study run` or `hattr study analyze`), and cannot be read as it is",
                      file.string(), version, kStudySchemaVersion);
   if (mode != OpenMode::kReadOnly) {
-    exec(db, "PRAGMA synchronous = FULL");
-    exec(db, "PRAGMA foreign_keys = ON");
+    db.exec("PRAGMA synchronous = FULL");
+    db.exec("PRAGMA foreign_keys = ON");
   }
   if (mode == OpenMode::kRunner) database.lock_fd_ = takeRunnerLock(file, db);
   if (mode != OpenMode::kReadOnly && version < kStudySchemaVersion) migrate(db, static_cast<int>(version));
   if (mode == OpenMode::kRunner) {
     // We hold the runner lock: anything still marked running died with its process.
     Transaction t(db);
-    exec(db, "UPDATE trials SET status = 'interrupted', interruptions = interruptions + 1 WHERE status = 'running'");
-    exec(db, fmt::format("UPDATE sessions SET ended_utc = '{}' WHERE ended_utc IS NULL", utcNowIso8601()));
+    db.exec("UPDATE trials SET status = 'interrupted', interruptions = interruptions + 1 WHERE status = 'running'");
+    db.exec(fmt::format("UPDATE sessions SET ended_utc = '{}' WHERE ended_utc IS NULL", utcNowIso8601()));
     t.commit();
   }
   database.loadDefinition();
@@ -571,16 +517,19 @@ StudyDatabase StudyDatabase::open(const std::filesystem::path& file, OpenMode mo
 }
 
 void StudyDatabase::loadDefinition() {
-  Statement s(db_, "SELECT definition FROM study WHERE id = 1");
+  Statement s(*db_, "SELECT definition FROM study WHERE id = 1");
   HATTR_THROW_UNLESS(s.step(), "{}: the study table is empty", file_.string());
   // Experts live in the database; the paths only record where they came from.
   study_ = parseStudy(s.text(0), file_.string() + ":study", "", false);
 }
 
-int StudyDatabase::schemaVersion() const { return static_cast<int>(scalar(db_, "PRAGMA user_version")); }
+int StudyDatabase::schemaVersion() const {
+  if (onPostgres()) return static_cast<int>(scalar(*db_, "SELECT schema_version FROM hattr_meta WHERE id = 1"));
+  return static_cast<int>(scalar(*db_, "PRAGMA user_version"));
+}
 
 HapticProfile StudyDatabase::expert(const std::string& skill) const {
-  Statement s(db_, "SELECT profile_csv FROM experts WHERE skill = ?");
+  Statement s(*db_, "SELECT profile_csv FROM experts WHERE skill = ?");
   s.bind(1, skill);
   HATTR_THROW_UNLESS(s.step(), "{}: no expert reference for skill \"{}\"", file_.string(), skill);
   std::istringstream in(s.text(0));
@@ -589,7 +538,7 @@ HapticProfile StudyDatabase::expert(const std::string& skill) const {
 
 std::vector<SubjectRecord> StudyDatabase::subjects() const {
   std::vector<SubjectRecord> out;
-  Statement s(db_, "SELECT id, position, mode_order, spec FROM subjects ORDER BY position");
+  Statement s(*db_, "SELECT id, position, mode_order, spec FROM subjects ORDER BY position");
   while (s.step()) {
     SubjectRecord r;
     r.id = s.text(0);
@@ -610,14 +559,14 @@ std::vector<SubjectRecord> StudyDatabase::subjects() const {
 
 std::vector<TrialRecord> StudyDatabase::trials(const std::string& subject) const {
   std::vector<TrialRecord> out;
-  Statement s(db_,
+  Statement s(*db_,
               "SELECT t.id, t.subject, t.sequence, t.mode, t.phase, t.trial_index, t.show_reference, t.guidance, "
               "t.status, t.attempts, t.interruptions, t.started_utc, t.ended_utc, t.outcome, "
               "COALESCE(s.sample_count, 0), COALESCE(t.disturbed, ''), "
               "(SELECT COUNT(*) FROM disturbed_attempts d WHERE d.trial = t.id) "
               "FROM trials t LEFT JOIN samples s ON s.trial = t.id "
-              "WHERE ?1 = '' OR t.subject = ?1 ORDER BY t.subject, t.sequence");
-  s.bind(1, subject);
+              "WHERE ? = '' OR t.subject = ? ORDER BY t.subject, t.sequence");
+  s.bind(1, subject).bind(2, subject);
   while (s.step()) {
     TrialRecord r;
     r.id = s.integer(0);
@@ -646,7 +595,7 @@ std::optional<TrialRecord> StudyDatabase::nextTrial(const std::string& subject) 
 }
 
 HapticProfile StudyDatabase::trialProfile(std::int64_t trial_id) const {
-  Statement s(db_,
+  Statement s(*db_,
               "SELECT s.raw_pressure, s.raw_tilt, s.sample_count, s.data, t.metadata, t.subject, t.sequence, s.encoding "
               "FROM samples s JOIN trials t ON t.id = s.trial WHERE s.trial = ?");
   s.bind(1, trial_id);
@@ -676,28 +625,58 @@ HapticProfile StudyDatabase::trialProfile(std::int64_t trial_id) const {
 // ---- Writing ---------------------------------------------------------------------------------
 
 std::int64_t StudyDatabase::beginSession(const std::string& subject) {
-  Statement s(db_, "INSERT INTO sessions (subject, started_utc, pid, host) VALUES (?, ?, ?, ?)");
-  s.bind(1, subject).bind(2, utcNowIso8601()).bind(3, static_cast<std::int64_t>(::getpid())).bind(4, hostName()).run();
-  return sqlite3_last_insert_rowid(db_);
+  Statement s(*db_, "INSERT INTO sessions (subject, started_utc, pid, host) VALUES (?, ?, ?, ?) RETURNING id");
+  s.bind(1, subject).bind(2, utcNowIso8601()).bind(3, static_cast<std::int64_t>(::getpid())).bind(4, detail::hostName());
+  HATTR_DEMAND(s.step(), "a new session has no id");
+  return s.integer(0);
 }
 
 void StudyDatabase::endSession(std::int64_t session_id) {
-  Statement s(db_, "UPDATE sessions SET ended_utc = ? WHERE id = ?");
+  Statement s(*db_, "UPDATE sessions SET ended_utc = ? WHERE id = ?");
   s.bind(1, utcNowIso8601()).bind(2, session_id).run();
 }
 
-bool StudyDatabase::runnerActive() const { return lock_fd_ >= 0 || runnerLockHeld(file_); }
-
-void StudyDatabase::markRunning(std::int64_t trial_id, std::int64_t session_id) {
-  Statement s(db_,
-              "UPDATE trials SET status = 'running', attempts = attempts + 1, session = ?, started_utc = ? "
-              "WHERE id = ? AND status != 'completed'");
-  s.bind(1, session_id).bind(2, utcNowIso8601()).bind(3, trial_id).run();
-  refuseCompleted(s.changes(), trial_id, "run again");
+bool StudyDatabase::runnerActive() const {
+  if (onPostgres()) return scalar(*db_, "SELECT COUNT(*) FROM subject_leases WHERE expires_at > clock_timestamp()") > 0;
+  return lock_fd_ >= 0 || runnerLockHeld(file_);
 }
 
-void StudyDatabase::refuseCompleted(std::int64_t changed, std::int64_t trial_id, std::string_view what) const {
+void StudyDatabase::holdLease(std::int64_t trial_id) {
+  if (!leases_) return;  // SQLite, or not a station (an import, a push: they check for stations themselves)
+  // The station's lease row, locked until the write's transaction ends: a takeover (which
+  // updates that row) waits for the write, and a write waits for a takeover and then finds
+  // the row another station's.
+  Statement s(*db_, "SELECT 1 FROM subject_leases WHERE station = ? AND subject = (SELECT subject FROM trials "
+                    "WHERE id = ?) FOR SHARE");
+  s.bind(1, station_).bind(2, trial_id);
+  if (!s.step()) refuseUnwritable(0, trial_id, "written");
+}
+
+void StudyDatabase::markRunning(std::int64_t trial_id, std::int64_t session_id) {
+  std::optional<Transaction> t;
+  if (leases_) t.emplace(*db_);
+  holdLease(trial_id);
+  Statement s(*db_, "UPDATE trials SET status = 'running', attempts = attempts + 1, session = ?, started_utc = ? "
+                    "WHERE id = ? AND status != 'completed'");
+  s.bind(1, session_id).bind(2, utcNowIso8601()).bind(3, trial_id).run();
+  refuseUnwritable(s.changes(), trial_id, "run again");
+  if (t) t->commit();
+}
+
+void StudyDatabase::refuseUnwritable(std::int64_t changed, std::int64_t trial_id, std::string_view what) const {
   if (changed == 1) return;
+  if (leases_) {
+    // The subject's lease is not this station's: another station took the subject over.
+    Statement s(*db_, "SELECT t.status, t.subject, l.host, l.pid, l.station = ? FROM trials t "
+                      "LEFT JOIN subject_leases l ON l.subject = t.subject WHERE t.id = ?");
+    s.bind(1, station_).bind(2, trial_id);
+    if (s.step() && (s.isNull(4) || s.integer(4) == 0)) {
+      throw SubjectTakenOver(fmt::format("study database {}: trial {}: subject {} is no longer this station's (its lease "
+                              "lapsed: not renewed for {} s{}); this station stores nothing more of it",
+                              file_.string(), trial_id, s.text(1), options_.lease_timeout_s,
+                              s.isNull(2) ? "" : fmt::format(", and process {} on {} holds it now", s.integer(3), s.text(2))));
+    }
+  }
   throw Error(fmt::format("study database {}: trial {} is completed or missing; a completed trial is never {}",
                           file_.string(), trial_id, what));
 }
@@ -715,9 +694,10 @@ json metadataJson(const ProfileMetadata& m) {
 void StudyDatabase::completeTrial(std::int64_t trial_id, const HapticProfile& profile, const std::string& outcome,
                                   const std::string& disturbed) {
   const std::string data = encodeTrialSamples(profile, study_.resolution);
-  Transaction t(db_);
-  Statement trial(db_, "UPDATE trials SET status = 'completed', ended_utc = ?, outcome = ?, metadata = ?, disturbed = ? "
-                       "WHERE id = ? AND status != 'completed'");
+  Transaction t(*db_);
+  holdLease(trial_id);
+  Statement trial(*db_, "UPDATE trials SET status = 'completed', ended_utc = ?, outcome = ?, metadata = ?, disturbed = ? "
+                        "WHERE id = ? AND status != 'completed'");
   trial.bind(1, utcNowIso8601()).bind(2, outcome).bind(3, metadataJson(profile.metadata()).dump());
   if (disturbed.empty()) {
     trial.bindNull(4);
@@ -725,42 +705,72 @@ void StudyDatabase::completeTrial(std::int64_t trial_id, const HapticProfile& pr
     trial.bind(4, disturbed);
   }
   trial.bind(5, trial_id).run();
-  refuseCompleted(trial.changes(), trial_id, "replaced");
-  Statement samples(db_,
-                    "INSERT OR REPLACE INTO samples (trial, raw_pressure, raw_tilt, sample_count, data, encoding) "
-                    "VALUES (?, ?, ?, ?, ?, ?)");
+  refuseUnwritable(trial.changes(), trial_id, "replaced");
+  Statement samples(*db_,
+                    "INSERT INTO samples (trial, raw_pressure, raw_tilt, sample_count, data, encoding) "
+                    "VALUES (?, ?, ?, ?, ?, ?) ON CONFLICT (trial) DO UPDATE SET raw_pressure = excluded.raw_pressure, "
+                    "raw_tilt = excluded.raw_tilt, sample_count = excluded.sample_count, data = excluded.data, "
+                    "encoding = excluded.encoding");
   samples.bind(1, trial_id).bind(2, profile.rawChannels().pressure ? 1 : 0).bind(3, profile.rawChannels().tilt ? 1 : 0)
       .bind(4, static_cast<std::int64_t>(profile.size())).bindBlob(5, data).bind(6, std::string(kCompactSamples)).run();
   t.commit();
 }
 
 void StudyDatabase::keepDisturbedAttempt(std::int64_t trial_id, const HapticProfile& profile, const std::string& reason) {
-  Statement s(db_,
+  std::optional<Transaction> t;
+  if (leases_) t.emplace(*db_);
+  holdLease(trial_id);
+  Statement s(*db_,
               "INSERT INTO disturbed_attempts (trial, reason, ended_utc, metadata, raw_pressure, raw_tilt, sample_count, "
               "data, encoding) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)");
   s.bind(1, trial_id).bind(2, reason).bind(3, utcNowIso8601()).bind(4, metadataJson(profile.metadata()).dump())
       .bind(5, profile.rawChannels().pressure ? 1 : 0).bind(6, profile.rawChannels().tilt ? 1 : 0)
       .bind(7, static_cast<std::int64_t>(profile.size())).bindBlob(8, encodeTrialSamples(profile, study_.resolution))
       .bind(9, std::string(kCompactSamples)).run();
+  if (t) t->commit();
 }
 
 void StudyDatabase::failTrial(std::int64_t trial_id, const std::string& reason) {
-  Statement s(db_,
-              "UPDATE trials SET status = 'interrupted', interruptions = interruptions + 1, ended_utc = ?, outcome = ? "
-              "WHERE id = ? AND status = 'running'");
+  std::optional<Transaction> t;
+  if (leases_) t.emplace(*db_);
+  try {
+    holdLease(trial_id);
+  } catch (const SubjectTakenOver&) {
+    return;  // the station that took the subject over has marked the trial interrupted
+  }
+  Statement s(*db_, "UPDATE trials SET status = 'interrupted', interruptions = interruptions + 1, ended_utc = ?, "
+                    "outcome = ? WHERE id = ? AND status = 'running'");
   s.bind(1, utcNowIso8601()).bind(2, "failed: " + reason).bind(3, trial_id).run();
+  if (t) t->commit();
 }
 
 void StudyDatabase::putResult(const std::string& key, const std::string& value) {
-  Statement s(db_, "INSERT OR REPLACE INTO results (key, value, updated_utc) VALUES (?, ?, ?)");
+  Statement s(*db_, "INSERT INTO results (key, value, updated_utc) VALUES (?, ?, ?) ON CONFLICT (key) DO UPDATE SET "
+                    "value = excluded.value, updated_utc = excluded.updated_utc");
   s.bind(1, key).bind(2, value).bind(3, utcNowIso8601()).run();
 }
 
 std::optional<std::string> StudyDatabase::result(const std::string& key) const {
-  Statement s(db_, "SELECT value FROM results WHERE key = ?");
+  Statement s(*db_, "SELECT value FROM results WHERE key = ?");
   s.bind(1, key);
   if (!s.step()) return std::nullopt;
   return s.text(0);
 }
+
+// ---- Subjects and stations -------------------------------------------------------------------
+
+SubjectClaim StudyDatabase::claimSubject(const std::string& subject) {
+  HATTR_DEMAND(lock_fd_ >= 0 || leases_ != nullptr, "a subject claimed by a study not opened as its runner");
+  if (!onPostgres()) return {true, ""};
+  return detail::claimLease(*db_, station_, subject, options_.lease_timeout_s);
+}
+
+void StudyDatabase::releaseSubject(const std::string& subject) {
+  if (!leases_) return;  // SQLite: the runner lock holds the whole study
+  Statement s(*db_, "DELETE FROM subject_leases WHERE subject = ? AND station = ?");
+  s.bind(1, subject).bind(2, station_).run();
+}
+
+double StudyDatabase::claimRetryInterval_s() const noexcept { return options_.lease_timeout_s / 4.0; }
 
 }  // namespace hattr::session

@@ -29,11 +29,15 @@ const std::string& checkedName(const std::string& name, std::string_view what) {
   return name;
 }
 
+}  // namespace
+
 std::string trialFileName(const TrialPlan& p) {
   (void)checkedName(p.subject, "subject id");
   return fmt::format("trials/{}/{:03}_{}_{}_{:02}.csv", p.subject, p.sequence, guidance::modeName(p.mode),
                      phaseName(p.phase), p.index);
 }
+
+namespace {
 
 /// exportStudy's files, written into `out` (created).
 std::size_t writeExport(const StudyDatabase& db, StudyDefinition study, const std::filesystem::path& out) {

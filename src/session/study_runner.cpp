@@ -1,6 +1,7 @@
 #include "hattr/session/study_runner.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <random>
 #include <thread>
 
@@ -9,6 +10,7 @@
 #include "hattr/core/error.hpp"
 #include "hattr/device/device_uri.hpp"
 #include "hattr/io/profile_csv.hpp"
+#include "hattr/session/study_export.hpp"
 
 namespace hattr::session {
 namespace {
@@ -83,6 +85,53 @@ TrialSetup studyTrialSetup(const StudyDefinition& study, const TrialPlan& plan,
   return setup;
 }
 
+namespace {
+
+/// The rescue folder of a run: the option, or beside a study file, or ./hattr-unstored.
+std::filesystem::path rescueFolder(const StudyDatabase& db, const RunOptions& options) {
+  if (!options.rescue_folder.empty()) return options.rescue_folder;
+  if (db.onPostgres()) return std::filesystem::current_path() / "hattr-unstored";
+  return std::filesystem::path(db.file().string() + ".unstored");
+}
+
+/// Writes a recording the store refused into `folder`, under its export name (a name already
+/// there gets -2, -3...); returns where.
+std::filesystem::path rescueRecording(const std::filesystem::path& folder, const TrialPlan& plan,
+                                      const HapticProfile& profile) {
+  const std::filesystem::path base = folder / trialFileName(plan);
+  std::filesystem::create_directories(base.parent_path());
+  std::filesystem::path file = base;
+  for (int n = 2; std::filesystem::exists(file); ++n) {
+    file = base.parent_path() / fmt::format("{}-{}{}", base.stem().string(), n, base.extension().string());
+  }
+  io::writeProfileCsv(profile, file);
+  return file;
+}
+
+}  // namespace
+
+void StudyRunner::storeOrRescue(const TrialRecord& record, const HapticProfile& profile, const std::string& outcome,
+                                const std::string& disturbed, const RunOptions& options) {
+  try {
+    withDatabase([&](StudyDatabase& db) { db.completeTrial(record.id, profile, outcome, disturbed); });
+  } catch (const SubjectTakenOver&) {
+    throw;  // another station runs this subject now: its trial, not this one's
+  } catch (const Error& e) {
+    // The store refused the trial: its recording is kept in a file, never lost.
+    std::filesystem::path file;
+    try {
+      file = rescueRecording(rescueFolder(db_, options), record.plan, profile);
+    } catch (const std::exception& also) {
+      throw Error(fmt::format("{}; and the recording could not be kept in a file either: {}", e.what(), also.what()));
+    }
+    const TrialPlan& plan = record.plan;
+    throw Error(fmt::format("{}; subject {}'s {} {} trial {} (sequence {}) was not stored: its recording is kept in {} "
+                            "(a profile CSV), and the trial runs again when the study resumes",
+                            e.what(), plan.subject, guidance::modeName(plan.mode), phaseName(plan.phase), plan.index,
+                            plan.sequence, file.string()));
+  }
+}
+
 bool repeatDisturbedTrial(const Protocol& protocol, const std::string& disturbed, int repeats_so_far) {
   return !disturbed.empty() && protocol.disturbed == DisturbedPolicy::kRepeat && repeats_so_far < protocol.max_repeats;
 }
@@ -125,6 +174,19 @@ int StudyRunner::run(const RunOptions& options) {
   HATTR_THROW_UNLESS(options.subjects_at_once >= 1, "subjects at once: expected at least 1, got {}",
                      options.subjects_at_once);
   stopping_ = false;
+  int ran = 0;
+  for (;;) {
+    held_elsewhere_ = false;
+    ran += runEverySubjectOnce(options, ran);
+    const bool budget_left = options.max_trials < 0 || ran < options.max_trials;
+    if (!held_elsewhere_ || stopping_ || !budget_left) return ran;
+    // Other stations (PostgreSQL) hold subjects with trials left: ask again later, and take
+    // over any whose station stops renewing its lease.
+    std::this_thread::sleep_for(std::chrono::duration<double>(db_.claimRetryInterval_s()));
+  }
+}
+
+int StudyRunner::runEverySubjectOnce(const RunOptions& options, int ran_before) {
   const std::vector<SubjectRecord> subjects = db_.subjects();
   // Only the in-process simulated pen: any other device runs in real time (runTrial), and a
   // person or a plugin's device is one at a time.
@@ -138,7 +200,7 @@ int StudyRunner::run(const RunOptions& options) {
   for (const SubjectRecord& subject : subjects) {
     if (!options.only_subject.empty() && subject.id != options.only_subject) continue;
     found = true;
-    const int budget = options.max_trials < 0 ? -1 : options.max_trials - ran;
+    const int budget = options.max_trials < 0 ? -1 : options.max_trials - ran_before - ran;
     if (budget == 0) break;
     ran += runSubject(subject, options, budget, environment_);
   }
@@ -178,29 +240,73 @@ int StudyRunner::runSubjectsAtOnce(const std::vector<SubjectRecord>& subjects, c
   return ran;
 }
 
+HapticProfile StudyRunner::storedProfile(std::int64_t trial_id) {
+  return withDatabase([trial_id](StudyDatabase& db) { return db.trialProfile(trial_id); });
+}
+
 // Every use of the database goes through withDatabase: other subjects may run beside this one.
 int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& options, int budget,
                             EnvironmentSlot& environment) {
-  const StudyDefinition& study = db_.study();
-  const auto profileOf = [this](std::int64_t id) { return withDatabase([id](StudyDatabase& db) { return db.trialProfile(id); }); };
   std::vector<TrialRecord> trials = withDatabase([&](StudyDatabase& db) { return db.trials(subject.id); });
   // A finished subject costs nothing: no participant is made and nothing is relived.
   const auto left = std::count_if(trials.begin(), trials.end(),
                                   [](const TrialRecord& t) { return t.status != TrialStatus::kCompleted; });
   if (left == 0) return 0;
   if (stopping_) return 0;  // another subject's trial failed meanwhile
+
+  // The subject, for this runner alone (on PostgreSQL another station may hold it), and its
+  // trials as they are now that it is ours; given back however this ends.
+  const SubjectClaim claim = withDatabase([&](StudyDatabase& db) { return db.claimSubject(subject.id); });
+  if (!claim.granted) {
+    if (!options.only_subject.empty()) {  // not bad input: the study's state at this moment
+      throw Error(fmt::format("--subject {}: another station is running this subject ({}); run another subject, or "
+                              "wait for it", subject.id, claim.holder));
+    }
+    held_elsewhere_ = true;
+    return 0;
+  }
+  struct Release {
+    StudyRunner& runner;
+    const std::string& subject;
+    ~Release() {
+      try {
+        runner.withDatabase([this](StudyDatabase& db) { db.releaseSubject(subject); });
+      } catch (const std::exception&) {  // the lease lapses on its own
+      }
+    }
+  } release{*this, subject.id};
+  trials = withDatabase([&](StudyDatabase& db) { return db.trials(subject.id); });
+  if (std::all_of(trials.begin(), trials.end(), [](const TrialRecord& t) { return t.status == TrialStatus::kCompleted; })) {
+    return 0;  // another station finished it meanwhile
+  }
   const auto participant = factory_(subject, expert_);
 
   // Resume: the participant relives the trials already done, in order.
   int completed = 0;
   for (const TrialRecord& t : trials) {
     if (t.status != TrialStatus::kCompleted) break;
-    participant->trialCompleted(t.plan, profileOf(t.id));
+    participant->trialCompleted(t.plan, storedProfile(t.id));
     ++completed;
   }
 
   const std::int64_t session = withDatabase([&](StudyDatabase& db) { return db.beginSession(subject.id); });
   int ran = 0;
+  try {
+    runTrialsLeft(subject, options, budget, environment, trials, completed, *participant, session, ran);
+  } catch (const SubjectTakenOver&) {
+    // Another station took the subject over (this one's lease lapsed): it runs the rest.
+    held_elsewhere_ = true;
+    withDatabase([&](StudyDatabase& db) { db.endSession(session); });
+    return ran;
+  }
+  withDatabase([&](StudyDatabase& db) { db.endSession(session); });
+  return ran;
+}
+
+void StudyRunner::runTrialsLeft(const SubjectRecord& subject, const RunOptions& options, int budget,
+                                EnvironmentSlot& environment, const std::vector<TrialRecord>& trials, int completed,
+                                Participant& participant, std::int64_t session, int& ran) {
+  const StudyDefinition& study = db_.study();
   for (std::size_t i = static_cast<std::size_t>(completed); i < trials.size(); ++i) {
     if ((budget >= 0 && ran >= budget) || stopping_) break;
     const TrialRecord& record = trials[i];
@@ -208,11 +314,11 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
     // A trial completed after a gap (an earlier one left pending) is never run again: the
     // participant relives it in its place, as on resume.
     if (record.status == TrialStatus::kCompleted) {
-      participant->trialCompleted(plan, profileOf(record.id));
+      participant.trialCompleted(plan, storedProfile(record.id));
       continue;
     }
-    if (i > static_cast<std::size_t>(completed) || completed > 0) participant->rest(study.protocol.rest_s);
-    participant->prompt(fmt::format("{} with {}: trial {} of {}", plan.phase == Phase::kTraining ? "Training" : "Recall",
+    if (i > static_cast<std::size_t>(completed) || completed > 0) participant.rest(study.protocol.rest_s);
+    participant.prompt(fmt::format("{} with {}: trial {} of {}", plan.phase == Phase::kTraining ? "Training" : "Recall",
                                     guidance::modeName(plan.mode), plan.index,
                                     plan.phase == Phase::kTraining ? study.protocol.training_trials
                                                                    : study.protocol.recall_trials));
@@ -232,7 +338,7 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
       setup.live_seed = studyLiveSeed(subject.spec, plan, attempt);
       withDatabase([&](StudyDatabase& db) { db.markRunning(record.id, session); });
       if (!environment) environment = std::make_unique<TrialEnvironment>(study.device, world_, study.rate_hz);
-      result = runTrial(*environment, setup, participant->handForTrial(plan));
+      result = runTrial(*environment, setup, participant.handForTrial(plan));
       // A trial the device broke off is not data: mark it, keep everything stored, and stop.
       if (!result.failure.empty()) {
         withDatabase([&](StudyDatabase& db) {
@@ -249,16 +355,16 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
       disturbed = noteLoopCounters(result);
       if (!repeatDisturbedTrial(study.protocol, disturbed, attempt)) break;
       withDatabase([&](StudyDatabase& db) { db.keepDisturbedAttempt(record.id, result.profile, disturbed); });
-      participant->prompt(fmt::format("That trial was disturbed ({}): once more", disturbed));
+      participant.prompt(fmt::format("That trial was disturbed ({}): once more", disturbed));
     }
     const std::string outcome = fmt::format("ok: {} samples, {} missed, {} faults{}", result.profile.size(),
                                             result.missed_samples, result.faults, disturbed.empty() ? "" : "; disturbed");
-    withDatabase([&](StudyDatabase& db) { db.completeTrial(record.id, result.profile, outcome, disturbed); });
+    storeOrRescue(record, result.profile, outcome, disturbed, options);
     // The participant learns from what was stored (at a declared resolution, not what was
     // measured), as it does on resume: a resumed study stays bit-identical.
-    participant->trialCompleted(plan, study.resolution.empty() ? result.profile : profileOf(record.id));
+    participant.trialCompleted(plan, study.resolution.empty() ? result.profile : storedProfile(record.id));
     if (study.protocol.show_scores && options.score_text) {
-      participant->prompt(withDatabase([&](StudyDatabase&) { return options.score_text(plan, result.profile); }));
+      participant.prompt(withDatabase([&](StudyDatabase&) { return options.score_text(plan, result.profile); }));
     }
     ++ran;
     if (options.progress) {
@@ -269,8 +375,6 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
       });
     }
   }
-  withDatabase([&](StudyDatabase& db) { db.endSession(session); });
-  return ran;
 }
 
 }  // namespace hattr::session

@@ -1,11 +1,7 @@
 // Kills `hattr study run` with SIGKILL at random moments, many times, resuming after each,
 // and checks that every completed trial is intact and bit-identical to an uninterrupted run.
 
-#include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <random>
@@ -15,33 +11,15 @@
 
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/session/study_database.hpp"
+#include "support/run_command.hpp"
 #include "support/test_support.hpp"
-
-extern char** environ;
 
 namespace hattr {
 namespace {
 
 /// Starts `hattr study run --db FILE --quiet`; returns the child's pid.
 pid_t startRunner(const std::filesystem::path& db) {
-  std::vector<std::string> args{HATTR_CLI_PATH, "study", "run", "--db", db.string(), "--quiet"};
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  pid_t pid = 0;
-  const int rc = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  EXPECT_EQ(rc, 0);
-  return pid;
-}
-
-int exitStatus(pid_t pid) {
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+  return test::spawnProcess({HATTR_CLI_PATH, "study", "run", "--db", db.string(), "--quiet"});
 }
 
 void makeStudy(const test::TempDir& dir, const std::string& db) {
@@ -66,7 +44,7 @@ TEST(StudyCrash, KilledRunnerResumesWithEveryCompletedTrialIntactAndIdentical) {
   test::TempDir dir;
   makeStudy(dir, "reference.sqlite");
   makeStudy(dir, "crash.sqlite");
-  ASSERT_EQ(exitStatus(startRunner(dir / "reference.sqlite")), 0);
+  ASSERT_EQ(test::exitStatus(startRunner(dir / "reference.sqlite")), 0);
 
   // Kill the runner at random moments until one finishes on its own.
   const std::uint64_t seed = test::testSeed(2026);
@@ -77,16 +55,16 @@ TEST(StudyCrash, KilledRunnerResumesWithEveryCompletedTrialIntactAndIdentical) {
     const pid_t pid = startRunner(dir / "crash.sqlite");
     std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(rng)));
     if (::kill(pid, SIGKILL) == 0) {
-      const int status = exitStatus(pid);
+      const int status = test::exitStatus(pid);
       if (status == 0) break;  // it finished before the signal landed
       ASSERT_EQ(status, -SIGKILL) << "seed " << seed;
       ++kills;
     } else {
-      ASSERT_EQ(exitStatus(pid), 0) << "seed " << seed;
+      ASSERT_EQ(test::exitStatus(pid), 0) << "seed " << seed;
       break;
     }
   }
-  ASSERT_EQ(exitStatus(startRunner(dir / "crash.sqlite")), 0) << "the final resume must complete the study";
+  ASSERT_EQ(test::exitStatus(startRunner(dir / "crash.sqlite")), 0) << "the final resume must complete the study";
 
   const auto reference = session::StudyDatabase::open(dir / "reference.sqlite", session::OpenMode::kReadOnly);
   const auto crashed = session::StudyDatabase::open(dir / "crash.sqlite", session::OpenMode::kReadOnly);

@@ -96,3 +96,23 @@ def test_study_errors_raise_input_error(tmp_path, small_study):
     study = hattr.Study.open(small_study["database"])
     with pytest.raises(hattr.InputError):
         study.trial_profile(10**9)
+
+
+def test_a_study_on_postgresql_reads_and_analyzes_as_on_sqlite(tmp_path, small_study, postgres_server):
+    # The same study made on a PostgreSQL server from the SQLite study's export, its trials
+    # pushed there (as a station that ran offline would): read and analyzed from Python alike.
+    database = small_study["database"]
+    run_cli("study", "export", "--db", database, "--out", tmp_path / "export")
+    address = postgres_server.create_database("python")
+    run_cli("study", "init", tmp_path / "export" / "study.json", "--db", address)
+    assert cli_json("study", "push", "--from", database, "--to", address)["pushed"] == 24
+    with hattr.Study.open(address) as on_server, hattr.Study.open(database) as on_file:
+        assert on_server.subjects() == on_file.subjects()
+        trials, on_server_trials = on_file.trials(), on_server.trials()
+        assert [(t["subject"], t["sequence"], t["status"]) for t in on_server_trials] == \
+            [(t["subject"], t["sequence"], t["status"]) for t in trials]
+        mine = on_server.trial_profile(on_server_trials[5]["trial_id"])
+        theirs = on_file.trial_profile(trials[5]["trial_id"])
+        for name in theirs.channel_names:
+            np.testing.assert_array_equal(mine.channel(name), theirs.channel(name), err_msg=name)
+        assert on_server.analyze() == on_file.analyze()

@@ -13,6 +13,7 @@
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/session/study_export.hpp"
 #include "hattr/session/study_runner.hpp"
+#include "session/study_fixture.hpp"
 #include "support/test_support.hpp"
 
 namespace hattr::session {
@@ -21,21 +22,6 @@ namespace {
 using ::testing::AllOf;
 using ::testing::HasSubstr;
 using ::testing::Not;
-
-/// A short expert profile (0.3 s, pressing 1.2 N) written to `file`.
-void writeExpert(const std::filesystem::path& file) {
-  HapticProfile p({.subject = "expert", .skill = "dash", .nominal_rate_hz = 100.0});
-  for (int i = 0; i <= 30; ++i) {
-    Sample s;
-    s.t_s = i * 0.01;
-    s.p_WT = Vec3(0.001 * i, 0.0, 0.0);
-    s.v_WT = Vec3(0.1, 0.0, 0.0);
-    s.f_user_W = Vec3(0.0, 0.0, -1.2);
-    s.pen_down = true;
-    p.append(s);
-  }
-  io::writeProfileCsv(p, file, io::Overwrite::kReplace);
-}
 
 std::string smallStudy(int subjects = 2) {
   return fmt::format(R"({{"name": "small", "skill": "dash", "experts": {{"dash": "expert.csv"}},

@@ -33,6 +33,12 @@ void StudySession::selectSubject(const std::string& subject_id, double now_s) {
   bool found = false;
   for (const session::SubjectRecord& s : db_.subjects()) found = found || s.id == subject_id;
   HATTR_THROW_UNLESS(found, "study {}: no subject \"{}\"", db_.file().string(), subject_id);
+  // The subject for this station alone (a PostgreSQL study's other stations may hold it); the
+  // one before is given back.
+  const session::SubjectClaim claim = db_.claimSubject(subject_id);
+  HATTR_THROW_UNLESS(claim.granted, "study {}: subject {} is being run at another station ({}); choose another "
+                     "subject, or wait for it", db_.file().string(), subject_id, claim.holder);
+  if (!subject_.empty() && subject_ != subject_id) db_.releaseSubject(subject_);
   if (session_id_) {
     db_.endSession(*session_id_);
     session_id_.reset();

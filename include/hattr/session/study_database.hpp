@@ -1,15 +1,19 @@
 #pragma once
-/// The study database: one SQLite file per study holding the definition, the expert
-/// references, the subjects with their mode orders, the sessions, every trial's plan and
-/// status, and the full-rate profile of every completed trial. Crash-safe:
+/// The study database: one SQLite file per study (one station), or one PostgreSQL database
+/// per study (many stations), holding the definition, the expert references, the subjects
+/// with their mode orders, the sessions, every trial's plan and status, and the full-rate
+/// profile of every completed trial. Crash-safe:
 /// - WAL journal, synchronous=FULL: a committed trial survives a crash or power loss;
 /// - each trial is committed in its own transaction the moment it ends, profile and status
 ///   together: never half-written;
 /// - a trial that was running when its process died is marked interrupted on the next run
 ///   and run again; nothing completed is lost;
-/// - one runner at a time: a second process gets a clear error (an exclusive lock);
+/// - SQLite: one runner at a time: a second process gets a clear error (an exclusive lock);
+/// - PostgreSQL: many runners (stations), each subject run by one at a time under a lease that
+///   the station renews; a station that stops renewing loses its subjects after the lease
+///   timeout, and its running trial becomes interrupted, as a crash does on SQLite;
 /// - a file that is not a study database, or from a newer schema, is refused.
-/// Schema and migrations: docs/studies.md.
+/// Schema and migrations: docs/studies.md; stations: docs/study-store.md.
 
 #include <cstdint>
 #include <filesystem>
@@ -20,12 +24,17 @@
 #include <string>
 #include <vector>
 
+#include "hattr/core/error.hpp"
 #include "hattr/core/haptic_profile.hpp"
 #include "hattr/session/study.hpp"
 
-struct sqlite3;
-
 namespace hattr::session {
+
+namespace detail {
+class SqlConnection;
+class Statement;
+class LeaseKeeper;
+}  // namespace detail
 
 /// The schema this build writes; it reads every version from 1 up to this one.
 inline constexpr int kStudySchemaVersion = 4;
@@ -59,29 +68,59 @@ struct SubjectRecord {
 
 enum class OpenMode { kReadOnly, kReadWrite, kRunner };
 
+/// How a runner holds its subjects on a PostgreSQL study (SQLite has one runner: no leases).
+struct StoreOptions {
+  /// A subject's lease lapses this long after its station's last renewal (renewed every
+  /// third of it); then another station may take the subject over.
+  double lease_timeout_s = 30.0;
+};
+
+/// A station's write refused because another station took the subject over (PostgreSQL: this
+/// station's lease lapsed); nothing of the write was stored. The runner moves on to other subjects.
+class SubjectTakenOver : public Error {
+ public:
+  using Error::Error;
+};
+
+/// Whether this process may run a subject now, and if not, who does.
+struct SubjectClaim {
+  bool granted = false;
+  std::string holder;  ///< "process 123 on host-a, lease for 12 s more" when not granted
+};
+
+/// Whether `location` names a PostgreSQL study (postgresql://... or postgres://...), not a file.
+bool isPostgresStudy(std::string_view location);
+
 class StudyDatabase {
  public:
+  /// `file` is a study file, or a PostgreSQL database's address (postgresql://...; no
+  /// password in it: libpq's password file, service file or environment supply it).
+  ///
   /// Creates a new study file from a definition (refuses to overwrite an existing file):
   /// stores the definition, copies the expert profiles in, assigns mode orders and plans
   /// every trial; then `fill` (if any) adds to it (an import's trials). All or nothing: the
   /// file is built under a hidden name beside `file` and linked into place only when
   /// complete, so a failure (of `fill` too), a kill or a full disk leaves no `file` behind.
   /// Returns it opened kReadWrite. Throws InputError for an existing file or bad experts.
+  /// On PostgreSQL the database must hold no study; a failed create leaves it empty.
   static StudyDatabase create(const std::filesystem::path& file, const StudyDefinition& study,
                               const std::function<void(StudyDatabase&)>& fill = {});
 
   /// Opens a study file. kRunner takes the exclusive runner lock (another runner: InputError
   /// naming the file and the holder) and marks trials left running as interrupted. Refuses
   /// a file that is not a hattr study or has a newer schema (InputError); migrates an older
-  /// one (kReadWrite, kRunner).
-  static StudyDatabase open(const std::filesystem::path& file, OpenMode mode);
+  /// one (kReadWrite, kRunner). On PostgreSQL, kRunner makes this process a station: it runs
+  /// the subjects it claims (claimSubject), and a thread renews its leases.
+  static StudyDatabase open(const std::filesystem::path& file, OpenMode mode, const StoreOptions& options = {});
 
   StudyDatabase(StudyDatabase&&) noexcept;
   StudyDatabase& operator=(StudyDatabase&&) noexcept;
   ~StudyDatabase();
 
   [[nodiscard]] const StudyDefinition& study() const noexcept { return study_; }
+  /// The study file, or the PostgreSQL address (for messages).
   [[nodiscard]] const std::filesystem::path& file() const noexcept { return file_; }
+  [[nodiscard]] bool onPostgres() const noexcept;
   [[nodiscard]] int schemaVersion() const;
   [[nodiscard]] HapticProfile expert(const std::string& skill) const;
   [[nodiscard]] std::vector<SubjectRecord> subjects() const;
@@ -91,11 +130,22 @@ class StudyDatabase {
   /// The recorded profile of a completed trial, exactly as stored.
   [[nodiscard]] HapticProfile trialProfile(std::int64_t trial_id) const;
 
-  /// Whether a runner holds the study now (this one, or another process): then a trial marked
-  /// running is being run, not interrupted.
+  /// Whether a runner holds the study now (this one, or another process; on PostgreSQL, a
+  /// station holds a lease): then a trial marked running is being run, not interrupted.
   [[nodiscard]] bool runnerActive() const;
 
+  /// Takes a subject for this runner (kRunner). SQLite: always granted (the runner lock holds
+  /// the whole study). PostgreSQL: granted when no other station's lease on it is live; a
+  /// lapsed station's running trials become interrupted and its sessions end.
+  SubjectClaim claimSubject(const std::string& subject);
+  /// Gives the subject back (PostgreSQL: drops the lease); quiet when not held.
+  void releaseSubject(const std::string& subject);
+  /// How long a station waits before asking again for subjects other stations hold.
+  [[nodiscard]] double claimRetryInterval_s() const noexcept;
+
   /// Starts a session (a run of the protocol by this process); returns its id.
+  /// Writing a trial (markRunning to failTrial) on PostgreSQL needs this station's lease on
+  /// its subject: a station whose subject was taken over gets SubjectTakenOver and stores nothing.
   std::int64_t beginSession(const std::string& subject);
   void endSession(std::int64_t session_id);
   /// Marks a trial running (its own transaction). A completed trial is never run again or
@@ -111,21 +161,50 @@ class StudyDatabase {
   /// <reason>"; nothing of it is kept, and the next run repeats it. Completed trials are untouched.
   void failTrial(std::int64_t trial_id, const std::string& reason);
 
+  /// What a push did: trials copied, trials already there (the same to the byte).
+  struct PushResult {
+    int pushed = 0;
+    int already_there = 0;
+    int subjects = 0;  ///< subjects with trials pushed
+  };
+  /// Copies every completed trial of `source` (the same study, run elsewhere: a station's
+  /// SQLite file run offline) into this study: samples as stored, metadata, attempts and
+  /// disturbed attempts. Idempotent: a trial already here the same to the byte is skipped.
+  /// Refuses, writing nothing, with an InputError listing them: another study (definition,
+  /// experts or plan differ), a trial completed here differently, or a subject with trials to
+  /// push that a station is running now. All of it in one transaction.
+  PushResult pushFrom(const StudyDatabase& source);
+
   /// Key/value results of analyses (the analysis issue stores its tables here).
   void putResult(const std::string& key, const std::string& value);
   [[nodiscard]] std::optional<std::string> result(const std::string& key) const;
 
  private:
-  /// Throws hattr::Error unless `changed` is 1: the trial was completed (or is not there).
-  void refuseCompleted(std::int64_t changed, std::int64_t trial_id, std::string_view what) const;
-  /// create(): the schema, the definition, the experts, the subjects and their trial plans.
+  /// Throws hattr::Error unless `changed` is 1: the trial was completed, is not there, or (on
+  /// PostgreSQL) its subject is no longer this station's.
+  void refuseUnwritable(std::int64_t changed, std::int64_t trial_id, std::string_view what) const;
+  /// A station's write of a trial (PostgreSQL, in the write's transaction): locks this
+  /// station's lease on the trial's subject, or throws SubjectTakenOver. Nothing otherwise.
+  void holdLease(std::int64_t trial_id);
+  /// create(): the definition, the experts, the subjects and their trial plans.
   void writeNewStudy(const StudyDefinition& study, const std::map<std::string, std::string>& expert_csv);
-  StudyDatabase(std::filesystem::path file, sqlite3* db, int lock_fd);
+  static StudyDatabase createSqlite(const std::filesystem::path& file, const StudyDefinition& study,
+                                    const std::map<std::string, std::string>& expert_csv,
+                                    const std::function<void(StudyDatabase&)>& fill);
+  static StudyDatabase createPostgres(const std::string& location, const StudyDefinition& study,
+                                      const std::map<std::string, std::string>& expert_csv,
+                                      const std::function<void(StudyDatabase&)>& fill);
+  static StudyDatabase openSqlite(const std::filesystem::path& file, OpenMode mode);
+  static StudyDatabase openPostgres(const std::string& location, OpenMode mode, const StoreOptions& options);
+  StudyDatabase(std::filesystem::path file, std::unique_ptr<detail::SqlConnection> db);
   void loadDefinition();
 
   std::filesystem::path file_;
-  sqlite3* db_ = nullptr;
-  int lock_fd_ = -1;
+  std::unique_ptr<detail::SqlConnection> db_;
+  int lock_fd_ = -1;                              ///< SQLite: the runner lock
+  StoreOptions options_;
+  std::string station_;                           ///< PostgreSQL runner: this station's id
+  std::unique_ptr<detail::LeaseKeeper> leases_;   ///< PostgreSQL runner: renews the leases
   StudyDefinition study_;
 };
 

@@ -13,6 +13,10 @@
 
 namespace hattr::session {
 
+/// A trial's file in an export (and in a rescue folder): trials/<subject>/<sequence>_<mode>_<phase>_<index>.csv.
+/// Throws InputError for a subject id that would leave the folder.
+std::string trialFileName(const TrialPlan& plan);
+
 /// Writes the export folder (created; refuses an existing non-empty folder). Returns the
 /// number of trial profiles written.
 std::size_t exportStudy(const StudyDatabase& db, const std::filesystem::path& out_dir);

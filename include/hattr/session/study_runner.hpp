@@ -5,6 +5,7 @@
 /// person on a real device: what differs is the Participant.
 
 #include <atomic>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -68,6 +69,10 @@ struct RunOptions {
   /// run one at a time. The callbacks above are then called one at a time (under the
   /// database's lock), and each participant only from its subject's thread.
   int subjects_at_once = 1;
+  /// Where a trial's recording goes when the store refuses it (a server away, a full disk), so
+  /// that nothing recorded is lost: "" = beside a study file (FILE.unstored/), or for a
+  /// PostgreSQL study ./hattr-unstored/. The trial runs again when the study resumes.
+  std::filesystem::path rescue_folder;
 };
 
 /// How the servo loop disturbed a trial, for people ("2 stalls (force zeroed) · 3 missed
@@ -107,14 +112,30 @@ class StudyRunner {
   /// a subject with trials left first relives its completed trials (its participant learns
   /// from what was stored); a finished subject costs nothing. Returns trials run now. When a
   /// trial fails, the subjects running beside it stop after their current trial, and the
-  /// first failure is thrown.
+  /// first failure is thrown. On PostgreSQL each subject is claimed first: subjects other
+  /// stations hold are skipped, and the run waits (asking again every quarter of the lease
+  /// timeout) until no subject with trials left is held elsewhere, so a lapsed station's
+  /// subjects are taken over; `--subject` held elsewhere is an Error naming the holder.
   int run(const RunOptions& options);
 
  private:
   /// The paper and the device of one thread, made at its first trial (the paper's texture
   /// takes a while to generate, and a finished study needs none).
   using EnvironmentSlot = std::unique_ptr<TrialEnvironment>;
+  /// One pass over the subjects (of options.only_subject): each with trials left that this
+  /// runner can claim runs to its end; those other stations hold set held_elsewhere_.
+  int runEverySubjectOnce(const RunOptions& options, int ran_before);
   int runSubject(const SubjectRecord& subject, const RunOptions& options, int budget, EnvironmentSlot& environment);
+  /// The subject's trials from `completed` on, in its session; counts them in `ran`.
+  void runTrialsLeft(const SubjectRecord& subject, const RunOptions& options, int budget, EnvironmentSlot& environment,
+                     const std::vector<TrialRecord>& trials, int completed, Participant& participant,
+                     std::int64_t session, int& ran);
+  /// A completed trial's profile as stored (through withDatabase).
+  HapticProfile storedProfile(std::int64_t trial_id);
+  /// Stores a finished trial, or, when the store refuses it, keeps its recording in the rescue
+  /// folder and throws an Error saying where.
+  void storeOrRescue(const TrialRecord& record, const HapticProfile& profile, const std::string& outcome,
+                     const std::string& disturbed, const RunOptions& options);
   int runSubjectsAtOnce(const std::vector<SubjectRecord>& subjects, const RunOptions& options);
   /// `f(db_)` with the database to this thread alone.
   template <class F>
@@ -126,6 +147,7 @@ class StudyRunner {
   StudyDatabase& db_;
   std::mutex db_mutex_;
   std::atomic<bool> stopping_{false};  ///< a trial failed: the other subjects stop
+  std::atomic<bool> held_elsewhere_{false};  ///< a subject with trials left is another station's now
   ParticipantFactory factory_;
   render::WorldConfig world_;
   EnvironmentSlot environment_;
