@@ -1,10 +1,17 @@
 // Storing and reading a finished trial in the study database, as the runner and the analysis
 // do: the simulated expert writing 'Na' (about 4.5 s at 1 kHz with tilt, like the demo's
 // trials), committed in its own transaction with WAL and synchronous=FULL, compressed losslessly
-// (docs/study-store.md); read back whole by trialProfile.
+// (docs/study-store.md); read back whole by trialProfile. The same on a PostgreSQL server when
+// HATTR_BENCH_PG_STORE and HATTR_BENCH_PG_READ name two empty databases (bench/study_stations.sh
+// starts a server and gives them).
 //   build/release/bench/bench_study_store
 
+#include <cstdlib>
 #include <filesystem>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include <benchmark/benchmark.h>
 
@@ -28,8 +35,9 @@ const HapticProfile& trial() {
   return recorded;
 }
 
-/// A study of one subject with 1000 planned trials, in a fresh folder.
-session::StudyDatabase freshStudy(const std::filesystem::path& dir) {
+/// A study of one subject with 1000 planned trials, in a fresh folder (its file there, or in
+/// the empty PostgreSQL database `postgres`), opened as its runner holding the subject.
+session::StudyDatabase freshStudy(const std::filesystem::path& dir, const std::string& postgres = "") {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   io::writeProfileCsv(trial(), dir / "expert.csv");
@@ -41,36 +49,84 @@ session::StudyDatabase freshStudy(const std::filesystem::path& dir) {
   study.protocol.training_trials = 1000;
   study.protocol.recall_trials = 2;  // the smallest protocol the study file allows (recall 1 is a warm-up)
   study.subjects = {{"S01", "script", 1, nlohmann::json::object()}};
-  { (void)session::StudyDatabase::create(dir / "s.sqlite", study); }
-  return session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kRunner);
+  const std::filesystem::path where = postgres.empty() ? dir / "s.sqlite" : std::filesystem::path(postgres);
+  { (void)session::StudyDatabase::create(where, study); }
+  session::StudyDatabase db = session::StudyDatabase::open(where, session::OpenMode::kRunner);
+  if (!db.claimSubject("S01").granted) throw std::runtime_error("the benchmark's subject is held elsewhere");
+  return db;
 }
 
-void BM_StoreTrial(benchmark::State& state) {
-  const auto dir = std::filesystem::temp_directory_path() / "hattr-bench-study";
-  session::StudyDatabase db = freshStudy(dir);
-  const auto trials = db.trials();
+/// A benchmark database named by the environment ("" when not set).
+std::string postgresFor(const char* variable) {
+  const char* value = std::getenv(variable);
+  return value ? value : "";
+}
+
+/// SQLite: a fresh study file for each run. PostgreSQL: the database the environment names,
+/// made into the study at the first run and kept for the others (a database holds one study).
+session::StudyDatabase& studyFor(const std::filesystem::path& dir, const char* postgres_variable) {
+  static std::map<std::string, session::StudyDatabase> kept;
+  const std::string address = postgres_variable ? postgresFor(postgres_variable) : "";
+  if (address.empty()) kept.erase(address);
+  if (!kept.contains(address)) kept.emplace(address, freshStudy(dir, address));
+  return kept.at(address);
+}
+
+/// The study's trials not completed yet.
+std::vector<std::int64_t> pendingTrials(const session::StudyDatabase& db) {
+  std::vector<std::int64_t> ids;
+  for (const auto& t : db.trials()) {
+    if (t.status != session::TrialStatus::kCompleted) ids.push_back(t.id);
+  }
+  return ids;
+}
+
+void BM_StoreTrial(benchmark::State& state, const char* postgres_variable) {
+  session::StudyDatabase& db = studyFor(std::filesystem::temp_directory_path() / "hattr-bench-study", postgres_variable);
+  const auto pending = pendingTrials(db);
   std::size_t next = 0;
   for (auto _ : state) {
-    db.completeTrial(trials[next % trials.size()].id, trial(), "bench");
-    ++next;
+    if (next == pending.size()) {
+      state.SkipWithError("no pending trial left to store");
+      break;
+    }
+    db.completeTrial(pending[next++], trial(), "bench");
   }
   state.counters["samples"] = static_cast<double>(trial().size());
-  std::filesystem::remove_all(dir);
 }
 
-void BM_ReadTrial(benchmark::State& state) {
-  const auto dir = std::filesystem::temp_directory_path() / "hattr-bench-study-read";
-  session::StudyDatabase db = freshStudy(dir);
-  const auto id = db.trials().front().id;
-  db.completeTrial(id, trial(), "bench");
+void BM_ReadTrial(benchmark::State& state, const char* postgres_variable) {
+  session::StudyDatabase& db =
+      studyFor(std::filesystem::temp_directory_path() / "hattr-bench-study-read", postgres_variable);
+  const auto trials = db.trials();
+  const auto id = trials.front().id;
+  if (trials.front().status != session::TrialStatus::kCompleted) db.completeTrial(id, trial(), "bench");
   for (auto _ : state) benchmark::DoNotOptimize(db.trialProfile(id));
   state.counters["samples"] = static_cast<double>(trial().size());
-  std::filesystem::remove_all(dir);
 }
 
-BENCHMARK(BM_StoreTrial)->Unit(benchmark::kMillisecond)->Iterations(200)->Repetitions(3)->ReportAggregatesOnly(true);
-BENCHMARK(BM_ReadTrial)->Unit(benchmark::kMillisecond)->Iterations(200)->Repetitions(3)->ReportAggregatesOnly(true);
+/// The SQLite benchmarks, and the PostgreSQL ones when their databases are given.
+void registerBenchmarks() {
+  const auto add = [](const char* name, void (*f)(benchmark::State&, const char*), const char* variable) {
+    benchmark::RegisterBenchmark(name, f, variable)
+        ->Unit(benchmark::kMillisecond)
+        ->Iterations(200)
+        ->Repetitions(3)
+        ->ReportAggregatesOnly(true);
+  };
+  add("BM_StoreTrial", BM_StoreTrial, nullptr);
+  add("BM_ReadTrial", BM_ReadTrial, nullptr);
+  if (!postgresFor("HATTR_BENCH_PG_STORE").empty()) add("BM_StoreTrialPostgres", BM_StoreTrial, "HATTR_BENCH_PG_STORE");
+  if (!postgresFor("HATTR_BENCH_PG_READ").empty()) add("BM_ReadTrialPostgres", BM_ReadTrial, "HATTR_BENCH_PG_READ");
+}
 
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  registerBenchmarks();
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
