@@ -19,6 +19,12 @@ namespace hattr::cli {
 /// Exit codes of every hattr command.
 enum ExitCode : int { kOk = 0, kRuntimeFailure = 1, kBadInput = 2 };
 
+/// Thrown by a command whose failure was already told (by it, or by another MPI rank):
+/// main() returns `code` and prints nothing.
+struct ExitQuietly {
+  int code;
+};
+
 /// The profile summary that `profile info --json` prints. Stable keys: samples,
 /// duration_s, rate_hz, channels {name: {unit, min, max}}, metadata.
 nlohmann::json profileSummaryJson(const HapticProfile& profile);
@@ -37,6 +43,8 @@ void registerRecordTrainCommands(CLI::App& app);
 void registerStudyCommands(CLI::App& app);
 void registerAnalysisCommands(CLI::App& app);
 void registerSimCommands(CLI::App& app);
+/// `hattr sim power` and `hattr sim power merge` (cmd_sim_power.cpp).
+void registerPowerCommands(CLI::App& sim);
 void registerDevicesCommands(CLI::App& app);
 void registerMentorCommands(CLI::App& app);
 /// `serve` and `keygen` under the `devices` (alias `device`) command: the network device server.

@@ -166,6 +166,8 @@ void registerSimCommands(CLI::App& app) {
   sweep->add_option("--out", opt->out_dir, "Folder for the studies")->capture_default_str();
   sweep->add_flag("--json", opt->json, "Print JSON rows: value, best mode and p per metric, same_as_first");
   sweep->callback([opt] { runSweep(*opt); });
+
+  registerPowerCommands(*simc);
 }
 
 }  // namespace hattr::cli

@@ -105,6 +105,8 @@ int main(int argc, char** argv) {
   } catch (const hattr::InputError& e) {
     std::cerr << "hattr: error: " << e.what() << '\n';
     return kBadInput;
+  } catch (const ExitQuietly& e) {
+    return e.code;
   } catch (const std::exception& e) {
     std::cerr << "hattr: failed: " << e.what() << '\n';
     return kRuntimeFailure;

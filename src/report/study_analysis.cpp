@@ -11,7 +11,6 @@
 #include "hattr/io/table_csv.hpp"
 
 namespace hattr::report {
-namespace {
 
 MetricResult analyzeMetric(const std::string& name, const std::vector<TrialCost>& costs, bool trajectory) {
   MetricResult r;
@@ -64,8 +63,6 @@ MetricResult analyzeMetric(const std::string& name, const std::vector<TrialCost>
   }
   return r;
 }
-
-}  // namespace
 
 StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptions& options) {
   const session::StudyDefinition& study = db.study();

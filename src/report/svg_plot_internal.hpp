@@ -3,6 +3,7 @@
 // points and bars. Self-contained SVG text, no scripts, no network.
 
 #include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -35,6 +36,8 @@ class SvgPlot {
   void equalAspect() { equal_aspect_ = true; }
   /// x takes integer values only (trial numbers): ticks at integers.
   void integerX() { integer_x_ = true; }
+  /// A fixed y range (a probability from 0 to 1) instead of the data's.
+  void yRange(double lo, double hi) { y_range_ = {lo, hi}; }
   /// Bars instead of lines (categories along x).
   void bars(std::vector<Bar> bars) { bars_ = std::move(bars); }
   [[nodiscard]] std::string svg() const;
@@ -44,6 +47,7 @@ class SvgPlot {
   int width_, height_;
   bool equal_aspect_ = false;
   bool integer_x_ = false;
+  std::optional<std::pair<double, double>> y_range_;
   std::vector<Series> series_;
   std::vector<Bar> bars_;
 };

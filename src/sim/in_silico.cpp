@@ -71,14 +71,19 @@ void setModelParameter(TraineeModel& model, std::string_view key, double value) 
   throw InputError(fmt::format("model parameter \"{}\": expected one of {}", key, fmt::join(modelParameterKeys(), ", ")));
 }
 
-InSilicoResult runInSilicoStudy(const InSilicoOptions& o) {
+std::vector<session::SubjectSpec> simulatedSubjects(int count, std::uint64_t seed, const nlohmann::json& options) {
+  std::vector<session::SubjectSpec> subjects;
+  for (int i = 1; i <= count; ++i) {
+    subjects.push_back({fmt::format("S{:02}", i), "simulated", seed * 1000 + static_cast<std::uint64_t>(i), options});
+  }
+  return subjects;
+}
+
+session::StudyDefinition writePaperStudy(const std::filesystem::path& dir, const InSilicoOptions& o) {
   HATTR_THROW_UNLESS(o.subjects >= 2 && o.subjects <= 1000, "subjects: expected 2 to 1000, got {}", o.subjects);
   HATTR_THROW_UNLESS(o.recall_trials >= 2 && o.training_trials >= 0, "trials: expected >= 2 recall and >= 0 training, got {} and {}",
                      o.recall_trials, o.training_trials);
-  namespace fs = std::filesystem;
-  fs::create_directories(o.out_dir);
-  const fs::path dir = fs::absolute(o.out_dir);
-
+  std::filesystem::create_directories(dir);
   // The expert: what they mean to write (the script), and what the pen records (the reference).
   const Glyph glyph = loadGlyph(defaultDataDir() / "glyphs" / (o.glyph + ".json"));
   const HapticProfile script = expertScript(glyph);
@@ -87,7 +92,6 @@ InSilicoResult runInSilicoStudy(const InSilicoOptions& o) {
                                             {.subject = "expert", .skill = o.glyph, .source = "sim:expert"});
   io::writeProfileCsv(script, dir / "expert-script.csv", io::Overwrite::kReplace);
   io::writeProfileCsv(expert, dir / "expert.csv", io::Overwrite::kReplace);
-
   // The study: the paper's protocol, counterbalanced, simulated subjects.
   session::StudyDefinition study;
   study.name = fmt::format("{} in silico: three training modes{}", glyph.name, o.guidance ? "" : " (A/A: no guidance)");
@@ -98,10 +102,14 @@ InSilicoResult runInSilicoStudy(const InSilicoOptions& o) {
   study.protocol.training_trials = o.training_trials;
   study.protocol.recall_trials = o.recall_trials;
   study.protocol.training.guidance = o.guidance;
-  for (int i = 1; i <= o.subjects; ++i) {
-    study.subjects.push_back({fmt::format("S{:02}", i), "simulated", o.seed * 1000 + static_cast<std::uint64_t>(i),
-                              nlohmann::json{{"template", (dir / "expert-script.csv").string()}}});
-  }
+  study.subjects = simulatedSubjects(o.subjects, o.seed, {{"template", (dir / "expert-script.csv").string()}});
+  return study;
+}
+
+InSilicoResult runInSilicoStudy(const InSilicoOptions& o) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::absolute(o.out_dir);
+  const session::StudyDefinition study = writePaperStudy(dir, o);
   io::writeFileAtomically(dir / "study.json", session::studyToJson(study).dump(2) + "\n", io::Overwrite::kReplace);
   keepAside(dir / "study.sqlite");
   { (void)session::StudyDatabase::create(dir / "study.sqlite", study); }

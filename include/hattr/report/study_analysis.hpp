@@ -79,6 +79,11 @@ struct StudyAnalysis {
   MetricResult force;
 };
 
+/// One metric's statistics over scored recall trials (the balanced design's cells all
+/// present): `trajectory` picks the shape cost, else the force cost. analyzeStudy's own, for
+/// analyses of a subset of a study's trials (a power analysis's smaller designs).
+MetricResult analyzeMetric(const std::string& name, const std::vector<TrialCost>& costs, bool trajectory);
+
 /// Analyzes every completed recall trial. Throws InputError when the study is not complete
 /// enough for the balanced design (naming the missing trials).
 StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptions& options = {});

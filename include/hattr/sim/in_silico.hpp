@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "hattr/report/study_analysis.hpp"
+#include "hattr/session/study.hpp"
 #include "hattr/sim/trainee_model.hpp"
 
 namespace hattr::sim {
@@ -41,6 +42,14 @@ struct InSilicoResult {
   std::uint64_t servo_ticks = 0;            ///< simulated servo ticks in all trials
   int trials = 0;
 };
+
+/// Simulated subjects S01 .. S<count>, subject i seeded seed·1000 + i, each with `options`.
+std::vector<session::SubjectSpec> simulatedSubjects(int count, std::uint64_t seed, const nlohmann::json& options);
+
+/// The paper's study in silico without running it: records the glyph's expert into `dir`
+/// (expert.csv, and expert-script.csv which the subjects mean to write) and returns the study
+/// (the paper's three modes, o's protocol and subjects). Throws InputError for bad options.
+session::StudyDefinition writePaperStudy(const std::filesystem::path& dir, const InSilicoOptions& o);
 
 /// Runs the whole study. An existing study database in out_dir is kept under a new name
 /// (study-<time>.sqlite), never overwritten. Throws InputError for bad options or data files.

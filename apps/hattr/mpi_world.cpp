@@ -1,0 +1,81 @@
+#include "mpi_world.hpp"
+
+// The C API only: not Open MPI's deprecated C++ bindings.
+#ifndef OMPI_SKIP_MPICXX
+#define OMPI_SKIP_MPICXX 1
+#endif
+#include <mpi.h>
+
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
+
+namespace hattr::cli {
+namespace {
+
+void check(int status, const char* call) {
+  if (status != MPI_SUCCESS) throw std::runtime_error(std::string("MPI: ") + call + " failed");
+}
+
+}  // namespace
+
+bool MpiWorld::launched() {
+  // Open MPI's mpirun sets OMPI_COMM_WORLD_SIZE; PMIx launchers (srun --mpi=pmix) PMIX_RANK.
+  return std::getenv("OMPI_COMM_WORLD_SIZE") != nullptr || std::getenv("PMIX_RANK") != nullptr;
+}
+
+MpiWorld::MpiWorld() {
+  if (!launched()) return;
+  // Threads may run beside MPI (a study's subjects at once); only this thread calls it.
+  int provided = 0;
+  check(MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+  initialized_ = true;
+  check(MPI_Comm_rank(MPI_COMM_WORLD, &rank_), "MPI_Comm_rank");
+  check(MPI_Comm_size(MPI_COMM_WORLD, &size_), "MPI_Comm_size");
+  // The ranks on this machine: those sharing its memory (any launcher, not only mpirun).
+  MPI_Comm local = MPI_COMM_NULL;
+  check(MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL, &local), "MPI_Comm_split_type");
+  check(MPI_Comm_size(local, &local_size_), "MPI_Comm_size");
+  MPI_Comm_free(&local);
+}
+
+MpiWorld::~MpiWorld() { finalize(); }
+
+void MpiWorld::finalize() noexcept {
+  if (initialized_) MPI_Finalize();
+  initialized_ = false;
+}
+
+int MpiWorld::firstFailedRank(bool failed) const {
+  if (!initialized_) return failed ? 0 : size_;
+  const int mine = failed ? rank_ : size_;
+  int first = size_;
+  check(MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD), "MPI_Allreduce");
+  return first;
+}
+
+std::vector<double> MpiWorld::gatherToRoot(const std::vector<double>& mine) const {
+  if (!initialized_ || size_ == 1) return mine;
+  // Counts first, then the values, each rank's after the one before.
+  int count = static_cast<int>(mine.size());
+  std::vector<int> counts(rank_ == 0 ? size_ : 0);
+  check(MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Gather");
+  std::vector<int> offsets(counts.size());
+  int total = 0;
+  for (std::size_t i = 0; i < counts.size(); ++i) {
+    offsets[i] = total;
+    total += counts[i];
+  }
+  std::vector<double> all(static_cast<std::size_t>(total));
+  check(MPI_Gatherv(mine.data(), count, MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE, 0,
+                    MPI_COMM_WORLD),
+        "MPI_Gatherv");
+  return all;
+}
+
+void MpiWorld::abort(int code) const {
+  if (initialized_) MPI_Abort(MPI_COMM_WORLD, code);
+  std::exit(code);
+}
+
+}  // namespace hattr::cli

@@ -1,0 +1,44 @@
+#pragma once
+// MPI for commands that split their work across processes (`mpirun -n N hattr sim power`):
+// Open MPI from Debian, through its C API. A process that a launcher did not start is a
+// world of one and never initializes MPI, so the CLI runs the same without mpirun.
+
+#include <vector>
+
+namespace hattr::cli {
+
+class MpiWorld {
+ public:
+  /// Initializes MPI when this process was started by an MPI launcher (mpirun, mpiexec, or
+  /// srun with PMIx); otherwise a world of one.
+  MpiWorld();
+  /// Finalizes MPI (every rank must get here, or abort()).
+  ~MpiWorld();
+  /// Finalizes now (before exiting without unwinding); the destructor then does nothing.
+  void finalize() noexcept;
+  MpiWorld(const MpiWorld&) = delete;
+  MpiWorld& operator=(const MpiWorld&) = delete;
+
+  [[nodiscard]] int rank() const noexcept { return rank_; }
+  [[nodiscard]] int size() const noexcept { return size_; }
+  /// Processes of this world on this machine (to share its cores).
+  [[nodiscard]] int localSize() const noexcept { return local_size_; }
+  /// The lowest rank for which `failed` is true, or size() when none is (every rank calls it).
+  [[nodiscard]] int firstFailedRank(bool failed) const;
+  /// Every rank's values, in rank order, on rank 0 (empty on the others).
+  [[nodiscard]] std::vector<double> gatherToRoot(const std::vector<double>& mine) const;
+  /// Ends every rank of the world with `code` (a rank that failed alone would leave the
+  /// others waiting in a gather).
+  [[noreturn]] void abort(int code) const;
+
+  /// Whether an MPI launcher started this process (its environment says so).
+  [[nodiscard]] static bool launched();
+
+ private:
+  bool initialized_ = false;
+  int rank_ = 0;
+  int size_ = 1;
+  int local_size_ = 1;
+};
+
+}  // namespace hattr::cli

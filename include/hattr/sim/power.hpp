@@ -1,0 +1,66 @@
+#pragma once
+/// Study design by simulation: a power analysis (docs/simulation.md, "Power analysis").
+/// Replicate r runs the study with simulated subjects through the real pipeline (the study
+/// runner into a scratch database, the paper's analysis), the subjects seeded as the in-silico
+/// study with seed + r. Designs share their subjects (common random numbers): a design of N
+/// subjects analyzes the replicate's first N, so the replicate runs only the largest design.
+/// Replicates depend on (plan, r) alone: any split across threads, processes or machines
+/// gives the same outcomes to the bit (report::summarizePower merges them).
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "hattr/report/power.hpp"
+#include "hattr/session/study.hpp"
+
+namespace hattr::sim {
+
+struct PowerOptions {
+  /// A study file whose subjects are simulated: its modes, protocol, expert, pen (sim://)
+  /// and world are used, its subjects replaced by each replicate's (their options, the
+  /// first subject's). Empty: the paper's study in silico (glyph, trials below).
+  std::filesystem::path study;
+  std::string glyph = "na";         ///< the paper's study only
+  int training_trials = 11;         ///< the paper's study only
+  int recall_trials = 11;           ///< the paper's study only
+  std::vector<int> subject_counts{6, 10, 20, 40};
+  int replicates = 200;
+  std::uint64_t seed = 1;
+  double alpha = 0.05;
+  int threads = 1;                  ///< subjects simulated at once, and scoring threads
+  /// Where replicates' databases are made (each removed when analyzed); empty: a new folder
+  /// in the system's temporary folder, removed with this object.
+  std::filesystem::path scratch;
+};
+
+/// A power analysis ready to run replicates: the study and its expert prepared once.
+class PowerStudy {
+ public:
+  /// Checks the options and the study (InputError naming what is wrong).
+  explicit PowerStudy(const PowerOptions& options);
+  PowerStudy(const PowerStudy&) = delete;
+  PowerStudy& operator=(const PowerStudy&) = delete;
+
+  [[nodiscard]] const report::PowerPlan& plan() const noexcept { return plan_; }
+  /// Runs replicate r (0 <= r < replicates). `progress` gets the fraction of its trials run.
+  [[nodiscard]] report::ReplicateOutcome runReplicate(int replicate,
+                                                      const std::function<void(double)>& progress = {}) const;
+
+ private:
+  PowerOptions options_;
+  session::StudyDefinition study_;  ///< without subjects
+  nlohmann::json subject_options_;  ///< every simulated subject's options
+  report::PowerPlan plan_;
+  /// The scratch folder, removed when made here (also when the constructor throws).
+  struct ScratchFolder {
+    std::filesystem::path path;
+    bool own = false;
+    ~ScratchFolder();
+  };
+  ScratchFolder scratch_;
+};
+
+}  // namespace hattr::sim

@@ -1,0 +1,148 @@
+#include "hattr/sim/power.hpp"
+
+#include <stdlib.h>
+
+#include <algorithm>
+#include <iterator>
+#include <set>
+
+#include <fmt/format.h>
+
+#include "hattr/core/error.hpp"
+#include "hattr/guidance/training_guidance.hpp"
+#include "hattr/session/study_database.hpp"
+#include "hattr/session/study_runner.hpp"
+#include "hattr/sim/in_silico.hpp"
+#include "hattr/sim/participant.hpp"
+
+namespace hattr::sim {
+namespace {
+
+void checkOptions(const PowerOptions& o) {
+  HATTR_THROW_UNLESS(!o.subject_counts.empty(), "subjects: expected at least one number of subjects");
+  std::set<int> seen;
+  for (const int n : o.subject_counts) {
+    HATTR_THROW_UNLESS(n >= 3 && n <= 1000, "subjects: expected 3 to 1000 subjects per design (Tukey's test needs 3), got {}", n);
+    HATTR_THROW_UNLESS(seen.insert(n).second, "subjects: {} is given twice", n);
+  }
+  HATTR_THROW_UNLESS(o.replicates >= 1 && o.replicates <= 1'000'000, "replicates: expected 1 to 1000000, got {}", o.replicates);
+  HATTR_THROW_UNLESS(o.alpha > 0.0 && o.alpha < 1.0, "alpha: expected a level in (0, 1), got {}", o.alpha);
+  HATTR_THROW_UNLESS(o.threads >= 1 && o.threads <= 256, "threads: expected 1 to 256, got {}", o.threads);
+  // Replicate r's subjects are seeded as the in-silico study with seed + r (subject i:
+  // (seed + r)·1000 + i): keep that within a study file's seed range.
+  HATTR_THROW_UNLESS(o.seed <= 1'000'000'000'000ULL, "seed: expected 0 to 1e12, got {}", o.seed);
+}
+
+/// A study file's checks: simulated subjects on the simulated pen, nothing live.
+void checkStudy(const session::StudyDefinition& study, const std::filesystem::path& file) {
+  const std::string where = file.string();
+  HATTR_THROW_UNLESS(study.device.rfind("sim://", 0) == 0,
+                     "{}: device \"{}\": a power analysis simulates its studies: expected a sim:// device", where,
+                     study.device);
+  HATTR_THROW_UNLESS(!study.hasMentoredModes(), "{}: mentored modes are not simulated by a power analysis (yet): "
+                     "expected modes without a mentor", where);
+  for (const auto& s : study.subjects) {
+    HATTR_THROW_UNLESS(s.participant == "simulated",
+                       "{}: subject {} is a \"{}\" participant: a power analysis replaces the subjects with simulated "
+                       "ones and takes their options from the study's: expected simulated subjects",
+                       where, s.id, s.participant);
+  }
+}
+
+/// The scratch folder: the given one, or a new one in the temporary folder.
+std::filesystem::path makeScratch(const std::filesystem::path& given, bool& own) {
+  own = given.empty();
+  if (!own) {
+    std::filesystem::create_directories(given);
+    return std::filesystem::absolute(given);
+  }
+  std::string pattern = (std::filesystem::temp_directory_path() / "hattr-power-XXXXXX").string();
+  HATTR_THROW_UNLESS(mkdtemp(pattern.data()) != nullptr, "power: cannot make a scratch folder in {}",
+                     std::filesystem::temp_directory_path().string());
+  return pattern;
+}
+
+}  // namespace
+
+PowerStudy::ScratchFolder::~ScratchFolder() {
+  std::error_code ignored;
+  if (own) std::filesystem::remove_all(path, ignored);
+}
+
+PowerStudy::PowerStudy(const PowerOptions& options) : options_(options) {
+  checkOptions(options_);
+  std::sort(options_.subject_counts.begin(), options_.subject_counts.end());
+  if (!options_.study.empty()) {
+    study_ = session::loadStudy(options_.study);
+    checkStudy(study_, options_.study);
+  } else {
+    HATTR_THROW_UNLESS(options_.recall_trials >= 2 && options_.training_trials >= 0,
+                       "trials: expected >= 2 recall and >= 0 training, got {} and {}", options_.recall_trials,
+                       options_.training_trials);
+  }
+  scratch_.path = makeScratch(options_.scratch, scratch_.own);
+  if (options_.study.empty()) {
+    study_ = writePaperStudy(scratch_.path, {.glyph = options_.glyph, .subjects = options_.subject_counts.back(),
+                                             .seed = options_.seed, .training_trials = options_.training_trials,
+                                             .recall_trials = options_.recall_trials});
+  }
+  subject_options_ = study_.subjects.front().options;
+  study_.subjects.clear();
+
+  // The plan: what makes replicates the same, so not where the expert's file is.
+  nlohmann::json definition = session::studyToJson(study_);
+  definition.erase("subjects");
+  definition.erase("experts");
+  plan_.study = definition;
+  for (const auto mode : study_.modes) plan_.modes.emplace_back(guidance::modeName(mode));
+  plan_.subject_counts = options_.subject_counts;
+  plan_.replicates = options_.replicates;
+  plan_.seed = options_.seed;
+  plan_.alpha = options_.alpha;
+}
+
+report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const std::function<void(double)>& progress) const {
+  HATTR_THROW_UNLESS(replicate >= 0 && replicate < plan_.replicates, "power: replicate {}: expected 0 to {}", replicate,
+                     plan_.replicates - 1);
+  // The largest design's subjects, seeded as the in-silico study with seed + r.
+  session::StudyDefinition study = study_;
+  study.subjects = simulatedSubjects(plan_.subject_counts.back(), plan_.seed + static_cast<std::uint64_t>(replicate),
+                                     subject_options_);
+  const std::filesystem::path folder = scratch_.path / fmt::format("replicate-{}", replicate);
+  std::filesystem::remove_all(folder);
+  std::filesystem::create_directories(folder);
+  const std::filesystem::path file = folder / "study.sqlite";
+  report::StudyAnalysis analysis;
+  {
+    (void)session::StudyDatabase::create(file, study);
+    session::StudyDatabase db = session::StudyDatabase::open(file, session::OpenMode::kRunner);
+    session::StudyRunner runner(db, [](const session::SubjectRecord& s, const HapticProfile& expert) {
+      return makeSimulatedParticipant(s, expert);
+    });
+    const double total = static_cast<double>(db.trials().size());
+    int done = 0;
+    session::RunOptions run;
+    run.subjects_at_once = options_.threads;
+    run.progress = [&](const session::RunProgress&) {
+      if (progress) progress(++done / total);
+    };
+    (void)runner.run(run);
+    analysis = report::analyzeStudy(db, {.threads = static_cast<unsigned>(options_.threads)});
+  }
+  std::filesystem::remove_all(folder);
+
+  // Each design: the replicate's first N subjects (S01 .. SN).
+  report::ReplicateOutcome outcome{replicate, {}};
+  for (const int n : plan_.subject_counts) {
+    std::set<std::string> ids;
+    for (const auto& s : simulatedSubjects(n, 0, {})) ids.insert(s.id);
+    std::vector<report::TrialCost> costs;
+    std::copy_if(analysis.costs.begin(), analysis.costs.end(), std::back_inserter(costs),
+                 [&ids](const report::TrialCost& c) { return ids.contains(c.subject); });
+    outcome.designs.push_back({report::metricOutcome(report::analyzeMetric("trajectory", costs, true), plan_),
+                               report::metricOutcome(report::analyzeMetric("force", costs, false), plan_)});
+  }
+  return outcome;
+}
+
+}  // namespace hattr::sim

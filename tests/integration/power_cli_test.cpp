@@ -1,0 +1,130 @@
+// hattr sim power on one process, on two MPI ranks (a real mpirun) and in two shards merged:
+// the same table to the bit.
+
+#include <filesystem>
+
+#include <fmt/format.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "support/run_command.hpp"
+
+namespace hattr {
+namespace {
+
+using ::testing::HasSubstr;
+using test::RunResult;
+
+const std::string kHattr = HATTR_CLI_PATH;
+
+/// Sanitized builds run the power analysis on one process and in shards, but not under mpirun:
+/// Open MPI's library is not instrumented, and its own threads and memory hooks are outside
+/// what the sanitizers can judge. The release build (`make test`) runs the mpirun checks.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+constexpr bool kRunMpirun = false;
+#else
+constexpr bool kRunMpirun = true;
+#endif
+
+/// Open MPI's launcher, which these tests start for real (scripts/install-deps installs it).
+std::string mpirun() {
+  for (const char* candidate : {"/usr/bin/mpirun", "/usr/local/bin/mpirun"}) {
+    if (std::filesystem::exists(candidate)) return candidate;
+  }
+  return {};
+}
+
+/// mpirun's settings for this machine: it runs as root here (Open MPI refuses that unless
+/// told), and LeakSanitizer would report what Open MPI's own library keeps until exit.
+const std::string kMpiEnvironment = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+                                    "OMPI_MCA_rmaps_base_oversubscribe=1 ASAN_OPTIONS=detect_leaks=0 ";
+
+/// The small power analysis every run here does: 3 and 4 subjects, 4 replicates, 2 + 2 trials.
+const std::string kPowerDesign = "sim power --subjects 3,4 --replicates 4 --trials 2 --seed 3";
+const std::string kPower = kPowerDesign + " --threads 1";
+
+nlohmann::json tableOf(const RunResult& r) {
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  return {{"plan", j.at("plan")}, {"rows", j.at("rows")}};
+}
+
+TEST(PowerCli, OneProcessTwoMpiRanksAndTwoShardsGiveTheSameTableToTheBit) {
+  const std::string launcher = mpirun();
+  ASSERT_FALSE(launcher.empty()) << "mpirun not found: install Open MPI (apt-get install openmpi-bin libopenmpi-dev, "
+                                    "as scripts/install-deps does)";
+  test::TempDir dir;
+  const RunResult one = test::runCommand(dir, kHattr, kPower + " --json --out " + (dir / "whole.json").string(), "one");
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  const nlohmann::json table = tableOf(one);
+  ASSERT_EQ(table["rows"].size(), 4u);  // 2 designs × 2 metrics
+  EXPECT_EQ(nlohmann::json::parse(one.out)["run"]["processes"], 1);
+
+  // Subjects simulated two at once: the same table.
+  const RunResult threads = test::runCommand(dir, kHattr, kPowerDesign + " --threads 2 --json", "threads");
+  ASSERT_EQ(threads.exit_code, 0) << threads.err;
+  EXPECT_EQ(tableOf(threads), table);
+
+  // Two ranks of a real mpirun: replicates split between them, gathered to rank 0.
+  if (kRunMpirun) {
+    const RunResult ranks =
+        test::runCommand(dir, kMpiEnvironment + launcher, "-n 2 " + kHattr + " " + kPower + " --json", "mpi");
+    ASSERT_EQ(ranks.exit_code, 0) << ranks.err << ranks.out;
+    EXPECT_EQ(tableOf(ranks), table);
+    EXPECT_EQ(nlohmann::json::parse(ranks.out)["run"]["processes"], 2);
+  }
+
+  // Two shards, then merged; and the whole run's own outcome file merges to the same.
+  for (int shard : {0, 1}) {
+    const RunResult s = test::runCommand(
+        dir, kHattr, fmt::format("{} --shard {}/2 --out {}", kPower, shard, (dir / fmt::format("s{}.json", shard)).string()),
+        fmt::format("shard{}", shard));
+    ASSERT_EQ(s.exit_code, 0) << s.err;
+    EXPECT_THAT(s.out, HasSubstr(fmt::format("shard {}/2: 2 studies", shard)));
+  }
+  const RunResult merged = test::runCommand(
+      dir, kHattr, "sim power merge --json " + (dir / "s0.json").string() + " " + (dir / "s1.json").string(), "merge");
+  ASSERT_EQ(merged.exit_code, 0) << merged.err;
+  EXPECT_EQ(tableOf(merged), table);
+  const RunResult whole = test::runCommand(dir, kHattr, "sim power merge --json " + (dir / "whole.json").string() +
+                                                            " --html " + (dir / "power.html").string(), "whole");
+  ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  EXPECT_EQ(tableOf(whole), table);
+  EXPECT_THAT(test::readText(dir / "power.html"), HasSubstr("<svg"));
+
+  // A shard missing, or written twice, is refused; nothing is overwritten without --force.
+  const RunResult half = test::runCommand(dir, kHattr, "sim power merge " + (dir / "s0.json").string(), "half");
+  EXPECT_EQ(half.exit_code, 2);
+  EXPECT_THAT(half.err, HasSubstr("power merge: 2 of 4 replicates are in the files; missing: 1, 3"));
+  const RunResult again =
+      test::runCommand(dir, kHattr, kPower + " --shard 0/2 --out " + (dir / "s0.json").string(), "again");
+  EXPECT_EQ(again.exit_code, 2);
+  EXPECT_THAT(again.err, HasSubstr("s0.json"));
+}
+
+TEST(PowerCli, BadArgumentsAreRefusedWithExitTwoAndTheReason) {
+  test::TempDir dir;
+  const auto refused = [&](const std::string& args, const std::string& reason) {
+    const RunResult r = test::runCommand(dir, kHattr, args, "bad");
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.err;
+    EXPECT_THAT(r.err, HasSubstr(reason)) << args;
+  };
+  refused("sim power --subjects 3,x", "--subjects: expected comma-separated whole numbers, got \"x\"");
+  refused("sim power --subjects 2", "subjects: expected 3 to 1000 subjects per design");
+  refused("sim power --shard 2/2 --out x.json", "--shard: expected i/N with 0 <= i < N (e.g. 0/4), got \"2/2\"");
+  refused("sim power --shard 0/2", "--shard: expected --out FILE");
+  refused("sim power --shard 0/2 --out s.json --html p.html", "--shard: a shard has no table yet");
+  refused("sim power merge " + (dir / "missing.json").string(), "missing.json");
+
+  // Under mpirun every rank refuses the same input, and the run ends with exit 2.
+  if (!kRunMpirun) return;
+  const std::string launcher = mpirun();
+  ASSERT_FALSE(launcher.empty()) << "mpirun not found: install openmpi-bin (scripts/install-deps)";
+  const RunResult both = test::runCommand(dir, kMpiEnvironment + launcher,
+                                          "-n 2 " + kHattr + " sim power --shard 0/2 --out x.json", "mpi-bad");
+  EXPECT_EQ(both.exit_code, 2) << both.err;
+  EXPECT_THAT(both.err, HasSubstr("give --shard or mpirun -n, not both"));
+}
+
+}  // namespace
+}  // namespace hattr

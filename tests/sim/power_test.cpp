@@ -1,0 +1,239 @@
+#include "hattr/sim/power.hpp"
+
+#include <cmath>
+#include <random>
+
+#include <fmt/format.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "hattr/analysis/proportion.hpp"
+#include "hattr/core/error.hpp"
+#include "hattr/io/profile_csv.hpp"
+#include "hattr/sim/in_silico.hpp"
+#include "support/test_support.hpp"
+
+namespace hattr::sim {
+namespace {
+
+using ::testing::HasSubstr;
+
+/// Equal to the bit, or both NaN (no value in either analysis).
+void expectSame(double a, double b, const std::string& what) {
+  if (std::isnan(a) || std::isnan(b)) {
+    EXPECT_TRUE(std::isnan(a) && std::isnan(b)) << what << ": " << a << " vs " << b;
+  } else {
+    EXPECT_EQ(a, b) << what;
+  }
+}
+
+/// The outcome the power analysis reads from an analysis, checked against its own reading.
+void expectOutcomeOf(const report::MetricOutcome& got, const report::MetricResult& metric, const report::PowerPlan& plan,
+                     const std::string& what) {
+  expectSame(got.p_mode, metric.overall.row("mode").p, what + " p");
+  expectSame(got.partial_eta_sq, metric.overall.row("mode").partial_eta_sq, what + " eta");
+  ASSERT_TRUE(metric.tukey.has_value()) << what;
+  ASSERT_EQ(got.p_pairs.size(), plan.pairs().size());
+  // Each plan pair ("BASIC-PCONTROL") is found in Tukey's comparisons, either way round.
+  const std::vector<std::string> pairs = plan.pairs();
+  for (std::size_t k = 0; k < got.p_pairs.size(); ++k) {
+    const std::string& pair = pairs[k];
+    int matches = 0;
+    for (const auto& c : metric.tukey->comparisons) {
+      if (pair == c.level + "-" + c.other_level || pair == c.other_level + "-" + c.level) {
+        expectSame(got.p_pairs[k], c.p_adjusted, what + " " + pair);
+        ++matches;
+      }
+    }
+    EXPECT_EQ(matches, 1) << what << " " << pair;
+  }
+}
+
+// Replicate r is the in-silico study with seed + r, and a design of N subjects analyzes its
+// first N: the same numbers as studies of 3 and of 4 subjects run on their own.
+TEST(PowerStudy, AReplicateIsTheInSilicoStudyWithSeedPlusRAndEachDesignItsFirstSubjects) {
+  test::TempDir dir;
+  const PowerStudy power({.training_trials = 1, .recall_trials = 3, .subject_counts = {4, 3}, .replicates = 2,
+                          .seed = 5, .threads = 2, .scratch = dir / "scratch"});
+  EXPECT_EQ(power.plan().subject_counts, (std::vector<int>{3, 4}));
+  EXPECT_EQ(power.plan().pairs(), (std::vector<std::string>{"BASIC-PCONTROL", "BASIC-ALPHA", "PCONTROL-ALPHA"}));
+  const report::ReplicateOutcome outcome = power.runReplicate(1);
+  EXPECT_EQ(outcome.replicate, 1);
+  ASSERT_EQ(outcome.designs.size(), 2u);
+  EXPECT_FALSE(std::filesystem::exists(dir / "scratch" / "replicate-1")) << "a replicate's database is removed";
+
+  for (const int n : {3, 4}) {
+    const InSilicoResult alone = runInSilicoStudy({.out_dir = dir / std::to_string(n), .subjects = n, .seed = 6,
+                                                   .training_trials = 1, .recall_trials = 3, .write_report = false});
+    const auto& design = outcome.designs[n == 3 ? 0 : 1];
+    expectOutcomeOf(design[0], alone.analysis.trajectory, power.plan(), fmt::format("{} subjects trajectory", n));
+    expectOutcomeOf(design[1], alone.analysis.force, power.plan(), fmt::format("{} subjects force", n));
+  }
+  // The two designs are different analyses (4 subjects are not 3).
+  EXPECT_NE(outcome.designs[0][0].p_mode, outcome.designs[1][0].p_mode);
+}
+
+TEST(PowerStudy, RefusesDesignsItCannotAnalyzeNamingTheOption) {
+  const auto message = [](const PowerOptions& o) {
+    try {
+      const PowerStudy power(o);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_THAT(message({.subject_counts = {2, 10}}), HasSubstr("subjects: expected 3 to 1000 subjects per design"));
+  EXPECT_THAT(message({.subject_counts = {6, 6}}), HasSubstr("subjects: 6 is given twice"));
+  EXPECT_THAT(message({.replicates = 0}), HasSubstr("replicates: expected 1 to 1000000, got 0"));
+  EXPECT_THAT(message({.alpha = 1.0}), HasSubstr("alpha: expected a level in (0, 1), got 1"));
+  EXPECT_THAT(message({.recall_trials = 1}), HasSubstr("trials: expected >= 2 recall"));
+
+  // A study file: only simulated subjects on the simulated pen.
+  test::TempDir dir;
+  const auto write = [&](const std::string& name, const std::string& device, const std::string& participant) {
+    const auto file = dir / name;
+    const std::string text = fmt::format(R"({{"name": "t", "skill": "na", "experts": {{"na": "{}"}},
+      "modes": ["BASIC", "ALPHA"], "device": "{}", "subjects": [{{"id": "P1", "participant": "{}"}}]}})",
+                                         (dir / "expert.csv").string(), device, participant);
+    io::writeFileAtomically(file, text, io::Overwrite::kReplace);
+    return file;
+  };
+  (void)writePaperStudy(dir.path(), {.subjects = 3});  // writes expert.csv
+  EXPECT_THAT(message({.study = write("person.json", "sim://pen", "person")}),
+              HasSubstr("subject P1 is a \"person\" participant: a power analysis replaces the subjects"));
+  EXPECT_THAT(message({.study = write("udp.json", "udp://127.0.0.1:9", "simulated")}),
+              HasSubstr("a power analysis simulates its studies: expected a sim:// device"));
+}
+
+// Clopper–Pearson intervals as R's binom.test (R 4.2, printed with %.17g).
+TEST(PowerSummary, ClopperPearsonIntervalsAreRsBinomTest) {
+  struct Case {
+    int k, n;
+    double confidence, lower, upper;
+  };
+  const Case cases[] = {{7, 20, 0.95, 0.15390920478454115, 0.59218853453282816},
+                        {0, 10, 0.95, 0.0, 0.30849710781876083},
+                        {10, 10, 0.95, 0.69150289218123917, 1.0},
+                        {1, 200, 0.95, 0.00012658102786701841, 0.02754189845720556},
+                        {123, 200, 0.95, 0.54376130721685478, 0.68277547463713262},
+                        {3, 8, 0.90, 0.1111127066076292, 0.71075918349819056}};
+  for (const auto& c : cases) {
+    const analysis::Proportion p = analysis::clopperPearson(c.k, c.n, c.confidence);
+    EXPECT_DOUBLE_EQ(p.estimate, static_cast<double>(c.k) / c.n);
+    EXPECT_NEAR(p.lower, c.lower, 1e-12) << c.k << "/" << c.n;
+    EXPECT_NEAR(p.upper, c.upper, 1e-12) << c.k << "/" << c.n;
+  }
+  EXPECT_THROW((void)analysis::clopperPearson(3, 2), InputError);
+  EXPECT_THROW((void)analysis::clopperPearson(0, 0), InputError);
+}
+
+/// A plan of three modes and synthetic outcomes: replicate r's p values from a seeded
+/// generator, with NaN (no variance) in some.
+report::PowerPlan syntheticPlan(int replicates) {
+  report::PowerPlan plan;
+  plan.study = {{"name", "synthetic"}};
+  plan.modes = {"BASIC", "PCONTROL", "ALPHA"};
+  plan.subject_counts = {6, 10};
+  plan.replicates = replicates;
+  plan.seed = 3;
+  plan.alpha = 0.05;
+  return plan;
+}
+
+std::vector<report::ReplicateOutcome> syntheticOutcomes(const report::PowerPlan& plan) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> p(0.0, 0.2);
+  std::vector<report::ReplicateOutcome> out;
+  for (int r = 0; r < plan.replicates; ++r) {
+    report::ReplicateOutcome o{r, {}};
+    for (std::size_t d = 0; d < plan.subject_counts.size(); ++d) {
+      std::array<report::MetricOutcome, 2> design;
+      for (auto& m : design) {
+        m.p_mode = r % 7 == 3 ? std::nan("") : p(rng);
+        m.partial_eta_sq = r % 5 == 1 ? std::nan("") : p(rng);
+        for (int k = 0; k < 3; ++k) m.p_pairs.push_back(p(rng));
+      }
+      o.designs.push_back(design);
+    }
+    out.push_back(o);
+  }
+  return out;
+}
+
+TEST(PowerSummary, CountsPBelowAlphaAndAveragesTheEffectSizeLeavingNaNOut) {
+  const report::PowerPlan plan = syntheticPlan(20);
+  std::vector<report::ReplicateOutcome> outcomes = syntheticOutcomes(plan);
+  // Count by hand for the second design's force.
+  int found = 0, eta_n = 0;
+  double eta = 0.0;
+  for (const auto& o : outcomes) {
+    const auto& m = o.designs[1][1];
+    found += m.p_mode < 0.05 ? 1 : 0;  // NaN compares false: not significant
+    if (!std::isnan(m.partial_eta_sq)) eta += m.partial_eta_sq, ++eta_n;
+  }
+  std::reverse(outcomes.begin(), outcomes.end());  // any order
+  const report::PowerTable table = report::summarizePower(plan, outcomes);
+  ASSERT_EQ(table.rows.size(), 4u);
+  const report::PowerRow& row = table.rows[3];
+  EXPECT_EQ(row.subjects, 10);
+  EXPECT_EQ(row.metric, "force");
+  EXPECT_EQ(row.power.successes, found);
+  EXPECT_EQ(row.power.trials, 20);
+  EXPECT_GT(found, 0);
+  EXPECT_LT(found, 20);
+  EXPECT_DOUBLE_EQ(row.mean_partial_eta_sq, eta / eta_n);
+  ASSERT_EQ(row.pairs.size(), 3u);
+  EXPECT_EQ(row.pairs[2].pair, "PCONTROL-ALPHA");
+
+  // A replicate missing, twice, or out of the plan is refused.
+  outcomes.pop_back();
+  EXPECT_THROW((void)report::summarizePower(plan, outcomes), InputError);
+  outcomes.push_back(outcomes.front());
+  EXPECT_THROW((void)report::summarizePower(plan, outcomes), InputError);
+}
+
+// Shards merge to exactly what one process summarizes: the outcomes go through JSON exactly.
+TEST(PowerShards, MergedShardsEqualTheWholeRunAndForeignOrMissingShardsAreRefused) {
+  test::TempDir dir;
+  const report::PowerPlan plan = syntheticPlan(10);
+  const std::vector<report::ReplicateOutcome> all = syntheticOutcomes(plan);
+  const nlohmann::json whole = report::powerTableToJson(report::summarizePower(plan, all));
+  std::vector<std::filesystem::path> files;
+  for (int shard = 0; shard < 3; ++shard) {
+    std::vector<report::ReplicateOutcome> mine;
+    for (int r = shard; r < plan.replicates; r += 3) mine.push_back(all[static_cast<std::size_t>(r)]);
+    files.push_back(dir / fmt::format("shard-{}.json", shard));
+    io::writeFileAtomically(files.back(), report::powerShardToJson(plan, shard, 3, mine).dump(1),
+                            io::Overwrite::kReplace);
+  }
+  EXPECT_EQ(report::powerTableToJson(report::mergePowerShards(files)).dump(), whole.dump());
+
+  // The flat encoding MPI gathers is exact too.
+  std::vector<double> flat;
+  report::encodeOutcome(all[3], flat);
+  ASSERT_EQ(flat.size(), report::encodedOutcomeSize(plan));
+  const report::ReplicateOutcome back = report::decodeOutcome(plan, flat);
+  EXPECT_EQ(back.replicate, 3);
+  EXPECT_TRUE(std::isnan(back.designs[0][0].p_mode));
+  EXPECT_EQ(back.designs[1][1].p_pairs, all[3].designs[1][1].p_pairs);
+
+  const auto message = [](const std::vector<std::filesystem::path>& f) {
+    try {
+      (void)report::mergePowerShards(f);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_THAT(message({files[0], files[2]}), HasSubstr("power merge: 7 of 10 replicates are in the files; missing: 1, 4, 7"));
+  EXPECT_THAT(message({files[0], files[1], files[1]}), HasSubstr("shard-1.json: replicate 1 is also in"));
+  report::PowerPlan other = plan;
+  other.alpha = 0.01;
+  io::writeFileAtomically(dir / "other.json", report::powerShardToJson(other, 0, 1, {}).dump(), io::Overwrite::kReplace);
+  EXPECT_THAT(message({files[0], dir / "other.json"}), HasSubstr("other.json: another power analysis than"));
+  io::writeFileAtomically(dir / "study.json", "{\"name\": \"x\"}", io::Overwrite::kReplace);
+  EXPECT_THAT(message({dir / "study.json"}), HasSubstr("study.json: not a power shard"));
+}
+
+}  // namespace
+}  // namespace hattr::sim
