@@ -45,6 +45,8 @@ void registerAnalysisCommands(CLI::App& app);
 void registerSimCommands(CLI::App& app);
 /// `hattr sim power` and `hattr sim power merge` (cmd_sim_power.cpp).
 void registerPowerCommands(CLI::App& sim);
+/// hattr sim compare-hypotheses (cmd_sim_hypotheses.cpp).
+void registerHypothesisCommands(CLI::App& sim);
 void registerDevicesCommands(CLI::App& app);
 void registerMentorCommands(CLI::App& app);
 /// `serve` and `keygen` under the `devices` (alias `device`) command: the network device server.

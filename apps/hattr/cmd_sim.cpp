@@ -30,6 +30,7 @@ struct SimOptions {
   std::string out_dir = "sim-out";
   std::string parameter;
   std::string values;
+  std::string hypothesis = "position-plan";
   bool json = false;
 };
 
@@ -71,7 +72,9 @@ void runAa(const SimOptions& opt) {
     progress.update(s - 1, fmt::format("A/A: study {} of {}", s, opt.seeds));
     const auto r = sim::runInSilicoStudy({.out_dir = fmt::format("{}/aa-{:03}", opt.out_dir, s), .subjects = opt.subjects,
                                           .seed = static_cast<std::uint64_t>(s), .training_trials = opt.trials,
-                                          .recall_trials = opt.trials, .guidance = false, .write_report = false,
+                                          .recall_trials = opt.trials, .guidance = false,
+                                          .hypothesis = sim::parseHypothesis(opt.hypothesis, "--hypothesis"),
+                                          .write_report = false,
                                           .progress = withinStudy(progress, s - 1)});
     const double p_traj = row(r.analysis.trajectory.overall, "mode")->p;
     const double p_force = row(r.analysis.force.overall, "mode")->p;
@@ -80,13 +83,13 @@ void runAa(const SimOptions& opt) {
     seeds.push_back({{"seed", s}, {"p_mode_trajectory", p_traj}, {"p_mode_force", p_force}});
   }
   progress.finish();
-  const nlohmann::json json = {{"seeds", seeds}, {"alpha", 0.05},
+  const nlohmann::json json = {{"hypothesis", opt.hypothesis}, {"seeds", seeds}, {"alpha", 0.05},
                                {"fraction_significant_trajectory", static_cast<double>(significant[0]) / opt.seeds},
                                {"fraction_significant_force", static_cast<double>(significant[1]) / opt.seeds}};
   if (opt.json) return printJson(json);
-  std::cout << fmt::format("A/A check ({} seeds, {} subjects, {}+{} trials per mode, guidance off in every mode):\n"
+  std::cout << fmt::format("A/A check ({}: {} seeds, {} subjects, {}+{} trials per mode, guidance off in every mode):\n"
                            "  mode effect significant at α = 0.05: trajectory {}/{}, force {}/{} (expected about {:.1f})\n",
-                           opt.seeds, opt.subjects, opt.trials, opt.trials, significant[0], opt.seeds, significant[1], opt.seeds,
+                           opt.hypothesis, opt.seeds, opt.subjects, opt.trials, opt.trials, significant[0], opt.seeds, significant[1], opt.seeds,
                            0.05 * opt.seeds);
 }
 
@@ -155,7 +158,9 @@ void registerSimCommands(CLI::App& app) {
   aa->add_option("--subjects", opt->subjects, "Subjects per study")->check(CLI::Range(2, 100))->capture_default_str();
   aa->add_option("--trials", opt->trials, "Training and recall trials per mode")->check(CLI::Range(2, 50))->capture_default_str();
   aa->add_option("--out", opt->out_dir, "Folder for the studies")->capture_default_str();
-  aa->add_flag("--json", opt->json, "Print JSON: seeds [{seed, p_mode_trajectory, p_mode_force}], fractions");
+  aa->add_option("--hypothesis", opt->hypothesis, "Learning hypothesis: position-plan, force-plan, guidance-dependent")
+      ->capture_default_str();
+  aa->add_flag("--json", opt->json, "Print JSON: hypothesis, seeds [{seed, p_mode_trajectory, p_mode_force}], fractions");
   aa->callback([opt] { runAa(*opt); });
 
   auto* sweep = simc->add_subcommand("sweep", "Sensitivity: rerun the study over values of one learning-rule parameter");
@@ -168,6 +173,7 @@ void registerSimCommands(CLI::App& app) {
   sweep->callback([opt] { runSweep(*opt); });
 
   registerPowerCommands(*simc);
+  registerHypothesisCommands(*simc);
 }
 
 }  // namespace hattr::cli

@@ -31,6 +31,7 @@ struct PowerCliOptions {
   double alpha = 0.05;
   int trials = 11;
   std::string glyph = "na";
+  std::string hypothesis;
   int threads = 0;
   std::string shard;
   std::string out;
@@ -185,7 +186,7 @@ void runPower(const PowerCliOptions& opt) {
     study.emplace(sim::PowerOptions{
         .study = opt.study, .glyph = opt.glyph, .training_trials = opt.trials, .recall_trials = opt.trials,
         .subject_counts = subjectCounts(opt.subjects), .replicates = opt.replicates, .seed = opt.seed,
-        .alpha = opt.alpha, .threads = threads,
+        .alpha = opt.alpha, .threads = threads, .hypothesis = opt.hypothesis,
         .scratch = opt.scratch.empty() ? std::filesystem::path() : std::filesystem::path(opt.scratch) / scratch_part});
   } catch (...) {
     failure = std::current_exception();
@@ -271,6 +272,9 @@ void registerPowerCommands(CLI::App& sim) {
   power->add_option("--glyph", opt->glyph, "Glyph in data/glyphs (the paper's study only)")
       ->capture_default_str()
       ->excludes(study);
+  power->add_option("--hypothesis", opt->hypothesis,
+                    "Learning hypothesis of every subject: position-plan, force-plan, guidance-dependent (default: the "
+                    "study's; the paper's study: position-plan)");
   power->add_option("--threads", opt->threads, "Subjects simulated at once per process (0: this machine's cores "
                                                "shared by its ranks)")
       ->check(CLI::Range(0, 256))

@@ -16,6 +16,8 @@ constexpr double kLiftHeight_m = 0.003;
 Vec3 handForce(const HandImpedance& hand, const HandCommand& command, const Vec3& p_WT, const Vec3& v_WT) noexcept {
   Vec3 force = hand.stiffness_N_per_m * (command.p_target_W - p_WT) +
                hand.damping_N_s_per_m * (command.v_target_W - v_WT);
+  // In the paper plane: the grip's share of the impedance, and the feedforward push.
+  force.head<2>() = command.grip * force.head<2>() + command.push_W.head<2>();
   if (command.pen_down) {
     // Writing: the fingers steer the tip in the paper plane and press it into the paper
     // with the normal share F·sin θ of the axial force (the tangential share is carried
@@ -36,12 +38,16 @@ HandCommand CircleHand::command(double t_s) noexcept {
   return cmd;
 }
 
-ProfileHandScript::ProfileHandScript(const HapticProfile& profile, double default_altitude_rad, Vec3 start_offset_W)
+ProfileHandScript::ProfileHandScript(const HapticProfile& profile, double default_altitude_rad, Vec3 start_offset_W,
+                                     ProfilePlayback playback)
     : samples_(profile.samples()),
       has_tilt_(profile.rawChannels().tilt),
       default_altitude_rad_(default_altitude_rad),
-      offset_W_(start_offset_W) {
+      offset_W_(start_offset_W),
+      playback_(playback) {
   HATTR_THROW_UNLESS(!samples_.empty(), "hand script: the profile has no samples");
+  HATTR_THROW_UNLESS(std::isfinite(playback.grip) && playback.grip > 0.0 && playback.grip <= 1.0,
+                     "hand script: grip: expected a share in (0, 1], got {}", playback.grip);
 }
 
 double ProfileHandScript::duration_s() const noexcept { return samples_.back().t_s - samples_.front().t_s; }
@@ -65,6 +71,11 @@ HandCommand ProfileHandScript::command(double t_s) noexcept {
   const double normal_N = -((1.0 - w) * a.f_user_W.z() + w * b.f_user_W.z());
   cmd.press_N = cmd.pen_down ? std::max(normal_N, 0.0) / std::sin(cmd.altitude_rad) : 0.0;
   if (!cmd.pen_down) cmd.p_target_W.z() = std::max(cmd.p_target_W.z(), kLiftHeight_m);
+  cmd.grip = playback_.grip;
+  if (playback_.push_in_plane) {
+    const Vec3 f = (1.0 - w) * a.f_user_W + w * b.f_user_W;
+    cmd.push_W = Vec3(f.x(), f.y(), 0.0);
+  }
   return cmd;
 }
 

@@ -102,7 +102,10 @@ session::StudyDefinition writePaperStudy(const std::filesystem::path& dir, const
   study.protocol.training_trials = o.training_trials;
   study.protocol.recall_trials = o.recall_trials;
   study.protocol.training.guidance = o.guidance;
-  study.subjects = simulatedSubjects(o.subjects, o.seed, {{"template", (dir / "expert-script.csv").string()}});
+  HATTR_THROW_UNLESS(!(o.hypothesis && o.model), "in-silico study: expected a hypothesis or a model, got both");
+  nlohmann::json options = {{"template", (dir / "expert-script.csv").string()}};
+  if (o.hypothesis) options["hypothesis"] = std::string(hypothesisName(*o.hypothesis));
+  study.subjects = simulatedSubjects(o.subjects, o.seed, options);
   return study;
 }
 
@@ -115,14 +118,14 @@ InSilicoResult runInSilicoStudy(const InSilicoOptions& o) {
   { (void)session::StudyDatabase::create(dir / "study.sqlite", study); }
 
   // Run it.
-  const TraineeModel model = o.model ? *o.model : loadTraineeModel(defaultDataDir() / "sim" / "trainee_model.json");
   session::StudyDatabase db = session::StudyDatabase::open(dir / "study.sqlite", session::OpenMode::kRunner);
-  session::StudyRunner runner(db, [&model](const session::SubjectRecord& s, const HapticProfile& e) {
-    return makeSimulatedParticipant(s, e, model);
+  session::StudyRunner runner(db, [&o](const session::SubjectRecord& s, const HapticProfile& e) {
+    return o.model ? makeSimulatedParticipant(s, e, *o.model) : makeSimulatedParticipant(s, e);
   });
   const int total = static_cast<int>(db.trials().size());
   int done = 0;
   InSilicoResult result;
+  result.study = study;
   session::RunOptions run;
   HATTR_THROW_UNLESS(o.threads >= 0, "threads: expected 0 (as many as the hardware runs) or more, got {}", o.threads);
   run.subjects_at_once = o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));

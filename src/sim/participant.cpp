@@ -41,12 +41,32 @@ class SimulatedParticipant final : public session::Participant {
 
 }  // namespace
 
+TraineeModel subjectTraineeModel(const session::SubjectRecord& subject) {
+  const auto& options = subject.spec.options;
+  const auto text = [&](const char* key) {
+    const auto& value = options[key];
+    HATTR_THROW_UNLESS(value.is_string(), "subject {}: option {}: expected a string, got {}", subject.id, key,
+                       value.dump());
+    return value.get<std::string>();
+  };
+  HATTR_THROW_UNLESS(!(options.contains("model") && options.contains("hypothesis")),
+                     "subject {}: options model and hypothesis: expected one of them (a model file states its "
+                     "hypothesis), got both",
+                     subject.id);
+  if (options.contains("model")) return loadTraineeModel(text("model"));
+  if (options.contains("hypothesis")) {
+    return loadHypothesisModel(parseHypothesis(text("hypothesis"), fmt::format("subject {}: option hypothesis", subject.id)));
+  }
+  return loadHypothesisModel(LearningHypothesis::kPositionPlan);
+}
+
 std::unique_ptr<session::Participant> makeSimulatedParticipant(const session::SubjectRecord& subject,
                                                                const HapticProfile& expert, const TraineeModel& model) {
   const auto& options = subject.spec.options;
   for (const auto& item : options.items()) {
-    HATTR_THROW_UNLESS(item.key() == "template" || item.key() == "model",
-                       "subject {}: unknown option \"{}\" for a simulated participant: expected template, model",
+    HATTR_THROW_UNLESS(item.key() == "template" || item.key() == "model" || item.key() == "hypothesis",
+                       "subject {}: unknown option \"{}\" for a simulated participant: expected template, model, "
+                       "hypothesis",
                        subject.id, item.key());
   }
   const HapticProfile script =
@@ -56,10 +76,7 @@ std::unique_ptr<session::Participant> makeSimulatedParticipant(const session::Su
 
 std::unique_ptr<session::Participant> makeSimulatedParticipant(const session::SubjectRecord& subject,
                                                                const HapticProfile& expert) {
-  const auto& options = subject.spec.options;
-  const std::filesystem::path model_file = options.contains("model") ? std::filesystem::path(options["model"].get<std::string>())
-                                                                     : defaultDataDir() / "sim" / "trainee_model.json";
-  return makeSimulatedParticipant(subject, expert, loadTraineeModel(model_file));
+  return makeSimulatedParticipant(subject, expert, subjectTraineeModel(subject));
 }
 
 std::unique_ptr<session::Participant> makeUnattendedParticipant(const session::SubjectRecord& subject,

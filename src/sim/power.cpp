@@ -88,11 +88,24 @@ PowerStudy::PowerStudy(const PowerOptions& options) : options_(options) {
   }
   subject_options_ = study_.subjects.front().options;
   study_.subjects.clear();
+  if (!options_.hypothesis.empty()) {
+    (void)parseHypothesis(options_.hypothesis, "hypothesis");
+    subject_options_.erase("model");
+    subject_options_["hypothesis"] = options_.hypothesis;
+  }
 
   // The plan: what makes replicates the same, so not where the expert's file is.
   nlohmann::json definition = session::studyToJson(study_);
   definition.erase("subjects");
   definition.erase("experts");
+  // Who the subjects are is part of the plan: replicates under another model do not merge.
+  const auto named = [&](const char* key) {
+    const auto& value = subject_options_[key];
+    return value.is_string() ? value.get<std::string>() : value.dump();
+  };
+  definition["trainee"] = subject_options_.contains("model")         ? "model " + named("model")
+                          : subject_options_.contains("hypothesis") ? named("hypothesis")
+                                                                     : std::string("position-plan");
   plan_.study = definition;
   for (const auto mode : study_.modes) plan_.modes.emplace_back(guidance::modeName(mode));
   plan_.subject_counts = options_.subject_counts;

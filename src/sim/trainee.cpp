@@ -65,6 +65,7 @@ SimulatedTrainee::SimulatedTrainee(const TraineeModel& model, const SubjectTrait
     : traits_(traits),
       basis_(static_cast<int>(model.basis_count.value), model.basis_width_ratio.value),
       seed_(seed),
+      hypothesis_(model.hypothesis),
       metadata_(template_script.metadata()) {
   validateTraits(traits_);
   HATTR_THROW_UNLESS(template_script.size() >= 2 && template_script.duration_s() > 0.0,
@@ -123,15 +124,39 @@ SimulatedTrainee::SimulatedTrainee(const TraineeModel& model, const SubjectTrait
   }
   const Eigen::MatrixX2d field = phi_ * raw;
   const double rms = std::sqrt(field.rowwise().squaredNorm().mean());
-  if (rms > 0.0) deviation_.leftCols<2>() = raw * (traits_.deviation_rms_m / rms);
+  if (rms > 0.0) deviation_.leftCols<2>() = raw * (traits_.deviation_rms_m * planUnitsPerMetre() / rms);
+}
+
+double SimulatedTrainee::planUnitsPerMetre() const noexcept {
+  // A force plan moves the path by its force over the grip's stiffness: a path offset of
+  // d needs a push of grip × K × d (K: the hand's stiffness, felt_force_stiffness_N_per_m).
+  return hypothesis_ == LearningHypothesis::kForcePlan ? traits_.grip_ratio * traits_.felt_force_stiffness_N_per_m
+                                                       : 1.0;
 }
 
 SimulatedTrainee::Series SimulatedTrainee::series(const PlanWeights& weights) const {
   const Eigen::MatrixX3d offsets = phi_ * weights;
   const Eigen::MatrixX3d rates = phi_rate_ * weights;
   Series s;
-  s.p_xy = template_xy_ + offsets.leftCols<2>();
-  s.v_xy = template_v_xy_ + rates.leftCols<2>();
+  s.push_xy = Eigen::MatrixX2d::Zero(offsets.rows(), 2);
+  if (hypothesis_ == LearningHypothesis::kForcePlan) {
+    // A force plan: the hand aims at the template's path with its loose grip and pushes with
+    // the friction the plan expects at the template's normal force, along the template's
+    // motion, plus what it learned (in newtons). Pressing otherwise is not compensated.
+    s.p_xy = template_xy_;
+    s.v_xy = template_v_xy_;
+    for (Eigen::Index i = 0; i < offsets.rows(); ++i) {
+      const double speed = template_v_xy_.row(i).norm();
+      if (pen_down_[static_cast<std::size_t>(i)] && speed > 1e-6) {
+        const double normal_N = template_axial_N_(i) * std::sin(altitude_rad_(i));
+        s.push_xy.row(i) = traits_.plan_friction * normal_N * template_v_xy_.row(i) / speed;
+      }
+    }
+    s.push_xy += offsets.leftCols<2>();
+  } else {
+    s.p_xy = template_xy_ + offsets.leftCols<2>();
+    s.v_xy = template_v_xy_ + rates.leftCols<2>();
+  }
   s.axial_N.resize(template_axial_N_.size());
   for (Eigen::Index i = 0; i < s.axial_N.size(); ++i) {
     const double planned = traits_.force_scale * template_axial_N_(i) + traits_.force_offset_N + offsets(i, 2);
@@ -156,7 +181,7 @@ HapticProfile SimulatedTrainee::profileOf(const Series& s, const std::string& so
     sample.v_WT = Vec3(s.v_xy(r, 0) / pace_factor, s.v_xy(r, 1) / pace_factor, 0.0);
     sample.pen_down = pen_down_[i] != 0;
     sample.in_contact = sample.pen_down;
-    sample.f_user_W = Vec3(0.0, 0.0, -s.axial_N(r) * std::sin(altitude_rad_(r)));
+    sample.f_user_W = Vec3(s.push_xy(r, 0), s.push_xy(r, 1), -s.axial_N(r) * std::sin(altitude_rad_(r)));
     sample.tilt_altitude_rad = altitude_rad_(r);
     sample.tilt_azimuth_rad = azimuth_rad_(r);
     profile.append(sample);
@@ -178,13 +203,16 @@ std::unique_ptr<device::HandScript> SimulatedTrainee::handForTrial(std::uint64_t
   detail::NormalSource normal(detail::streamSeed(detail::streamSeed(seed_, kTrialNoiseStream), trial_seed));
   PlanWeights noise = PlanWeights::Zero(weights.rows(), 3);
   for (Eigen::Index k = 0; k < weights.rows(); ++k) {
-    const double position_sd = traits_.position_noise_coefficient * mean_speed(k) * window_s;
+    const double position_sd = traits_.position_noise_coefficient * mean_speed(k) * window_s * planUnitsPerMetre();
     noise(k, kPlanX) = position_sd * normal.normal();
     noise(k, kPlanY) = position_sd * normal.normal();
     noise(k, kPlanAxialForce) = traits_.force_noise_coefficient * mean_force(k) * normal.normal();
   }
   const HapticProfile trial = profileOf(series(weights + noise), "sim:trainee-hand", paceFactor(trial_seed));
-  return std::make_unique<device::ProfileHandScript>(trial);
+  const bool force_plan = hypothesis_ == LearningHypothesis::kForcePlan;
+  return std::make_unique<device::ProfileHandScript>(
+      trial, kDefaultAltitude_rad, Vec3::Zero(),
+      device::ProfilePlayback{.grip = force_plan ? traits_.grip_ratio : 1.0, .push_in_plane = force_plan});
 }
 
 double SimulatedTrainee::paceFactor(std::uint64_t trial_seed) const {
@@ -223,7 +251,7 @@ void SimulatedTrainee::learn(const HapticProfile& recorded, bool template_shown,
     std::vector<char> mask(t_s_.size());
     for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = static_cast<char>(rec.valid[i] && visual_pen_down_[i] && rec.pen_down[i]);
     const Eigen::MatrixXd visual_error = visual_xy_ - rec.p_xy;
-    error.leftCols<2>() += project(visual_error, mask);
+    error.leftCols<2>() += ownLearningShare(rec.f_guide, rec.valid) * planUnitsPerMetre() * project(visual_error, mask);
   }
 
   // (b) What the trainee felt: the guidance force, as an in-plane force and as the axial force
@@ -239,14 +267,33 @@ void SimulatedTrainee::learn(const HapticProfile& recorded, bool template_shown,
       felt_weights(r, c) = perceivedForce(felt_weights(r, c), traits_.weber_fraction, normal.normal());
     }
   }
-  error.col(kPlanX) += felt_weights.col(0) / traits_.felt_force_stiffness_N_per_m;
-  error.col(kPlanY) += felt_weights.col(1) / traits_.felt_force_stiffness_N_per_m;
+  // A position plan reads the in-plane force as where the hand should have been (f / K); a
+  // force plan takes it as force it should have pushed with.
+  const double felt_to_plan =
+      hypothesis_ == LearningHypothesis::kForcePlan ? 1.0 : 1.0 / traits_.felt_force_stiffness_N_per_m;
+  error.col(kPlanX) += felt_weights.col(0) * felt_to_plan;
+  error.col(kPlanY) += felt_weights.col(1) * felt_to_plan;
   error.col(kPlanAxialForce) += felt_weights.col(2);
 
   // The one learning rule.
   fast_ = traits_.fast_retention * fast_ + traits_.fast_rate * error;
   slow_ = traits_.slow_retention * slow_ + traits_.slow_rate * error;
   ++trials_learned_;
+}
+
+double SimulatedTrainee::ownLearningShare(const Eigen::MatrixX3d& f_guide, const std::vector<char>& valid) const {
+  if (hypothesis_ != LearningHypothesis::kGuidanceDependent) return 1.0;
+  // The guidance hypothesis: in a trial whose guidance it felt, the trainee leans on it and
+  // learns less from its own error.
+  double sum = 0.0;
+  int count = 0;
+  for (std::size_t i = 0; i < valid.size(); ++i) {
+    if (!valid[i]) continue;
+    sum += f_guide.row(static_cast<Eigen::Index>(i)).squaredNorm();
+    ++count;
+  }
+  const double rms_N = count > 0 ? std::sqrt(sum / count) : 0.0;
+  return rms_N > traits_.guidance_felt_N ? 1.0 - traits_.guidance_dependence : 1.0;
 }
 
 void SimulatedTrainee::setVisualTemplate(const HapticProfile& shown) {

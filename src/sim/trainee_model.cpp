@@ -14,12 +14,16 @@
 
 #include "hattr/core/error.hpp"
 #include "hattr/core/units.hpp"
+#include "hattr/sim/data_dir.hpp"
 #include "random_internal.hpp"
 
 namespace hattr::sim {
 namespace {
 
 using nlohmann::json;
+
+constexpr unsigned bitOf(LearningHypothesis h) { return 1U << static_cast<unsigned>(h); }
+constexpr unsigned kEveryHypothesis = 0b111;
 
 /// What the model can use of each parameter: its unit in the file, the widest range the code
 /// accepts, the factor to SI, and whether it is structural (the same for every subject).
@@ -31,6 +35,7 @@ struct ParameterSpec {
   double to_si;
   bool structural;
   ModelParameter TraineeModel::*member;
+  unsigned hypotheses = kEveryHypothesis;  ///< the hypotheses whose files state it (bits)
 };
 
 constexpr std::array kSpecs{
@@ -51,9 +56,19 @@ constexpr std::array kSpecs{
     ParameterSpec{"force_scale", "1", 0.0, 5.0, 1.0, false, &TraineeModel::force_scale},
     ParameterSpec{"force_offset_N", "N", -2.0, 2.0, 1.0, false, &TraineeModel::force_offset_N},
     ParameterSpec{"pace_cv", "1", 0.0, 0.5, 1.0, false, &TraineeModel::pace_cv},
+    ParameterSpec{"grip_ratio", "1", 0.05, 1.0, 1.0, false, &TraineeModel::grip_ratio,
+                  bitOf(LearningHypothesis::kForcePlan)},
+    ParameterSpec{"plan_friction", "1", 0.0, 2.0, 1.0, false, &TraineeModel::plan_friction,
+                  bitOf(LearningHypothesis::kForcePlan)},
+    ParameterSpec{"guidance_dependence", "1", 0.0, 1.0, 1.0, false, &TraineeModel::guidance_dependence,
+                  bitOf(LearningHypothesis::kGuidanceDependent)},
+    ParameterSpec{"guidance_felt_N", "N", 0.0, 10.0, 1.0, false, &TraineeModel::guidance_felt_N,
+                  bitOf(LearningHypothesis::kGuidanceDependent)},
 };
 
-constexpr std::array kTopKeys{"format", "version", "description", "units_note", "per_subject_note", "parameters"};
+constexpr std::array kHypothesisNames{"position-plan", "force-plan", "guidance-dependent"};
+
+constexpr std::array kTopKeys{"format", "version", "hypothesis", "description", "units_note", "per_subject_note", "parameters"};
 constexpr std::array kParameterKeys{"value", "unit", "range", "source", "per_subject", "note"};
 
 std::string keyList(const auto& keys) {
@@ -214,17 +229,29 @@ TraineeModel parseTraineeModel(std::string_view json_text, std::string_view sour
   HATTR_THROW_UNLESS(parameters && parameters->is_object(), "{}: key parameters: expected an object, got {}", source,
                      shown(parameters));
 
-  std::vector<std::string> names;
-  for (const auto& spec : kSpecs) names.emplace_back(spec.key);
-  for (const auto& item : parameters->items()) {
-    HATTR_THROW_UNLESS(std::find(names.begin(), names.end(), item.key()) != names.end(),
-                       "{}: unknown parameter \"parameters.{}\": expected one of {}", source, item.key(), keyList(names));
-  }
   TraineeModel model;
   model.source_name = std::string(source);
+  if (const json* hypothesis = find(root, "hypothesis")) {
+    HATTR_THROW_UNLESS(hypothesis->is_string(), "{}: key hypothesis: expected one of {}, got {}", source,
+                       keyList(kHypothesisNames), jsonExcerpt(*hypothesis));
+    model.hypothesis = parseHypothesis(hypothesis->get<std::string>(), fmt::format("{}: key hypothesis", source));
+  }
+  const std::string_view hypothesis_name = hypothesisName(model.hypothesis);
+  // The hypothesis's parameters, every one stated; no other's.
+  std::vector<std::string> names;
   for (const auto& spec : kSpecs) {
+    if ((spec.hypotheses & bitOf(model.hypothesis)) != 0) names.emplace_back(spec.key);
+  }
+  for (const auto& item : parameters->items()) {
+    HATTR_THROW_UNLESS(std::find(names.begin(), names.end(), item.key()) != names.end(),
+                       "{}: unknown parameter \"parameters.{}\" for the {} hypothesis: expected one of {}", source,
+                       item.key(), hypothesis_name, keyList(names));
+  }
+  for (const auto& spec : kSpecs) {
+    if ((spec.hypotheses & bitOf(model.hypothesis)) == 0) continue;
     const json* item = find(*parameters, spec.key);
-    HATTR_THROW_UNLESS(item != nullptr, "{}: parameters.{}: missing (every parameter must be stated)", source, spec.key);
+    HATTR_THROW_UNLESS(item != nullptr, "{}: parameters.{}: missing (every parameter of the {} hypothesis must be stated)",
+                       source, spec.key, hypothesis_name);
     model.*spec.member = parseParameter(*item, spec, source);
   }
   HATTR_THROW_UNLESS(model.fast_retention.value <= model.slow_retention.value,
@@ -240,6 +267,35 @@ TraineeModel loadTraineeModel(const std::filesystem::path& file) {
   return parseTraineeModel(readTextFile(file), file.string());
 }
 
+std::string_view hypothesisName(LearningHypothesis hypothesis) {
+  return kHypothesisNames.at(static_cast<std::size_t>(hypothesis));
+}
+
+LearningHypothesis parseHypothesis(std::string_view name, std::string_view where) {
+  for (const LearningHypothesis h : allHypotheses()) {
+    if (hypothesisName(h) == name) return h;
+  }
+  throw InputError(fmt::format("{}: expected one of {}, got \"{}\"", where, keyList(kHypothesisNames), name));
+}
+
+const std::vector<LearningHypothesis>& allHypotheses() {
+  static const std::vector<LearningHypothesis> all{LearningHypothesis::kPositionPlan, LearningHypothesis::kForcePlan,
+                                                   LearningHypothesis::kGuidanceDependent};
+  return all;
+}
+
+std::filesystem::path hypothesisModelFile(LearningHypothesis hypothesis) {
+  if (hypothesis == LearningHypothesis::kPositionPlan) return defaultDataDir() / "sim" / "trainee_model.json";
+  return defaultDataDir() / "sim" / "hypotheses" / (std::string(hypothesisName(hypothesis)) + ".json");
+}
+
+TraineeModel loadHypothesisModel(LearningHypothesis hypothesis) {
+  TraineeModel model = loadTraineeModel(hypothesisModelFile(hypothesis));
+  HATTR_THROW_UNLESS(model.hypothesis == hypothesis, "{}: key hypothesis: expected \"{}\", got \"{}\"",
+                     model.source_name, hypothesisName(hypothesis), hypothesisName(model.hypothesis));
+  return model;
+}
+
 SubjectTraits populationTraits(const TraineeModel& m) {
   return {.fast_retention = m.fast_retention.value,
           .fast_rate = m.fast_rate.value,
@@ -252,7 +308,11 @@ SubjectTraits populationTraits(const TraineeModel& m) {
           .deviation_rms_m = m.deviation_rms_m.value,
           .force_scale = m.force_scale.value,
           .force_offset_N = m.force_offset_N.value,
-          .pace_cv = m.pace_cv.value};
+          .pace_cv = m.pace_cv.value,
+          .grip_ratio = m.grip_ratio.value,
+          .plan_friction = m.plan_friction.value,
+          .guidance_dependence = m.guidance_dependence.value,
+          .guidance_felt_N = m.guidance_felt_N.value};
 }
 
 SubjectTraits drawSubject(const TraineeModel& m, std::uint64_t seed) {
@@ -275,7 +335,12 @@ SubjectTraits drawSubject(const TraineeModel& m, std::uint64_t seed) {
   t.deviation_rms_m = drawValue(m.deviation_rms_m, normal);
   t.force_scale = drawValue(m.force_scale, normal);
   t.force_offset_N = drawValue(m.force_offset_N, normal);
-  t.pace_cv = drawValue(m.pace_cv, normal);  // drawn last: the other traits keep their draws
+  t.pace_cv = drawValue(m.pace_cv, normal);  // drawn after the others: they keep their draws
+  // The hypotheses' own traits, last, so that every hypothesis draws the same subjects above.
+  t.grip_ratio = drawValue(m.grip_ratio, normal);
+  t.plan_friction = drawValue(m.plan_friction, normal);
+  t.guidance_dependence = drawValue(m.guidance_dependence, normal);
+  t.guidance_felt_N = drawValue(m.guidance_felt_N, normal);
   return t;
 }
 
@@ -296,6 +361,10 @@ void validateTraits(const SubjectTraits& t) {
   check(t.force_scale, 0.0, 5.0, "force_scale");
   check(t.force_offset_N, -2.0, 2.0, "force_offset_N");
   check(t.pace_cv, 0.0, 0.5, "pace_cv");
+  check(t.grip_ratio, 0.05, 1.0, "grip_ratio");
+  check(t.plan_friction, 0.0, 2.0, "plan_friction");
+  check(t.guidance_dependence, 0.0, 1.0, "guidance_dependence");
+  check(t.guidance_felt_N, 0.0, 10.0, "guidance_felt_N");
   HATTR_THROW_UNLESS(t.fast_retention <= t.slow_retention,
                      "subject traits: fast_retention: expected at most slow_retention = {}, got {}", t.slow_retention,
                      t.fast_retention);

@@ -18,6 +18,11 @@ struct HandCommand {
   double azimuth_rad = 0.0;         ///< pen azimuth (see docs/units_and_frames.md)
   double altitude_rad = 1.0471975511965976;  ///< pen altitude above the paper (60°)
   bool pen_down = false;            ///< the hand means to write
+  /// The share of the hand's impedance it writes with in the paper plane (1: the full
+  /// HandImpedance; a hand that writes from a feedforward force holds the pen more loosely).
+  double grip = 1.0;
+  /// A feedforward force the hand adds in the paper plane [N, W] (z ignored).
+  Vec3 push_W = Vec3::Zero();
 };
 
 /// A source of hand commands. command() is called on the servo thread (through the
@@ -68,14 +73,21 @@ class CircleHand final : public HandScript {
   double press_N_;
 };
 
+/// How a ProfileHandScript plays its profile beyond the path and the press force.
+struct ProfilePlayback {
+  double grip = 1.0;           ///< HandCommand::grip of every command
+  bool push_in_plane = false;  ///< push with the profile's in-plane f_user_W (interpolated)
+};
+
 /// Plays a recorded haptic profile as the hand's target: the position and velocity at the
 /// time (linearly interpolated), the press force that reproduces the profile's normal force
 /// at its tilt (or at `default_altitude_rad`), pen-down as recorded. Holds the last sample
-/// after the end. `start_offset_W` shifts the path.
+/// after the end. `start_offset_W` shifts the path. `playback`: the grip and, if asked, the
+/// profile's in-plane force as the hand's push (a force plan; see sim::SimulatedTrainee).
 class ProfileHandScript final : public HandScript {
  public:
   explicit ProfileHandScript(const HapticProfile& profile, double default_altitude_rad = 1.0471975511965976,
-                             Vec3 start_offset_W = Vec3::Zero());
+                             Vec3 start_offset_W = Vec3::Zero(), ProfilePlayback playback = {});
   HandCommand command(double t_s) noexcept override;
   void rewind() noexcept override { cursor_ = 0; }
   [[nodiscard]] double duration_s() const noexcept;
@@ -85,6 +97,7 @@ class ProfileHandScript final : public HandScript {
   bool has_tilt_;
   double default_altitude_rad_;
   Vec3 offset_W_;
+  ProfilePlayback playback_;
   std::size_t cursor_ = 0;
 };
 

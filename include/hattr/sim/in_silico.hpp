@@ -25,7 +25,10 @@ struct InSilicoOptions {
   int training_trials = 11;
   int recall_trials = 11;
   bool guidance = true;                     ///< false: an A/A study (no mode ever guides)
-  std::optional<TraineeModel> model;        ///< default: data/sim/trainee_model.json
+  /// The subjects' learning hypothesis, recorded in their options ("hypothesis"); default:
+  /// position-plan (data/sim/trainee_model.json). Not together with `model`.
+  std::optional<LearningHypothesis> hypothesis;
+  std::optional<TraineeModel> model;        ///< a model in place of the hypothesis's file (the sweep)
   bool write_report = true;
   /// Subjects simulated at once (session::RunOptions::subjects_at_once); 0: as many as the
   /// hardware runs at once. The trials and the analysis are the same to the bit for any count.
@@ -36,6 +39,7 @@ struct InSilicoOptions {
 };
 
 struct InSilicoResult {
+  session::StudyDefinition study;
   std::filesystem::path database;
   std::filesystem::path report_html;        ///< empty without a report
   report::StudyAnalysis analysis;

@@ -14,12 +14,17 @@ namespace hattr::sim {
 ///   "template": the expert's script (what the expert meant to write) the trainee learns;
 ///               default: the expert reference itself (see SimulatedTrainee on why the
 ///               script is better);
-///   "model":    a trainee model file; default: data/sim/trainee_model.json.
+///   "model":    a trainee model file; default: data/sim/trainee_model.json;
+///   "hypothesis": a learning hypothesis by name ("force-plan", ...): its model file in
+///               data/sim (hypothesisModelFile); not together with "model".
 /// The subject's traits are drawn with its seed; the expert reference is what the trainee
 /// sees in training trials. Trial noise depends on the subject, the phase and the trial number
 /// but not on the mode: common random numbers across modes.
 std::unique_ptr<session::Participant> makeSimulatedParticipant(const session::SubjectRecord& subject,
                                                                const HapticProfile& expert);
+
+/// The trainee model a simulated subject's options name (above); InputError for a bad option.
+TraineeModel subjectTraineeModel(const session::SubjectRecord& subject);
 
 /// As above with an explicit model (the sensitivity sweep varies it).
 std::unique_ptr<session::Participant> makeSimulatedParticipant(const session::SubjectRecord& subject,

@@ -31,6 +31,9 @@ struct PowerOptions {
   std::uint64_t seed = 1;
   double alpha = 0.05;
   int threads = 1;                  ///< subjects simulated at once, and scoring threads
+  /// A learning hypothesis ("force-plan", ...) for every subject, in place of the study's
+  /// trainee model; empty: the study's (the paper's study: position-plan).
+  std::string hypothesis;
   /// Where replicates' databases are made (each removed when analyzed); empty: a new folder
   /// in the system's temporary folder, removed with this object.
   std::filesystem::path scratch;

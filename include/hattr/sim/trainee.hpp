@@ -109,8 +109,14 @@ class SimulatedTrainee {
   struct Series {
     Eigen::MatrixX2d p_xy;    // planned position in the plane [m]
     Eigen::MatrixX2d v_xy;    // planned velocity [m/s]
+    Eigen::MatrixX2d push_xy; // planned in-plane push (force plan only, else 0) [N]
     Eigen::VectorXd axial_N;  // planned axial force (0 with the pen up) [N]
   };
+  /// Plan units of the x, y channels per metre of path: 1 for a position plan, N/m for a force plan.
+  [[nodiscard]] double planUnitsPerMetre() const noexcept;
+  /// The share of its own (visual) error the trainee learns from after a trial that felt the
+  /// guidance `f_guide` (rows where `valid`): guidance-dependent, less after a guided trial; else 1.
+  [[nodiscard]] double ownLearningShare(const Eigen::MatrixX3d& f_guide, const std::vector<char>& valid) const;
   [[nodiscard]] Series series(const PlanWeights& weights) const;
   [[nodiscard]] HapticProfile profileOf(const Series& s, const std::string& source, double pace_factor = 1.0) const;
   [[nodiscard]] PlanWeights planWeights() const { return deviation_ + fast_ + slow_; }
@@ -121,6 +127,7 @@ class SimulatedTrainee {
   NormalizedGaussianBasis basis_;
   double ridge_ = 0.0;                  // absolute ridge of the projection
   std::uint64_t seed_;
+  LearningHypothesis hypothesis_;
   ProfileMetadata metadata_;
 
   // The template on its own time grid (times relative to its first sample).

@@ -8,8 +8,24 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace hattr::sim {
+
+/// What a simulated trainee is assumed to learn, and from what (docs/simulation.md,
+/// "Learning hypotheses"). Each has its own model file in data/sim.
+enum class LearningHypothesis {
+  kPositionPlan,       ///< a movement plan; felt guidance read as a position error
+  kForcePlan,          ///< a feedforward force plan; the path follows through a loose grip
+  kGuidanceDependent,  ///< a position plan whose own error learning drops under guidance
+};
+
+/// "position-plan", "force-plan", "guidance-dependent".
+std::string_view hypothesisName(LearningHypothesis hypothesis);
+/// The hypothesis of a name; throws InputError naming `where`, the names, and what was given.
+LearningHypothesis parseHypothesis(std::string_view name, std::string_view where);
+/// Every hypothesis, in the order above.
+const std::vector<LearningHypothesis>& allHypotheses();
 
 /// How a parameter varies between simulated subjects.
 struct SubjectDistribution {
@@ -33,10 +49,12 @@ struct ModelParameter {
   SubjectDistribution per_subject;
 };
 
-/// Every parameter of the trainee model (file version 1).
+/// Every parameter of the trainee model (file version 1). The hypothesis's own parameters
+/// are stated only in its file; for the others they keep the neutral values below.
 struct TraineeModel {
   std::string source_name;                  ///< the file it came from, for messages
   int version = 1;
+  LearningHypothesis hypothesis = LearningHypothesis::kPositionPlan;
   ModelParameter basis_count;               ///< number of basis functions [1]
   ModelParameter basis_width_ratio;         ///< Gaussian width / centre spacing [1]
   ModelParameter projection_ridge;          ///< relative ridge of the error projection [1]
@@ -52,6 +70,12 @@ struct TraineeModel {
   ModelParameter force_scale;                   ///< personal force scale [1]
   ModelParameter force_offset_N;                ///< personal force offset [N]
   ModelParameter pace_cv;                       ///< trial-to-trial variability of the pace [1]
+  // force-plan only
+  ModelParameter grip_ratio{.key = "grip_ratio", .value = 1.0, .min = 1.0, .max = 1.0};  ///< hand impedance share [1]
+  ModelParameter plan_friction{.key = "plan_friction", .value = 0.0, .min = 0.0, .max = 0.0};  ///< μ the plan expects [1]
+  // guidance-dependent only
+  ModelParameter guidance_dependence{.key = "guidance_dependence", .value = 0.0, .min = 0.0, .max = 0.0};  ///< [1]
+  ModelParameter guidance_felt_N{.key = "guidance_felt_N", .value = 1.0, .min = 1.0, .max = 1.0};  ///< [N]
 };
 
 /// Parses a trainee model file's text; `source_name` names it in messages. Throws InputError
@@ -61,11 +85,19 @@ struct TraineeModel {
 /// source, a distribution of an unknown kind or with a negative spread, a structural parameter
 /// (basis_count, basis_width_ratio, projection_ridge) that is not fixed, a non-integer
 /// basis_count, or fast and slow values that break A_f <= A_s or B_f >= B_s (the fast process
-/// forgets faster and learns faster: Smith et al. 2006). Not for the servo thread.
+/// forgets faster and learns faster: Smith et al. 2006), an unknown "hypothesis" (default
+/// "position-plan"), a parameter of another hypothesis, or a missing one of its own.
+/// Not for the servo thread.
 TraineeModel parseTraineeModel(std::string_view json_text, std::string_view source_name);
 
 /// Loads and parses a trainee model file; throws InputError if it cannot be read.
 TraineeModel loadTraineeModel(const std::filesystem::path& file);
+
+/// The model file of a hypothesis in the data folder: data/sim/trainee_model.json for
+/// position-plan, data/sim/hypotheses/<name>.json for the others.
+std::filesystem::path hypothesisModelFile(LearningHypothesis hypothesis);
+/// Loads it; throws InputError if it cannot be read or parsed.
+TraineeModel loadHypothesisModel(LearningHypothesis hypothesis);
 
 /// One simulated subject's own values (SI). The plan's structure (basis) is the model's.
 struct SubjectTraits {
@@ -83,6 +115,16 @@ struct SubjectTraits {
   /// Trial-to-trial variability of the pace: each trial plays the plan uniformly slower or
   /// faster by a factor exp(pace_cv × N(0, 1)) (SD of its log; about its coefficient of variation).
   double pace_cv = 0.0;
+  /// force-plan: the hand's in-plane impedance while writing, as a share of the simulated
+  /// hand's (1: position-plan's stiff tracking); the rest of the force is the plan's push.
+  double grip_ratio = 1.0;
+  /// force-plan: the dynamic friction coefficient the force plan expects of the paper.
+  double plan_friction = 0.0;
+  /// guidance-dependent: the share of its own (visual) error learning a trainee loses in a
+  /// trial in which it felt guidance.
+  double guidance_dependence = 0.0;
+  /// guidance-dependent: the RMS guidance force over a trial above which it was felt [N].
+  double guidance_felt_N = 1.0;
   friend bool operator==(const SubjectTraits&, const SubjectTraits&) = default;
 };
 
