@@ -35,6 +35,8 @@ struct HypothesisResult {
   double p_mode_force = 0.0;
   int aa_significant_trajectory = 0;
   int aa_significant_force = 0;
+  std::vector<double> aa_p_trajectory;  ///< the A/A studies' mode-effect p, in seed order
+  std::vector<double> aa_p_force;
 };
 
 std::vector<sim::LearningHypothesis> parseHypothesisList(const std::string& text) {
@@ -81,8 +83,10 @@ HypothesisResult runHypothesis(const CompareOptions& o, sim::LearningHypothesis 
                                            .hypothesis = h, .write_report = false, .threads = o.threads,
                                            .progress = within});
     ++studies_done;
-    result.aa_significant_trajectory += modeP(aa.analysis.trajectory) < 0.05 ? 1 : 0;
-    result.aa_significant_force += modeP(aa.analysis.force) < 0.05 ? 1 : 0;
+    result.aa_p_trajectory.push_back(modeP(aa.analysis.trajectory));
+    result.aa_p_force.push_back(modeP(aa.analysis.force));
+    result.aa_significant_trajectory += result.aa_p_trajectory.back() < 0.05 ? 1 : 0;
+    result.aa_significant_force += result.aa_p_force.back() < 0.05 ? 1 : 0;
   }
   return result;
 }
@@ -102,7 +106,9 @@ nlohmann::json toJson(const CompareOptions& o, const std::vector<HypothesisResul
                           {"p_mode_force", r.p_mode_force},
                           {"aa", {{"seeds", o.aa_seeds},
                                   {"significant_trajectory", r.aa_significant_trajectory},
-                                  {"significant_force", r.aa_significant_force}}},
+                                  {"significant_force", r.aa_significant_force},
+                                  {"p_mode_trajectory", r.aa_p_trajectory},
+                                  {"p_mode_force", r.aa_p_force}}},
                           {"points", points}});
   }
   return {{"subjects", o.subjects}, {"training_trials", o.trials}, {"recall_trials", o.trials}, {"seed", o.seed},
@@ -186,7 +192,8 @@ void registerHypothesisCommands(CLI::App& sim) {
       ->capture_default_str();
   cmd->add_option("--out", o->out_dir, "Folder for the studies")->capture_default_str();
   cmd->add_flag("--json", o->json, "Print JSON: hypotheses [{hypothesis, agrees, differs, p_mode_trajectory, "
-                                   "p_mode_force, aa {seeds, significant_trajectory, significant_force}, points}]");
+                                   "p_mode_force, aa {seeds, significant_trajectory, significant_force, p_mode_trajectory, "
+                                   "p_mode_force}, points [{point, source, paper, hattr, agreement}]}]");
   cmd->callback([o] { runCompare(*o); });
 }
 

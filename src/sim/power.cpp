@@ -31,6 +31,7 @@ void checkOptions(const PowerOptions& o) {
   // Replicate r's subjects are seeded as the in-silico study with seed + r (subject i:
   // (seed + r)·1000 + i): keep that within a study file's seed range.
   HATTR_THROW_UNLESS(o.seed <= 1'000'000'000'000ULL, "seed: expected 0 to 1e12, got {}", o.seed);
+  if (!o.hypothesis.empty()) (void)parseHypothesis(o.hypothesis, "hypothesis");
 }
 
 /// A study file's checks: simulated subjects on the simulated pen, nothing live.
@@ -89,7 +90,6 @@ PowerStudy::PowerStudy(const PowerOptions& options) : options_(options) {
   subject_options_ = study_.subjects.front().options;
   study_.subjects.clear();
   if (!options_.hypothesis.empty()) {
-    (void)parseHypothesis(options_.hypothesis, "hypothesis");
     subject_options_.erase("model");
     subject_options_["hypothesis"] = options_.hypothesis;
   }

@@ -73,6 +73,24 @@ TEST(PowerStudy, AReplicateIsTheInSilicoStudyWithSeedPlusRAndEachDesignItsFirstS
   EXPECT_NE(outcome.designs[0][0].p_mode, outcome.designs[1][0].p_mode);
 }
 
+TEST(PowerStudy, UnderAHypothesisAReplicateIsTheInSilicoStudyUnderIt) {
+  test::TempDir dir;
+  const PowerStudy power({.training_trials = 2, .recall_trials = 3, .subject_counts = {3}, .replicates = 1, .seed = 8,
+                          .threads = 2, .hypothesis = "guidance-dependent", .scratch = dir / "scratch"});
+  EXPECT_EQ(power.plan().study.at("trainee"), "guidance-dependent") << "replicates of another model do not merge";
+  const report::ReplicateOutcome outcome = power.runReplicate(0);
+  const auto inSilico = [&](std::optional<LearningHypothesis> h, const char* name) {
+    return runInSilicoStudy({.out_dir = dir / name, .subjects = 3, .seed = 8, .training_trials = 2,
+                             .recall_trials = 3, .hypothesis = h, .write_report = false});
+  };
+  const InSilicoResult dependent = inSilico(LearningHypothesis::kGuidanceDependent, "dependent");
+  expectOutcomeOf(outcome.designs[0][0], dependent.analysis.trajectory, power.plan(), "trajectory");
+  expectOutcomeOf(outcome.designs[0][1], dependent.analysis.force, power.plan(), "force");
+  // And it is not the position-plan learner's study: guided, this learner learns less.
+  const InSilicoResult plain = inSilico(std::nullopt, "plain");
+  EXPECT_NE(outcome.designs[0][0].p_mode, plain.analysis.trajectory.overall.row("mode").p);
+}
+
 TEST(PowerStudy, RefusesDesignsItCannotAnalyzeNamingTheOption) {
   const auto message = [](const PowerOptions& o) {
     try {
@@ -87,6 +105,8 @@ TEST(PowerStudy, RefusesDesignsItCannotAnalyzeNamingTheOption) {
   EXPECT_THAT(message({.replicates = 0}), HasSubstr("replicates: expected 1 to 1000000, got 0"));
   EXPECT_THAT(message({.alpha = 1.0}), HasSubstr("alpha: expected a level in (0, 1), got 1"));
   EXPECT_THAT(message({.recall_trials = 1}), HasSubstr("trials: expected >= 2 recall"));
+  EXPECT_THAT(message({.hypothesis = "telepathy"}),
+              HasSubstr("hypothesis: expected one of position-plan, force-plan, guidance-dependent, got \"telepathy\""));
 
   // A study file: only simulated subjects on the simulated pen.
   test::TempDir dir;
