@@ -65,6 +65,7 @@ std::function<void(std::string_view, int, int)> withinStudy(Progress& progress, 
 
 /// One reduced study per seed with guidance switched off in every mode.
 void runAa(const SimOptions& opt) {
+  const sim::LearningHypothesis hypothesis = sim::parseHypothesis(opt.hypothesis, "--hypothesis");
   nlohmann::json seeds = nlohmann::json::array();
   int significant[2] = {0, 0};
   Progress progress("A/A", opt.seeds, "studies");
@@ -73,7 +74,7 @@ void runAa(const SimOptions& opt) {
     const auto r = sim::runInSilicoStudy({.out_dir = fmt::format("{}/aa-{:03}", opt.out_dir, s), .subjects = opt.subjects,
                                           .seed = static_cast<std::uint64_t>(s), .training_trials = opt.trials,
                                           .recall_trials = opt.trials, .guidance = false,
-                                          .hypothesis = sim::parseHypothesis(opt.hypothesis, "--hypothesis"),
+                                          .hypothesis = hypothesis,
                                           .write_report = false,
                                           .progress = withinStudy(progress, s - 1)});
     const double p_traj = row(r.analysis.trajectory.overall, "mode")->p;
@@ -87,10 +88,11 @@ void runAa(const SimOptions& opt) {
                                {"fraction_significant_trajectory", static_cast<double>(significant[0]) / opt.seeds},
                                {"fraction_significant_force", static_cast<double>(significant[1]) / opt.seeds}};
   if (opt.json) return printJson(json);
-  std::cout << fmt::format("A/A check ({}: {} seeds, {} subjects, {}+{} trials per mode, guidance off in every mode):\n"
+  std::cout << fmt::format("A/A check ({} seeds, {} subjects, {}+{} trials per mode, guidance off in every mode, {} "
+                           "learner):\n"
                            "  mode effect significant at α = 0.05: trajectory {}/{}, force {}/{} (expected about {:.1f})\n",
-                           opt.hypothesis, opt.seeds, opt.subjects, opt.trials, opt.trials, significant[0], opt.seeds, significant[1], opt.seeds,
-                           0.05 * opt.seeds);
+                           opt.seeds, opt.subjects, opt.trials, opt.trials, opt.hypothesis, significant[0], opt.seeds,
+                           significant[1], opt.seeds, 0.05 * opt.seeds);
 }
 
 /// A reduced study per value of one learning-rule parameter; where the conclusions change.

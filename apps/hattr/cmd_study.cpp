@@ -86,7 +86,10 @@ int trialsToRun(const session::StudyDatabase& db, const StudyOptions& opt) {
 void runRun(const StudyOptions& opt) {
   session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kRunner,
                                                            {.lease_timeout_s = opt.lease_timeout_s});
-  session::StudyRunner runner(db, sim::makeUnattendedParticipant);
+  const std::string device_uri = db.study().device;
+  session::StudyRunner runner(db, [&device_uri](const session::SubjectRecord& s, const HapticProfile& expert) {
+    return sim::makeUnattendedParticipant(s, expert, device_uri);
+  });
   session::RunOptions run{.only_subject = opt.subject,
                           .clock = session::parseClock(opt.clock),
                           .max_trials = opt.max_trials,

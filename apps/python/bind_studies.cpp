@@ -156,7 +156,10 @@ void bindStudies(py::module_& m) {
       [](const std::filesystem::path& path, const std::optional<std::string>& subject, std::optional<int> max_trials) {
         py::gil_scoped_release unlocked;
         StudyDatabase db = StudyDatabase::open(path, session::OpenMode::kRunner);
-        session::StudyRunner runner(db, sim::makeUnattendedParticipant);
+        const std::string device_uri = db.study().device;
+        session::StudyRunner runner(db, [&device_uri](const session::SubjectRecord& s, const HapticProfile& expert) {
+          return sim::makeUnattendedParticipant(s, expert, device_uri);
+        });
         return runner.run({.only_subject = subject.value_or(""), .max_trials = max_trials.value_or(-1)});
       },
       py::arg("path"), py::kw_only(), py::arg("subject") = py::none(), py::arg("max_trials") = py::none(),

@@ -22,12 +22,13 @@ std::string joined(const std::vector<std::string>& lines) {
   return out;
 }
 
-/// The pen lifted: no press, at least the lift height, no vertical speed.
+/// The pen lifted: no press, at least the lift height, no vertical speed, no push.
 device::HandCommand lifted(device::HandCommand command) noexcept {
   command.pen_down = false;
   command.press_N = 0.0;
   command.v_target_W.z() = 0.0;
   command.p_target_W.z() = std::max(command.p_target_W.z(), kLiftHeight_m);
+  command.push_W.setZero();  // held still above the start: a force plan's push waits for the writing
   return command;
 }
 

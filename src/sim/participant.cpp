@@ -80,9 +80,17 @@ std::unique_ptr<session::Participant> makeSimulatedParticipant(const session::Su
 }
 
 std::unique_ptr<session::Participant> makeUnattendedParticipant(const session::SubjectRecord& subject,
-                                                                const HapticProfile& expert) {
+                                                                const HapticProfile& expert,
+                                                                std::string_view device_uri) {
   if (subject.spec.participant == "script") return session::makeScriptParticipant(subject, expert);
-  if (subject.spec.participant == "simulated") return makeSimulatedParticipant(subject, expert);
+  if (subject.spec.participant == "simulated") {
+    const TraineeModel model = subjectTraineeModel(subject);
+    HATTR_THROW_UNLESS(model.hypothesis != LearningHypothesis::kForcePlan || device_uri.starts_with("sim://"),
+                       "subject {} is a force-plan trainee, whose grip and push only the simulated pen renders: "
+                       "expected a sim:// device, got \"{}\"",
+                       subject.id, device_uri);
+    return makeSimulatedParticipant(subject, expert, model);
+  }
   if (subject.spec.participant == "person") {
     throw InputError(fmt::format("subject {} is a person: run their trials from the studio (hattr studio)", subject.id));
   }

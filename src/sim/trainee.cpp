@@ -269,10 +269,13 @@ void SimulatedTrainee::learn(const HapticProfile& recorded, bool template_shown,
   }
   // A position plan reads the in-plane force as where the hand should have been (f / K); a
   // force plan takes it as force it should have pushed with.
-  const double felt_to_plan =
-      hypothesis_ == LearningHypothesis::kForcePlan ? 1.0 : 1.0 / traits_.felt_force_stiffness_N_per_m;
-  error.col(kPlanX) += felt_weights.col(0) * felt_to_plan;
-  error.col(kPlanY) += felt_weights.col(1) * felt_to_plan;
+  if (hypothesis_ == LearningHypothesis::kForcePlan) {
+    error.col(kPlanX) += felt_weights.col(0);
+    error.col(kPlanY) += felt_weights.col(1);
+  } else {
+    error.col(kPlanX) += felt_weights.col(0) / traits_.felt_force_stiffness_N_per_m;
+    error.col(kPlanY) += felt_weights.col(1) / traits_.felt_force_stiffness_N_per_m;
+  }
   error.col(kPlanAxialForce) += felt_weights.col(2);
 
   // The one learning rule.

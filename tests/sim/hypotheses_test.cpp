@@ -16,6 +16,7 @@
 #include "hattr/sim/data_dir.hpp"
 #include "hattr/sim/expert.hpp"
 #include "hattr/sim/glyph.hpp"
+#include "hattr/sim/participant.hpp"
 #include "hattr/sim/trainee.hpp"
 #include "support/test_support.hpp"
 
@@ -278,7 +279,36 @@ TEST(LearningHypotheses, TheHandWritesWithTheGripsShareOfItsImpedanceAndItsPush)
   EXPECT_NEAR(loose.x(), 0.5 * full.x() + 0.2, 1e-12);
   EXPECT_NEAR(loose.y(), 0.5 * full.y() - 0.1, 1e-12);
   EXPECT_EQ(loose.z(), full.z()) << "the press is the press: neither grip nor push reaches it";
-  EXPECT_THROW(device::ProfileHandScript(circleTemplate(), 1.0, Vec3::Zero(), {.grip = 0.0}), InputError);
+  try {
+    (void)device::ProfileHandScript(circleTemplate(), 1.0, Vec3::Zero(), {.grip = 0.0});
+    ADD_FAILURE() << "a grip of 0 was accepted";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "hand script: grip: expected a share in (0, 1], got 0");
+  }
+}
+
+TEST(LearningHypotheses, AStudyOptionPicksTheHypothesisAndAForcePlanTraineeNeedsTheSimulatedPen) {
+  session::SubjectRecord subject{.id = "S01", .spec = {.id = "S01", .participant = "simulated", .seed = 1}};
+  subject.spec.options = {{"hypothesis", "force-plan"}};
+  EXPECT_EQ(subjectTraineeModel(subject).hypothesis, LearningHypothesis::kForcePlan);
+  EXPECT_NE(makeUnattendedParticipant(subject, circleTemplate(), "sim://pen"), nullptr);
+  const auto refusal = [&](const std::string& device) {
+    try {
+      (void)makeUnattendedParticipant(subject, circleTemplate(), device);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(refusal("plugin:sim"), "subject S01 is a force-plan trainee, whose grip and push only the simulated pen "
+                                   "renders: expected a sim:// device, got \"plugin:sim\"");
+  subject.spec.options = {{"hypothesis", "guidance-dependent"}};
+  EXPECT_NE(makeUnattendedParticipant(subject, circleTemplate(), "plugin:sim"), nullptr) << "its hand is an ordinary one";
+  subject.spec.options = {{"hypothesis", 3}};
+  EXPECT_EQ(refusal("sim://pen"), "subject S01: option hypothesis: expected a string, got 3");
+  subject.spec.options = {{"hypothesis", "force-plan"}, {"model", "x.json"}};
+  EXPECT_EQ(refusal("sim://pen"), "subject S01: options model and hypothesis: expected one of them (a model file "
+                                  "states its hypothesis), got both");
 }
 
 }  // namespace

@@ -33,8 +33,11 @@ std::unique_ptr<session::Participant> makeSimulatedParticipant(const session::Su
 /// The participant a study runs without a person at the pen, by the subject's `participant`:
 /// "script" (session::makeScriptParticipant) or "simulated" (above). A "person" is refused
 /// (their trials run from the studio), as is any other kind: InputError naming the subject.
-/// `hattr study run` and Python's hattr.run_study use it.
+/// So is a force-plan trainee on a device other than sim:// (`device_uri`, the study's): its
+/// grip and push are rendered by the simulated pen's own hand only; the plugin ABI's and the
+/// network's hand commands do not carry them. `hattr study run` and Python's hattr.run_study use it.
 std::unique_ptr<session::Participant> makeUnattendedParticipant(const session::SubjectRecord& subject,
-                                                                const HapticProfile& expert);
+                                                                const HapticProfile& expert,
+                                                                std::string_view device_uri);
 
 }  // namespace hattr::sim

@@ -10,7 +10,13 @@
 ///       normal force / sin(altitude) → axial force.
 /// A training mode enters only through (b): the recording's f_guide_W channel.
 ///
-/// Plan channels are the columns of every weight matrix: x [m], y [m], axial force [N].
+/// That is the position-plan learner; the model's hypothesis (LearningHypothesis) may change
+/// it: a force-plan learner holds x and y as a push [N] the hand adds with a loose grip (the
+/// path it aims at stays the template's) and takes a felt in-plane force as push; a
+/// guidance-dependent learner learns less of (a) after a trial whose guidance it felt.
+///
+/// Plan channels are the columns of every weight matrix: x [m], y [m], axial force [N]
+/// (force-plan: push x [N], push y [N], axial force [N]).
 /// Everything is seeded: the same model, traits, template and seed give the same trainee,
 /// and the same trial seed the same noise, so modes can be compared on common random numbers.
 
@@ -76,7 +82,10 @@ class SimulatedTrainee {
   /// The visual error is template − recorded position in the plane, where both the shown
   /// template and the recording have the pen down. Recorded samples after the template's end are
   /// ignored. With the template hidden (recall) there is no visual error: the trainee has only
-  /// what it felt, and with no guidance both states decay by their retention factors. Throws
+  /// what it felt, and with no guidance both states decay by their retention factors. A
+  /// force-plan learner converts the visual error to push (× grip × K) and takes the felt
+  /// in-plane force as push; a guidance-dependent one scales the visual error by
+  /// 1 − guidance_dependence after a trial whose guidance RMS exceeded guidance_felt_N. Throws
   /// InputError for a recording of fewer than two samples. Not for the servo thread.
   /// `pace_factor`: the trial's paceFactor; the trainee compares the template with its own
   /// trace at the same point of the movement (recorded time / pace_factor), not of the clock.
@@ -89,7 +98,7 @@ class SimulatedTrainee {
 
   /// The current plan without noise, on the template's time grid: what handForTrial plays with
   /// zero noise. Positions, velocities, pen-down and tilt as a profile; f_user_W.z is the planned
-  /// normal force −axial·sin(altitude). The height is the template's, its velocity zero (the hand
+  /// normal force −axial·sin(altitude), f_user_W.x and .y the planned push (force-plan; else 0). The height is the template's, its velocity zero (the hand
   /// holds the pen up at least 3 mm, or presses it down: it never tracks a vertical speed).
   [[nodiscard]] HapticProfile plan() const;
 

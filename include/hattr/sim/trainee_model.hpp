@@ -115,8 +115,8 @@ struct SubjectTraits {
   /// Trial-to-trial variability of the pace: each trial plays the plan uniformly slower or
   /// faster by a factor exp(pace_cv × N(0, 1)) (SD of its log; about its coefficient of variation).
   double pace_cv = 0.0;
-  /// force-plan: the hand's in-plane impedance while writing, as a share of the simulated
-  /// hand's (1: position-plan's stiff tracking); the rest of the force is the plan's push.
+  /// force-plan: the hand's in-plane impedance, as a share of the simulated hand's (1:
+  /// position-plan's stiff tracking), whenever it holds the pen; the rest is the plan's push.
   double grip_ratio = 1.0;
   /// force-plan: the dynamic friction coefficient the force plan expects of the paper.
   double plan_friction = 0.0;
