@@ -10,8 +10,7 @@
 //       positions are NaN), stall_after=N (frames after which
 //       the scheduler stops calling), block_read_at=N&block_read_ms=M (read N blocks for M ms,
 //       once: an SDK call that hangs for a while on the loop's own thread).
-// Test hooks (extern "C"): fake_vendor_last_force_D, fake_vendor_frames, fake_vendor_reset_total_reads,
-// fake_vendor_latest_wake_ms.
+// Test hooks (extern "C"): fake_vendor_last_force_D, fake_vendor_frames, fake_vendor_reset_total_reads.
 
 #include <atomic>
 #include <cmath>
@@ -33,7 +32,6 @@ constexpr int kFakeDeviceFault = 0x0201;
 std::atomic<double> g_force_D[3] = {0.0, 0.0, 0.0};
 std::atomic<std::uint64_t> g_frames{0};
 std::atomic<std::int64_t> g_total_reads{0};
-std::atomic<std::int64_t> g_latest_wake_ns{0};  // the scheduler's latest wake-up after its deadline
 
 class FakeVendor final : public VendorBackend {
  public:
@@ -63,7 +61,6 @@ class FakeVendor final : public VendorBackend {
     }
     for (auto& f : g_force_D) f.store(0.0);
     g_frames.store(0);
-    g_latest_wake_ns.store(0);
 
     VendorDescription d;
     d.model = "Fake Vendor Pen";
@@ -123,9 +120,6 @@ class FakeVendor final : public VendorBackend {
         }
         deadline += period;
         std::this_thread::sleep_until(deadline);
-        // How late the host woke this thread (a starved scheduler, not a stopped clock).
-        const std::int64_t late_ns = (std::chrono::steady_clock::now() - deadline).count();
-        if (late_ns > g_latest_wake_ns.load()) g_latest_wake_ns.store(late_ns);
       }
     });
   }
@@ -158,8 +152,5 @@ extern "C" __attribute__((visibility("default"))) void fake_vendor_last_force_D(
 }
 extern "C" __attribute__((visibility("default"))) std::uint64_t fake_vendor_frames() { return g_frames.load(); }
 extern "C" __attribute__((visibility("default"))) void fake_vendor_reset_total_reads() { g_total_reads.store(0); }
-extern "C" __attribute__((visibility("default"))) double fake_vendor_latest_wake_ms() {
-  return static_cast<double>(g_latest_wake_ns.load()) * 1e-6;
-}
 
 HATTR_EXPORT_DEVICE_PLUGIN("fake-vendor", "a fake vendor SDK for the adapter's tests", openVendorDevice<FakeVendor>)
