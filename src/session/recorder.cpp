@@ -36,7 +36,7 @@ void Recorder::take(const TickSample& item) {
   if (sample.t_s < config_.window_begin_s - half_period) return;
 
   // Start and stop.
-  const bool armed = armed_.load(std::memory_order_acquire);
+  const bool armed = armed_.load(std::memory_order_acquire) && item.tick < stop_before_tick_.load(std::memory_order_acquire);
   if (config_.trigger == RecordTrigger::kCommand) {
     recording_ = armed && !finished_;
   } else if (!armed) {

@@ -327,7 +327,9 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
       result.failure = end.failure;
       stopped = end.stopped;
     }
-    recorder.stop();  // nothing after the end (a stop request) is recorded
+    // Nothing after the end (a fault, a stop request) is recorded, and nothing before it lost
+    // however far the recorder's thread is behind the loop.
+    recorder.stopBefore(loop.counters().ticks.load());
     loop.stop();
     recorder.stopThread();
   }

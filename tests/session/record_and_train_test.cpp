@@ -177,6 +177,35 @@ TEST(Recorder, PenDownTriggerRecordsFromTouchDownToALongLift) {
   EXPECT_EQ(p.metadata().extra.at("t_origin_s"), "0.1");
 }
 
+TEST(Recorder, StoppedBeforeATickItKeepsEveryEarlierSampleItTakesLate) {
+  SpscRing<TickSample> ring(4096);
+  Recorder recorder(ring, RecorderConfig{.nominal_period_s = 1e-3}, ProfileMetadata{});
+  recorder.start();
+  const auto push = [&](int from, int to) {
+    for (int i = from; i < to; ++i) {
+      Sample s;
+      s.t_s = i * 1e-3;
+      ASSERT_TRUE(ring.tryPush(TickSample{static_cast<std::uint64_t>(i), s}));
+    }
+  };
+  push(0, 200);
+  recorder.drain();
+  push(200, 500);            // the consumer falls behind: 300 samples wait in the ring
+  recorder.stopBefore(450);  // the trial ends at tick 450
+  push(500, 600);
+  recorder.drain();
+  const HapticProfile p = recorder.takeProfile();
+  ASSERT_EQ(p.size(), 450u) << "every sample before the stop, none after";
+  EXPECT_NEAR(p.samples().back().t_s, 0.449, 1e-12);
+  // stop() is immediate: what the consumer has not taken yet is not kept.
+  Recorder immediate(ring, RecorderConfig{.nominal_period_s = 1e-3}, ProfileMetadata{});
+  immediate.start();
+  push(600, 700);
+  immediate.stop();
+  immediate.drain();
+  EXPECT_EQ(immediate.takeProfile().size(), 0u);
+}
+
 TEST(Recorder, KeepsOnlyItsLoopTimeWindowWhenArmedBeforeIt) {
   SpscRing<TickSample> ring(4096);
   Recorder recorder(ring, RecorderConfig{.nominal_period_s = 1e-3, .window_begin_s = 0.3, .window_end_s = 0.8},

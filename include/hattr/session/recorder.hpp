@@ -45,8 +45,15 @@ class Recorder {
   Recorder& operator=(const Recorder&) = delete;
 
   /// Start / stop recording (kCommand), or arm / disarm (kPenDown). Any thread.
-  void start() noexcept { armed_.store(true, std::memory_order_release); }
+  void start() noexcept {
+    stop_before_tick_.store(std::numeric_limits<std::uint64_t>::max(), std::memory_order_release);
+    armed_.store(true, std::memory_order_release);
+  }
   void stop() noexcept { armed_.store(false, std::memory_order_release); }
+  /// Stops with the loop's tick `tick`: samples of earlier ticks are still kept when they are
+  /// taken later (a consumer behind the loop loses nothing the loop recorded before the stop),
+  /// none from `tick` on. Any thread.
+  void stopBefore(std::uint64_t tick) noexcept { stop_before_tick_.store(tick, std::memory_order_release); }
 
   /// Takes every sample waiting in the ring. Consumer thread only. Returns how many.
   std::size_t drain();
@@ -84,6 +91,7 @@ class Recorder {
   RecorderConfig config_;
   HapticProfile profile_;
   std::atomic<bool> armed_{false};
+  std::atomic<std::uint64_t> stop_before_tick_{std::numeric_limits<std::uint64_t>::max()};
   std::atomic<double> consumer_time_s_{0.0};
   bool recording_ = false;
   bool finished_ = false;       // kPenDown: stopped after a long pen-up
