@@ -51,12 +51,7 @@ std::vector<sim::LearningHypothesis> parseHypothesisList(const std::string& text
   return out;
 }
 
-double modeP(const report::MetricResult& metric) {
-  for (const auto& row : metric.overall.rows) {
-    if (row.source == "mode") return row.p;
-  }
-  throw InvariantError("the overall ANOVA has no mode row");
-}
+double modeP(const report::MetricResult& metric) { return metric.overall.row("mode").p; }
 
 /// Runs the paper's study and the A/A studies of one hypothesis; `studies_done` counts studies.
 HypothesisResult runHypothesis(const CompareOptions& o, sim::LearningHypothesis h, Progress& progress, int& studies_done) {
