@@ -121,7 +121,6 @@ TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
   const device::DeviceStatus write_status = device_.write(command);
   if (write_status == device::DeviceStatus::kFault) safety_.latchFault(SafetyFault::kDeviceError);
   if (safety_.fault() != SafetyFault::kNone) status = TickStatus::kFaulted;
-  counters_.faults.store(safety_.faultCount(), std::memory_order_relaxed);
 
   // Publish the sample.
   Sample sample;
@@ -141,6 +140,9 @@ TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
   latest_.write(sample);
 
   bump(counters_.ticks);
+  // A fault is published after its tick is counted and its sample is in the ring: whoever
+  // sees the fault (acquire) and ends the recording at the tick count keeps the faulting tick.
+  counters_.faults.store(safety_.faultCount(), std::memory_order_release);
   tick_compute_.record((monotonicNow() - compute_start).count());
   return status;
 }

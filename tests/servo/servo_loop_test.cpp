@@ -117,6 +117,47 @@ TEST(ServoLoop, NanForceLatchesAFaultAndTheDeviceGetsZero) {
   EXPECT_NE(rig.device.lastCommand(), Vec3::Zero());
 }
 
+TEST(ServoLoop, AFaultIsPublishedOnlyAfterItsTickIsCounted) {
+  // A trial's watcher that sees the fault counter move reads the tick counter next and ends
+  // the recording there: the faulting tick (its sample, with zero command) must already be
+  // counted, or the recording loses it. Every even tick faults and every odd one clears the
+  // fault; a watcher spinning on another core checks, at every count it sees, that the tick
+  // of that fault is counted (fault k is tick 2(k - 1)).
+  constexpr std::uint64_t kTicks = 60'000;
+  Rig rig({}, 64);
+  const Vec3 nan_force(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0);
+  std::atomic<bool> done{false};
+  std::thread ticker([&] {
+    for (std::uint64_t i = 0; i < kTicks; i += 2) {
+      rig.guidance.force = nan_force;
+      (void)rig.loop.tick(rig.loop.simulatedNow() + static_cast<std::int64_t>(i) * rig.loop.period());
+      rig.guidance.force = Vec3::Zero();
+      while (!rig.loop.post({ServoCommand::Type::kClearFault})) {
+      }
+      (void)rig.loop.tick(rig.loop.simulatedNow() + static_cast<std::int64_t>(i + 1) * rig.loop.period());
+      TickSample drained;
+      while (rig.loop.samples().tryPop(drained)) {
+      }
+    }
+    done.store(true);
+  });
+  std::uint64_t checked = 0;
+  std::uint64_t early = 0;
+  std::uint64_t last_seen = 0;
+  while (!done.load()) {
+    const std::uint64_t faults = rig.loop.counters().faults.load();
+    if (faults == last_seen) continue;
+    last_seen = faults;
+    const std::uint64_t ticks = rig.loop.counters().ticks.load();
+    ++checked;
+    if (ticks < 2 * faults - 1) ++early;
+  }
+  ticker.join();
+  EXPECT_EQ(rig.loop.counters().faults.load(), kTicks / 2);
+  EXPECT_GT(checked, 0u);
+  EXPECT_EQ(early, 0u) << "a fault was visible before its tick was counted, " << early << " times of " << checked;
+}
+
 TEST(ServoLoop, ForceAboveTheLimitIsClamped) {
   Rig rig;
   rig.guidance.force = Vec3(50.0, 0.0, 0.0);
