@@ -69,6 +69,7 @@ StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptio
   StudyAnalysis out;
   out.options = options;
   out.options.progress = nullptr;  // the caller's callback does not outlive the call
+  for (const auto mode : study.modes) out.modes.emplace_back(guidance::modeName(mode));
   out.analyzed_recall_trials = session::analyzedRecallTrials(study.protocol);
   out.disturbed_policy = std::string(session::disturbedPolicyName(study.protocol.disturbed));
   const std::set<int> analyzed(out.analyzed_recall_trials.begin(), out.analyzed_recall_trials.end());

@@ -140,7 +140,8 @@ class Document {
               std::map<std::string, std::string>& files) {
     files["figures/" + name + ".svg"] = svg;
     md_ += fmt::format("![{}](figures/{}.svg)\n\n*{}*\n\n", caption, name, caption);
-    html_ += fmt::format("<figure>{}<figcaption>{}</figcaption></figure>\n", svg, escape(caption));
+    // The figure's id is its file's name: a link can point at it, and a test finds its file.
+    html_ += fmt::format("<figure id=\"{}\">{}<figcaption>{}</figcaption></figure>\n", name, svg, escape(caption));
   }
   const std::string& markdown() const { return md_; }
   const std::string& html() const { return html_; }
@@ -171,6 +172,19 @@ double leastSquaresSlope(const std::vector<double>& values) {
   }
   return sxy / sxx;
 }
+
+/// The modes of a metric's per-mode tables in the study's order (those the study does not name,
+/// or all when the order is not known, after, in name order).
+std::vector<std::string> inStudyOrder(const StudyAnalysis& a, const MetricResult& m) {
+  std::vector<std::string> order;
+  for (const std::string& mode : a.modes) {
+    if (m.per_mode.contains(mode)) order.push_back(mode);
+  }
+  for (const auto& [mode, table] : m.per_mode) {
+    if (std::find(order.begin(), order.end(), mode) == order.end()) order.push_back(mode);
+  }
+  return order;
+}
 }  // namespace
 
 std::vector<std::string> conclusions(const StudyAnalysis& a, double alpha) {
@@ -198,8 +212,8 @@ std::vector<std::string> conclusions(const StudyAnalysis& a, double alpha) {
     // direction (the least-squares slope of the mean cost over the recall trials): costs that
     // rise over recall are forgetting or fatigue, not learning.
     std::vector<std::string> trained;
-    for (const auto& [mode_name, table] : m->per_mode) {
-      const analysis::AnovaRow* trial = findRow(table, "trial");
+    for (const std::string& mode_name : inStudyOrder(a, *m)) {
+      const analysis::AnovaRow* trial = findRow(m->per_mode.at(mode_name), "trial");
       if (!trial || !(trial->p < alpha)) continue;
       const auto means = m->mean_by_trial.find(mode_name);
       const double slope = means == m->mean_by_trial.end() ? 0.0 : leastSquaresSlope(means->second);

@@ -160,18 +160,20 @@ StudyAnalysis writeReportOf(const CompletedStudy& study) {
   return a;
 }
 
+/// Whether `a`, `b` and `c` all occur in `text`, first ones in that order.
+bool inOrder(const std::string& text, const std::string& a, const std::string& b, const std::string& c) {
+  const auto pa = text.find(a), pb = text.find(b), pc = text.find(c);
+  return pa != std::string::npos && pb != std::string::npos && pc != std::string::npos && pa < pb && pb < pc;
+}
+
 TEST(StudyReport, ModesComeInTheStudysOrderEverywhere) {
   CompletedStudy study;  // modes: the paper's BASIC, PCONTROL, ALPHA
   (void)writeReportOf(study);
   const std::string html = test::readText(study.dir / "report" / "report.html");
-  const auto in_order = [](const std::string& text, const std::string& a1, const std::string& b1, const std::string& c1) {
-    const auto pa = text.find(a1), pb = text.find(b1), pc = text.find(c1);
-    return pa != std::string::npos && pa < pb && pb != std::string::npos && pb < pc && pc != std::string::npos;
-  };
-  EXPECT_TRUE(in_order(html, "<p>BASIC:</p>", "<p>PCONTROL:</p>", "<p>ALPHA:</p>"));  // the per-mode ANOVA tables
+  EXPECT_TRUE(inOrder(html, "<p>BASIC:</p>", "<p>PCONTROL:</p>", "<p>ALPHA:</p>"));  // the per-mode ANOVA tables
   for (const char* figure : {"trajectory_mean_by_trial", "force_mean_per_mode", "force_variance_per_mode", "profile_fz"}) {
     const std::string svg = test::readText(study.dir / "report" / "figures" / (std::string(figure) + ".svg"));
-    EXPECT_TRUE(in_order(svg, ">BASIC<", ">PCONTROL<", ">ALPHA<")) << figure;
+    EXPECT_TRUE(inOrder(svg, ">BASIC<", ">PCONTROL<", ">ALPHA<")) << figure;
   }
 }
 
@@ -249,6 +251,21 @@ TEST(StudyAnalysis, ConclusionsSayWhichWayTheRecallTrialsWent) {
                               "trials, forgetting or fatigue, not learning)"));
   EXPECT_THAT(text, HasSubstr("haptic-profile (force) metric in: ALPHA (p = 0.020, -1 per trial: costs fell over the recall trials)"));
   EXPECT_THAT(text, Not(HasSubstr("PCONTROL (")));
+}
+
+TEST(StudyAnalysis, ConclusionsNameTheModesInTheStudysOrder) {
+  // The paper's order (BASIC, PCONTROL, ALPHA), not the alphabet's, when the analysis knows it.
+  StudyAnalysis a;
+  a.trajectory.metric = "trajectory";
+  a.force.metric = "force";
+  for (const char* mode : {"ALPHA", "BASIC", "PCONTROL"}) {
+    a.trajectory.per_mode[mode].rows.push_back({.source = "trial", .p = 0.01});
+    a.trajectory.mean_by_trial[mode] = {10.0, 9.0};
+  }
+  const auto text = [&a] { return fmt::format("{}", fmt::join(conclusions(a), "\n")); };
+  EXPECT_TRUE(inOrder(text(), "ALPHA (", "BASIC (", "PCONTROL (")) << text();
+  a.modes = {"BASIC", "PCONTROL", "ALPHA"};
+  EXPECT_TRUE(inOrder(text(), "BASIC (", "PCONTROL (", "ALPHA (")) << text();
 }
 
 TEST(StudyAnalysis, RefusesAnUnfinishedStudyNamingWhatIsMissing) {

@@ -70,6 +70,7 @@ struct MetricResult {
 
 struct StudyAnalysis {
   AnalysisOptions options;
+  std::vector<std::string> modes;           ///< the study's modes in its file's order (empty: not known)
   std::vector<int> analyzed_recall_trials;  ///< the recall trial numbers used (the protocol's)
   std::string disturbed_policy;             ///< the protocol's: repeat, flag, exclude
   std::vector<FlaggedTrial> flagged;        ///< disturbed recall trials, analyzed or not

@@ -1,0 +1,188 @@
+#!/usr/bin/env python3
+"""The study report in a real browser: Debian's headless Chromium, driven by its chromedriver
+through Selenium (python3-selenium).
+
+Makes a small scripted study with the CLI and its report, opens report.html and checks that:
+  - the page loads with no console error or warning from the browser;
+  - every figure file has its figure on the page, and no figure is missing a file;
+  - inside each figure's plot area (its clip rectangle), the figure inline in the page has the
+    same pixels as its standalone SVG file opened alone. A figure clipped by another figure's
+    rectangle, or cut by the page, differs there.
+
+Usage: report_in_chromium.py HATTR_CLI [--keep DIR]   (DIR keeps the report and the screenshots)
+Exit code: 0 passed, 1 failed (with what differed), 2 bad arguments.
+"""
+import argparse
+import base64
+import io
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+CHROMIUM = Path("/usr/bin/chromium")
+CHROMEDRIVER = Path("/usr/bin/chromedriver")
+INSTALL_HINT = ("install Debian's chromium, chromium-driver, python3-selenium and python3-pil "
+                "(scripts/install-deps does)")
+# Pixels whose colour differs by more than this in a channel count as different; a few may
+# differ by anti-aliasing when a figure sits at a fractional position on the page.
+CHANNEL_TOLERANCE = 48
+MAX_DIFFERENT_FRACTION = 0.002
+
+
+def fail(message: str) -> None:
+    print(f"report_in_chromium: FAILED: {message}")
+    sys.exit(1)
+
+
+def run(cli: str, folder: Path, *args: str) -> None:
+    done = subprocess.run([cli, *args], cwd=folder, capture_output=True, text=True)
+    if done.returncode != 0:
+        fail(f"hattr {' '.join(args)} exited {done.returncode}:\n{done.stdout}\n{done.stderr}")
+
+
+def make_report(cli: str, folder: Path) -> Path:
+    """A study of 3 scripted subjects, 1 training and 3 recall trials per mode, and its report."""
+    lines = ["# skill: loop", "t_s,x_mm,y_mm,z_mm,fx_N,fy_N,fz_N,pen_down_bool"]
+    lines += [f"{i * 0.01:.2f},{i * 0.2:.1f},{3.0 * (i % 10) / 10:.1f},0,0,0,-1.2,1" for i in range(51)]
+    (folder / "expert.csv").write_text("\n".join(lines) + "\n")
+    (folder / "study.json").write_text(
+        '{"name": "browser", "skill": "loop", "experts": {"loop": "expert.csv"},'
+        ' "protocol": {"training_trials": 1, "recall_trials": 3, "rest_s": 0},'
+        ' "world": {"relief": {"kind": "flat"}},'
+        ' "subjects": {"count": 3, "participant": "script", "options": {"jitter_mm": 2.0}}}\n')
+    run(cli, folder, "study", "init", "study.json", "--db", "study.sqlite")
+    run(cli, folder, "study", "run", "--db", "study.sqlite")
+    run(cli, folder, "study", "report", "--db", "study.sqlite", "--out", "report")
+    return folder / "report"
+
+
+def open_browser():
+    try:
+        from selenium import webdriver
+        from selenium.webdriver.chrome.service import Service
+    except ImportError:
+        fail(f"python3-selenium is missing: {INSTALL_HINT}")
+    for program in (CHROMIUM, CHROMEDRIVER):
+        if not program.exists():
+            fail(f"{program} is missing: {INSTALL_HINT}")
+    options = webdriver.ChromeOptions()
+    options.binary_location = str(CHROMIUM)
+    # Root runs this in CI: Chromium's sandbox needs a user namespace it cannot have there.
+    for argument in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1400,1000",
+                     "--force-device-scale-factor=1", "--hide-scrollbars", "--disable-dev-shm-usage"):
+        options.add_argument(argument)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    return webdriver.Chrome(service=Service(str(CHROMEDRIVER)), options=options)
+
+
+def console_problems(driver) -> list:
+    """The browser's console messages at warning level or above (SEVERE, WARNING)."""
+    return [entry for entry in driver.get_log("browser") if entry.get("level") in ("SEVERE", "WARNING")]
+
+
+def shoot(driver, element):
+    """The element as the page renders it, wherever it lies on the page (Chromium's own
+    screenshot of the element's rectangle, beyond the window if need be)."""
+    from PIL import Image
+    x, y, width, height = driver.execute_script(
+        "const r = arguments[0].getBoundingClientRect();"
+        "return [r.left + window.scrollX, r.top + window.scrollY, r.width, r.height];", element)
+    shot = driver.execute_cdp_cmd("Page.captureScreenshot", {
+        "format": "png", "captureBeyondViewport": True,
+        "clip": {"x": x, "y": y, "width": width, "height": height, "scale": 1}})
+    return Image.open(io.BytesIO(base64.b64decode(shot["data"])))
+
+
+def plot_area(svg_text: str, name: str):
+    """The figure's plot area: its clip rectangle, shrunk to whole pixels."""
+    match = re.search(r'<clipPath id="[^"]+"><rect x="([-\d.]+)" y="([-\d.]+)" width="([\d.]+)" height="([\d.]+)"',
+                      svg_text)
+    if match is None:
+        fail(f"figures/{name}.svg has no clip rectangle to compare inside")
+    x, y, w, h = (float(v) for v in match.groups())
+    return (int(x) + 1, int(y) + 1, int(x + w) - 1, int(y + h) - 1)
+
+
+def different_fraction(a, b) -> float:
+    from PIL import ImageChops
+    difference = ImageChops.difference(a.convert("RGB"), b.convert("RGB"))
+    pixels = difference.getdata()
+    different = sum(1 for p in pixels if max(p) > CHANNEL_TOLERANCE)
+    return different / max(1, len(pixels))
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("cli")
+    parser.add_argument("--keep", type=Path)
+    arguments = parser.parse_args()
+    try:
+        from PIL import Image
+    except ImportError:
+        fail(f"python3-pil is missing: {INSTALL_HINT}")
+
+    with tempfile.TemporaryDirectory(prefix="hattr-browser-") as scratch:
+        folder = Path(scratch)
+        report = make_report(str(Path(arguments.cli).resolve()), folder)
+        files = sorted(p.stem for p in (report / "figures").glob("*.svg"))
+        if not files:
+            fail("the report wrote no figures")
+        driver = open_browser()
+        try:
+            # The page: loads without a console problem, with one figure per file.
+            driver.get((report / "report.html").as_uri())
+            problems = console_problems(driver)
+            if problems:
+                fail("the report's console:\n" + "\n".join(str(p) for p in problems))
+            ids = driver.execute_script("return Array.from(document.querySelectorAll('figure')).map(f => f.id)")
+            if sorted(ids) != files:
+                fail(f"the page's figures {sorted(ids)} are not the figure files {files}")
+            page_png = driver.get_screenshot_as_png()
+            inline = {}
+            for name in files:
+                svg = driver.find_element("css selector", f"figure[id='{name}'] > svg")
+                inline[name] = shoot(driver, svg)
+            # Each figure alone, as its file.
+            alone = {}
+            for name in files:
+                driver.get((report / "figures" / f"{name}.svg").as_uri())
+                problems = console_problems(driver)
+                if problems:
+                    fail(f"figures/{name}.svg's console:\n" + "\n".join(str(p) for p in problems))
+                alone[name] = shoot(driver, driver.find_element("css selector", "svg"))
+        finally:
+            driver.quit()
+
+        # Inside each plot area the two must agree.
+        failures = []
+        for name in files:
+            svg_text = (report / "figures" / f"{name}.svg").read_text()
+            width, height = (int(v) for v in re.search(r'<svg [^>]*width="(\d+)" height="(\d+)"', svg_text).groups())
+            if inline[name].size != (width, height) or alone[name].size != (width, height):
+                failures.append(f"{name}: sizes inline {inline[name].size}, alone {alone[name].size}, "
+                                f"expected {(width, height)}")
+                continue
+            box = plot_area(svg_text, name)
+            fraction = different_fraction(inline[name].crop(box), alone[name].crop(box))
+            print(f"{name}: {fraction:.4%} of the plot area's pixels differ")
+            if fraction > MAX_DIFFERENT_FRACTION:
+                failures.append(f"{name}: {fraction:.2%} of the plot area's pixels differ from the file's "
+                                f"(at most {MAX_DIFFERENT_FRACTION:.2%})")
+
+        if arguments.keep:
+            shutil.copytree(report, arguments.keep / "report", dirs_exist_ok=True)
+            (arguments.keep / "page.png").write_bytes(page_png)
+            for name in files:
+                inline[name].save(arguments.keep / f"{name}.inline.png")
+                alone[name].save(arguments.keep / f"{name}.alone.png")
+        if failures:
+            fail("figures that differ inside their plot areas:\n  " + "\n  ".join(failures))
+    print(f"report_in_chromium: {len(files)} figures, whole in the page and as files; no console problem")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
