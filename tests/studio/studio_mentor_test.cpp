@@ -23,6 +23,7 @@
 #include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/net/link_emulator.hpp"
+#include "screen_checks.hpp"
 #include "studio_test_support.hpp"
 #include "ui/main_window.hpp"
 #include "ui/mentor_tab.hpp"
@@ -30,6 +31,9 @@
 
 using namespace hattr;
 using namespace hattr::studio;
+using test::colourNear;
+using test::sendMouse;
+using test::shareDrawn;
 
 #ifndef HATTR_STUDIO_SCREENSHOT_DIR
 #define HATTR_STUDIO_SCREENSHOT_DIR "."
@@ -107,41 +111,6 @@ double median(std::vector<double> v) {
   if (v.empty()) return 1e9;
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
   return v[v.size() / 2];
-}
-
-/// True if a pixel within `radius` of p has a colour within `tolerance` of `colour`.
-bool colourNear(const QImage& image, QPoint p, const QColor& colour, int radius = 1, int tolerance = 60) {
-  for (int dy = -radius; dy <= radius; ++dy) {
-    for (int dx = -radius; dx <= radius; ++dx) {
-      const QPoint q = p + QPoint(dx, dy);
-      if (!image.rect().contains(q)) continue;
-      const QColor c = image.pixelColor(q);
-      const int d =
-          std::abs(c.red() - colour.red()) + std::abs(c.green() - colour.green()) + std::abs(c.blue() - colour.blue());
-      if (d <= tolerance) return true;
-    }
-  }
-  return false;
-}
-
-/// The share of a profile's pen-down points (every `step`-th) drawn in `colour` in the window's shot.
-double shareDrawn(const QImage& shot, const MainWindow& window, const HapticProfile& profile, const QColor& colour,
-                  std::size_t step = 20) {
-  const PaperView* view = window.paperView();
-  const QPoint origin = view->mapTo(&window, QPoint(0, 0));
-  int found = 0, total = 0;
-  for (std::size_t i = 0; i < profile.size(); i += step) {
-    if (!profile[i].in_contact) continue;
-    const QPointF px = view->mapping().toWidget(profile[i].p_WT) + QPointF(origin);
-    ++total;
-    found += colourNear(shot, px.toPoint(), colour) ? 1 : 0;
-  }
-  return total == 0 ? 0.0 : static_cast<double>(found) / total;
-}
-
-void sendMouse(QWidget* view, QEvent::Type type, QPointF at, Qt::MouseButton button, Qt::MouseButtons buttons) {
-  QMouseEvent event(type, at, view->mapToGlobal(at), button, buttons, Qt::NoModifier);
-  QCoreApplication::sendEvent(view, &event);
 }
 
 /// A point on a circle of radius `r` around (cx, cy) at phase `t` [s] of a 2 s turn.

@@ -13,6 +13,7 @@
 
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/session/study_database.hpp"
+#include "screen_checks.hpp"
 #include "studio_test_support.hpp"
 #include "ui/main_window.hpp"
 #include "ui/paper_view.hpp"
@@ -25,45 +26,8 @@ using namespace hattr::studio;
 #define HATTR_STUDIO_SCREENSHOT_DIR "."
 #endif
 
-namespace {
-
-/// True if a pixel within `radius` of p has a colour within `tolerance` of `colour`.
-bool colourNear(const QImage& image, QPoint p, const QColor& colour, int radius = 1, int tolerance = 60) {
-  for (int dy = -radius; dy <= radius; ++dy) {
-    for (int dx = -radius; dx <= radius; ++dx) {
-      const QPoint q = p + QPoint(dx, dy);
-      if (!image.rect().contains(q)) continue;
-      const QColor c = image.pixelColor(q);
-      const int d =
-          std::abs(c.red() - colour.red()) + std::abs(c.green() - colour.green()) + std::abs(c.blue() - colour.blue());
-      if (d <= tolerance) return true;
-    }
-  }
-  return false;
-}
-
-/// The share of a profile's pen-down points (every `step`-th) drawn in `colour` in the
-/// window's screenshot.
-double shareDrawn(const QImage& shot, const MainWindow& window, const HapticProfile& profile, const QColor& colour,
-                  std::size_t step = 25) {
-  const PaperView* view = window.paperView();
-  const QPoint origin = view->mapTo(&window, QPoint(0, 0));
-  int found = 0, total = 0;
-  for (std::size_t i = 0; i < profile.size(); i += step) {
-    if (!profile[i].pen_down) continue;
-    const QPointF px = view->mapping().toWidget(profile[i].p_WT) + QPointF(origin);
-    ++total;
-    found += colourNear(shot, px.toPoint(), colour) ? 1 : 0;
-  }
-  return total == 0 ? 0.0 : static_cast<double>(found) / total;
-}
-
-void sendMouse(QWidget* view, QEvent::Type type, QPointF at, Qt::MouseButton button, Qt::MouseButtons buttons) {
-  QMouseEvent event(type, at, view->mapToGlobal(at), button, buttons, Qt::NoModifier);
-  QCoreApplication::sendEvent(view, &event);
-}
-
-}  // namespace
+using test::sendMouse;
+using test::shareDrawn;
 
 class StudioSmokeTest : public QObject {
   Q_OBJECT
@@ -153,8 +117,8 @@ class StudioSmokeTest : public QObject {
     QVERIFY2(sum / 900.0 > 170.0, "the paper is light");
     QVERIFY2(hi - lo >= 8, "the paper shows its grain");
     // The reference where the expert wrote, the trail where the pen wrote.
-    const double reference = shareDrawn(shot, w, expert_, PaperColours::reference());
-    const double trail = shareDrawn(shot, w, *w.lastTrial(), PaperColours::ink());
+    const double reference = shareDrawn(shot, w, expert_, PaperColours::reference(), 25);
+    const double trail = shareDrawn(shot, w, *w.lastTrial(), PaperColours::ink(), 25);
     QVERIFY2(reference > 0.7, qPrintable(QString("reference drawn at %1 of its points").arg(reference)));
     QVERIFY2(trail > 0.7, qPrintable(QString("trail drawn at %1 of its points").arg(trail)));
     // The status bar shows the input and the loop.

@@ -21,11 +21,13 @@
 #include <QSlider>
 #include <QSplitter>
 #include <QStatusBar>
+#include <QTabBar>
 #include <QTabWidget>
 #include <QTimer>
 #include <QToolBar>
 #include <QTreeWidget>
 #include <QVBoxLayout>
+#include <algorithm>
 #include <cmath>
 
 #include "core/device_choice.hpp"
@@ -121,7 +123,10 @@ void MainWindow::buildUi() {
   buildStudyTab();
   buildReviewTab();
   buildMentorTab();
-  tabs_->setMinimumWidth(320);
+  // Every tab's name in view: the panel is at least as wide as the whole tab bar (with scroll
+  // arrows, a small window hid the last tabs).
+  tabs_->tabBar()->setUsesScrollButtons(false);
+  tabs_->setMinimumWidth(std::max(320, tabs_->tabBar()->sizeHint().width() + 4));
   connect(tabs_, &QTabWidget::currentChanged, this, [this] { refreshButtons(); });
 
   splitter_ = new QSplitter(Qt::Horizontal);

@@ -1,5 +1,6 @@
 #include "ui/paper_view.hpp"
 
+#include <QFontMetricsF>
 #include <QMouseEvent>
 #include <QPainter>
 #include <QPainterPath>
@@ -16,6 +17,8 @@ namespace {
 constexpr double kReliefPixelsPerMetre = 6000.0;  // cached relief: 6 px/mm
 constexpr double kArrowMetresPerNewton = 0.01;    // force arrows: 10 mm of paper per newton
 constexpr double kPenRadius_px = 6.0;
+/// Room between the banner's box and its text, left and right.
+constexpr double kBannerMargin_px = 8.0;
 
 QPolygonF strokePolygon(const std::vector<Eigen::Vector2d>& stroke, const PaperMapping& mapping) {
   QPolygonF polygon;
@@ -169,7 +172,8 @@ void PaperView::paintEvent(QPaintEvent*) {
   const QPointF bar_end(paper.right() - 12.0, paper.bottom() - 12.0);
   painter.setPen(QPen(QColor(90, 90, 90), 2.0));
   painter.drawLine(bar_end - QPointF(bar_px, 0.0), bar_end);
-  painter.drawText(QRectF(bar_end.x() - bar_px, bar_end.y() - 20.0, bar_px, 16.0), Qt::AlignCenter, tr("10 mm"));
+  painter.drawText(QRectF(bar_end.x() - bar_px, bar_end.y() - 20.0, bar_px, 16.0), Qt::AlignCenter | Qt::TextDontClip,
+                   tr("10 mm"));
 
   // Reference, reviewed trial, the pen's trail.
   if (reference_shown_) drawTrail(painter, reference_, PaperColours::reference(), 3.0);
@@ -254,17 +258,36 @@ void PaperView::paintEvent(QPaintEvent*) {
 
   // The banner.
   if (!banner_.isEmpty()) {
-    QFont big = font();
-    big.setPointSizeF(big.pointSizeF() * 1.6);
-    big.setBold(true);
-    painter.setFont(big);
-    const QRectF box(paper.left() + paper.width() * 0.15, paper.top() + 28.0, paper.width() * 0.7, 40.0);
+    const BannerLayout banner = bannerLayout();
+    painter.setFont(banner.font);
     painter.setPen(Qt::NoPen);
     painter.setBrush(QColor(30, 34, 44, 200));
-    painter.drawRoundedRect(box, 8.0, 8.0);
+    painter.drawRoundedRect(banner.box, 8.0, 8.0);
     painter.setPen(Qt::white);
-    painter.drawText(box, Qt::AlignCenter, banner_);
+    painter.drawText(banner.box.adjusted(kBannerMargin_px, 0.0, -kBannerMargin_px, 0.0),
+                     Qt::AlignCenter | Qt::TextWordWrap, banner_);
   }
+}
+
+PaperView::BannerLayout PaperView::bannerLayout() const {
+  const QRectF paper = mapping_.paperRectPx();
+  const double width = paper.width() * 0.7;
+  const double text_width = width - 2.0 * kBannerMargin_px;
+  BannerLayout layout;
+  layout.font = font();
+  layout.font.setBold(true);
+  // From 1.6 times the view's font down to its own size, the first that fits on two lines.
+  for (int step = 0; step <= 6; ++step) {
+    layout.font.setPointSizeF(font().pointSizeF() * (1.6 - 0.1 * step));
+    const QFontMetricsF metrics(layout.font);
+    const QRectF needed =
+        metrics.boundingRect(QRectF(0.0, 0.0, text_width, 1e6), Qt::AlignCenter | Qt::TextWordWrap, banner_);
+    layout.fits = needed.width() <= text_width + 0.5 && needed.height() <= 2.0 * metrics.lineSpacing() + 0.5;
+    layout.box = QRectF(paper.left() + paper.width() * 0.15, paper.top() + 28.0, width,
+                        std::max(40.0, std::min(needed.height(), 2.0 * metrics.lineSpacing()) + 12.0));
+    if (layout.fits) break;
+  }
+  return layout;
 }
 
 }  // namespace hattr::studio

@@ -6,7 +6,9 @@
 /// the hand holding the simulated pen: the cursor is the hand's target, the left button puts
 /// the pen down, the wheel sets how hard the hand presses. Millimetres only in the labels.
 
+#include <QFont>
 #include <QImage>
+#include <QRectF>
 #include <QString>
 #include <QWidget>
 #include <optional>
@@ -62,6 +64,16 @@ class PaperView final : public QWidget {
   }
   /// Text over the paper (prompts, countdowns); empty: none.
   void setBanner(const QString& text) { banner_ = text; }
+  [[nodiscard]] const QString& banner() const { return banner_; }
+  /// Where and how the banner is drawn: a box over the paper's top, 0.7 of its width, in the
+  /// view's font bold at 1.6 times its size, smaller (down to its own size) until the text fits
+  /// the box on at most two lines. `fits` false: even that did not fit (the text is cut).
+  struct BannerLayout {
+    QRectF box;
+    QFont font;
+    bool fits = false;
+  };
+  [[nodiscard]] BannerLayout bannerLayout() const;
   void setForceArrowsShown(bool shown) { arrows_shown_ = shown; }
 
   [[nodiscard]] const PaperMapping& mapping() const { return mapping_; }
