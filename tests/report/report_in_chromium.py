@@ -59,15 +59,20 @@ def make_report(cli: str, folder: Path) -> Path:
     return folder / "report"
 
 
-def open_browser():
+def require_browser() -> None:
+    """Fails now, before the study is made, when the browser or its driver is missing."""
     try:
-        from selenium import webdriver
-        from selenium.webdriver.chrome.service import Service
+        import selenium  # noqa: F401
     except ImportError:
         fail(f"python3-selenium is missing: {INSTALL_HINT}")
     for program in (CHROMIUM, CHROMEDRIVER):
         if not program.exists():
             fail(f"{program} is missing: {INSTALL_HINT}")
+
+
+def open_browser():
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
     options = webdriver.ChromeOptions()
     options.binary_location = str(CHROMIUM)
     # Root runs this in CI: Chromium's sandbox needs a user namespace it cannot have there.
@@ -89,7 +94,8 @@ def shoot(driver, element):
     from PIL import Image
     x, y, width, height = driver.execute_script(
         "const r = arguments[0].getBoundingClientRect();"
-        "return [r.left + window.scrollX, r.top + window.scrollY, r.width, r.height];", element)
+        "return [Math.round(r.left + window.scrollX), Math.round(r.top + window.scrollY),"
+        " Math.round(r.width), Math.round(r.height)];", element)
     shot = driver.execute_cdp_cmd("Page.captureScreenshot", {
         "format": "png", "captureBeyondViewport": True,
         "clip": {"x": x, "y": y, "width": width, "height": height, "scale": 1}})
@@ -124,6 +130,7 @@ def main() -> int:
     except ImportError:
         fail(f"python3-pil is missing: {INSTALL_HINT}")
 
+    require_browser()
     with tempfile.TemporaryDirectory(prefix="hattr-browser-") as scratch:
         folder = Path(scratch)
         report = make_report(str(Path(arguments.cli).resolve()), folder)

@@ -1,5 +1,6 @@
 #include "hattr/servo/servo_loop.hpp"
 
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>

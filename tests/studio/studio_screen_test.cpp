@@ -108,6 +108,9 @@ class StudioScreenTest : public QObject {
   // window as its widgets draw it (the page and the paper view), not a blank or stale one.
   void eachTabIsClickedAndShownOnTheScreen() {
     MainWindow& w = *window_;
+    // The window fits the small screen with every tab in view.
+    qInfo("the window's smallest width: %d px", w.minimumSizeHint().width());
+    QVERIFY(w.minimumSizeHint().width() <= kSmallScreenWindow.width());
     QCOMPARE(w.size(), kSmallScreenWindow);
     QTabBar* bar = w.tabs()->tabBar();
     for (int k = 0; k < w.tabs()->count(); ++k) {

@@ -27,7 +27,6 @@
 #include <QToolBar>
 #include <QTreeWidget>
 #include <QVBoxLayout>
-#include <algorithm>
 #include <cmath>
 
 #include "core/device_choice.hpp"
@@ -123,10 +122,9 @@ void MainWindow::buildUi() {
   buildStudyTab();
   buildReviewTab();
   buildMentorTab();
-  // Every tab's name in view: the panel is at least as wide as the whole tab bar (with scroll
-  // arrows, a small window hid the last tabs).
+  // Every tab's name in view: without scroll arrows (a small window hid the last tabs behind
+  // them) the tab bar's minimum is the whole bar, and so the panel's, whatever the font.
   tabs_->tabBar()->setUsesScrollButtons(false);
-  tabs_->setMinimumWidth(std::max(320, tabs_->tabBar()->sizeHint().width() + 4));
   connect(tabs_, &QTabWidget::currentChanged, this, [this] { refreshButtons(); });
 
   splitter_ = new QSplitter(Qt::Horizontal);

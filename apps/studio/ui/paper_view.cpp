@@ -1,5 +1,6 @@
 #include "ui/paper_view.hpp"
 
+#include <QFontInfo>
 #include <QFontMetricsF>
 #include <QMouseEvent>
 #include <QPainter>
@@ -276,10 +277,12 @@ PaperView::BannerLayout PaperView::bannerLayout() const {
   BannerLayout layout;
   layout.font = font();
   layout.font.setBold(true);
-  // From 1.6 times the view's font down to its own size, the first that fits on two lines.
+  // From 1.6 times the view's font down to its own size, the first that fits on two lines
+  // (the size as resolved: a font set in pixels has no point size of its own).
+  const double base_pt = QFontInfo(font()).pointSizeF();
   for (int step = 0; step <= 6; ++step) {
-    layout.font.setPointSizeF(font().pointSizeF() * (1.6 - 0.1 * step));
-    const QFontMetricsF metrics(layout.font);
+    layout.font.setPointSizeF(base_pt * (1.6 - 0.1 * step));
+    const QFontMetricsF metrics(layout.font, this);
     const QRectF needed =
         metrics.boundingRect(QRectF(0.0, 0.0, text_width, 1e6), Qt::AlignCenter | Qt::TextWordWrap, banner_);
     layout.fits = needed.width() <= text_width + 0.5 && needed.height() <= 2.0 * metrics.lineSpacing() + 0.5;
