@@ -30,13 +30,8 @@ std::string modeColour(const std::string& mode) {
   return "#7f7f7f";
 }
 
-/// The modes in the study file's order (the paper's: BASIC, PCONTROL, ALPHA), for every
-/// table, legend and bar; a mode the study does not name goes last.
-std::vector<std::string> modeOrder(const session::StudyDefinition& study) {
-  std::vector<std::string> order;
-  for (const auto mode : study.modes) order.emplace_back(guidance::modeName(mode));
-  return order;
-}
+/// Where `mode` stands in the study file's order (StudyAnalysis::modes, the paper's: BASIC,
+/// PCONTROL, ALPHA), for every table, legend and bar; a mode the study does not name goes last.
 std::size_t modeRank(const std::vector<std::string>& order, const std::string& mode) {
   return static_cast<std::size_t>(std::find(order.begin(), order.end(), mode) - order.begin());
 }
@@ -313,7 +308,7 @@ std::filesystem::path writeStudyReport(const session::StudyDatabase& db, const S
   doc.table(table1);
 
   // Per metric: ANOVA tables and figures 5/6, modes in the study's order.
-  const std::vector<std::string> order = modeOrder(study);
+  const std::vector<std::string>& order = a.modes;
   for (const MetricResult* m : {&a.trajectory, &a.force}) {
     const std::string title = m->metric == "trajectory" ? "Trajectory" : "Haptic profile (force)";
     doc.heading(fmt::format("{}: mode × subject ANOVA (subject random)", title));
