@@ -281,9 +281,10 @@ void DeviceServer::Impl::onHello(const device::net::Nonce& nonce, const device::
   if (live && rx.from != client_) {
     const device::net::Packet busy{{.session_id = 0, .sequence = 0, .sender_time_ns = device::net::monotonicNs()},
                                    device::net::BusyPayload{nonce}};
-    send(busy, rx.from);
+    // Counted before the answer: a client that has read it sees the count.
     bump(busy_refusals_);
     drops_.count(DropReason::kBusy);
+    send(busy, rx.from);
     return;
   }
   seen_nonces_[seen_count_++ % kNonceMemory] = nonce;

@@ -56,6 +56,7 @@ void ServoLoop::resetRun() noexcept {
   tick_compute_.clear();
   safety_.restartRamp();
   link_down_ = false;
+  last_good_pen_ = PenState{};
   counters_.disconnected.store(false, std::memory_order_relaxed);
   last_device_wall_ = std::chrono::nanoseconds(-1);
 }
@@ -93,6 +94,15 @@ TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
   // unplugged device) zeroes the force while it lasts and ramps in again when it returns.
   PenState pen;
   const device::DeviceStatus read_status = device_.read(now, pen);
+  // A failed read holds the last good reading, at this tick's time: a device need not fill
+  // the state it could not read, and the tick's sample (zero command) must still fall on the
+  // loop's clock, where the recording keeps it.
+  if (read_status == device::DeviceStatus::kOk) {
+    last_good_pen_ = pen;
+  } else {
+    pen = last_good_pen_;
+    pen.t_s = seconds(now);
+  }
   if (read_status == device::DeviceStatus::kFault) safety_.latchFault(SafetyFault::kDeviceError);
   const bool disconnected = read_status == device::DeviceStatus::kDisconnected;
   if (disconnected) {

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <thread>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "hattr/core/error.hpp"
@@ -349,6 +350,11 @@ TEST(DeviceFault, EndsTheTrialEarlyWithTheDevicesReasonAndKeepsWhatWasRecorded) 
     const session::TrialResult result = session::runTrial(env, setup, hand);
     const double took_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     stalls += result.stalls;
+    // What every failure below reports with its own message.
+    SCOPED_TRACE(fmt::format("trial: failure \"{}\", {} ticks, {} samples over {:.4f} s, took {:.3f} s, "
+                             "{} loop stalls, {} host stalls, {} missed samples",
+                             result.failure, result.ticks, result.profile.size(), result.profile.duration_s(), took_s,
+                             result.stalls, watch.stalls(), result.missed_samples));
     EXPECT_NE(result.failure.find("error_after=500: plugin:fake-vendor: reading the device: fake SDK: amplifier fault"),
               std::string::npos)
         << result.failure;
@@ -360,7 +366,9 @@ TEST(DeviceFault, EndsTheTrialEarlyWithTheDevicesReasonAndKeepsWhatWasRecorded) 
     const auto& extra = result.profile.metadata().extra;
     ASSERT_TRUE(extra.contains("failed"));
     EXPECT_EQ(extra.at("failed"), result.failure);
-    // From the fault on, the loop commanded zero: the last recorded command is zero.
+    // From the fault on, the loop commanded zero: the last recorded command is zero. (The pen
+    // hangs in the air here, so every command is zero; ServoLoop.AFailedReadHoldsTheLastGood...
+    // checks that the faulting tick's own sample reaches the recording.)
     ASSERT_FALSE(result.profile.samples().empty());
     EXPECT_EQ(result.profile.samples().back().f_cmd_W.norm(), 0.0);
   });

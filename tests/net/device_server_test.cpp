@@ -79,7 +79,10 @@ TEST(DeviceServer, ClientReadsThePenAndTheServerClampsTheForceToItsDeviceLimits)
     Rig rig;
     DeviceServer server(rig.config("sim://pen?continuous_force_N=0.5"));
     server.start();
-    auto client = rig.client(server);
+    // The client bridges 20 ms of missing states, longer than the server loop's 10 ms stall
+    // threshold: a server thread held up long enough to cut the link is a counted stall.
+    // (With the default 5 ms, a 5-10 ms hold-up on a loaded host read as disconnected.)
+    auto client = rig.client(server, nullptr, "&hold_ms=20");
     EXPECT_DOUBLE_EQ(client->limits().continuous_force_N, 0.5);
     EXPECT_DOUBLE_EQ(client->serverRate_hz(), 1000.0);
     EXPECT_EQ(client->clocking(), device::DeviceClocking::kHostRealTime);
@@ -306,7 +309,7 @@ TEST(DeviceServer, AStoppedServerEndsTheSessionAndANewServerOnThePortServesTheCl
   auto server = std::make_unique<DeviceServer>(rig.config());
   server->start();
   const std::string address = server->endpoint().text();
-  auto client = rig.client(*server);
+  auto client = rig.client(*server, nullptr, "&hold_ms=20");  // a brief hold-up of the server is bridged; the BYE is not
   ASSERT_EQ(poll(*client, [](DeviceStatus) { return false; }, std::chrono::milliseconds(10)).second,
             DeviceStatus::kOk);
   server.reset();  // says BYE

@@ -159,6 +159,50 @@ TEST(ServoLoop, AFaultIsPublishedOnlyAfterItsTickIsCounted) {
   EXPECT_EQ(early, 0u) << "a fault was visible before its tick was counted, " << early << " times of " << checked;
 }
 
+/// The simulated pen, whose reads fail (as a vendor SDK's do: the state is left unfilled)
+/// from read `fail_from` on.
+class FailingReads final : public device::Device {
+ public:
+  FailingReads(device::Device& inner, std::uint64_t fail_from) : inner_(inner), fail_from_(fail_from) {}
+  device::DeviceStatus read(std::chrono::nanoseconds now, PenState& out) noexcept override {
+    if (reads_++ >= fail_from_) return device::DeviceStatus::kFault;
+    return inner_.read(now, out);
+  }
+  device::DeviceStatus write(const Vec3& f) noexcept override { return inner_.write(f); }
+  const device::DeviceLimits& limits() const noexcept override { return inner_.limits(); }
+  device::DeviceCapabilities capabilities() const noexcept override { return inner_.capabilities(); }
+  const std::string& uri() const noexcept override { return inner_.uri(); }
+
+ private:
+  device::Device& inner_;
+  std::uint64_t fail_from_;
+  std::uint64_t reads_ = 0;
+};
+
+TEST(ServoLoop, AFailedReadHoldsTheLastGoodPenAtTheTicksTime) {
+  // The faulting tick's sample is the one a recording ends with: it must carry the tick's
+  // time (not a default 0, which a loop-time window drops) and the last position read.
+  Rig rig;
+  FailingReads failing(rig.device, 300);
+  ServoLoop loop(failing, ServoConfig{});
+  loop.setWorld(&rig.paper);
+  loop.setGuidance(&rig.guidance);
+  rig.guidance.force = Vec3(0.3, 0.0, 0.0);
+  loop.runSimulated(302);
+  std::vector<Sample> samples;
+  TickSample item;
+  while (loop.samples().tryPop(item)) samples.push_back(item.sample);
+  ASSERT_EQ(samples.size(), 302u);
+  const Sample& good = samples[299];
+  EXPECT_GT(good.f_cmd_W.norm(), 0.0);
+  for (std::size_t i : {300u, 301u}) {
+    EXPECT_NEAR(samples[i].t_s, static_cast<double>(i) * 1e-3, 1e-12) << "tick " << i;
+    EXPECT_EQ(samples[i].p_WT, good.p_WT) << "tick " << i;
+    EXPECT_EQ(samples[i].f_cmd_W, Vec3::Zero()) << "tick " << i;
+  }
+  EXPECT_EQ(loop.counters().faults.load(), 1u);
+}
+
 TEST(ServoLoop, ForceAboveTheLimitIsClamped) {
   Rig rig;
   rig.guidance.force = Vec3(50.0, 0.0, 0.0);

@@ -156,6 +156,7 @@ class ServoLoop {
   std::thread thread_;
   std::atomic<LoopClock> clock_{LoopClock::kNone};
   bool link_down_ = false;
+  PenState last_good_pen_;  // the last reading the device returned kOk for (servo thread)
   // Device clock: the wall time of the last device tick [ns of monotonicNow], for the watchdog.
   std::atomic<std::int64_t> last_device_tick_ns_{0};
   std::chrono::nanoseconds last_device_wall_{-1};
