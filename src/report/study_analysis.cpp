@@ -1,6 +1,7 @@
 #include "hattr/report/study_analysis.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -215,6 +216,51 @@ nlohmann::json analysisToJson(const StudyAnalysis& a) {
 }
 
 void storeAnalysis(session::StudyDatabase& db, const StudyAnalysis& a) { db.putResult("analysis", analysisToJson(a).dump()); }
+
+std::vector<TrialCost> storedCosts(const session::StudyDatabase& db) {
+  const std::optional<std::string> stored = db.result("analysis");
+  if (!stored) return {};
+  const auto refuse = [](const std::string& why) {
+    return InputError(fmt::format("the study's stored analysis (results key \"analysis\"): {}; run `hattr study "
+                                  "analyze` again to replace it",
+                                  why));
+  };
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(*stored);
+  } catch (const nlohmann::json::exception& e) {
+    throw refuse(fmt::format("not JSON ({})", e.what()));
+  }
+  if (!j.is_object() || !j.contains("recall_costs") || !j["recall_costs"].is_array()) {
+    throw refuse("expected an object with an array \"recall_costs\"");
+  }
+  // A number, or null where the analysis wrote a non-finite one.
+  const auto real = [](const nlohmann::json& v) {
+    return v.is_null() ? std::numeric_limits<double>::quiet_NaN() : v.get<double>();
+  };
+  std::vector<TrialCost> costs;
+  for (std::size_t i = 0; i < j["recall_costs"].size(); ++i) {
+    const nlohmann::json& c = j["recall_costs"][i];
+    try {
+      TrialCost cost{.trial_id = c.at("trial_id").get<std::int64_t>(),
+                     .subject = c.at("subject").get<std::string>(),
+                     .mode = c.at("mode").get<std::string>(),
+                     .trial = c.at("trial").get<int>(),
+                     .score = {},
+                     .disturbed = c.at("disturbed").get<std::string>()};
+      cost.score.x = real(c.at("x"));
+      cost.score.y = real(c.at("y"));
+      cost.score.z = real(c.at("z"));
+      cost.score.fx = real(c.at("fx"));
+      cost.score.fy = real(c.at("fy"));
+      cost.score.fz = real(c.at("fz"));
+      costs.push_back(std::move(cost));
+    } catch (const nlohmann::json::exception& e) {
+      throw refuse(fmt::format("recall_costs[{}]: {}", i, e.what()));
+    }
+  }
+  return costs;
+}
 
 void writeAnalysisCsv(const StudyAnalysis& a, const std::filesystem::path& dir) {
   std::filesystem::create_directories(dir);

@@ -1,6 +1,7 @@
 #include "hattr/report/study_report.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -341,6 +342,46 @@ TEST(DisturbedTrials, FlagKeepsThemInTheAnalysisAndTheReportListsThem) {
   const auto html = test::readText(writeStudyReport(db, a, study.dir / "report"));
   EXPECT_THAT(html, HasSubstr("Disturbed trials"));
   EXPECT_THAT(html, HasSubstr("1 stall (force zeroed)"));
+}
+
+TEST(StoredCosts, ReadBackWhatTheStoredAnalysisCostedTrialByTrial) {
+  CompletedStudy study(R"("disturbed_trials": "flag",)", stallInS01Recall2());
+  auto db = session::StudyDatabase::open(study.dir / "s.sqlite", session::OpenMode::kReadWrite);
+  EXPECT_TRUE(storedCosts(db).empty());  // nothing stored yet
+  const StudyAnalysis a = analyzeStudy(db);
+  storeAnalysis(db, a);
+  const std::vector<TrialCost> back = storedCosts(db);
+  ASSERT_EQ(back.size(), a.costs.size());
+  int disturbed = 0;
+  for (std::size_t i = 0; i < back.size(); ++i) {
+    const TrialCost& want = a.costs[i];
+    const TrialCost& got = back[i];
+    EXPECT_EQ(got.trial_id, want.trial_id);
+    EXPECT_EQ(got.subject, want.subject);
+    EXPECT_EQ(got.mode, want.mode);
+    EXPECT_EQ(got.trial, want.trial);
+    EXPECT_EQ(got.disturbed, want.disturbed);
+    disturbed += got.disturbed.empty() ? 0 : 1;
+    // JSON keeps a double to the bit.
+    const std::array<std::pair<double, double>, 6> channels{{{got.score.x, want.score.x},
+                                                              {got.score.y, want.score.y},
+                                                              {got.score.z, want.score.z},
+                                                              {got.score.fx, want.score.fx},
+                                                              {got.score.fy, want.score.fy},
+                                                              {got.score.fz, want.score.fz}}};
+    for (const auto& [g, w] : channels) EXPECT_EQ(g, w) << "trial " << got.trial_id;
+  }
+  EXPECT_EQ(disturbed, 3);
+
+  db.putResult("analysis", R"({"recall_costs": [{"trial_id": 1}]})");
+  try {
+    (void)storedCosts(db);
+    ADD_FAILURE() << "a stored analysis without the costs' fields was read";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("the study's stored analysis (results key \"analysis\"): recall_costs[0]:"));
+  }
+  db.putResult("analysis", "{not json");
+  EXPECT_THROW((void)storedCosts(db), InputError);
 }
 
 TEST(DisturbedTrials, ExcludeReplacesThemWithTheSpareRecallTrial) {

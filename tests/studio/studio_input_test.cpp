@@ -6,11 +6,14 @@
 #include <QPointingDevice>
 #include <QStatusBar>
 #include <QTabletEvent>
+#include <QTreeWidget>
 #include <QTemporaryDir>
 #include <QtTest>
 #include <cmath>
 #include <fstream>
 #include <functional>
+#include <map>
+#include <tuple>
 
 #include "core/device_choice.hpp"
 #include "core/mouse_hand.hpp"
@@ -18,9 +21,11 @@
 #include "core/tablet_input.hpp"
 #include "hattr/net/device_server.hpp"
 #include "hattr/core/error.hpp"
+#include "hattr/report/study_analysis.hpp"
 #include "studio_test_support.hpp"
 #include "ui/main_window.hpp"
 #include "ui/paper_view.hpp"
+#include "ui/review_tab.hpp"
 
 using namespace hattr;
 using namespace hattr::studio;
@@ -28,6 +33,37 @@ using namespace hattr::studio;
 namespace {
 
 constexpr double kDeg = 3.141592653589793 / 180.0;
+
+/// The Review tree's costs, by trial id: (shape, force, status) as the tree shows them.
+std::map<qint64, std::tuple<QString, QString, QString>> treeCosts(const ReviewTab& review) {
+  std::map<qint64, std::tuple<QString, QString, QString>> shown;
+  QTreeWidget* tree = review.widgets().tree;
+  for (int s = 0; s < tree->topLevelItemCount(); ++s) {
+    for (int t = 0; t < tree->topLevelItem(s)->childCount(); ++t) {
+      const QTreeWidgetItem* item = tree->topLevelItem(s)->child(t);
+      if (!item->data(ReviewTab::kTrial, Qt::UserRole).isValid()) continue;
+      shown[item->data(ReviewTab::kTrial, Qt::UserRole).toLongLong()] = {
+          item->text(ReviewTab::kShape), item->text(ReviewTab::kForce), item->text(ReviewTab::kStatus)};
+    }
+  }
+  return shown;
+}
+
+/// Checks that the tree shows exactly `costs` (to 4 digits) on their trials and nothing on the others.
+void expectTreeShows(const ReviewTab& review, const std::vector<report::TrialCost>& costs) {
+  auto shown = treeCosts(review);
+  QVERIFY(!costs.empty());
+  for (const report::TrialCost& c : costs) {
+    const auto it = shown.find(c.trial_id);
+    QVERIFY2(it != shown.end(), qPrintable(QString("trial %1 is not in the tree").arg(c.trial_id)));
+    QCOMPARE(std::get<0>(it->second), QString::number(c.trajectory(), 'g', 4));
+    QCOMPARE(std::get<1>(it->second), QString::number(c.forceProfile(), 'g', 4));
+    shown.erase(it);
+  }
+  // The training trials (completed, not analyzed) show no cost.
+  QVERIFY(!shown.empty());
+  for (const auto& [id, texts] : shown) QVERIFY2(std::get<0>(texts).isEmpty(), qPrintable(QString::number(id)));
+}
 
 QString thrownMessage(const std::function<void()>& call) {
   try {
@@ -260,12 +296,60 @@ class StudioInputTest : public QObject {
       opened << url;
       return true;
     });
+    // No analysis stored: no costs yet, and the tab says how to get them.
+    QVERIFY(w.reviewTab()->widgets().costs->text().contains("No analysis is stored"));
+    for (const auto& [id, texts] : treeCosts(*w.reviewTab())) QVERIFY(std::get<0>(texts).isEmpty());
     QVERIFY2(w.openReport(), qPrintable(w.lastError()));
+    // The report's analysis fills the recall trials' costs.
+    {
+      const auto db = session::StudyDatabase::open(db_file, session::OpenMode::kReadOnly);
+      expectTreeShows(*w.reviewTab(), report::analyzeStudy(db).costs);
+    }
+    QVERIFY(w.reviewTab()->widgets().costs->text().contains("report just written"));
     const auto html = folder / "s-report" / "report.html";
     QVERIFY(std::filesystem::exists(html));
     QVERIFY(std::filesystem::file_size(html) > 1000);
     QCOMPARE(opened.size(), 1);
     QCOMPARE(opened.front(), QUrl::fromLocalFile(QString::fromStdString(html.string())));
+  }
+
+  void theReviewTreeShowsTheStoredAnalysissCostsAndSaysWhenItCannotReadThem() {
+    MainWindow& w = window();
+    const auto folder = dir_ / "analyzed";
+    std::filesystem::create_directories(folder);
+    const auto db_file = test::reportStudy(folder, true);
+    std::vector<report::TrialCost> costs;
+    {
+      auto db = session::StudyDatabase::open(db_file, session::OpenMode::kReadWrite);
+      report::StudyAnalysis analysis = report::analyzeStudy(db);
+      analysis.costs.front().disturbed = "1 stall (force zeroed)";  // as a flagged trial's
+      report::storeAnalysis(db, analysis);
+      costs = analysis.costs;
+    }
+    QVERIFY2(w.openReview(QString::fromStdString(db_file.string())), qPrintable(w.lastError()));
+    expectTreeShows(*w.reviewTab(), costs);
+    QVERIFY(w.reviewTab()->widgets().costs->text().contains("stored analysis"));
+    const auto flagged = treeCosts(*w.reviewTab()).at(costs.front().trial_id);
+    QVERIFY2(std::get<2>(flagged).endsWith("(disturbed)"), qPrintable(std::get<2>(flagged)));
+
+    // A stored analysis the library cannot read: the trials are listed, the tab says why no costs.
+    {
+      auto db = session::StudyDatabase::open(db_file, session::OpenMode::kReadWrite);
+      db.putResult("analysis", "{not json");
+    }
+    QVERIFY2(w.openReview(QString::fromStdString(db_file.string())), qPrintable(w.lastError()));
+    QVERIFY2(w.reviewTab()->widgets().costs->text().contains("could not be read"),
+             qPrintable(w.reviewTab()->widgets().costs->text()));
+    const auto shown = treeCosts(*w.reviewTab());
+    std::size_t completed = 0;
+    {
+      const auto db = session::StudyDatabase::open(db_file, session::OpenMode::kReadOnly);
+      for (const auto& subject : db.subjects()) {
+        for (const auto& t : db.trials(subject.id)) completed += t.status == session::TrialStatus::kCompleted ? 1 : 0;
+      }
+    }
+    QCOMPARE(shown.size(), completed);
+    for (const auto& [id, texts] : shown) QVERIFY(std::get<0>(texts).isEmpty());
   }
 
  private:

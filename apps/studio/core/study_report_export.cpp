@@ -1,6 +1,5 @@
 #include "core/study_report_export.hpp"
 
-#include "hattr/report/study_analysis.hpp"
 #include "hattr/report/study_report.hpp"
 
 namespace hattr::studio {
@@ -9,9 +8,11 @@ std::filesystem::path reportFolderFor(const std::filesystem::path& db_file) {
   return db_file.parent_path() / (db_file.stem().string() + "-report");
 }
 
-std::filesystem::path writeReviewReport(const session::StudyDatabase& db, const std::filesystem::path& db_file) {
-  const report::StudyAnalysis analysis = report::analyzeStudy(db);
-  return report::writeStudyReport(db, analysis, reportFolderFor(db_file));
+ReviewReport writeReviewReport(const session::StudyDatabase& db, const std::filesystem::path& db_file) {
+  report::StudyAnalysis analysis = report::analyzeStudy(db);
+  ReviewReport written{.html = report::writeStudyReport(db, analysis, reportFolderFor(db_file)), .costs = {}};
+  written.costs = std::move(analysis.costs);
+  return written;
 }
 
 }  // namespace hattr::studio

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 
+#include "hattr/report/study_analysis.hpp"
 #include "hattr/session/study_database.hpp"
 
 namespace hattr::studio {
@@ -13,8 +14,14 @@ namespace hattr::studio {
 /// <folder of db_file>/<stem of db_file>-report
 std::filesystem::path reportFolderFor(const std::filesystem::path& db_file);
 
+/// A report written from Review: its page and the per-trial costs it was made from.
+struct ReviewReport {
+  std::filesystem::path html;
+  std::vector<report::TrialCost> costs;
+};
+
 /// Analyzes the study in `db` (opened from `db_file`) and writes its report into
-/// reportFolderFor(db_file). Returns the path of report.html.
-std::filesystem::path writeReviewReport(const session::StudyDatabase& db, const std::filesystem::path& db_file);
+/// reportFolderFor(db_file).
+ReviewReport writeReviewReport(const session::StudyDatabase& db, const std::filesystem::path& db_file);
 
 }  // namespace hattr::studio

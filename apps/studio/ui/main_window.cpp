@@ -11,7 +11,6 @@
 #include <QFileInfo>
 #include <QFormLayout>
 #include <QHBoxLayout>
-#include <QHeaderView>
 #include <QInputDialog>
 #include <QLabel>
 #include <QLineEdit>
@@ -25,7 +24,6 @@
 #include <QTabWidget>
 #include <QTimer>
 #include <QToolBar>
-#include <QTreeWidget>
 #include <QVBoxLayout>
 #include <cmath>
 
@@ -36,6 +34,7 @@
 #include "ui/mentor_tab.hpp"
 #include "ui/paper_view.hpp"
 #include "ui/profile_plot.hpp"
+#include "ui/review_tab.hpp"
 
 namespace hattr::studio {
 namespace {
@@ -384,47 +383,24 @@ void MainWindow::buildStudyTab() {
 }
 
 void MainWindow::buildReviewTab() {
-  auto* page = new QWidget;
-  auto* layout = new QVBoxLayout(page);
-  layout->addWidget(
-      wrappedLabel(tr("<b>Review</b> a study: pick a completed trial to overlay it on the expert "
-                      "(orange on blue) and play it back.")));
-  auto* open = new QPushButton(tr("Open study for review… (Ctrl+Shift+D)"));
-  connect(open, &QPushButton::clicked, this, [this] {
-    const QString file =
-        askOpenFile(tr("Open a study database for review"), tr("Study databases (*.sqlite *.db);;All files (*)"));
-    if (!file.isEmpty()) openReview(file);
-  });
-  layout->addWidget(open);
-  review_label_ = wrappedLabel(tr("No study open for review."));
-  layout->addWidget(review_label_);
-  review_tree_ = new QTreeWidget;
-  review_tree_->setHeaderLabels({tr("Trial"), tr("Mode"), tr("Phase"), tr("Status")});
-  review_tree_->header()->setSectionResizeMode(QHeaderView::ResizeToContents);
-  connect(review_tree_, &QTreeWidget::currentItemChanged, this, [this](QTreeWidgetItem* item) {
-    if (item != nullptr && item->data(0, Qt::UserRole).isValid())
-      showReviewTrial(item->data(0, Qt::UserRole).toLongLong());
-  });
-  layout->addWidget(review_tree_, 1);
-  auto* row = new QHBoxLayout;
-  play_button_ = new QPushButton(tr("Play / pause (P)"));
-  connect(play_button_, &QPushButton::clicked, this, &MainWindow::togglePlayback);
-  speed_combo_ = new QComboBox;
-  for (const double speed : {0.25, 0.5, 1.0, 2.0}) speed_combo_->addItem(tr("%1×").arg(speed), speed);
-  speed_combo_->setCurrentIndex(2);
-  connect(speed_combo_, &QComboBox::activated, this,
-          [this] { playback_.setSpeed(speed_combo_->currentData().toDouble()); });
-  row->addWidget(play_button_, 1);
-  row->addWidget(speed_combo_);
-  layout->addLayout(row);
-  report_button_ = new QPushButton(tr("Open report… (Ctrl+Shift+R)"));
-  report_button_->setToolTip(tr("Analyze the study (DTW, ANOVA) and open report.html, written next to the database"));
-  connect(report_button_, &QPushButton::clicked, this, [this] { (void)openReport(); });
-  layout->addWidget(report_button_);
-  review_scores_ = wrappedLabel();
-  review_scores_->setObjectName("review_scores");
-  layout->addWidget(review_scores_);
-  tabs_->addTab(page, tr("Review"));
+  ReviewHost host;
+  host.may_show = [this] { return activity_ == Activity::kFree || activity_ == Activity::kPlayback; };
+  host.show = [this](const HapticProfile& trial, const HapticProfile& expert, const QString& title, QLabel* scores) {
+    showReviewed(trial, expert, title, scores);
+  };
+  host.forget = [this](const HapticProfile* shown) {
+    if (activity_ == Activity::kPlayback) abortActivity();
+    if (shown != nullptr && playback_.profile() == shown) playback_.load(nullptr);
+    paper_->overlay().clear();
+  };
+  host.toggle_playback = [this] { togglePlayback(); };
+  host.set_speed = [this](double speed) { playback_.setSpeed(speed); };
+  host.error = [this](const QString& what, const QString& detail) { showError(what, detail); };
+  host.ask_open_file = [this](const QString& title, const QString& filter) { return askOpenFile(title, filter); };
+  host.note = [this](const QString& message) { statusBar()->showMessage(message, 10000); };
+  host.open_url = [this](const QUrl& url) { return !url_opener_ || url_opener_(url); };
+  review_ = new ReviewTab(*settings_, std::move(host));
+  tabs_->addTab(review_, tr("Review"));
 }
 
 // The Mentor tab borrows the device (the rig stops; Activity::kMentoring) and the dialogs.
@@ -897,8 +873,7 @@ void MainWindow::refreshButtons() {
       study_open && (activity_ == Activity::kStudyTrial ||
                      (free && (study_->state() == StudySession::State::kReady ||
                                study_->state() == StudySession::State::kResting))));
-  play_button_->setEnabled(review_trial_.has_value() || playback_.loaded());
-  report_button_->setEnabled(review_db_ != nullptr);
+  review_->refresh(playback_.loaded());
 }
 
 void MainWindow::showReference(const HapticProfile* expert) {

@@ -22,7 +22,6 @@
 #include "core/series.hpp"
 #include "core/study_session.hpp"
 #include "core/trial_scoring.hpp"
-#include "hattr/session/study_database.hpp"
 
 class QAction;
 class QCheckBox;
@@ -35,14 +34,13 @@ class QSlider;
 class QSplitter;
 class QTabWidget;
 class QTimer;
-class QTreeWidget;
-class QTreeWidgetItem;
 
 namespace hattr::studio {
 
 class MentorTab;
 class PaperView;
 class ProfilePlot;
+class ReviewTab;
 
 class MainWindow final : public QMainWindow {
   Q_OBJECT
@@ -119,6 +117,7 @@ class MainWindow final : public QMainWindow {
   [[nodiscard]] LiveRig& rig() { return rig_; }
   [[nodiscard]] QTabWidget* tabs() const { return tabs_; }
   [[nodiscard]] MentorTab* mentorTab() const { return mentor_; }
+  [[nodiscard]] ReviewTab* reviewTab() const { return review_; }
 
  protected:
   void closeEvent(QCloseEvent* event) override;
@@ -159,7 +158,8 @@ class MainWindow final : public QMainWindow {
   // Actions helpers (main_window_actions.cpp).
   void fillStudySubjects();
   void refreshStudyPanel();
-  void fillReviewTree();
+  /// Review: `trial` over `expert` on the paper and the plot, its scores in `scores`.
+  void showReviewed(const HapticProfile& trial, const HapticProfile& expert, const QString& title, QLabel* scores);
   void startPlayback(const HapticProfile* profile, const HapticProfile* expert);
   bool saveProfileTo(const HapticProfile& profile, const QString& file, bool& saved_flag);
 
@@ -198,12 +198,8 @@ class MainWindow final : public QMainWindow {
 
   // Study and review.
   std::unique_ptr<StudySession> study_;
-  std::unique_ptr<session::StudyDatabase> review_db_;
-  QString review_file_;
   std::function<bool(const QUrl&)> url_opener_;
   QString tablet_calibration_file_;
-  std::optional<HapticProfile> review_trial_;
-  std::optional<HapticProfile> review_expert_;
 
   // Playback.
   Playback playback_;
@@ -259,13 +255,8 @@ class MainWindow final : public QMainWindow {
   QPushButton* study_next_button_ = nullptr;
   QPushButton* close_study_button_ = nullptr;
   QLabel* study_scores_ = nullptr;
-  // Review tab.
-  QLabel* review_label_ = nullptr;
-  QTreeWidget* review_tree_ = nullptr;
-  QLabel* review_scores_ = nullptr;
-  QPushButton* play_button_ = nullptr;
-  QComboBox* speed_combo_ = nullptr;
-  QPushButton* report_button_ = nullptr;
+  // Review tab (the study database it reviews is its own).
+  ReviewTab* review_ = nullptr;
   // Mentor tab (it has the device and the hand while a session runs: Activity::kMentoring).
   MentorTab* mentor_ = nullptr;
 };

@@ -12,11 +12,9 @@
 #include <QPushButton>
 #include <QStatusBar>
 #include <QTabWidget>
-#include <QTreeWidget>
 
 #include "core/device_choice.hpp"
 #include "core/profile_files.hpp"
-#include "core/study_report_export.hpp"
 #include "core/tablet_input.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/render/world_config.hpp"
@@ -24,6 +22,7 @@
 #include "ui/mentor_tab.hpp"
 #include "ui/paper_view.hpp"
 #include "ui/profile_plot.hpp"
+#include "ui/review_tab.hpp"
 
 namespace hattr::studio {
 namespace {
@@ -131,29 +130,7 @@ bool MainWindow::loadTabletCalibration(const QString& file) {
   }
 }
 
-bool MainWindow::openReport() {
-  if (!review_db_) {
-    showError(tr("No study open for review"), tr("open a study for review first (Ctrl+Shift+D)"));
-    return false;
-  }
-  std::filesystem::path html;
-  try {
-    QApplication::setOverrideCursor(Qt::WaitCursor);
-    html = writeReviewReport(*review_db_, std::filesystem::path(review_file_.toStdString()));
-    QApplication::restoreOverrideCursor();
-  } catch (const std::exception& e) {
-    QApplication::restoreOverrideCursor();
-    showError(tr("The report could not be made"), what(e));
-    return false;
-  }
-  const QString file = QString::fromStdString(html.string());
-  statusBar()->showMessage(tr("Report written: %1").arg(QDir::toNativeSeparators(file)), 10000);
-  if (url_opener_ && !url_opener_(QUrl::fromLocalFile(file))) {
-    showError(tr("The report could not be opened"), tr("no program opens %1; it was written there").arg(file));
-    return false;
-  }
-  return true;
-}
+bool MainWindow::openReport() { return review_->openReport(); }
 
 void MainWindow::setMode(guidance::TrainingMode mode) {
   mode_ = mode;
@@ -461,11 +438,11 @@ void MainWindow::startPlayback(const HapticProfile* profile, const HapticProfile
   if (profile == nullptr || profile->empty()) return;
   if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) return;
   playback_.load(profile);
-  playback_.setSpeed(speed_combo_->currentData().toDouble());
+  playback_.setSpeed(review_->speed());
   playback_expert_ = expert;
   showReference(expert);
   paper_->setReferenceShown(true);
-  if (!review_trial_ || profile != &*review_trial_) paper_->overlay().clear();  // a reviewed trial stays overlaid
+  if (profile != review_->trial()) paper_->overlay().clear();  // a reviewed trial stays overlaid
   plot_holds_result_ = true;
   plot_->setExpert(expert != nullptr ? ForceSeries::fromProfile(*expert) : ForceSeries{});
   plot_->setTrainee(ForceSeries::fromProfile(*profile));
@@ -491,7 +468,7 @@ void MainWindow::togglePlayback() {
       if (take_) startPlayback(&*take_, nullptr);
       break;
     case kTabReview:
-      if (review_trial_) startPlayback(&*review_trial_, review_expert_ ? &*review_expert_ : nullptr);
+      if (review_->trial() != nullptr) startPlayback(review_->trial(), review_->expert());
       break;
     default:
       if (last_trial_) startPlayback(&*last_trial_, last_trial_expert_ ? &*last_trial_expert_ : nullptr);
@@ -693,83 +670,29 @@ void MainWindow::closeStudy() {
 // ---- Review -------------------------------------------------------------------------------
 
 bool MainWindow::openReview(const QString& file) {
-  try {
-    review_db_ = std::make_unique<session::StudyDatabase>(
-        session::StudyDatabase::open(file.toStdString(), session::OpenMode::kReadOnly));
-    settings_->setValue("review/file", file);
-    review_file_ = file;
-  } catch (const std::exception& e) {
-    showError(tr("The study could not be opened for review"), what(e));
-    return false;
-  }
-  // The previous study's trial, expert and scores go with it (the playback held a pointer to it).
-  if (activity_ == Activity::kPlayback) abortActivity();
-  if (review_trial_ && playback_.profile() == &*review_trial_) playback_.load(nullptr);
-  review_trial_.reset();
-  review_expert_.reset();
-  review_scores_->clear();
-  paper_->overlay().clear();
-  review_label_->setText(
-      tr("<b>%1</b> (%2)")
-          .arg(qs(review_db_->study().name).toHtmlEscaped(), QFileInfo(file).fileName().toHtmlEscaped()));
-  fillReviewTree();
+  if (!review_->open(file)) return false;
   tabs_->setCurrentIndex(kTabReview);
   refreshButtons();
   return true;
 }
 
-void MainWindow::fillReviewTree() {
-  review_tree_->clear();
-  if (!review_db_) return;
-  try {
-    for (const session::SubjectRecord& subject : review_db_->subjects()) {
-      const std::vector<session::TrialRecord> trials = review_db_->trials(subject.id);
-      int done = 0;
-      for (const auto& t : trials) done += t.status == session::TrialStatus::kCompleted ? 1 : 0;
-      auto* top = new QTreeWidgetItem(review_tree_, {qs(subject.id), qs(subject.spec.participant), QString(),
-                                                     tr("%1/%2 done").arg(done).arg(trials.size())});
-      for (const session::TrialRecord& t : trials) {
-        auto* item = new QTreeWidgetItem(
-            top, {tr("#%1 (%2)").arg(t.plan.sequence + 1).arg(t.plan.index), qs(guidance::modeName(t.plan.mode)),
-                  qs(session::phaseName(t.plan.phase)), qs(session::trialStatusName(t.status))});
-        if (t.status == session::TrialStatus::kCompleted)
-          item->setData(0, Qt::UserRole, QVariant::fromValue<qint64>(t.id));
-      }
-    }
-    review_tree_->expandAll();
-  } catch (const std::exception& e) {
-    showError(tr("The study's trials could not be read"), what(e));
-  }
-}
+bool MainWindow::showReviewTrial(qint64 trial_id) { return review_->showTrial(trial_id); }
 
-bool MainWindow::showReviewTrial(qint64 trial_id) {
-  if (!review_db_) return false;
-  if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) return false;
-  try {
-    review_trial_ = review_db_->trialProfile(trial_id);
-    review_expert_ = review_db_->expert(review_db_->study().skill);
-  } catch (const std::exception& e) {
-    showError(tr("The trial could not be read"), what(e));
-    return false;
-  }
+void MainWindow::showReviewed(const HapticProfile& trial, const HapticProfile& expert, const QString& title,
+                              QLabel* scores) {
   if (activity_ == Activity::kPlayback) abortActivity();
-  showReference(&*review_expert_);
+  showReference(&expert);
   paper_->setReferenceShown(true);
-  paper_->overlay().assign(*review_trial_);
+  paper_->overlay().assign(trial);
   paper_->trail().clear();
-  plot_->setExpert(ForceSeries::fromProfile(*review_expert_));
-  plot_->setTrainee(ForceSeries::fromProfile(*review_trial_));
+  plot_->setExpert(ForceSeries::fromProfile(expert));
+  plot_->setTrainee(ForceSeries::fromProfile(trial));
   plot_->setTimeWindow(std::nullopt);
   plot_->setCursorTime(std::nullopt);
   plot_holds_result_ = true;
-  plot_->setTitle(tr("%1, %2 %3 trial %4")
-                      .arg(qs(review_trial_->metadata().subject))
-                      .arg(qs(review_trial_->metadata().extra["study_mode"]))
-                      .arg(qs(review_trial_->metadata().extra["phase"]))
-                      .arg(qs(review_trial_->metadata().extra["trial"])));
-  showScores(*review_expert_, *review_trial_, review_scores_);
+  plot_->setTitle(title);
+  showScores(expert, trial, scores);
   refreshButtons();
-  return true;
 }
 
 }  // namespace hattr::studio

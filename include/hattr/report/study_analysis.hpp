@@ -92,6 +92,9 @@ StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptio
 nlohmann::json analysisToJson(const StudyAnalysis& analysis);
 /// Stores the analysis in the database (results key "analysis").
 void storeAnalysis(session::StudyDatabase& db, const StudyAnalysis& analysis);
+/// The per-trial costs of the analysis stored in `db` (storeAnalysis), as they were stored;
+/// empty when none was. Throws InputError on a stored analysis it cannot read.
+std::vector<TrialCost> storedCosts(const session::StudyDatabase& db);
 /// The files writeAnalysisCsv writes (for checking outputs before any is written).
 inline const std::vector<std::string> kAnalysisCsvFiles{"recall_costs.csv", "anova.csv", "table1.csv"};
 /// Writes recall_costs.csv, anova.csv and table1.csv into `dir` (created; existing ones replaced).

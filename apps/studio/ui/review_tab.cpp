@@ -1,0 +1,227 @@
+#include "ui/review_tab.hpp"
+
+#include <QApplication>
+#include <QComboBox>
+#include <QDir>
+#include <QFileInfo>
+#include <QHBoxLayout>
+#include <QHeaderView>
+#include <QLabel>
+#include <QPushButton>
+#include <QSettings>
+#include <QTreeWidget>
+#include <QUrl>
+#include <QVBoxLayout>
+
+#include "core/study_report_export.hpp"
+#include "hattr/guidance/training_guidance.hpp"
+
+namespace hattr::studio {
+namespace {
+
+QString qs(const std::string& text) { return QString::fromStdString(text); }
+QString qs(std::string_view text) { return QString::fromUtf8(text.data(), static_cast<qsizetype>(text.size())); }
+QString what(const std::exception& e) { return QString::fromUtf8(e.what()); }
+
+QLabel* wrappedLabel(const QString& text = {}) {
+  auto* label = new QLabel(text);
+  label->setWordWrap(true);
+  label->setTextInteractionFlags(Qt::TextSelectableByMouse);
+  return label;
+}
+
+/// The wait cursor while a slow call runs on the GUI thread.
+struct WaitCursor {
+  WaitCursor() { QApplication::setOverrideCursor(Qt::WaitCursor); }
+  ~WaitCursor() { QApplication::restoreOverrideCursor(); }
+  WaitCursor(const WaitCursor&) = delete;
+  WaitCursor& operator=(const WaitCursor&) = delete;
+};
+
+}  // namespace
+
+ReviewTab::ReviewTab(QSettings& settings, ReviewHost host, QWidget* parent)
+    : QWidget(parent), settings_(settings), host_(std::move(host)) {
+  buildUi();
+}
+
+ReviewTab::~ReviewTab() = default;
+
+// ---- Construction ------------------------------------------------------------------------
+
+void ReviewTab::buildUi() {
+  auto* layout = new QVBoxLayout(this);
+  layout->addWidget(
+      wrappedLabel(tr("<b>Review</b> a study: pick a completed trial to overlay it on the expert "
+                      "(orange on blue) and play it back.")));
+  auto* open_button = new QPushButton(tr("Open study for review… (Ctrl+Shift+D)"));
+  connect(open_button, &QPushButton::clicked, this, [this] {
+    const QString file =
+        host_.ask_open_file(tr("Open a study database for review"), tr("Study databases (*.sqlite *.db);;All files (*)"));
+    if (!file.isEmpty()) open(file);
+  });
+  layout->addWidget(open_button);
+  w_.study = wrappedLabel(tr("No study open for review."));
+  layout->addWidget(w_.study);
+
+  // The subjects and their trials; a completed trial carries its database id.
+  w_.tree = new QTreeWidget;
+  w_.tree->setHeaderLabels({tr("Trial"), tr("Mode"), tr("Phase"), tr("Status"), tr("Shape"), tr("Force")});
+  w_.tree->headerItem()->setToolTip(kShape, tr("recall trials: DTW cost of x + y against the expert (lower is closer)"));
+  w_.tree->headerItem()->setToolTip(kForce, tr("recall trials: DTW cost of fx + fy + fz against the expert"));
+  w_.tree->header()->setSectionResizeMode(QHeaderView::ResizeToContents);
+  connect(w_.tree, &QTreeWidget::currentItemChanged, this, [this](QTreeWidgetItem* item) {
+    if (item != nullptr && item->data(kTrial, Qt::UserRole).isValid()) {
+      showTrial(item->data(kTrial, Qt::UserRole).toLongLong());
+    }
+  });
+  layout->addWidget(w_.tree, 1);
+  w_.costs = wrappedLabel();
+  w_.costs->setObjectName("review_costs");
+  layout->addWidget(w_.costs);
+
+  // Playback and the report.
+  auto* row = new QHBoxLayout;
+  w_.play = new QPushButton(tr("Play / pause (P)"));
+  connect(w_.play, &QPushButton::clicked, this, [this] { host_.toggle_playback(); });
+  w_.speed = new QComboBox;
+  for (const double speed : {0.25, 0.5, 1.0, 2.0}) w_.speed->addItem(tr("%1×").arg(speed), speed);
+  w_.speed->setCurrentIndex(2);
+  connect(w_.speed, &QComboBox::activated, this, [this] { host_.set_speed(speed()); });
+  row->addWidget(w_.play, 1);
+  row->addWidget(w_.speed);
+  layout->addLayout(row);
+  w_.report = new QPushButton(tr("Open report… (Ctrl+Shift+R)"));
+  w_.report->setToolTip(tr("Analyze the study (DTW, ANOVA) and open report.html, written next to the database"));
+  connect(w_.report, &QPushButton::clicked, this, [this] { (void)openReport(); });
+  layout->addWidget(w_.report);
+  w_.scores = wrappedLabel();
+  w_.scores->setObjectName("review_scores");
+  layout->addWidget(w_.scores);
+}
+
+double ReviewTab::speed() const { return w_.speed->currentData().toDouble(); }
+
+void ReviewTab::refresh(bool playback_loaded) {
+  w_.play->setEnabled(trial_.has_value() || playback_loaded);
+  w_.report->setEnabled(db_ != nullptr);
+}
+
+// ---- Actions -------------------------------------------------------------------------------
+
+bool ReviewTab::open(const QString& file) {
+  std::unique_ptr<session::StudyDatabase> db;
+  try {
+    db = std::make_unique<session::StudyDatabase>(
+        session::StudyDatabase::open(file.toStdString(), session::OpenMode::kReadOnly));
+  } catch (const std::exception& e) {
+    host_.error(tr("The study could not be opened for review"), what(e));
+    return false;
+  }
+  // The previous study's trial, expert and scores go with it (a playback held a pointer to it).
+  host_.forget(trial());
+  trial_.reset();
+  expert_.reset();
+  w_.scores->clear();
+  db_ = std::move(db);
+  file_ = file;
+  settings_.setValue("review/file", file);
+  w_.study->setText(tr("<b>%1</b> (%2)")
+                        .arg(qs(db_->study().name).toHtmlEscaped(), QFileInfo(file).fileName().toHtmlEscaped()));
+
+  // The costs of the analysis stored in the study (`hattr study analyze`), if any.
+  try {
+    const std::vector<report::TrialCost> stored = report::storedCosts(*db_);
+    useCosts(stored, stored.empty() ? tr("No analysis is stored in this study: <i>Open report</i> scores its recall "
+                                         "trials.")
+                                    : tr("Shape and force: the recall trials' costs in the study's stored analysis."));
+  } catch (const std::exception& e) {
+    useCosts({}, tr("The study's stored analysis could not be read: %1").arg(what(e).toHtmlEscaped()));
+  }
+  return true;
+}
+
+void ReviewTab::useCosts(const std::vector<report::TrialCost>& costs, const QString& source) {
+  costs_.clear();
+  for (const report::TrialCost& c : costs) costs_.emplace(c.trial_id, c);
+  w_.costs->setText(source);
+  fillTree();
+}
+
+void ReviewTab::fillTree() {
+  w_.tree->clear();
+  if (!db_) return;
+  const auto number = [](double v) { return QString::number(v, 'g', 4); };
+  try {
+    for (const session::SubjectRecord& subject : db_->subjects()) {
+      const std::vector<session::TrialRecord> trials = db_->trials(subject.id);
+      int done = 0;
+      for (const auto& t : trials) done += t.status == session::TrialStatus::kCompleted ? 1 : 0;
+      auto* top = new QTreeWidgetItem(w_.tree, {qs(subject.id), qs(subject.spec.participant), QString(),
+                                                tr("%1/%2 done").arg(done).arg(trials.size())});
+      for (const session::TrialRecord& t : trials) {
+        auto* item = new QTreeWidgetItem(
+            top, {tr("#%1 (%2)").arg(t.plan.sequence + 1).arg(t.plan.index), qs(guidance::modeName(t.plan.mode)),
+                  qs(session::phaseName(t.plan.phase)), qs(session::trialStatusName(t.status))});
+        if (t.status == session::TrialStatus::kCompleted) {
+          item->setData(kTrial, Qt::UserRole, QVariant::fromValue<qint64>(t.id));
+        }
+        if (const auto cost = costs_.find(t.id); cost != costs_.end()) {
+          item->setText(kShape, number(cost->second.trajectory()));
+          item->setText(kForce, number(cost->second.forceProfile()));
+          if (!cost->second.disturbed.empty()) {
+            item->setText(kStatus, item->text(kStatus) + tr(" (disturbed)"));
+            item->setToolTip(kStatus, qs(cost->second.disturbed));
+          }
+        }
+      }
+    }
+    w_.tree->expandAll();
+  } catch (const std::exception& e) {
+    host_.error(tr("The study's trials could not be read"), what(e));
+  }
+}
+
+bool ReviewTab::showTrial(qint64 trial_id) {
+  if (!db_ || !host_.may_show()) return false;
+  try {
+    trial_ = db_->trialProfile(trial_id);
+    expert_ = db_->expert(db_->study().skill);
+  } catch (const std::exception& e) {
+    host_.error(tr("The trial could not be read"), what(e));
+    return false;
+  }
+  auto& extra = trial_->metadata().extra;
+  const QString title = tr("%1, %2 %3 trial %4")
+                            .arg(qs(trial_->metadata().subject))
+                            .arg(qs(extra["study_mode"]))
+                            .arg(qs(extra["phase"]))
+                            .arg(qs(extra["trial"]));
+  host_.show(*trial_, *expert_, title, w_.scores);
+  return true;
+}
+
+bool ReviewTab::openReport() {
+  if (!db_) {
+    host_.error(tr("No study open for review"), tr("open a study for review first (Ctrl+Shift+D)"));
+    return false;
+  }
+  ReviewReport written;
+  try {
+    const WaitCursor wait;
+    written = writeReviewReport(*db_, std::filesystem::path(file_.toStdString()));
+  } catch (const std::exception& e) {
+    host_.error(tr("The report could not be made"), what(e));
+    return false;
+  }
+  useCosts(written.costs, tr("Shape and force: the recall trials' costs in the report just written."));
+  const QString file = QString::fromStdString(written.html.string());
+  host_.note(tr("Report written: %1").arg(QDir::toNativeSeparators(file)));
+  if (!host_.open_url(QUrl::fromLocalFile(file))) {
+    host_.error(tr("The report could not be opened"), tr("no program opens %1; it was written there").arg(file));
+    return false;
+  }
+  return true;
+}
+
+}  // namespace hattr::studio
