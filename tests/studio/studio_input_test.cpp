@@ -330,7 +330,7 @@ class StudioInputTest : public QObject {
     expectTreeShows(*w.reviewTab(), costs);
     QVERIFY(w.reviewTab()->widgets().costs->text().contains("stored analysis"));
     const auto flagged = treeCosts(*w.reviewTab()).at(costs.front().trial_id);
-    QVERIFY2(std::get<2>(flagged).endsWith("(disturbed)"), qPrintable(std::get<2>(flagged)));
+    QVERIFY2(std::get<2>(flagged).endsWith(" disturbed"), qPrintable(std::get<2>(flagged)));
 
     // A stored analysis the library cannot read: the trials are listed, the tab says why no costs.
     {

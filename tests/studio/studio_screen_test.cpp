@@ -6,19 +6,24 @@
 // reference, the Study tab a banner that fits its box with white text in it, the Review tab
 // the reviewed trial in its colour.
 #include <QGuiApplication>
+#include <QHeaderView>
 #include <QScreen>
+#include <QScrollBar>
 #include <QTabBar>
 #include <QTabWidget>
+#include <QTreeWidget>
 #include <QtTest>
 #include <algorithm>
 #include <fstream>
 
 #include "hattr/io/profile_csv.hpp"
+#include "hattr/report/study_analysis.hpp"
 #include "hattr/session/study_database.hpp"
 #include "screen_checks.hpp"
 #include "studio_test_support.hpp"
 #include "ui/main_window.hpp"
 #include "ui/paper_view.hpp"
+#include "ui/review_tab.hpp"
 
 using namespace hattr;
 using namespace hattr::studio;
@@ -88,6 +93,10 @@ class StudioScreenTest : public QObject {
     review_dir_ = dir_ / "review";
     std::filesystem::create_directories(review_dir_);
     review_db_ = test::reportStudy(review_dir_, true);
+    {
+      auto db = session::StudyDatabase::open(review_db_, session::OpenMode::kReadWrite);
+      report::storeAnalysis(db, report::analyzeStudy(db));  // as `hattr study analyze` leaves it
+    }
 
     auto settings =
         std::make_unique<QSettings>(QString::fromStdString((dir_ / "studio.ini").string()), QSettings::IniFormat);
@@ -189,6 +198,19 @@ class StudioScreenTest : public QObject {
     const QImage screen = screenShot("studio_screen_review.png");
     const double drawn = shareDrawn(screen, w, db.trialProfile(last.id), PaperColours::overlay(), 2);
     QVERIFY2(drawn > 0.8, qPrintable(QString("%1 of the reviewed trial's points drawn on the screen").arg(drawn)));
+    // The tree's costs are in view in the narrow panel, numbers in them, without scrolling.
+    QTreeWidget* tree = w.reviewTab()->widgets().tree;
+    QCOMPARE(tree->horizontalScrollBar()->value(), 0);
+    for (const int column : {ReviewTab::kShape, ReviewTab::kForce}) {
+      const int right = tree->header()->sectionViewportPosition(column) + tree->header()->sectionSize(column);
+      QVERIFY2(right <= tree->viewport()->width(),
+               qPrintable(QString("column %1 ends at %2 px, the tree shows %3").arg(column).arg(right).arg(tree->viewport()->width())));
+    }
+    int with_costs = 0;
+    for (int t = 0; t < tree->topLevelItem(0)->childCount(); ++t) {
+      with_costs += tree->topLevelItem(0)->child(t)->text(ReviewTab::kShape).isEmpty() ? 0 : 1;
+    }
+    QCOMPARE(with_costs, 6);  // 2 analyzed recall trials (the first of each mode is not) × 3 modes
   }
 
  private:

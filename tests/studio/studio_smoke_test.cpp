@@ -15,6 +15,8 @@
 #include "hattr/session/study_database.hpp"
 #include "screen_checks.hpp"
 #include "studio_test_support.hpp"
+#include "core/series.hpp"
+#include "ui/learning_curve.hpp"
 #include "ui/main_window.hpp"
 #include "ui/paper_view.hpp"
 #include "ui/profile_plot.hpp"
@@ -89,7 +91,25 @@ class StudioSmokeTest : public QObject {
     QVERIFY(w.lastTrial()->penDownCount() > 500);
     QVERIFY(w.lastScores().has_value());
     QVERIFY(w.lastScores()->shape() > 0.0);
+    // The learning curve has the trial: its mode, its scores.
+    QCOMPARE(w.learningCurve()->points().size(), std::size_t{1});
+    QCOMPARE(w.learningCurve()->points().back().mode, guidance::TrainingMode::kPositionControl);
+    QCOMPARE(w.learningCurve()->points().back().shape, w.lastScores()->shape());
+    QCOMPARE(w.learningCurve()->points().back().force, w.lastScores()->force());
+    {
+      // Drawn: the trial's two points in PCONTROL's colour, and nothing else in it (the panels
+      // are not filled).
+      const QImage curve = w.learningCurve()->grab().toImage();
+      const QColor colour = LearningCurve::modeColour(guidance::TrainingMode::kPositionControl);
+      int coloured = 0;
+      for (int y = 0; y < curve.height(); ++y) {
+        for (int x = 0; x < curve.width(); ++x) coloured += test::colourNear(curve, QPoint(x, y), colour, 0, 40) ? 1 : 0;
+      }
+      const double share = static_cast<double>(coloured) / (curve.width() * curve.height());
+      QVERIFY2(coloured >= 2 && share < 0.01, qPrintable(QString("%1 pixels (%2) in the mode's colour").arg(coloured).arg(share)));
+    }
     QCOMPARE(w.lastTrial()->metadata().extra.at("mode"), std::string("PCONTROL"));
+    QCOMPARE(w.lastTrial()->metadata().extra.at("reference_file"), expert_file_.filename().string());
     QCOMPARE(w.lastTrial()->metadata().extra.at("end_reason"), std::string("pen lifted"));
     QVERIFY(w.lastTrial()->duration_s() < 3.0 * expert_.duration_s() - 0.5);
 
@@ -141,8 +161,10 @@ class StudioSmokeTest : public QObject {
     QVERIFY(w.take()->penDownCount() > 100);
     // Loading a reference now shows the reference alone: the take's force curves go (issue 18).
     QVERIFY(!w.plot()->trainee().empty());
+    QVERIFY(!w.learningCurve()->points().empty());  // the first test's trial
     QVERIFY2(w.loadReference(QString::fromStdString(expert_file_.string())), qPrintable(w.lastError()));
     QVERIFY(w.plot()->trainee().empty());
+    QVERIFY(w.learningCurve()->points().empty());  // a new reference starts a new curve
     const QString file = QString::fromStdString((dir_ / "take.csv").string());
     QVERIFY2(w.saveTake(file), qPrintable(w.lastError()));
     const HapticProfile saved = io::readProfileCsv(file.toStdString());
@@ -154,6 +176,20 @@ class StudioSmokeTest : public QObject {
     QVERIFY(!w.saveTake(file));
     QVERIFY2(w.lastError().contains("already exists"), qPrintable(w.lastError()));
     QCOMPARE(std::filesystem::file_size(file.toStdString()), size);
+
+    // The take as the reference, unsaved: the Train tab opens on it, and a trial runs against it.
+    w.tabs()->setCurrentIndex(MainWindow::kTabRecord);
+    QVERIFY2(w.useTakeAsReference(), qPrintable(w.lastError()));
+    QCOMPARE(w.tabs()->currentIndex(), int{MainWindow::kTabTrain});
+    Trail take_trail;
+    take_trail.assign(*w.take());
+    QCOMPARE(w.paperView()->reference().pointCount(), take_trail.pointCount());
+    QVERIFY2(w.startTrial(), qPrintable(w.lastError()));
+    QVERIFY(w.rig().spec().reference != nullptr);
+    QCOMPARE(w.rig().spec().metadata.extra.at("reference_file"), std::string("take (not saved)"));
+    QCOMPARE(w.rig().spec().metadata.skill, w.take()->metadata().skill);
+    w.abortActivity();
+    QVERIFY2(w.loadReference(QString::fromStdString(expert_file_.string())), qPrintable(w.lastError()));
   }
 
   void aStudyTrialIsStoredAndReviewed() {

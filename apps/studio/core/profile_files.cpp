@@ -62,13 +62,16 @@ std::string suggestedTakeFileName(const std::string& expert_name, const std::str
   return out + ".csv";
 }
 
+void checkReferenceProfile(const HapticProfile& profile, const std::string& name) {
+  HATTR_THROW_UNLESS(profile.size() >= 2, "{}: a reference needs at least 2 samples, got {}", name, profile.size());
+  HATTR_THROW_UNLESS(profile.penDownCount() > 0,
+                     "{}: a reference needs samples with the pen down (something written), got none of {}", name,
+                     profile.size());
+}
+
 HapticProfile loadReferenceProfile(const std::filesystem::path& file) {
   HapticProfile profile = io::readProfileCsv(file);
-  HATTR_THROW_UNLESS(profile.size() >= 2, "{}: a reference needs at least 2 samples, got {}", file.string(),
-                     profile.size());
-  HATTR_THROW_UNLESS(profile.penDownCount() > 0,
-                     "{}: a reference needs samples with the pen down (something written), got none of {}",
-                     file.string(), profile.size());
+  checkReferenceProfile(profile, file.string());
   return profile;
 }
 

@@ -30,8 +30,12 @@ HapticProfile nameTake(HapticProfile take, const std::string& expert_name, const
 /// file names replaced by '_'.
 std::string suggestedTakeFileName(const std::string& expert_name, const std::string& character);
 
-/// Reads a reference profile for training and checks it can be one (at least two samples,
-/// some pen-down). Throws InputError naming the file, what was expected and what was found.
+/// Checks `profile` can be a training reference: at least two samples, some pen-down. Throws
+/// InputError starting with `name`, saying what was expected and what was found.
+void checkReferenceProfile(const HapticProfile& profile, const std::string& name);
+
+/// Reads a reference profile for training and checks it can be one (checkReferenceProfile,
+/// named by the file).
 HapticProfile loadReferenceProfile(const std::filesystem::path& file);
 
 }  // namespace hattr::studio

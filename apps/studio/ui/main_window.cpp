@@ -31,6 +31,7 @@
 #include "core/profile_files.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/render/world_config.hpp"
+#include "ui/learning_curve.hpp"
 #include "ui/mentor_tab.hpp"
 #include "ui/paper_view.hpp"
 #include "ui/profile_plot.hpp"
@@ -254,7 +255,12 @@ void MainWindow::buildRecordTab() {
                     qs(suggestedTakeFileName(expert_name_->text().toStdString(), character_->text().toStdString())));
     if (!file.isEmpty()) saveTake(file);
   });
-  for (auto* b : {record_button_, replay_take_button_, retake_button_, save_take_button_}) layout->addWidget(b);
+  use_take_button_ = new QPushButton(tr("Use as the reference (Train)"));
+  use_take_button_->setToolTip(tr("Train against this take without saving it first"));
+  connect(use_take_button_, &QPushButton::clicked, this, [this] { (void)useTakeAsReference(); });
+  for (auto* b : {record_button_, replay_take_button_, retake_button_, save_take_button_, use_take_button_}) {
+    layout->addWidget(b);
+  }
   take_label_ = wrappedLabel(tr("No take yet."));
   layout->addWidget(take_label_);
   layout->addStretch(1);
@@ -328,6 +334,8 @@ void MainWindow::buildTrainTab() {
   for (auto* b : {trial_button_, replay_trial_button_, save_trial_button_}) layout->addWidget(b);
   scores_label_ = wrappedLabel();
   layout->addWidget(scores_label_);
+  learning_curve_ = new LearningCurve;
+  layout->addWidget(learning_curve_);
   layout->addStretch(1);
   tabs_->addTab(page, tr("Train"));
 }
@@ -858,6 +866,7 @@ void MainWindow::refreshButtons() {
   replay_take_button_->setEnabled(take_.has_value() && free);
   retake_button_->setEnabled(take_.has_value() && free);
   save_take_button_->setEnabled(take_.has_value());
+  use_take_button_->setEnabled(take_.has_value() && activity_ != Activity::kTrial && activity_ != Activity::kStudyTrial);
   trial_button_->setText(activity_ == Activity::kTrial ? tr("Stop trial (Space, Ctrl+.)") : tr("Start trial (Space)"));
   trial_button_->setEnabled((free && reference_profile_) || activity_ == Activity::kTrial);
   replay_trial_button_->setEnabled(last_trial_.has_value() && free);

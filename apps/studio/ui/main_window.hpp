@@ -37,6 +37,7 @@ class QTimer;
 
 namespace hattr::studio {
 
+class LearningCurve;
 class MentorTab;
 class PaperView;
 class ProfilePlot;
@@ -62,6 +63,8 @@ class MainWindow final : public QMainWindow {
   // ---- Actions (the buttons, menus and shortcuts call these); false when refused. ------
   /// Loads a reference profile for training (Train tab).
   bool loadReference(const QString& file);
+  /// Makes the current take the training reference, unsaved (Record tab); the Train tab opens.
+  bool useTakeAsReference();
   /// Loads a world configuration (paper, friction, relief) for writing and training.
   bool loadWorld(const QString& file);
   /// The training mode; during a trial it switches through the servo mailbox (cross-fade).
@@ -118,6 +121,7 @@ class MainWindow final : public QMainWindow {
   [[nodiscard]] QTabWidget* tabs() const { return tabs_; }
   [[nodiscard]] MentorTab* mentorTab() const { return mentor_; }
   [[nodiscard]] ReviewTab* reviewTab() const { return review_; }
+  [[nodiscard]] LearningCurve* learningCurve() const { return learning_curve_; }
 
  protected:
   void closeEvent(QCloseEvent* event) override;
@@ -144,6 +148,9 @@ class MainWindow final : public QMainWindow {
   void finishTrial();
   void showScores(const HapticProfile& expert, const HapticProfile& trial, QLabel* where);
   void showReference(const HapticProfile* expert);
+  /// The training reference, read from `file` (empty: not from a file, not remembered), named
+  /// `name` in trials' metadata, described by `label_html`.
+  void setReference(HapticProfile profile, const QString& file, const QString& name, const QString& label_html);
   void refreshButtons();
   [[nodiscard]] double now_s() const;
 
@@ -182,13 +189,15 @@ class MainWindow final : public QMainWindow {
   // Train.
   std::optional<HapticProfile> reference_profile_;
   std::shared_ptr<const guidance::ReferenceTrajectory> reference_;
-  QString reference_file_;
+  QString reference_file_;  // remembered in settings; empty for an unsaved take
+  QString reference_name_;  // in the trials' metadata (reference_file)
   guidance::TrainingMode mode_ = guidance::TrainingMode::kBasic;
   std::optional<HapticProfile> last_trial_;
   std::optional<HapticProfile> last_trial_expert_;
   bool last_trial_saved_ = true;
   std::optional<analysis::TrialScore> last_scores_;
   const HapticProfile* trial_expert_ = nullptr;  // the reference of the running trial
+  guidance::TrainingMode trial_mode_ = guidance::TrainingMode::kBasic;  // the mode it started in
   bool trial_shows_reference_ = true;
 
   // Record.
@@ -235,6 +244,7 @@ class MainWindow final : public QMainWindow {
   QPushButton* replay_take_button_ = nullptr;
   QPushButton* retake_button_ = nullptr;
   QPushButton* save_take_button_ = nullptr;
+  QPushButton* use_take_button_ = nullptr;
   QLabel* take_label_ = nullptr;
   // Train tab.
   QLabel* reference_label_ = nullptr;
@@ -246,6 +256,7 @@ class MainWindow final : public QMainWindow {
   QPushButton* save_trial_button_ = nullptr;
   QPushButton* replay_trial_button_ = nullptr;
   QLabel* scores_label_ = nullptr;
+  LearningCurve* learning_curve_ = nullptr;
   // Study tab.
   QLabel* study_label_ = nullptr;
   QComboBox* subject_combo_ = nullptr;

@@ -18,6 +18,7 @@
 #include "core/tablet_input.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/render/world_config.hpp"
+#include "ui/learning_curve.hpp"
 #include "ui/main_window.hpp"
 #include "ui/mentor_tab.hpp"
 #include "ui/paper_view.hpp"
@@ -49,30 +50,59 @@ bool MainWindow::loadReference(const QString& file) {
   }
   try {
     HapticProfile profile = loadReferenceProfile(file.toStdString());
-    reference_profile_ = std::move(profile);
-    reference_file_ = file;
-    reference_ = nullptr;  // built at the trial's rate when a trial starts
-    reference_label_->setText(
-        tr("Reference <b>%1</b> (%2, %3): %4")
-            .arg(QFileInfo(file).fileName().toHtmlEscaped(), qs(reference_profile_->metadata().subject).toHtmlEscaped(),
-                 qs(reference_profile_->metadata().skill).toHtmlEscaped(), describeProfile(*reference_profile_)));
-    if (activity_ == Activity::kFree || activity_ == Activity::kRecording) {
-      showReference(&*reference_profile_);
-      paper_->setReferenceShown(show_reference_check_->isChecked());
-      // The new reference alone on the plot: the last take's curves go; it stays until the pen writes.
-      plot_->setTrainee({});
-      plot_->setCursorTime(std::nullopt);
-      plot_->setTimeWindow(std::nullopt);
-      plot_->setTitle(tr("Reference"));
-      plot_holds_result_ = true;
-      plot_->setExpert(ForceSeries::fromProfile(*reference_profile_, 4000, -reference_profile_->samples().front().t_s));
-    }
-    refreshButtons();
+    const QString label = tr("Reference <b>%1</b> (%2, %3): %4")
+                              .arg(QFileInfo(file).fileName().toHtmlEscaped(),
+                                   qs(profile.metadata().subject).toHtmlEscaped(),
+                                   qs(profile.metadata().skill).toHtmlEscaped(), describeProfile(profile));
+    setReference(std::move(profile), file, QFileInfo(file).fileName(), label);
     return true;
   } catch (const std::exception& e) {
     showError(tr("The reference could not be loaded"), what(e));
     return false;
   }
+}
+
+bool MainWindow::useTakeAsReference() {
+  if (!take_) return false;
+  if (activity_ == Activity::kTrial || activity_ == Activity::kStudyTrial) {
+    showError(tr("The reference cannot change now"), tr("finish or abort the trial first (Esc)"));
+    return false;
+  }
+  try {
+    checkReferenceProfile(*take_, "the take");
+  } catch (const std::exception& e) {
+    showError(tr("The take cannot be the reference"), what(e));
+    return false;
+  }
+  const QString who = expert_name_->text().trimmed().isEmpty() ? tr("unnamed") : expert_name_->text().trimmed();
+  const QString what_char = character_->text().trimmed().isEmpty() ? tr("no character") : character_->text().trimmed();
+  setReference(*take_, QString(), QStringLiteral("take (not saved)"),
+               tr("Reference: <b>the take</b> (%1, %2, not saved): %3")
+                   .arg(who.toHtmlEscaped(), what_char.toHtmlEscaped(), describeProfile(*take_)));
+  tabs_->setCurrentIndex(kTabTrain);
+  return true;
+}
+
+void MainWindow::setReference(HapticProfile profile, const QString& file, const QString& name,
+                              const QString& label_html) {
+  reference_profile_ = std::move(profile);
+  reference_file_ = file;
+  reference_name_ = name;
+  reference_ = nullptr;  // built at the trial's rate when a trial starts
+  reference_label_->setText(label_html);
+  learning_curve_->clear();  // scores against another reference do not compare
+  if (activity_ == Activity::kFree || activity_ == Activity::kRecording) {
+    showReference(&*reference_profile_);
+    paper_->setReferenceShown(show_reference_check_->isChecked());
+    // The new reference alone on the plot: the last take's curves go; it stays until the pen writes.
+    plot_->setTrainee({});
+    plot_->setCursorTime(std::nullopt);
+    plot_->setTimeWindow(std::nullopt);
+    plot_->setTitle(tr("Reference"));
+    plot_holds_result_ = true;
+    plot_->setExpert(ForceSeries::fromProfile(*reference_profile_, 4000, -reference_profile_->samples().front().t_s));
+  }
+  refreshButtons();
 }
 
 bool MainWindow::loadWorld(const QString& file) {
@@ -163,7 +193,7 @@ bool MainWindow::startTrial() {
     setup.metadata.subject = "trainee";
     setup.metadata.skill = reference_profile_->metadata().skill;
     setup.metadata.source = "studio";
-    setup.metadata.extra["reference_file"] = QFileInfo(reference_file_).fileName().toStdString();
+    setup.metadata.extra["reference_file"] = reference_name_.toStdString();
     playback_.load(nullptr);
     rig_.start(*environment_, trialRunSpec(setup, true), hand_, session::Clock::kRealTime);
   } catch (const std::exception& e) {
@@ -172,6 +202,7 @@ bool MainWindow::startTrial() {
     return false;
   }
   activity_ = Activity::kTrial;
+  trial_mode_ = mode_;
   trial_expert_ = &*reference_profile_;
   trial_shows_reference_ = show_reference_check_->isChecked();
   showReference(trial_expert_);
@@ -273,6 +304,7 @@ void MainWindow::finishTrial() {
     }
   }
   showScores(*last_trial_expert_, *last_trial_, scores_label);
+  if (was == Activity::kTrial && last_scores_) learning_curve_->add(trial_mode_, *last_scores_);
   if (was == Activity::kTrial) {
     scores_label_->setText(scores_label_->text() + tr("<br>%1 ticks, %2 overruns, %3 missed samples, %4 faults")
                                                        .arg(result.ticks)

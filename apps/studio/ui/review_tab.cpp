@@ -66,7 +66,7 @@ void ReviewTab::buildUi() {
 
   // The subjects and their trials; a completed trial carries its database id.
   w_.tree = new QTreeWidget;
-  w_.tree->setHeaderLabels({tr("Trial"), tr("Mode"), tr("Phase"), tr("Status"), tr("Shape"), tr("Force")});
+  w_.tree->setHeaderLabels({tr("Trial"), tr("Mode"), tr("Phase"), tr("Shape"), tr("Force"), tr("Status")});
   w_.tree->headerItem()->setToolTip(kShape, tr("recall trials: DTW cost of x + y against the expert (lower is closer)"));
   w_.tree->headerItem()->setToolTip(kForce, tr("recall trials: DTW cost of fx + fy + fz against the expert"));
   w_.tree->header()->setSectionResizeMode(QHeaderView::ResizeToContents);
@@ -157,21 +157,24 @@ void ReviewTab::fillTree() {
       const std::vector<session::TrialRecord> trials = db_->trials(subject.id);
       int done = 0;
       for (const auto& t : trials) done += t.status == session::TrialStatus::kCompleted ? 1 : 0;
-      auto* top = new QTreeWidgetItem(w_.tree, {qs(subject.id), qs(subject.spec.participant), QString(),
-                                                tr("%1/%2 done").arg(done).arg(trials.size())});
+      auto* top = new QTreeWidgetItem(w_.tree, {tr("%1 · %2/%3").arg(qs(subject.id)).arg(done).arg(trials.size()),
+                                                qs(subject.spec.participant)});
+      top->setToolTip(kTrial, tr("%1: %2 of %3 trials done").arg(qs(subject.id)).arg(done).arg(trials.size()));
       for (const session::TrialRecord& t : trials) {
+        // A completed trial is ticked (the narrow panel keeps room for the costs); others say why not.
+        const bool completed = t.status == session::TrialStatus::kCompleted;
         auto* item = new QTreeWidgetItem(
             top, {tr("#%1 (%2)").arg(t.plan.sequence + 1).arg(t.plan.index), qs(guidance::modeName(t.plan.mode)),
-                  qs(session::phaseName(t.plan.phase)), qs(session::trialStatusName(t.status))});
-        if (t.status == session::TrialStatus::kCompleted) {
-          item->setData(kTrial, Qt::UserRole, QVariant::fromValue<qint64>(t.id));
-        }
+                  qs(session::phaseName(t.plan.phase))});
+        item->setText(kStatus, completed ? QStringLiteral("✓") : qs(session::trialStatusName(t.status)));
+        item->setToolTip(kStatus, qs(session::trialStatusName(t.status)));
+        if (completed) item->setData(kTrial, Qt::UserRole, QVariant::fromValue<qint64>(t.id));
         if (const auto cost = costs_.find(t.id); cost != costs_.end()) {
           item->setText(kShape, number(cost->second.trajectory()));
           item->setText(kForce, number(cost->second.forceProfile()));
           if (!cost->second.disturbed.empty()) {
-            item->setText(kStatus, item->text(kStatus) + tr(" (disturbed)"));
-            item->setToolTip(kStatus, qs(cost->second.disturbed));
+            item->setText(kStatus, item->text(kStatus) + tr(" disturbed"));
+            item->setToolTip(kStatus, tr("completed, disturbed: %1").arg(qs(cost->second.disturbed)));
           }
         }
       }

@@ -49,8 +49,8 @@ class ReviewTab final : public QWidget {
   Q_OBJECT
 
  public:
-  /// The tree's columns.
-  enum Column : int { kTrial = 0, kMode, kPhase, kStatus, kShape, kForce };
+  /// The tree's columns (the costs before the status, so a narrow panel shows them).
+  enum Column : int { kTrial = 0, kMode, kPhase, kShape, kForce, kStatus };
 
   ReviewTab(QSettings& settings, ReviewHost host, QWidget* parent = nullptr);
   ~ReviewTab() override;
