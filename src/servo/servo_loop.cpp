@@ -94,14 +94,15 @@ TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
   // unplugged device) zeroes the force while it lasts and ramps in again when it returns.
   PenState pen;
   const device::DeviceStatus read_status = device_.read(now, pen);
-  // A failed read holds the last good reading, at this tick's time: a device need not fill
-  // the state it could not read, and the tick's sample (zero command) must still fall on the
-  // loop's clock, where the recording keeps it.
+  // A failed read holds the last good position, at rest, at this tick's time: a device need
+  // not fill the state it could not read, and the tick's sample (zero command) must still
+  // fall on the loop's clock, where the recording keeps it.
   if (read_status == device::DeviceStatus::kOk) {
     last_good_pen_ = pen;
   } else {
     pen = last_good_pen_;
     pen.t_s = seconds(now);
+    pen.v_WT.setZero();
   }
   if (read_status == device::DeviceStatus::kFault) safety_.latchFault(SafetyFault::kDeviceError);
   const bool disconnected = read_status == device::DeviceStatus::kDisconnected;

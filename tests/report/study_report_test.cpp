@@ -380,8 +380,20 @@ TEST(StoredCosts, ReadBackWhatTheStoredAnalysisCostedTrialByTrial) {
   } catch (const InputError& e) {
     EXPECT_THAT(e.what(), HasSubstr("the study's stored analysis (results key \"analysis\"): recall_costs[0]:"));
   }
+  db.putResult("analysis", R"({"recall_costs": 3})");
+  try {
+    (void)storedCosts(db);
+    ADD_FAILURE() << "recall_costs that is no array was read";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("expected an object with an array \"recall_costs\""));
+  }
   db.putResult("analysis", "{not json");
-  EXPECT_THROW((void)storedCosts(db), InputError);
+  try {
+    (void)storedCosts(db);
+    ADD_FAILURE() << "a stored analysis that is not JSON was read";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("not JSON"));
+  }
 }
 
 TEST(DisturbedTrials, ExcludeReplacesThemWithTheSpareRecallTrial) {

@@ -181,7 +181,7 @@ class FailingReads final : public device::Device {
 
 TEST(ServoLoop, AFailedReadHoldsTheLastGoodPenAtTheTicksTime) {
   // The faulting tick's sample is the one a recording ends with: it must carry the tick's
-  // time (not a default 0, which a loop-time window drops) and the last position read.
+  // time (not a default 0, which a loop-time window drops) and the last position read, at rest.
   Rig rig;
   FailingReads failing(rig.device, 300);
   ServoLoop loop(failing, ServoConfig{});
@@ -198,6 +198,7 @@ TEST(ServoLoop, AFailedReadHoldsTheLastGoodPenAtTheTicksTime) {
   for (std::size_t i : {300u, 301u}) {
     EXPECT_NEAR(samples[i].t_s, static_cast<double>(i) * 1e-3, 1e-12) << "tick " << i;
     EXPECT_EQ(samples[i].p_WT, good.p_WT) << "tick " << i;
+    EXPECT_EQ(samples[i].v_WT, Vec3::Zero()) << "tick " << i;  // held at rest
     EXPECT_EQ(samples[i].f_cmd_W, Vec3::Zero()) << "tick " << i;
   }
   EXPECT_EQ(loop.counters().faults.load(), 1u);

@@ -6,6 +6,7 @@
 #include <QPointingDevice>
 #include <QStatusBar>
 #include <QTabletEvent>
+#include <QPushButton>
 #include <QTreeWidget>
 #include <QTemporaryDir>
 #include <QtTest>
@@ -333,11 +334,17 @@ class StudioInputTest : public QObject {
     QVERIFY2(std::get<2>(flagged).endsWith(" disturbed"), qPrintable(std::get<2>(flagged)));
 
     // A stored analysis the library cannot read: the trials are listed, the tab says why no costs.
+    // Opened from the tab itself (its own button's path): the window's buttons follow.
     {
       auto db = session::StudyDatabase::open(db_file, session::OpenMode::kReadWrite);
       db.putResult("analysis", "{not json");
     }
-    QVERIFY2(w.openReview(QString::fromStdString(db_file.string())), qPrintable(w.lastError()));
+    QVERIFY2(w.showReviewTrial(costs.front().trial_id), qPrintable(w.lastError()));
+    QVERIFY(w.reviewTab()->widgets().play->isEnabled());
+    QVERIFY2(w.reviewTab()->open(QString::fromStdString(db_file.string())), qPrintable(w.lastError()));
+    QVERIFY(w.reviewTab()->trial() == nullptr);
+    QVERIFY(!w.reviewTab()->widgets().play->isEnabled());  // nothing on show to play
+    QVERIFY(w.reviewTab()->widgets().report->isEnabled());
     QVERIFY2(w.reviewTab()->widgets().costs->text().contains("could not be read"),
              qPrintable(w.reviewTab()->widgets().costs->text()));
     const auto shown = treeCosts(*w.reviewTab());

@@ -3,6 +3,7 @@
 #include <QPainter>
 #include <QPainterPath>
 #include <algorithm>
+#include <cmath>
 
 namespace hattr::studio {
 
@@ -47,28 +48,39 @@ void LearningCurve::paintEvent(QPaintEvent*) {
   const int panel_h = (height() - 4) / 2;
   const auto panel = [&](int row, const QString& name, auto value) {
     const QRectF area(label_w, 2 + row * panel_h + 4, width() - label_w - 8, panel_h - 8);
-    double top = 0.0;
-    for (const Point& p : points_) top = std::max(top, value(p));
-    top = top > 0.0 ? top * 1.1 : 1.0;
+    double largest = 0.0;
+    for (const Point& p : points_) {
+      if (std::isfinite(value(p))) largest = std::max(largest, value(p));
+    }
+    const double top = largest > 0.0 ? largest * 1.1 : 1.0;
     painter.setPen(palette().color(QPalette::Text));
     painter.drawText(QRectF(2, area.top(), label_w - 6, area.height()), Qt::AlignLeft | Qt::AlignVCenter,
-                     QStringLiteral("%1\n%2").arg(name).arg(top / 1.1, 0, 'g', 3));
+                     QStringLiteral("%1\n%2").arg(name).arg(largest, 0, 'g', 3));
     painter.setPen(palette().color(QPalette::Mid));
     painter.setBrush(Qt::NoBrush);
     painter.drawRect(area);
     // x: trial 1 at the left edge, the last at the right (one trial: the middle).
+    // A score that is not a number (a trial the scorer could not take) is left out.
     const auto at = [&](std::size_t i) {
       const double x = points_.size() == 1 ? area.center().x()
                                            : area.left() + area.width() * static_cast<double>(i) /
                                                                static_cast<double>(points_.size() - 1);
       return QPointF(x, area.bottom() - area.height() * value(points_[i]) / top);
     };
-    QPainterPath line(at(0));
-    for (std::size_t i = 1; i < points_.size(); ++i) line.lineTo(at(i));
+    QPainterPath line;
+    for (std::size_t i = 0; i < points_.size(); ++i) {
+      if (!std::isfinite(value(points_[i]))) continue;
+      if (line.elementCount() == 0) {
+        line.moveTo(at(i));
+      } else {
+        line.lineTo(at(i));
+      }
+    }
     painter.setPen(QPen(palette().color(QPalette::Mid), 1.0));
     painter.drawPath(line);
     painter.setPen(Qt::NoPen);
     for (std::size_t i = 0; i < points_.size(); ++i) {
+      if (!std::isfinite(value(points_[i]))) continue;
       painter.setBrush(modeColour(points_[i].mode));
       painter.drawEllipse(at(i), 3.5, 3.5);
     }

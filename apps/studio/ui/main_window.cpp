@@ -407,6 +407,7 @@ void MainWindow::buildReviewTab() {
   host.ask_open_file = [this](const QString& title, const QString& filter) { return askOpenFile(title, filter); };
   host.note = [this](const QString& message) { statusBar()->showMessage(message, 10000); };
   host.open_url = [this](const QUrl& url) { return !url_opener_ || url_opener_(url); };
+  host.changed = [this] { refreshButtons(); };
   review_ = new ReviewTab(*settings_, std::move(host));
   tabs_->addTab(review_, tr("Review"));
 }
@@ -597,7 +598,8 @@ void MainWindow::saveSettings() {
   s.setValue("train/indexing", indexing_combo_->currentIndex());
   s.setValue("train/show_reference", show_reference_check_->isChecked());
   s.setValue("train/settle_s", settle_spin_->value());
-  s.setValue("train/reference_file", reference_file_);
+  // An unsaved take as the reference is not remembered; the last file reference stays.
+  if (!reference_file_.isEmpty()) s.setValue("train/reference_file", reference_file_);
   s.setValue("world/file", world_file_);
   s.sync();
 }
@@ -866,7 +868,7 @@ void MainWindow::refreshButtons() {
   replay_take_button_->setEnabled(take_.has_value() && free);
   retake_button_->setEnabled(take_.has_value() && free);
   save_take_button_->setEnabled(take_.has_value());
-  use_take_button_->setEnabled(take_.has_value() && activity_ != Activity::kTrial && activity_ != Activity::kStudyTrial);
+  use_take_button_->setEnabled(take_.has_value() && free);
   trial_button_->setText(activity_ == Activity::kTrial ? tr("Stop trial (Space, Ctrl+.)") : tr("Start trial (Space)"));
   trial_button_->setEnabled((free && reference_profile_) || activity_ == Activity::kTrial);
   replay_trial_button_->setEnabled(last_trial_.has_value() && free);

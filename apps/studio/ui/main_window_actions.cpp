@@ -63,9 +63,12 @@ bool MainWindow::loadReference(const QString& file) {
 }
 
 bool MainWindow::useTakeAsReference() {
-  if (!take_) return false;
-  if (activity_ == Activity::kTrial || activity_ == Activity::kStudyTrial) {
-    showError(tr("The reference cannot change now"), tr("finish or abort the trial first (Esc)"));
+  if (!take_) {
+    showError(tr("No take to use"), tr("record a take first (Record tab)"));
+    return false;
+  }
+  if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) {
+    showError(tr("The reference cannot change now"), tr("finish the trial, recording or session first"));
     return false;
   }
   try {
@@ -242,6 +245,7 @@ bool MainWindow::stopTrial() {
 
 void MainWindow::finishTrial() {
   session::TrialResult result = rig_.finish();
+  const std::string failure = result.failure;
   const Activity was = activity_;
   activity_ = Activity::kFree;
   startFreeRun();
@@ -304,7 +308,8 @@ void MainWindow::finishTrial() {
     }
   }
   showScores(*last_trial_expert_, *last_trial_, scores_label);
-  if (was == Activity::kTrial && last_scores_) learning_curve_->add(trial_mode_, *last_scores_);
+  // A trial the device or the loop cut short (failure) is scored, but is no point of the curve.
+  if (was == Activity::kTrial && last_scores_ && failure.empty()) learning_curve_->add(trial_mode_, *last_scores_);
   if (was == Activity::kTrial) {
     scores_label_->setText(scores_label_->text() + tr("<br>%1 ticks, %2 overruns, %3 missed samples, %4 faults")
                                                        .arg(result.ticks)

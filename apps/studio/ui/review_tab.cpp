@@ -9,7 +9,9 @@
 #include <QLabel>
 #include <QPushButton>
 #include <QSettings>
+#include <QSignalBlocker>
 #include <QTreeWidget>
+#include <QTreeWidgetItemIterator>
 #include <QUrl>
 #include <QVBoxLayout>
 
@@ -138,6 +140,7 @@ bool ReviewTab::open(const QString& file) {
   } catch (const std::exception& e) {
     useCosts({}, tr("The study's stored analysis could not be read: %1").arg(what(e).toHtmlEscaped()));
   }
+  host_.changed();
   return true;
 }
 
@@ -145,7 +148,15 @@ void ReviewTab::useCosts(const std::vector<report::TrialCost>& costs, const QStr
   costs_.clear();
   for (const report::TrialCost& c : costs) costs_.emplace(c.trial_id, c);
   w_.costs->setText(source);
+  // The tree anew, the trial on show still selected (without showing it again).
+  const QTreeWidgetItem* current = w_.tree->currentItem();
+  const QVariant selected = current != nullptr ? current->data(kTrial, Qt::UserRole) : QVariant();
+  const QSignalBlocker quiet(w_.tree);
   fillTree();
+  if (!selected.isValid()) return;
+  for (QTreeWidgetItemIterator it(w_.tree); *it != nullptr; ++it) {
+    if ((*it)->data(kTrial, Qt::UserRole) == selected) w_.tree->setCurrentItem(*it);
+  }
 }
 
 void ReviewTab::fillTree() {
@@ -187,13 +198,18 @@ void ReviewTab::fillTree() {
 
 bool ReviewTab::showTrial(qint64 trial_id) {
   if (!db_ || !host_.may_show()) return false;
+  // Both read before either replaces what is on show (a playback may be reading it).
+  std::optional<HapticProfile> trial;
+  std::optional<HapticProfile> expert;
   try {
-    trial_ = db_->trialProfile(trial_id);
-    expert_ = db_->expert(db_->study().skill);
+    trial = db_->trialProfile(trial_id);
+    expert = db_->expert(db_->study().skill);
   } catch (const std::exception& e) {
     host_.error(tr("The trial could not be read"), what(e));
     return false;
   }
+  trial_ = std::move(trial);
+  expert_ = std::move(expert);
   auto& extra = trial_->metadata().extra;
   const QString title = tr("%1, %2 %3 trial %4")
                             .arg(qs(trial_->metadata().subject))

@@ -7,10 +7,12 @@
 
 #include <QString>
 #include <QWidget>
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "hattr/core/haptic_profile.hpp"
 #include "hattr/report/study_analysis.hpp"
@@ -43,6 +45,8 @@ struct ReviewHost {
   std::function<void(const QString& message)> note;
   /// Opens a URL (false when nothing could).
   std::function<bool(const QUrl& url)> open_url;
+  /// What the tab has changed the window's buttons depend on (a study opened).
+  std::function<void()> changed;
 };
 
 class ReviewTab final : public QWidget {
