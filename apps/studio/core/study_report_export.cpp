@@ -10,9 +10,8 @@ std::filesystem::path reportFolderFor(const std::filesystem::path& db_file) {
 
 ReviewReport writeReviewReport(const session::StudyDatabase& db, const std::filesystem::path& db_file) {
   report::StudyAnalysis analysis = report::analyzeStudy(db);
-  ReviewReport written{.html = report::writeStudyReport(db, analysis, reportFolderFor(db_file)), .costs = {}};
-  written.costs = std::move(analysis.costs);
-  return written;
+  // Designated initializers run in order: the report is written before its costs are moved out.
+  return {.html = report::writeStudyReport(db, analysis, reportFolderFor(db_file)), .costs = std::move(analysis.costs)};
 }
 
 }  // namespace hattr::studio

@@ -36,6 +36,7 @@
 #include "ui/paper_view.hpp"
 #include "ui/profile_plot.hpp"
 #include "ui/review_tab.hpp"
+#include "ui/ui_text.hpp"
 
 namespace hattr::studio {
 namespace {
@@ -43,15 +44,6 @@ namespace {
 constexpr int kFramePeriod_ms = 16;  // ~60 Hz display
 constexpr int kStatusPeriod_ms = 250;
 constexpr double kRollingWindow_s = 5.0;  // the plot's window while writing freely
-
-QString qs(const std::string& text) { return QString::fromStdString(text); }
-
-QLabel* wrappedLabel(const QString& text = {}) {
-  auto* label = new QLabel(text);
-  label->setWordWrap(true);
-  label->setTextInteractionFlags(Qt::TextSelectableByMouse);
-  return label;
-}
 
 }  // namespace
 

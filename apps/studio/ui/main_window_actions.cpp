@@ -24,13 +24,10 @@
 #include "ui/paper_view.hpp"
 #include "ui/profile_plot.hpp"
 #include "ui/review_tab.hpp"
+#include "ui/ui_text.hpp"
 
 namespace hattr::studio {
 namespace {
-
-QString qs(const std::string& text) { return QString::fromStdString(text); }
-QString qs(std::string_view text) { return QString::fromUtf8(text.data(), static_cast<qsizetype>(text.size())); }
-QString what(const std::exception& e) { return QString::fromUtf8(e.what()); }
 
 QString describeProfile(const HapticProfile& p) {
   return QObject::tr("%1 samples, %2 s, %3 with the pen down")
@@ -707,9 +704,8 @@ void MainWindow::closeStudy() {
 // ---- Review -------------------------------------------------------------------------------
 
 bool MainWindow::openReview(const QString& file) {
-  if (!review_->open(file)) return false;
+  if (!review_->open(file)) return false;  // it refreshes the buttons (ReviewHost::changed)
   tabs_->setCurrentIndex(kTabReview);
-  refreshButtons();
   return true;
 }
 

@@ -16,6 +16,7 @@
 
 #include "hattr/session/trial.hpp"
 #include "ui/paper_view.hpp"
+#include "ui/ui_text.hpp"
 
 namespace hattr::studio {
 namespace {
@@ -23,16 +24,6 @@ namespace {
 constexpr int kStatusPeriod_ms = 250;
 constexpr net::Coupling kCouplings[] = {net::Coupling::kObserve, net::Coupling::kPosition, net::Coupling::kForce,
                                         net::Coupling::kBilateral};
-
-QString qs(const std::string& text) { return QString::fromStdString(text); }
-QString qs(std::string_view text) { return QString::fromUtf8(text.data(), static_cast<qsizetype>(text.size())); }
-
-QLabel* wrappedLabel(const QString& text = {}) {
-  auto* label = new QLabel(text);
-  label->setWordWrap(true);
-  label->setTextInteractionFlags(Qt::TextSelectableByMouse);
-  return label;
-}
 
 /// The other station's pen as the paper view draws a pen.
 Sample peerSample(const net::PeerView& peer) {

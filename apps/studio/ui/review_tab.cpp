@@ -17,20 +17,10 @@
 
 #include "core/study_report_export.hpp"
 #include "hattr/guidance/training_guidance.hpp"
+#include "ui/ui_text.hpp"
 
 namespace hattr::studio {
 namespace {
-
-QString qs(const std::string& text) { return QString::fromStdString(text); }
-QString qs(std::string_view text) { return QString::fromUtf8(text.data(), static_cast<qsizetype>(text.size())); }
-QString what(const std::exception& e) { return QString::fromUtf8(e.what()); }
-
-QLabel* wrappedLabel(const QString& text = {}) {
-  auto* label = new QLabel(text);
-  label->setWordWrap(true);
-  label->setTextInteractionFlags(Qt::TextSelectableByMouse);
-  return label;
-}
 
 /// The wait cursor while a slow call runs on the GUI thread.
 struct WaitCursor {

@@ -1,0 +1,25 @@
+#pragma once
+/// Small helpers the studio's widgets share: library text to Qt, an exception's text, and the
+/// word-wrapped, selectable label every tab uses. GUI thread only (wrappedLabel).
+
+#include <QLabel>
+#include <QString>
+#include <exception>
+#include <string>
+#include <string_view>
+
+namespace hattr::studio {
+
+inline QString qs(const std::string& text) { return QString::fromStdString(text); }
+inline QString qs(std::string_view text) { return QString::fromUtf8(text.data(), static_cast<qsizetype>(text.size())); }
+inline QString what(const std::exception& e) { return QString::fromUtf8(e.what()); }
+
+/// A word-wrapped label whose text can be selected (and copied).
+inline QLabel* wrappedLabel(const QString& text = {}) {
+  auto* label = new QLabel(text);
+  label->setWordWrap(true);
+  label->setTextInteractionFlags(Qt::TextSelectableByMouse);
+  return label;
+}
+
+}  // namespace hattr::studio
