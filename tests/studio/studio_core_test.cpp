@@ -3,11 +3,13 @@
 #include <QtTest>
 #include <cmath>
 #include <fstream>
+#include <numbers>
 
 #include "core/mouse_hand.hpp"
 #include "core/paper_mapping.hpp"
 #include "core/profile_files.hpp"
 #include "core/relief_image.hpp"
+#include "core/scene_camera.hpp"
 #include "core/series.hpp"
 #include "core/trial_scoring.hpp"
 #include "hattr/analysis/dtw.hpp"
@@ -349,6 +351,54 @@ class StudioCoreTest : public QObject {
     QVERIFY(lo > 150);      // still light paper
     const QImage flat = reliefImage(render::HeightField{}, -0.08, -0.06, 0.08, 0.06, 16, 12);
     QCOMPARE(flat.pixelColor(3, 4), paperColour());
+  }
+
+  // ---- The 3-D view's geometry ----
+  void theBarrelPointsAlongTheTiltFromTheTip() {
+    const Vec3 tip(0.01, -0.02, 0.003);
+    constexpr double kL = 0.04, kDeg = std::numbers::pi / 180.0;
+    // Upright: straight above the tip.
+    QVERIFY((penTop_W(tip, 1.234, 90.0 * kDeg, kL) - (tip + Vec3(0.0, 0.0, kL))).norm() < 1e-12);
+    // Lying flat at azimuth 0: along +y; at 90°: clockwise from +y seen from above, +x.
+    QVERIFY((penTop_W(tip, 0.0, 0.0, kL) - (tip + Vec3(0.0, kL, 0.0))).norm() < 1e-12);
+    QVERIFY((penTop_W(tip, 90.0 * kDeg, 0.0, kL) - (tip + Vec3(kL, 0.0, 0.0))).norm() < 1e-12);
+    // 30° above the paper toward -y (azimuth 180°): cos 30° along the paper, sin 30° up.
+    const Vec3 d = penTop_W(tip, 180.0 * kDeg, 30.0 * kDeg, kL) - tip;
+    QVERIFY((d - Vec3(0.0, -kL * std::cos(30.0 * kDeg), kL * std::sin(30.0 * kDeg))).norm() < 1e-12);
+  }
+  void theCameraFitsThePaperAndShowsHeightAsUp() {
+    SceneCamera camera;
+    const Vec3 lo(-0.08, -0.06, 0.0), hi(0.08, 0.06, 0.04);
+    camera.frame(lo, hi, -20.0 * std::numbers::pi / 180.0, 35.0 * std::numbers::pi / 180.0, 400, 300, 10.0);
+    // Every corner of the box in the viewport, and the box touching its margins on one axis.
+    double min_x = 1e9, max_x = -1e9, min_y = 1e9, max_y = -1e9;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Eigen::Vector2d p = camera.toPixels(Vec3((corner & 1) ? hi.x() : lo.x(), (corner & 2) ? hi.y() : lo.y(),
+                                                     (corner & 4) ? hi.z() : lo.z()));
+      min_x = std::min(min_x, p.x());
+      max_x = std::max(max_x, p.x());
+      min_y = std::min(min_y, p.y());
+      max_y = std::max(max_y, p.y());
+    }
+    QVERIFY(min_x >= 10.0 - 1e-9 && max_x <= 390.0 + 1e-9 && min_y >= 10.0 - 1e-9 && max_y <= 290.0 + 1e-9);
+    QVERIFY(std::abs(min_x - 10.0) < 1e-9 || std::abs(min_y - 10.0) < 1e-9);
+    // Higher is up on the screen; the paper's far edge (+y) is above its near edge; +x is right.
+    QVERIFY(camera.toPixels(Vec3(0, 0, 0.01)).y() < camera.toPixels(Vec3(0, 0, 0)).y());
+    QVERIFY(camera.toPixels(Vec3(0, 0.05, 0)).y() < camera.toPixels(Vec3(0, -0.05, 0)).y());
+    QVERIFY(camera.toPixels(Vec3(0.05, 0, 0)).x() > camera.toPixels(Vec3(-0.05, 0, 0)).x());
+    // The far edge is deeper than the near one.
+    QVERIFY(camera.depth(Vec3(0, 0.05, 0)) > camera.depth(Vec3(0, -0.05, 0)));
+  }
+  void aMicrometreReliefIsRaisedAndFlatPaperIsNot() {
+    QCOMPARE(reliefExaggeration(render::HeightField{}, 0.16), 1.0);
+    // Heights from 0 to 20 µm on a 0.16 m paper: raised to 3 % of it (4.8 mm), 240 times.
+    const auto ramp = render::HeightField::fromFunction(5, 5, Vec3(-0.08, -0.08, 0.0), 0.04,
+                                                        [](double x, double) { return (x + 0.08) / 0.16 * 2e-5; });
+    QVERIFY(std::abs(reliefExaggeration(ramp, 0.16) - 240.0) < 1e-9);
+    // A relief already higher than that is never lowered.
+    const auto tall = render::HeightField::fromFunction(5, 5, Vec3(-0.08, -0.08, 0.0), 0.04,
+                                                        [](double x, double) { return (x + 0.08) / 0.16 * 0.01; });
+    QCOMPARE(reliefExaggeration(tall, 0.16), 1.0);
   }
 };
 

@@ -23,6 +23,7 @@
 #include "studio_test_support.hpp"
 #include "ui/main_window.hpp"
 #include "ui/paper_view.hpp"
+#include "ui/pen_scene_view.hpp"
 #include "ui/review_tab.hpp"
 
 using namespace hattr;
@@ -151,6 +152,27 @@ class StudioScreenTest : public QObject {
       const double paper_light = shareOf(screen, paper.toAlignedRect().adjusted(40, 40, -40, -40), light);
       QVERIFY2(paper_light > 0.9, qPrintable(QString("%1: %2 of the paper light on the screen").arg(name).arg(paper_light)));
     }
+  }
+
+  // The 3-D view beside the paper still fits the small screen, and the X server shows it:
+  // the lit paper (light) in the paper's far left quarter (away from the pen), the desk (dark)
+  // in a corner.
+  void theThreeDViewFitsBesideThePaperOnTheScreen() {
+    MainWindow& w = *window_;
+    w.setSceneShown(true);
+    QVERIFY(w.minimumSizeHint().width() <= kSmallScreenWindow.width());
+    QCOMPARE(w.size(), kSmallScreenWindow);
+    const PenSceneView* scene = w.sceneView();
+    QVERIFY(scene->isVisible() && scene->width() >= scene->minimumWidth());
+    const QImage screen = screenShot("studio_screen_3d.png");
+    QCOMPARE(screen.size(), kSmallScreenWindow);  // the window did not grow to show it
+    const Eigen::Vector2d quarter = scene->camera().toPixels(Vec3(-0.04, 0.03, 0.0));
+    const QPoint at = scene->mapTo(&w, QPoint(static_cast<int>(quarter.x()), static_cast<int>(quarter.y())));
+    const double paper_light = shareOf(screen, QRect(at - QPoint(6, 6), QSize(13, 13)), light);
+    QVERIFY2(paper_light > 0.9, qPrintable(QString("%1 of the 3-D paper light on the screen").arg(paper_light)));
+    const QPoint corner = scene->mapTo(&w, QPoint(scene->width() - 6, scene->height() - 6));
+    QVERIFY(dark(screen.pixelColor(corner)));
+    w.setSceneShown(false);
   }
 
   // Train: the expert's reference, in its colour, where the reference lies.

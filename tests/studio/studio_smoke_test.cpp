@@ -10,6 +10,7 @@
 #include <cmath>
 #include <fstream>
 #include <functional>
+#include <numbers>
 
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/session/study_database.hpp"
@@ -19,6 +20,7 @@
 #include "ui/learning_curve.hpp"
 #include "ui/main_window.hpp"
 #include "ui/paper_view.hpp"
+#include "ui/pen_scene_view.hpp"
 #include "ui/profile_plot.hpp"
 
 using namespace hattr;
@@ -147,6 +149,68 @@ class StudioSmokeTest : public QObject {
     QVERIFY2(status.contains("Input: mouse") && status.contains("Hz") && status.contains("overruns") &&
                  status.contains("faults"),
              qPrintable(status));
+  }
+
+  // The 3-D view beside the paper: the relief's shaded mesh, and the pen's barrel where its
+  // tilt puts it (two azimuths, two places), gone when there is no pen.
+  void theThreeDViewShowsThePenAtItsTiltOverTheRelief() {
+    MainWindow& w = *window_;
+    QVERIFY(!w.sceneView()->isVisible());  // hidden until asked for
+    w.setSceneShown(true);
+    PenSceneView* scene = w.sceneView();
+    QVERIFY(scene->isVisible());
+    QVERIFY(scene->width() >= scene->minimumWidth());
+    QVERIFY2(scene->exaggeration() > 1.0, "the default paper's grain is raised to be seen");
+    constexpr double kDeg = std::numbers::pi / 180.0;
+    const auto barrelAt = [](const QImage& image, const QPointF& p) {
+      // The barrel's colour (or its highlight) within 2 px of p.
+      for (int dy = -2; dy <= 2; ++dy) {
+        for (int dx = -2; dx <= 2; ++dx) {
+          const QColor c = image.pixelColor(p.toPoint() + QPoint(dx, dy));
+          const QColor b = PaperColours::barrel(), h = PaperColours::barrel().lighter(160);
+          const auto near = [&](const QColor& k) {
+            return std::abs(c.red() - k.red()) + std::abs(c.green() - k.green()) + std::abs(c.blue() - k.blue()) < 30;
+          };
+          if (near(b) || near(h)) return true;
+        }
+      }
+      return false;
+    };
+    std::vector<std::pair<QPointF, QPointF>> barrels;
+    QImage with_pen;
+    for (const double azimuth : {90.0 * kDeg, 270.0 * kDeg}) {
+      Sample pen;
+      pen.p_WT = Vec3(0.0, 0.0, 0.005);
+      pen.tilt_altitude_rad = 50.0 * kDeg;
+      pen.tilt_azimuth_rad = azimuth;
+      w.paperView()->setPen(pen);
+      with_pen = scene->grab().toImage();
+      const auto [tip, top] = scene->barrelPx(pen);
+      QVERIFY(scene->rect().contains(tip.toPoint()) && scene->rect().contains(top.toPoint()));
+      const QPointF middle = 0.5 * (tip + top);
+      QVERIFY2(barrelAt(with_pen, middle), qPrintable(QString("no barrel at (%1, %2)").arg(middle.x()).arg(middle.y())));
+      barrels.emplace_back(tip, top);
+    }
+    // Toward +x the barrel leans right of its tip, toward -x left; the tip is where it was.
+    QVERIFY((barrels[0].first - barrels[1].first).manhattanLength() < 1e-9);
+    QVERIFY(barrels[0].second.x() > barrels[0].first.x() + 10.0);
+    QVERIFY(barrels[1].second.x() < barrels[1].first.x() - 10.0);
+    with_pen.save(QStringLiteral(HATTR_STUDIO_SCREENSHOT_DIR "/studio_scene_3d.png"));
+    // No pen, no barrel.
+    w.paperView()->setPen(std::nullopt);
+    const QImage without = scene->grab().toImage();
+    QVERIFY(!barrelAt(without, 0.5 * (barrels[1].first + barrels[1].second)));
+    // The relief: many shades of the lit paper, not one flat colour.
+    QSet<QRgb> shades;
+    const Eigen::Vector2d paper_centre = scene->camera().toPixels(Vec3::Zero());
+    const QPoint centre(static_cast<int>(paper_centre.x()), static_cast<int>(paper_centre.y()));
+    for (int dy = -30; dy <= 30; ++dy) {
+      for (int dx = -30; dx <= 30; ++dx) shades.insert(without.pixel(centre + QPoint(dx, dy)));
+    }
+    QVERIFY2(shades.size() > 20, qPrintable(QString("%1 shades on the paper").arg(shades.size())));
+    w.grab().save(QStringLiteral(HATTR_STUDIO_SCREENSHOT_DIR "/studio_smoke_3d.png"));
+    w.setSceneShown(false);
+    QVERIFY(!scene->isVisible());
   }
 
   void aTakeIsRecordedAndSavedButNeverOverwrittenUnasked() {
@@ -330,12 +394,14 @@ class StudioSmokeTest : public QObject {
   void settingsAreRememberedAcrossSessions() {
     const QString ini = QString::fromStdString((dir_ / "studio.ini").string());
     window_->setMode(guidance::TrainingMode::kForceControl);
+    window_->setSceneShown(true);
     window_->setInteractive(false, true);  // "quit and lose the unsaved trial?" yes
     QVERIFY(window_->close());
     window_.reset();
     MainWindow again(std::make_unique<QSettings>(ini, QSettings::IniFormat));
     again.setInteractive(false, true);
     QCOMPARE(again.mode(), guidance::TrainingMode::kForceControl);
+    QVERIFY(!again.sceneView()->isHidden());  // the 3-D view shown last time is shown again
     QVERIFY(again.startTrial());  // the reference of last time is loaded again
     again.abortActivity();
     QSettings settings(ini, QSettings::IniFormat);

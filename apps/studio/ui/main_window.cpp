@@ -34,6 +34,7 @@
 #include "ui/learning_curve.hpp"
 #include "ui/mentor_tab.hpp"
 #include "ui/paper_view.hpp"
+#include "ui/pen_scene_view.hpp"
 #include "ui/profile_plot.hpp"
 #include "ui/review_tab.hpp"
 #include "ui/ui_text.hpp"
@@ -101,8 +102,15 @@ void MainWindow::buildUi() {
   paper_ = new PaperView;
   paper_->setMouseHand(&hand_);
   plot_ = new ProfilePlot;
+  // The top view, and beside it the 3-D view (hidden until asked for).
+  scene_ = new PenSceneView(paper_);
+  scene_->hide();
+  view_splitter_ = new QSplitter(Qt::Horizontal);
+  view_splitter_->setChildrenCollapsible(false);
+  view_splitter_->addWidget(paper_);
+  view_splitter_->addWidget(scene_);
   left_splitter_ = new QSplitter(Qt::Vertical);
-  left_splitter_->addWidget(paper_);
+  left_splitter_->addWidget(view_splitter_);
   left_splitter_->addWidget(plot_);
   left_splitter_->setStretchFactor(0, 3);
   left_splitter_->setStretchFactor(1, 1);
@@ -156,6 +164,15 @@ void MainWindow::buildUi() {
   arrows_check_->setChecked(true);
   connect(arrows_check_, &QCheckBox::toggled, this, [this](bool on) { paper_->setForceArrowsShown(on); });
   tools->addWidget(arrows_check_);
+  scene_check_ = new QCheckBox(tr("3-D view"));
+  scene_check_->setToolTip(tr("The pen over the paper in 3-D, with its tilt, beside the top view"));
+  connect(scene_check_, &QCheckBox::toggled, this, [this](bool on) {
+    scene_->setVisible(on);
+    // Shown: two fifths of the room beside the paper (the top view keeps its minimum).
+    const int room = view_splitter_->width();
+    if (on) view_splitter_->setSizes({room - room * 2 / 5, room * 2 / 5});
+  });
+  tools->addWidget(scene_check_);
 
   // Status bar: the input, the loop, the activity; always visible.
   status_input_ = new QLabel;
@@ -533,6 +550,8 @@ void MainWindow::buildActions() {
 
 // ---- Settings ------------------------------------------------------------------------------
 
+void MainWindow::setSceneShown(bool shown) { scene_check_->setChecked(shown); }
+
 void MainWindow::loadSettings() {
   QSettings& s = *settings_;
   restoreGeometry(s.value("window/geometry").toByteArray());
@@ -547,6 +566,7 @@ void MainWindow::loadSettings() {
   hand_.setInput(input);
   press_label_->setText(tr("%1 N").arg(input.press_N, 0, 'f', 1));
   arrows_check_->setChecked(s.value("view/arrows", true).toBool());
+  scene_check_->setChecked(s.value("view/scene_3d", false).toBool());
   expert_name_->setText(s.value("record/name").toString());
   character_->setText(s.value("record/character").toString());
   trigger_->setCurrentIndex(s.value("record/trigger", 0).toInt());
@@ -583,6 +603,7 @@ void MainWindow::saveSettings() {
   s.setValue("window/tab", tabs_->currentIndex());
   s.setValue("input/press_N", hand_.input().press_N);
   s.setValue("view/arrows", arrows_check_->isChecked());
+  s.setValue("view/scene_3d", scene_check_->isChecked());
   s.setValue("record/name", expert_name_->text());
   s.setValue("record/character", character_->text());
   s.setValue("record/trigger", trigger_->currentIndex());
@@ -670,6 +691,8 @@ void MainWindow::useEnvironment(session::TrialEnvironment& environment) {
   environment_ = &environment;
   const DeviceLimits& limits = environment.limits();
   paper_->setPaper(environment.paper().relief(), limits.workspace_min_m.x(), limits.workspace_min_m.y(),
+                   limits.workspace_max_m.x(), limits.workspace_max_m.y());
+  scene_->setPaper(environment.paper().relief(), limits.workspace_min_m.x(), limits.workspace_min_m.y(),
                    limits.workspace_max_m.x(), limits.workspace_max_m.y());
   QString clamps;
   for (const auto& line : environment.worldClamps()) clamps += QStringLiteral("<br>· ") + qs(line).toHtmlEscaped();

@@ -40,6 +40,7 @@ namespace hattr::studio {
 class LearningCurve;
 class MentorTab;
 class PaperView;
+class PenSceneView;
 class ProfilePlot;
 class ReviewTab;
 
@@ -115,6 +116,9 @@ class MainWindow final : public QMainWindow {
   [[nodiscard]] const std::optional<HapticProfile>& take() const { return take_; }
   [[nodiscard]] StudySession* study() const { return study_.get(); }
   [[nodiscard]] PaperView* paperView() const { return paper_; }
+  /// The 3-D view beside the paper (shown with the tool bar's "3-D view", remembered).
+  [[nodiscard]] PenSceneView* sceneView() const { return scene_; }
+  void setSceneShown(bool shown);
   [[nodiscard]] ProfilePlot* plot() const { return plot_; }
   [[nodiscard]] MouseHand& mouseHand() { return hand_; }
   [[nodiscard]] LiveRig& rig() { return rig_; }
@@ -222,15 +226,18 @@ class MainWindow final : public QMainWindow {
 
   // Widgets.
   PaperView* paper_ = nullptr;
+  PenSceneView* scene_ = nullptr;
   ProfilePlot* plot_ = nullptr;
   QSplitter* splitter_ = nullptr;
   QSplitter* left_splitter_ = nullptr;
+  QSplitter* view_splitter_ = nullptr;  // the top view and the 3-D view
   QTabWidget* tabs_ = nullptr;
   QTimer* frame_timer_ = nullptr;
   QTimer* status_timer_ = nullptr;
   QSlider* press_slider_ = nullptr;
   QLabel* press_label_ = nullptr;
   QCheckBox* arrows_check_ = nullptr;
+  QCheckBox* scene_check_ = nullptr;
   QLabel* status_input_ = nullptr;
   QLabel* status_loop_ = nullptr;
   QLabel* status_activity_ = nullptr;

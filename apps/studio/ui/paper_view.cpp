@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/relief_image.hpp"
+#include "ui/trail_drawing.hpp"
 
 namespace hattr::studio {
 namespace {
@@ -20,13 +21,6 @@ constexpr double kArrowMetresPerNewton = 0.01;    // force arrows: 10 mm of pape
 constexpr double kPenRadius_px = 6.0;
 /// Room between the banner's box and its text, left and right.
 constexpr double kBannerMargin_px = 8.0;
-
-QPolygonF strokePolygon(const std::vector<Eigen::Vector2d>& stroke, const PaperMapping& mapping) {
-  QPolygonF polygon;
-  polygon.reserve(static_cast<qsizetype>(stroke.size()));
-  for (const auto& p : stroke) polygon << mapping.toWidget(p.x(), p.y());
-  return polygon;
-}
 
 }  // namespace
 
@@ -104,14 +98,8 @@ void PaperView::wheelEvent(QWheelEvent* event) {
 // ---- Drawing -------------------------------------------------------------------------------
 
 void PaperView::drawTrail(QPainter& painter, const Trail& trail, const QColor& colour, double width_px) const {
-  painter.setPen(QPen(colour, width_px, Qt::SolidLine, Qt::RoundCap, Qt::RoundJoin));
-  for (const auto& stroke : trail.strokes()) {
-    if (stroke.size() == 1) {
-      painter.drawPoint(mapping_.toWidget(stroke.front().x(), stroke.front().y()));
-    } else {
-      painter.drawPolyline(strokePolygon(stroke, mapping_));
-    }
-  }
+  drawTrailStrokes(painter, trail, colour, width_px,
+                   [this](const Eigen::Vector2d& p) { return mapping_.toWidget(p.x(), p.y()); });
 }
 
 void PaperView::drawArrow(QPainter& painter, const QPointF& from, const Eigen::Vector2d& f_N,

@@ -30,6 +30,7 @@ struct PaperColours {
   static QColor userForce() { return {235, 120, 0}; }   ///< the user's force on the paper
   static QColor guideForce() { return {0, 165, 70}; }   ///< the guidance force on the pen
   static QColor peer() { return {165, 30, 200}; }       ///< the other station's pen (Mentor tab)
+  static QColor barrel() { return {70, 80, 100}; }      ///< the pen's barrel (3-D view)
 };
 
 class PaperView final : public QWidget {
@@ -45,16 +46,20 @@ class PaperView final : public QWidget {
 
   /// The pen as the loop last published it (nullopt: no pen drawn).
   void setPen(const std::optional<Sample>& pen) { pen_ = pen; }
+  [[nodiscard]] const std::optional<Sample>& pen() const { return pen_; }
   /// The expert's reference path (drawn when shown).
   Trail& reference() { return reference_; }
+  [[nodiscard]] const Trail& reference() const { return reference_; }
   void setReferenceShown(bool shown) { reference_shown_ = shown; }
   [[nodiscard]] bool referenceShown() const { return reference_shown_; }
   /// Where the reference is now (a marker), or nothing.
   void setReferenceCue(const std::optional<Eigen::Vector2d>& cue_m) { cue_m_ = cue_m; }
   /// The pen's trail (live, or a replayed take).
   Trail& trail() { return trail_; }
+  [[nodiscard]] const Trail& trail() const { return trail_; }
   /// A trial overlaid on the reference (review).
   Trail& overlay() { return overlay_; }
+  [[nodiscard]] const Trail& overlay() const { return overlay_; }
   /// The other station's pen in a mentored session and its trail, drawn in PaperColours::peer()
   /// with `label` beside the pen (null trail: none; the trail must outlive its use here).
   void setPeer(const Trail* trail, const std::optional<Sample>& pen, const QString& label = {}) {
