@@ -191,7 +191,9 @@ void runStation(const MentorOptions& opt, net::MentorRole role) {
           opt.seconds > 0.0 ? opt.seconds : (script && !serving ? script->duration_s() + mentor.ramp_s + 0.5 : 1e9);
       failure = runLinkedSession(station, duration_s, mentor.hold_s);
     }
-    station.recorder().stop();
+    // The session ends here: everything the loop published before now is the session's, however
+    // far behind the recorder's thread is (the loop runs on for the next follower).
+    station.recorder().stopBefore(station.loop().counters().ticks.load());
     station.recorder().stopThread();
     SessionSummary summary;
     HapticProfile recorded = station.takeRecording();

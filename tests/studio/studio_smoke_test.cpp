@@ -250,8 +250,23 @@ class StudioSmokeTest : public QObject {
     QCOMPARE(w.paperView()->reference().pointCount(), take_trail.pointCount());
     QVERIFY2(w.startTrial(), qPrintable(w.lastError()));
     QVERIFY(w.rig().spec().reference != nullptr);
-    QCOMPARE(w.rig().spec().metadata.extra.at("reference_file"), std::string("take (not saved)"));
+    // Saved before it became the reference: it is named by its file.
+    QCOMPARE(w.rig().spec().metadata.extra.at("reference_file"), std::string("take.csv"));
     QCOMPARE(w.rig().spec().metadata.skill, w.take()->metadata().skill);
+    w.abortActivity();
+    // A new take, unsaved, as the reference: "take (not saved)"; saved, its file names it.
+    QVERIFY2(w.startRecording(), qPrintable(w.lastError()));
+    QTest::qWait(400);  // settle
+    driveFor(w, 0.6, Vec3(0.02, 0.0, 0.0));
+    QVERIFY(w.stopRecording());
+    QVERIFY2(w.useTakeAsReference(), qPrintable(w.lastError()));
+    QVERIFY2(w.startTrial(), qPrintable(w.lastError()));
+    QCOMPARE(w.rig().spec().metadata.extra.at("reference_file"), std::string("take (not saved)"));
+    w.abortActivity();
+    const QString second = QString::fromStdString((dir_ / "take2.csv").string());
+    QVERIFY2(w.saveTake(second), qPrintable(w.lastError()));
+    QVERIFY2(w.startTrial(), qPrintable(w.lastError()));
+    QCOMPARE(w.rig().spec().metadata.extra.at("reference_file"), std::string("take2.csv"));
     w.abortActivity();
     QVERIFY2(w.loadReference(QString::fromStdString(expert_file_.string())), qPrintable(w.lastError()));
   }

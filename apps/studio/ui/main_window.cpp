@@ -252,8 +252,7 @@ void MainWindow::buildRecordTab() {
   retake_button_ = new QPushButton(tr("Re-take"));
   connect(retake_button_, &QPushButton::clicked, this, [this] {
     if (take_ && !take_saved_ && !confirm(tr("The current take is not saved. Discard it and record again?"))) return;
-    take_.reset();
-    take_saved_ = true;
+    forgetTake();
     startRecording();
   });
   save_take_button_ = new QPushButton(tr("Save take… (Ctrl+S)"));

@@ -155,6 +155,8 @@ class MainWindow final : public QMainWindow {
   /// The training reference, read from `file` (empty: not from a file, not remembered), named
   /// `name` in trials' metadata, described by `label_html`.
   void setReference(HapticProfile profile, const QString& file, const QString& name, const QString& label_html);
+  void nameTakeReference();
+  void forgetTake();
   void refreshButtons();
   [[nodiscard]] double now_s() const;
 
@@ -208,6 +210,8 @@ class MainWindow final : public QMainWindow {
   bool recording_armed_ = false;  // start/stop buttons: armed once the settle phase is over
   std::optional<HapticProfile> take_;
   bool take_saved_ = true;
+  QString take_file_;              // where the take was saved (empty: not saved)
+  bool reference_is_take_ = false;  // the reference is the take (named by take_file_)
 
   // Study and review.
   std::unique_ptr<StudySession> study_;

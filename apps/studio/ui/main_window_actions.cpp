@@ -74,13 +74,31 @@ bool MainWindow::useTakeAsReference() {
     showError(tr("The take cannot be the reference"), what(e));
     return false;
   }
-  const QString who = expert_name_->text().trimmed().isEmpty() ? tr("unnamed") : expert_name_->text().trimmed();
-  const QString what_char = character_->text().trimmed().isEmpty() ? tr("no character") : character_->text().trimmed();
-  setReference(*take_, QString(), QStringLiteral("take (not saved)"),
-               tr("Reference: <b>the take</b> (%1, %2, not saved): %3")
-                   .arg(who.toHtmlEscaped(), what_char.toHtmlEscaped(), describeProfile(*take_)));
+  setReference(*take_, QString(), QStringLiteral("take (not saved)"), QString());
+  reference_is_take_ = true;
+  nameTakeReference();
   tabs_->setCurrentIndex(kTabTrain);
   return true;
+}
+
+// The take as the reference is named by the file it was saved to, if it was; else "take (not saved)".
+void MainWindow::nameTakeReference() {
+  const QString who = expert_name_->text().trimmed().isEmpty() ? tr("unnamed") : expert_name_->text().trimmed();
+  const QString what_char = character_->text().trimmed().isEmpty() ? tr("no character") : character_->text().trimmed();
+  const bool saved = take_saved_ && !take_file_.isEmpty();
+  reference_file_ = saved ? take_file_ : QString();
+  reference_name_ = saved ? QFileInfo(take_file_).fileName() : QStringLiteral("take (not saved)");
+  reference_label_->setText(tr("Reference: <b>the take</b> (%1, %2, %3): %4")
+                                .arg(who.toHtmlEscaped(), what_char.toHtmlEscaped(),
+                                     saved ? tr("saved as %1").arg(take_file_.toHtmlEscaped()) : tr("not saved"),
+                                     describeProfile(*reference_profile_)));
+}
+
+void MainWindow::forgetTake() {
+  take_.reset();
+  take_saved_ = true;
+  take_file_.clear();
+  reference_is_take_ = false;  // a reference made of it stays, as a take nobody can save now
 }
 
 void MainWindow::setReference(HapticProfile profile, const QString& file, const QString& name,
@@ -88,6 +106,7 @@ void MainWindow::setReference(HapticProfile profile, const QString& file, const 
   reference_profile_ = std::move(profile);
   reference_file_ = file;
   reference_name_ = name;
+  reference_is_take_ = false;
   reference_ = nullptr;  // built at the trial's rate when a trial starts
   reference_label_->setText(label_html);
   learning_curve_->clear();  // scores against another reference do not compare
@@ -366,8 +385,7 @@ bool MainWindow::startRecording() {
     return false;
   }
   recording_armed_ = false;  // the start/stop trigger arms once the pen has settled
-  take_.reset();
-  take_saved_ = true;
+  forgetTake();
   activity_ = Activity::kRecording;
   paper_->trail().clear();
   paper_->overlay().clear();
@@ -392,6 +410,7 @@ bool MainWindow::stopRecording() {
     refreshButtons();
     return false;
   }
+  forgetTake();
   take_ = std::move(result.profile);
   take_saved_ = false;
   paper_->trail().assign(*take_);
@@ -415,7 +434,9 @@ bool MainWindow::saveTake(const QString& file) {
     bool saved = false;
     if (!saveProfileTo(named, file, saved)) return false;
     take_saved_ = true;
+    take_file_ = file;
     take_label_->setText(tr("Take: %1. Saved as %2.").arg(describeProfile(*take_), file.toHtmlEscaped()));
+    if (reference_is_take_) nameTakeReference();  // the reference is now that file
     return true;
   } catch (const std::exception& e) {
     showError(tr("The take was not saved (it is still here)"), what(e));
