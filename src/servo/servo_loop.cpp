@@ -44,23 +44,6 @@ ServoLoop::ServoLoop(device::Device& device, ServoConfig config)
 
 ServoLoop::~ServoLoop() { stop(); }
 
-void ServoLoop::resetRun() noexcept {
-  last_now_ = std::chrono::nanoseconds(-1);
-  tick_number_ = 0;
-  sim_now_ = std::chrono::nanoseconds(0);
-  for (auto* c : {&counters_.ticks, &counters_.overruns, &counters_.dropped_samples, &counters_.faults,
-                  &counters_.stalls, &counters_.consumer_stalls, &counters_.link_faults, &counters_.disconnected_ticks}) {
-    c->store(0, std::memory_order_relaxed);
-  }
-  period_error_.clear();
-  tick_compute_.clear();
-  safety_.restartRamp();
-  link_down_ = false;
-  last_good_pen_ = PenState{};
-  counters_.disconnected.store(false, std::memory_order_relaxed);
-  last_device_wall_ = std::chrono::nanoseconds(-1);
-}
-
 void ServoLoop::drainCommands() noexcept {
   ServoCommand command;
   // Bounded: a flood of commands cannot stretch a tick.

@@ -123,9 +123,6 @@ class ServoLoop {
   [[nodiscard]] std::chrono::nanoseconds period() const noexcept { return period_; }
   [[nodiscard]] const device::Device& device() const noexcept { return device_; }
 
-  /// Zeroes clocks, counters, histograms and the ramp for a new run. Not while running.
-  void resetRun() noexcept;
-
  private:
   void drainCommands() noexcept;
   void runRealtime();
