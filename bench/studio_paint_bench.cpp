@@ -7,6 +7,8 @@
 
 #include <QApplication>
 #include <QImage>
+#include <QPainter>
+#include <QPolygonF>
 #include <cmath>
 #include <numbers>
 
@@ -15,6 +17,7 @@
 #include "hattr/session/trial.hpp"
 #include "ui/paper_view.hpp"
 #include "ui/pen_scene_view.hpp"
+#include "ui/trail_drawing.hpp"
 
 namespace {
 
@@ -80,6 +83,38 @@ void BM_SceneViewMesh(benchmark::State& state) {
   }
 }
 
+// The trail and the reference alone, over the top view's mapping: as the views draw them now
+// (drawTrailStrokes: round-capped segments, sub-pixel steps skipped), and as they did before
+// (one polyline per stroke, round joins): the baseline, in the same run.
+void drawTrails(benchmark::State& state, bool as_segments) {
+  PaperView& top = views().top;
+  QImage image(top.size(), QImage::Format_ARGB32_Premultiplied);
+  const auto to_pixels = [&](const Eigen::Vector2d& p) { return top.mapping().toWidget(p.x(), p.y()); };
+  for (auto _ : state) {
+    image.fill(Qt::white);
+    QPainter painter(&image);
+    painter.setRenderHint(QPainter::Antialiasing);
+    // The widths the top view uses: the reference 3 px, the trail 2.5 px.
+    for (const auto& [trail, width] : {std::pair{&top.reference(), 3.0}, std::pair{&top.trail(), 2.5}}) {
+      if (as_segments) {
+        drawTrailStrokes(painter, *trail, Qt::black, width, to_pixels);
+        continue;
+      }
+      painter.setPen(QPen(Qt::black, width, Qt::SolidLine, Qt::RoundCap, Qt::RoundJoin));
+      for (const auto& stroke : trail->strokes()) {
+        QPolygonF polyline;
+        for (const auto& p : stroke) polyline << to_pixels(p);
+        painter.drawPolyline(polyline);
+      }
+    }
+    benchmark::DoNotOptimize(image.constBits());
+  }
+}
+void BM_TrailsAsSegments(benchmark::State& state) { drawTrails(state, true); }
+void BM_TrailsAsPolylines(benchmark::State& state) { drawTrails(state, false); }
+
+BENCHMARK(BM_TrailsAsSegments)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TrailsAsPolylines)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_TopViewFrame)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SceneViewFrame)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SceneViewMesh)->Unit(benchmark::kMillisecond);

@@ -193,7 +193,7 @@ void runStation(const MentorOptions& opt, net::MentorRole role) {
     }
     // The session ends here: everything the loop published before now is the session's, however
     // far behind the recorder's thread is (the loop runs on for the next follower).
-    station.recorder().stopBefore(station.loop().counters().ticks.load());
+    station.recorder().stopBefore(station.loop().counters().ticks.load(std::memory_order_acquire));
     station.recorder().stopThread();
     SessionSummary summary;
     HapticProfile recorded = station.takeRecording();

@@ -102,6 +102,7 @@ void TrainingGuidance::reset() noexcept {
   have_error_ = false;
   error_rate_.setZero();
   cue_ = {};
+  cue_index_.store(-1.0, std::memory_order_relaxed);
 }
 
 void TrainingGuidance::startTrial(double t_s) noexcept {
@@ -160,6 +161,7 @@ Vec3 TrainingGuidance::compute(const PenState& pen, const ContactForces& contact
   if (!player_) return Vec3::Zero();
   const double dt = std::max(dt_s, 1e-9);
   cue_ = player_->at(pen.t_s - trial_start_s_, pen.p_WT);
+  cue_index_.store(cue_.phase == ReferenceCue::Phase::kBefore ? -1.0 : cue_.index, std::memory_order_relaxed);
 
   // The force error against the expert's profile at this step, and its filtered rate. The
   // user's force is the device's force sensor where it has one, else the renderer's.

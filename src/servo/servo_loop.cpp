@@ -133,7 +133,9 @@ TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
   ++tick_number_;
   latest_.write(sample);
 
-  bump(counters_.ticks);
+  // The count is published after the tick's sample is in the ring (release): whoever reads the
+  // count (acquire) and ends a recording before that tick finds the sample in the ring.
+  counters_.ticks.fetch_add(1, std::memory_order_release);
   // A fault is published after its tick is counted and its sample is in the ring: whoever
   // sees the fault (acquire) and ends the recording at the tick count keeps the faulting tick.
   counters_.faults.store(safety_.faultCount(), std::memory_order_release);

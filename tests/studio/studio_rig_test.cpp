@@ -215,6 +215,43 @@ class StudioRigTest : public QObject {
     (void)rig.finish();
   }
 
+  // The reference marker is where the guidance plays the reference: nothing during the settle;
+  // with time indexing, the point 0.5 s into the reference after 0.5 s of the trial; with
+  // progress indexing, the reference's point under a pen held over it (its index 150).
+  void liveRigCueIsWhereTheGuidancePlaysTheReference() {
+    const Vec3 over = reference_->at(150.0).p_WT;
+    const auto cueAfter = [&](guidance::Indexing indexing) {
+      MouseHand hand;
+      hand.setInput({.x_m = over.x(), .y_m = over.y(), .pen_down = false, .press_N = 1.0});
+      RunSpec spec;
+      spec.reference = reference_;
+      spec.guidance.mode = guidance::TrainingMode::kBasic;
+      spec.guidance.playback.indexing = indexing;
+      spec.settle_s = 0.3;
+      LiveRig rig;
+      rig.start(*environment_, spec, hand, session::Clock::kSimulated);
+      rig.advanceSimulated(0.2);
+      const bool none_while_settling = !rig.referenceCue().has_value();
+      rig.advanceSimulated(0.6);
+      const std::optional<Vec3> cue = rig.referenceCue();
+      (void)rig.finish();
+      return std::make_pair(none_while_settling, cue);
+    };
+    const auto [time_settling, time_cue] = cueAfter(guidance::Indexing::kTime);
+    QVERIFY(time_settling);
+    QVERIFY(time_cue.has_value());
+    // 0.5 s into the trial at 1 kHz: index 500 (the chunk may end a few ticks later).
+    double nearest = 1e9;
+    for (int i = 495; i <= 520; ++i) nearest = std::min(nearest, (*time_cue - reference_->at(i).p_WT).norm());
+    QVERIFY2(nearest < 1e-12, qPrintable(QString("the cue is %1 m from the reference's points 495..520").arg(nearest)));
+    const auto [progress_settling, progress_cue] = cueAfter(guidance::Indexing::kProgress);
+    QVERIFY(progress_settling);
+    QVERIFY(progress_cue.has_value());
+    const double under_pen = (progress_cue->head<2>() - over.head<2>()).norm();
+    QVERIFY2(under_pen < 0.001, qPrintable(QString("the progress cue is %1 m from the point under the pen").arg(under_pen)));
+    QVERIFY((*progress_cue - *time_cue).norm() > 0.005);  // the two indexings differ here
+  }
+
   void liveRigPenDownTriggerRecordsFromTouchUntilALongLift() {
     MouseHand hand;
     hand.setInput({.x_m = 0.0, .y_m = 0.0, .pen_down = false, .press_N = 1.2});

@@ -160,11 +160,11 @@ class StudioScreenTest : public QObject {
   void theThreeDViewFitsBesideThePaperOnTheScreen() {
     MainWindow& w = *window_;
     w.setSceneShown(true);
-    QVERIFY(w.minimumSizeHint().width() <= kSmallScreenWindow.width());
-    QCOMPARE(w.size(), kSmallScreenWindow);
     const PenSceneView* scene = w.sceneView();
-    QVERIFY(scene->isVisible() && scene->width() >= scene->minimumWidth());
-    const QImage screen = screenShot("studio_screen_3d.png");
+    QVERIFY(scene->isVisible());
+    const QImage screen = screenShot("studio_screen_3d.png");  // after the layout took the view in
+    qInfo("the window's smallest width with the 3-D view: %d px", w.minimumSizeHint().width());
+    QVERIFY(w.minimumSizeHint().width() <= kSmallScreenWindow.width());
     QCOMPARE(screen.size(), kSmallScreenWindow);  // the window did not grow to show it
     const Eigen::Vector2d quarter = scene->camera().toPixels(Vec3(-0.04, 0.03, 0.0));
     const QPoint at = scene->mapTo(&w, QPoint(static_cast<int>(quarter.x()), static_cast<int>(quarter.y())));

@@ -184,6 +184,13 @@ void LiveRig::pump() {
   publishStatus();
 }
 
+std::optional<Vec3> LiveRig::referenceCue() const noexcept {
+  if (!guidance_ || !spec_.reference || live_ != nullptr) return std::nullopt;
+  const double index = guidance_->cueIndex();
+  if (index < 0.0) return std::nullopt;
+  return spec_.reference->at(index).p_WT;
+}
+
 void LiveRig::checkMentor() {
   mentor_failure_ = live_->unavailable();
   mentor_checked_ = true;

@@ -18,6 +18,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -132,6 +133,9 @@ class LiveRig {
   bool post(const servo::ServoCommand& command) noexcept;
   /// Switches the guidance mode with its cross-fade, through the mailbox.
   bool switchMode(guidance::TrainingMode mode) noexcept;
+  /// Where the reference is now: the point the guidance played at its last tick (with time or
+  /// progress indexing alike), or nothing (no reference, a mentored run, before the trial).
+  [[nodiscard]] std::optional<Vec3> referenceCue() const noexcept;
 
   [[nodiscard]] bool active() const noexcept { return loop_ != nullptr; }
   [[nodiscard]] RigStatus status() const noexcept;

@@ -557,6 +557,7 @@ void MainWindow::loadSettings() {
   restoreState(s.value("window/state").toByteArray());
   splitter_->restoreState(s.value("window/splitter").toByteArray());
   left_splitter_->restoreState(s.value("window/left_splitter").toByteArray());
+  view_splitter_->restoreState(s.value("window/view_splitter").toByteArray());
   tabs_->setCurrentIndex(s.value("window/tab", 0).toInt());
   const double press_N = s.value("input/press_N", PressScale::kDefault_N).toDouble();
   press_slider_->setValue(PressScale::toSliderSteps(press_N));
@@ -603,6 +604,7 @@ void MainWindow::saveSettings() {
   s.setValue("input/press_N", hand_.input().press_N);
   s.setValue("view/arrows", arrows_check_->isChecked());
   s.setValue("view/scene_3d", scene_check_->isChecked());
+  s.setValue("window/view_splitter", view_splitter_->saveState());
   s.setValue("record/name", expert_name_->text());
   s.setValue("record/character", character_->text());
   s.setValue("record/trigger", trigger_->currentIndex());
@@ -770,15 +772,12 @@ void MainWindow::onFrame() {
   switch (activity_) {
     case Activity::kTrial:
     case Activity::kStudyTrial: {
-      // The reference's point now (time indexing), the countdown, the end.
+      // The reference's point now (as the guidance played it, time or progress indexing), the
+      // countdown, the end.
       const double t_trial = status.loop_time_s - rig_.spec().settle_s;
-      if (trial_expert_ != nullptr && rig_.spec().guidance.playback.indexing == guidance::Indexing::kTime) {
-        Playback where;
-        where.load(trial_expert_);
-        const std::size_t i = where.indexAt(std::max(0.0, t_trial) * rig_.spec().guidance.playback.speed +
-                                            trial_expert_->samples().front().t_s);
-        paper_->setReferenceCue(Eigen::Vector2d((*trial_expert_)[i].p_WT.head<2>()));
-      }
+      std::optional<Vec3> cue = rig_.referenceCue();
+      if (!cue && status.settling && rig_.spec().reference) cue = rig_.spec().reference->at(0.0).p_WT;  // the start
+      paper_->setReferenceCue(cue ? std::optional<Eigen::Vector2d>(cue->head<2>()) : std::nullopt);
       const double left_s = std::max(0.0, rig_.spec().duration_s - t_trial);
       if (status.settling) {
         banner = tr("Get ready: %1 s").arg(std::max(0.0, -t_trial), 0, 'f', 1);

@@ -50,6 +50,7 @@ void PenSceneView::setPaper(const render::HeightField& relief, double x_min_m, d
   x_max_m_ = x_max_m;
   y_max_m_ = y_max_m;
   exaggeration_ = reliefExaggeration(relief_, std::max(x_max_m - x_min_m, y_max_m - y_min_m));
+  drawn_relief_ = drawnRelief();
   frameCamera();
   update();
 }
@@ -74,7 +75,7 @@ void PenSceneView::frameCamera() {
 }
 
 double PenSceneView::surfaceHeight(double x_m, double y_m) const {
-  return exaggeration_ * relief_.heightAt(x_m, y_m);  // 0 for flat paper
+  return drawn_relief_.heightAt(x_m, y_m);  // 0 for flat paper
 }
 
 Vec3 PenSceneView::drawnPoint(const Vec3& p_W) const {
@@ -89,20 +90,39 @@ std::pair<QPointF, QPointF> PenSceneView::barrelPx(const Sample& pen) const {
   return {px(camera_.toPixels(tip)), px(camera_.toPixels(top))};
 }
 
-// The relief's triangle mesh (render::HeightField::mesh on a coarser grid of the raised
-// heights), far triangles first, each shaded by its normal; the paper's 10 mm grid on it.
-void PenSceneView::drawSurface() {
-  surface_ = QImage(size(), QImage::Format_ARGB32_Premultiplied);
-  surface_.fill(Qt::transparent);
-  QPainter painter(&surface_);
+// The raised relief the view draws: the relief averaged over each cell of a grid of
+// kMeshCells along the paper's longer side (a grain finer than a cell would alias into noise),
+// times the exaggeration. The mesh, the trails and the pen all stand on it.
+render::HeightField PenSceneView::drawnRelief() const {
+  if (relief_.flat()) return {};
   const double width_m = x_max_m_ - x_min_m_, height_m = y_max_m_ - y_min_m_;
   const double spacing = std::max(width_m, height_m) / kMeshCells;
   const int nx = std::max(2, static_cast<int>(std::ceil(width_m / spacing)) + 1);
   const int ny = std::max(2, static_cast<int>(std::ceil(height_m / spacing)) + 1);
-  const render::HeightField drawn = render::HeightField::fromFunction(
-      nx, ny, Vec3(x_min_m_, y_min_m_, 0.0), spacing,
-      [&](double x, double y) { return surfaceHeight(std::min(x, x_max_m_), std::min(y, y_max_m_)); });
-  render::TriangleMesh mesh = drawn.mesh();
+  constexpr int kSub = 4;  // samples per cell side averaged
+  return render::HeightField::fromFunction(nx, ny, Vec3(x_min_m_, y_min_m_, 0.0), spacing, [&](double x, double y) {
+    double sum = 0.0;
+    for (int j = 0; j < kSub; ++j) {
+      for (int i = 0; i < kSub; ++i) {
+        sum += relief_.heightAt(x + ((i + 0.5) / kSub - 0.5) * spacing, y + ((j + 0.5) / kSub - 0.5) * spacing);
+      }
+    }
+    return exaggeration_ * sum / (kSub * kSub);
+  });
+}
+
+// The raised relief's triangle mesh (render::HeightField::mesh), far triangles first, each
+// shaded by its normal; the paper's 10 mm grid on it. At the screen's pixel ratio.
+void PenSceneView::drawSurface() {
+  const qreal ratio = devicePixelRatioF();
+  surface_ = QImage(size() * ratio, QImage::Format_ARGB32_Premultiplied);
+  surface_.setDevicePixelRatio(ratio);
+  surface_.fill(Qt::transparent);
+  QPainter painter(&surface_);
+  const render::HeightField flat_paper = render::HeightField::fromFunction(
+      2, 2, Vec3(x_min_m_, y_min_m_, 0.0), std::max(x_max_m_ - x_min_m_, y_max_m_ - y_min_m_),
+      [](double, double) { return 0.0; });
+  render::TriangleMesh mesh = (drawn_relief_.flat() ? flat_paper : drawn_relief_).mesh();
   for (Vec3& v : mesh.vertices) v.head<2>() = v.head<2>().cwiseMin(Eigen::Vector2d(x_max_m_, y_max_m_));  // the last cells end at the edge
 
   std::vector<std::pair<double, std::size_t>> order;
@@ -136,12 +156,10 @@ void PenSceneView::drawSurface() {
     painter.drawPolyline(polyline);
   };
   painter.setPen(QPen(QColor(150, 160, 175, 110), 1.0));
-  for (double x = std::ceil(x_min_m_ / kGridSpacing_m) * kGridSpacing_m; x <= x_max_m_; x += kGridSpacing_m) {
-    line(x, y_min_m_, x, y_max_m_);
-  }
-  for (double y = std::ceil(y_min_m_ / kGridSpacing_m) * kGridSpacing_m; y <= y_max_m_; y += kGridSpacing_m) {
-    line(x_min_m_, y, x_max_m_, y);
-  }
+  const auto first = [](double from) { return static_cast<int>(std::ceil(from / kGridSpacing_m - 1e-9)); };
+  const auto last = [](double to) { return static_cast<int>(std::floor(to / kGridSpacing_m + 1e-9)); };
+  for (int k = first(x_min_m_); k <= last(x_max_m_); ++k) line(k * kGridSpacing_m, y_min_m_, k * kGridSpacing_m, y_max_m_);
+  for (int k = first(y_min_m_); k <= last(y_max_m_); ++k) line(x_min_m_, k * kGridSpacing_m, x_max_m_, k * kGridSpacing_m);
   painter.setPen(QPen(QColor(160, 160, 150), 1.5));
   line(x_min_m_, y_min_m_, x_max_m_, y_min_m_);
   line(x_max_m_, y_min_m_, x_max_m_, y_max_m_);
@@ -200,7 +218,7 @@ void PenSceneView::paintEvent(QPaintEvent*) {
     painter.setPen(QColor(225, 225, 230));
     const double lift_mm = (pen->p_WT.z() - relief_.heightAt(pen->p_WT.x(), pen->p_WT.y())) * 1e3;
     const QString tilt = pen->tilt_altitude_rad > 0.0
-                             ? tr("tilt %1° · azimuth %2°")
+                             ? tr("altitude %1° · azimuth %2°")
                                    .arg(pen->tilt_altitude_rad * 180.0 / std::numbers::pi, 0, 'f', 0)
                                    .arg(pen->tilt_azimuth_rad * 180.0 / std::numbers::pi, 0, 'f', 0)
                              : tr("tilt not measured (drawn upright)");

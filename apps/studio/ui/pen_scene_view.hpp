@@ -49,6 +49,7 @@ class PenSceneView final : public QWidget {
 
  private:
   void frameCamera();
+  [[nodiscard]] render::HeightField drawnRelief() const;
   void drawSurface();
   [[nodiscard]] double surfaceHeight(double x_m, double y_m) const;
   void drawTrail(QPainter& painter, const Trail& trail, const QColor& colour, double width_px) const;
@@ -56,6 +57,7 @@ class PenSceneView final : public QWidget {
 
   const PaperView* top_;
   render::HeightField relief_;
+  render::HeightField drawn_relief_;  // raised and averaged per cell: what the view stands things on
   double x_min_m_ = -0.1, y_min_m_ = -0.1, x_max_m_ = 0.1, y_max_m_ = 0.1;
   double exaggeration_ = 1.0;
   SceneCamera camera_;

@@ -9,6 +9,7 @@
 /// Mode switches cross-fade the force (default 100 ms). Gains are clamped to what the device
 /// renders passively together with the paper (clampGains). See docs/training_modes.md.
 
+#include <atomic>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -101,6 +102,9 @@ class TrainingGuidance final : public GuidanceController {
 
   [[nodiscard]] TrainingMode mode() const noexcept { return mode_; }
   [[nodiscard]] const ReferenceCue& lastCue() const noexcept { return cue_; }
+  /// The reference's fractional index the guidance played at its last tick, for a display on
+  /// another thread (any thread; a relaxed atomic). Negative before the trial starts.
+  [[nodiscard]] double cueIndex() const noexcept { return cue_index_.load(std::memory_order_relaxed); }
   [[nodiscard]] const GuidanceConfig& config() const noexcept { return config_; }
 
  private:
@@ -119,6 +123,7 @@ class TrainingGuidance final : public GuidanceController {
   Vec3 last_error_ = Vec3::Zero();
   Vec3 error_rate_ = Vec3::Zero();   // filtered ė
   ReferenceCue cue_;
+  std::atomic<double> cue_index_{-1.0};  // cue_.index while running, else -1 (cueIndex())
 };
 
 }  // namespace hattr::guidance
