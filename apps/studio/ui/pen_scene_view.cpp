@@ -49,7 +49,9 @@ void PenSceneView::setPaper(const render::HeightField& relief, double x_min_m, d
   y_min_m_ = y_min_m;
   x_max_m_ = x_max_m;
   y_max_m_ = y_max_m;
-  exaggeration_ = reliefExaggeration(relief_, std::max(x_max_m - x_min_m, y_max_m - y_min_m));
+  // Raised so that the averaged relief (what is drawn) spans 3 % of the paper.
+  exaggeration_ = 1.0;
+  exaggeration_ = reliefExaggeration(drawnRelief(), std::max(x_max_m - x_min_m, y_max_m - y_min_m));
   drawn_relief_ = drawnRelief();
   frameCamera();
   update();
