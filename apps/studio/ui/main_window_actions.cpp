@@ -85,7 +85,7 @@ bool MainWindow::useTakeAsReference() {
 void MainWindow::nameTakeReference() {
   const QString who = expert_name_->text().trimmed().isEmpty() ? tr("unnamed") : expert_name_->text().trimmed();
   const QString what_char = character_->text().trimmed().isEmpty() ? tr("no character") : character_->text().trimmed();
-  const bool saved = take_saved_ && !take_file_.isEmpty();
+  const bool saved = !take_file_.isEmpty();  // set by saveTake, cleared with the take
   reference_file_ = saved ? take_file_ : QString();
   reference_name_ = saved ? QFileInfo(take_file_).fileName() : QStringLiteral("take (not saved)");
   reference_label_->setText(tr("Reference: <b>the take</b> (%1, %2, %3): %4")
@@ -410,8 +410,7 @@ bool MainWindow::stopRecording() {
     refreshButtons();
     return false;
   }
-  forgetTake();
-  take_ = std::move(result.profile);
+  take_ = std::move(result.profile);  // startRecording forgot the previous take
   take_saved_ = false;
   paper_->trail().assign(*take_);
   plot_->setTrainee(ForceSeries::fromProfile(*take_));

@@ -84,11 +84,15 @@ Vec3 PenSceneView::drawnPoint(const Vec3& p_W) const {
   return {p_W.x(), p_W.y(), surfaceHeight(p_W.x(), p_W.y()) + (p_W.z() - relief_.heightAt(p_W.x(), p_W.y()))};
 }
 
-std::pair<QPointF, QPointF> PenSceneView::barrelPx(const Sample& pen) const {
+std::pair<Vec3, Vec3> PenSceneView::barrelW(const Sample& pen) const {
   const Vec3 tip = drawnPoint(pen.p_WT);
   // A device without tilt reports altitude 0: drawn upright, and the read-out says so.
   const double altitude = pen.tilt_altitude_rad > 0.0 ? pen.tilt_altitude_rad : std::numbers::pi / 2.0;
-  const Vec3 top = penTop_W(tip, pen.tilt_azimuth_rad, altitude, kBarrelLength_m);
+  return {tip, penTop_W(tip, pen.tilt_azimuth_rad, altitude, kBarrelLength_m)};
+}
+
+std::pair<QPointF, QPointF> PenSceneView::barrelPx(const Sample& pen) const {
+  const auto [tip, top] = barrelW(pen);
   return {px(camera_.toPixels(tip)), px(camera_.toPixels(top))};
 }
 
@@ -177,10 +181,8 @@ void PenSceneView::drawTrail(QPainter& painter, const Trail& trail, const QColor
 
 // The shadow of the barrel on the paper, the line down from a lifted tip, the barrel, its nib.
 void PenSceneView::drawPen(QPainter& painter, const Sample& pen) const {
-  const auto [tip_px, top_px] = barrelPx(pen);
-  const Vec3 tip = drawnPoint(pen.p_WT);
-  const double altitude = pen.tilt_altitude_rad > 0.0 ? pen.tilt_altitude_rad : std::numbers::pi / 2.0;
-  const Vec3 top = penTop_W(tip, pen.tilt_azimuth_rad, altitude, kBarrelLength_m);
+  const auto [tip, top] = barrelW(pen);
+  const QPointF tip_px = px(camera_.toPixels(tip)), top_px = px(camera_.toPixels(top));
   const Vec3 tip_ground(tip.x(), tip.y(), surfaceHeight(tip.x(), tip.y()));
   const Vec3 top_ground(top.x(), top.y(), surfaceHeight(top.x(), top.y()));
   painter.setPen(QPen(QColor(40, 40, 50, 70), 5.0, Qt::SolidLine, Qt::RoundCap));

@@ -49,6 +49,8 @@ class PenSceneView final : public QWidget {
 
  private:
   void frameCamera();
+  /// The pen's tip and its barrel's far end as drawn (W, on the raised relief).
+  [[nodiscard]] std::pair<Vec3, Vec3> barrelW(const Sample& pen) const;
   [[nodiscard]] render::HeightField drawnRelief() const;
   void drawSurface();
   [[nodiscard]] double surfaceHeight(double x_m, double y_m) const;
