@@ -26,7 +26,7 @@ build: deps
 	cmake --build --preset $(PRESET) -j $(JOBS)
 
 test: build
-	ctest --preset $(PRESET) -j $(JOBS) || { scripts/show-test-failures $(BUILD); exit 1; }
+	scripts/run-ctest $(BUILD) --preset $(PRESET) -j $(JOBS)
 
 demo: build
 	$(BUILD)/apps/hattr/hattr demo --out demo-out
@@ -34,7 +34,7 @@ demo: build
 asan tsan: deps
 	cmake --preset $@ >/dev/null
 	cmake --build --preset $@ -j $(JOBS)
-	ctest --preset $@ -j $(JOBS) || { scripts/show-test-failures build/$@; exit 1; }
+	scripts/run-ctest build/$@ --preset $@ -j $(JOBS)
 
 sanitize: asan tsan
 
