@@ -17,6 +17,7 @@
 #include "screen_checks.hpp"
 #include "studio_test_support.hpp"
 #include "core/series.hpp"
+#include "core/study_session.hpp"
 #include "ui/learning_curve.hpp"
 #include "ui/main_window.hpp"
 #include "ui/paper_view.hpp"
@@ -302,6 +303,11 @@ class StudioSmokeTest : public QObject {
     QVERIFY2(ran_s < max_s - 0.5, qPrintable(QString("ran %1 s of a %2 s maximum").arg(ran_s).arg(max_s)));
     QCOMPARE(w.study()->completedCount(), 1);
     QCOMPARE(w.study()->state(), StudySession::State::kResting);
+    // The trial showed its reference; the next is recall: its reference is out of sight from its
+    // announcement on, the rest included, on the paper and on the plot.
+    QVERIFY(!w.study()->currentTrial()->plan.view.show_reference);
+    QVERIFY(!w.paperView()->referenceShown());
+    QVERIFY(w.plot()->expert().empty());
     w.closeStudy();
 
     // Stored through the library: readable, completed, with the runner's metadata.

@@ -37,6 +37,7 @@
 #include "ui/pen_scene_view.hpp"
 #include "ui/profile_plot.hpp"
 #include "ui/review_tab.hpp"
+#include "ui/study_tab.hpp"
 #include "ui/ui_text.hpp"
 
 namespace hattr::studio {
@@ -348,54 +349,48 @@ void MainWindow::buildTrainTab() {
   tabs_->addTab(page, tr("Train"));
 }
 
+// The Study tab runs its trials on the window's rig, paper and plot (StudyHost).
 void MainWindow::buildStudyTab() {
-  auto* page = new QWidget;
-  auto* layout = new QVBoxLayout(page);
-  layout->addWidget(
-      wrappedLabel(tr("<b>Study session</b> for a person: open a study database (made with "
-                      "<tt>hattr study init</tt>), pick the subject and follow the prompts. Every "
-                      "trial is stored the moment it ends; reopening resumes where it stopped.")));
-  auto* open = new QPushButton(tr("Open study… (Ctrl+D)"));
-  connect(open, &QPushButton::clicked, this, [this] {
-    const QString file = askOpenFile(tr("Open a study database"), tr("Study databases (*.sqlite *.db);;All files (*)"));
-    if (!file.isEmpty()) openStudy(file);
-  });
-  layout->addWidget(open);
-  study_label_ = wrappedLabel(tr("No study open."));
-  layout->addWidget(study_label_);
-  auto* row = new QHBoxLayout;
-  subject_combo_ = new QComboBox;
-  subject_button_ = new QPushButton(tr("Begin"));
-  connect(subject_button_, &QPushButton::clicked, this,
-          [this] { selectStudySubject(subject_combo_->currentData().toString()); });
-  row->addWidget(new QLabel(tr("Subject")));
-  row->addWidget(subject_combo_, 1);
-  row->addWidget(subject_button_);
-  layout->addLayout(row);
-  study_progress_ = wrappedLabel();
-  layout->addWidget(study_progress_);
-  study_prompt_ = wrappedLabel();
-  QFont big = study_prompt_->font();
-  big.setPointSizeF(big.pointSizeF() * 1.3);
-  big.setBold(true);
-  study_prompt_->setFont(big);
-  layout->addWidget(study_prompt_);
-  study_next_button_ = new QPushButton(tr("Start trial (Space) / skip rest (N)"));
-  connect(study_next_button_, &QPushButton::clicked, this, [this] {
-    if (activity_ == Activity::kStudyTrial) {
-      stopTrial();
-    } else {
-      studyNext();
+  StudyHost host;
+  host.idle = [this] { return activity_ == Activity::kFree || activity_ == Activity::kPlayback; };
+  host.trial_running = [this] { return activity_ == Activity::kStudyTrial; };
+  host.device_busy = [this] { return activity_ == Activity::kStudyTrial || activity_ == Activity::kMentoring; };
+  host.clear_views = [this] {
+    if (activity_ == Activity::kPlayback) abortActivity();
+    paper_->overlay().clear();
+    paper_->trail().clear();
+    plot_->clear();
+  };
+  host.use_environment = [this](session::TrialEnvironment* environment) {
+    (void)rig_.finish();  // the loop runs on the paper that may go
+    if (environment == nullptr) {
+      showReference(reference_profile_ ? &*reference_profile_ : nullptr);
+      paper_->setReferenceShown(show_reference_check_->isChecked());
     }
-  });
-  layout->addWidget(study_next_button_);
-  close_study_button_ = new QPushButton(tr("Close study"));
-  connect(close_study_button_, &QPushButton::clicked, this, &MainWindow::closeStudy);
-  layout->addWidget(close_study_button_);
-  study_scores_ = wrappedLabel();
-  layout->addWidget(study_scores_);
-  layout->addStretch(1);
-  tabs_->addTab(page, tr("Study"));
+    useEnvironment(environment != nullptr ? *environment : *default_environment_);
+  };
+  host.show_reference = [this](const HapticProfile* expert, bool shown) {
+    showReference(expert);
+    paper_->setReferenceShown(shown);
+  };
+  host.hide_reference = [this] {
+    paper_->setReferenceShown(false);
+    plot_->setExpert(ForceSeries{});
+  };
+  host.start_trial = [this](session::TrialEnvironment& environment, const session::TrialSetup& setup,
+                            const HapticProfile& expert, bool shows_reference, const QString& title, QLabel* scores) {
+    beginLiveTrial(environment, setup, Activity::kStudyTrial, expert, shows_reference, shows_reference, title, scores);
+  };
+  host.stop_trial = [this] { (void)stopTrial(); };
+  host.settle_s = [this] { return settle_spin_->value(); };
+  host.now_s = [this] { return now_s(); };
+  host.error = [this](const QString& what, const QString& detail) { showError(what, detail); };
+  host.confirm = [this](const QString& question) { return confirm(question); };
+  host.ask_open_file = [this](const QString& title, const QString& filter) { return askOpenFile(title, filter); };
+  host.note = [this](const QString& message, int ms) { statusBar()->showMessage(message, ms); };
+  host.changed = [this] { refreshButtons(); };
+  study_tab_ = new StudyTab(*settings_, std::move(host));
+  tabs_->addTab(study_tab_, tr("Study"));
 }
 
 void MainWindow::buildReviewTab() {
@@ -816,18 +811,7 @@ void MainWindow::onFrame() {
     }
     case Activity::kMentoring: break;  // drawn by the Mentor tab (above)
     case Activity::kFree:
-      if (study_ && study_->state() != StudySession::State::kNoSubject) {
-        study_->tick(now);
-        switch (study_->state()) {
-          case StudySession::State::kResting:
-            banner = tr("Rest: %1 s").arg(std::ceil(study_->restRemaining_s(now)), 0, 'f', 0);
-            break;
-          case StudySession::State::kReady: banner = qs(study_->prompt()) + tr(" — Space to start"); break;
-          case StudySession::State::kFinished: banner = tr("Every trial is done. Thank you!"); break;
-          default: break;
-        }
-        refreshStudyPanel();
-      }
+      banner = study_tab_->idleBanner();  // a study's rest, prompt or thanks
       break;
   }
   paper_->setBanner(banner);
@@ -886,17 +870,7 @@ void MainWindow::refreshButtons() {
   trial_button_->setEnabled((free && reference_profile_) || activity_ == Activity::kTrial);
   replay_trial_button_->setEnabled(last_trial_.has_value() && free);
   save_trial_button_->setEnabled(last_trial_.has_value());
-  const bool study_open = study_ != nullptr;
-  subject_combo_->setEnabled(study_open && activity_ != Activity::kStudyTrial);
-  subject_button_->setEnabled(study_open && activity_ != Activity::kStudyTrial);
-  close_study_button_->setEnabled(study_open && activity_ != Activity::kStudyTrial &&
-                                  activity_ != Activity::kMentoring);
-  study_next_button_->setText(activity_ == Activity::kStudyTrial ? tr("Stop trial (Ctrl+.)")
-                                                                 : tr("Start trial (Space) / skip rest (N)"));
-  study_next_button_->setEnabled(
-      study_open && (activity_ == Activity::kStudyTrial ||
-                     (free && (study_->state() == StudySession::State::kReady ||
-                               study_->state() == StudySession::State::kResting))));
+  study_tab_->refresh();
   review_->refresh(playback_.loaded());
 }
 

@@ -20,7 +20,6 @@
 #include "core/live_rig.hpp"
 #include "core/mouse_hand.hpp"
 #include "core/series.hpp"
-#include "core/study_session.hpp"
 #include "core/trial_scoring.hpp"
 
 class QAction;
@@ -43,6 +42,8 @@ class PaperView;
 class PenSceneView;
 class ProfilePlot;
 class ReviewTab;
+class StudySession;
+class StudyTab;
 
 class MainWindow final : public QMainWindow {
   Q_OBJECT
@@ -114,7 +115,8 @@ class MainWindow final : public QMainWindow {
   [[nodiscard]] const std::optional<analysis::TrialScore>& lastScores() const { return last_scores_; }
   [[nodiscard]] const std::optional<HapticProfile>& lastTrial() const { return last_trial_; }
   [[nodiscard]] const std::optional<HapticProfile>& take() const { return take_; }
-  [[nodiscard]] StudySession* study() const { return study_.get(); }
+  /// The open study session (null: none); the Study tab owns it.
+  [[nodiscard]] StudySession* study() const;
   [[nodiscard]] PaperView* paperView() const { return paper_; }
   /// The 3-D view beside the paper (shown with the tool bar's "3-D view", remembered).
   [[nodiscard]] PenSceneView* sceneView() const { return scene_; }
@@ -125,6 +127,7 @@ class MainWindow final : public QMainWindow {
   [[nodiscard]] QTabWidget* tabs() const { return tabs_; }
   [[nodiscard]] MentorTab* mentorTab() const { return mentor_; }
   [[nodiscard]] ReviewTab* reviewTab() const { return review_; }
+  [[nodiscard]] StudyTab* studyTab() const { return study_tab_; }
   [[nodiscard]] LearningCurve* learningCurve() const { return learning_curve_; }
 
  protected:
@@ -149,6 +152,13 @@ class MainWindow final : public QMainWindow {
   void onFrame();
   void onStatus();
   void consumeLive(const Sample& sample);
+  /// Starts a live trial of `setup` on `environment` as `kind` (a training or a study trial)
+  /// against `expert`: drawn on the paper when `reference_on_paper`, its force on the plot
+  /// when `expert_on_plot`; the plot titled `title`, `scores` says it runs. Throws what the
+  /// rig throws (free writing goes on).
+  void beginLiveTrial(session::TrialEnvironment& environment, const session::TrialSetup& setup, Activity kind,
+                      const HapticProfile& expert, bool reference_on_paper, bool expert_on_plot, const QString& title,
+                      QLabel* scores);
   void finishTrial();
   void showScores(const HapticProfile& expert, const HapticProfile& trial, QLabel* where);
   void showReference(const HapticProfile* expert);
@@ -169,8 +179,6 @@ class MainWindow final : public QMainWindow {
   void askDevice();
 
   // Actions helpers (main_window_actions.cpp).
-  void fillStudySubjects();
-  void refreshStudyPanel();
   /// Review: `trial` over `expert` on the paper and the plot, its scores in `scores`.
   void showReviewed(const HapticProfile& trial, const HapticProfile& expert, const QString& title, QLabel* scores);
   void startPlayback(const HapticProfile* profile, const HapticProfile* expert);
@@ -213,8 +221,7 @@ class MainWindow final : public QMainWindow {
   QString take_file_;              // where the take was saved (empty: not saved)
   bool reference_is_take_ = false;  // the reference is the take (named by take_file_)
 
-  // Study and review.
-  std::unique_ptr<StudySession> study_;
+  // Review.
   std::function<bool(const QUrl&)> url_opener_;
   QString tablet_calibration_file_;
 
@@ -268,15 +275,8 @@ class MainWindow final : public QMainWindow {
   QPushButton* replay_trial_button_ = nullptr;
   QLabel* scores_label_ = nullptr;
   LearningCurve* learning_curve_ = nullptr;
-  // Study tab.
-  QLabel* study_label_ = nullptr;
-  QComboBox* subject_combo_ = nullptr;
-  QPushButton* subject_button_ = nullptr;
-  QLabel* study_progress_ = nullptr;
-  QLabel* study_prompt_ = nullptr;
-  QPushButton* study_next_button_ = nullptr;
-  QPushButton* close_study_button_ = nullptr;
-  QLabel* study_scores_ = nullptr;
+  // Study tab (the study session it runs is its own).
+  StudyTab* study_tab_ = nullptr;
   // Review tab (the study database it reviews is its own).
   ReviewTab* review_ = nullptr;
   // Mentor tab (it has the device and the hand while a session runs: Activity::kMentoring).

@@ -1,4 +1,4 @@
-// The main window's actions: record, train, study, review, playback.
+// The main window's actions: record, train, the trials it runs for the Study tab, review, playback.
 #include <fmt/format.h>
 
 #include <QCheckBox>
@@ -24,6 +24,7 @@
 #include "ui/paper_view.hpp"
 #include "ui/profile_plot.hpp"
 #include "ui/review_tab.hpp"
+#include "ui/study_tab.hpp"
 #include "ui/ui_text.hpp"
 
 namespace hattr::studio {
@@ -136,7 +137,7 @@ bool MainWindow::loadWorld(const QString& file) {
     (void)rig_.finish();
     default_environment_ = std::move(environment);
     world_file_ = file;
-    if (!study_) useEnvironment(*default_environment_);
+    if (study() == nullptr) useEnvironment(*default_environment_);
     return true;
   } catch (const std::exception& e) {
     showError(tr("The world configuration could not be loaded"), what(e));
@@ -157,7 +158,7 @@ bool MainWindow::setDevice(const QString& uri) {
     default_environment_ = std::move(environment);
     settings_->setValue("device/uri", uri);
     // A study keeps its own device; the new one is used when it is closed.
-    if (!study_) useEnvironment(*default_environment_);
+    if (study() == nullptr) useEnvironment(*default_environment_);
     return true;
   } catch (const std::exception& e) {
     showError(tr("The device cannot be used"), what(e));
@@ -213,29 +214,42 @@ bool MainWindow::startTrial() {
     setup.metadata.skill = reference_profile_->metadata().skill;
     setup.metadata.source = "studio";
     setup.metadata.extra["reference_file"] = reference_name_.toStdString();
-    playback_.load(nullptr);
-    rig_.start(*environment_, trialRunSpec(setup, true), hand_, session::Clock::kRealTime);
+    beginLiveTrial(*environment_, setup, Activity::kTrial, *reference_profile_, show_reference_check_->isChecked(), true,
+                   tr("Trial: %1").arg(qs(guidance::modeName(mode_))), scores_label_);
   } catch (const std::exception& e) {
     showError(tr("The trial could not start"), what(e));
-    startFreeRun();
     return false;
   }
-  activity_ = Activity::kTrial;
   trial_mode_ = mode_;
-  trial_expert_ = &*reference_profile_;
-  trial_shows_reference_ = show_reference_check_->isChecked();
+  return true;
+}
+
+void MainWindow::beginLiveTrial(session::TrialEnvironment& environment, const session::TrialSetup& setup,
+                                Activity kind, const HapticProfile& expert, bool reference_on_paper,
+                                bool expert_on_plot, const QString& title, QLabel* scores) {
+  if (activity_ == Activity::kPlayback) abortActivity();
+  playback_.load(nullptr);
+  try {
+    rig_.start(environment, trialRunSpec(setup, true), hand_, session::Clock::kRealTime);
+  } catch (...) {
+    startFreeRun();
+    throw;
+  }
+  activity_ = kind;
+  trial_expert_ = &expert;
+  trial_shows_reference_ = reference_on_paper;
+  // The paper: the reference (or not), nothing else; the plot: the trial's window.
   showReference(trial_expert_);
-  paper_->setReferenceShown(trial_shows_reference_);
+  paper_->setReferenceShown(reference_on_paper);
   paper_->overlay().clear();
   paper_->trail().clear();
-  plot_->setExpert(ForceSeries::fromProfile(*trial_expert_, 4000, -trial_expert_->samples().front().t_s));
+  plot_->setExpert(expert_on_plot ? ForceSeries::fromProfile(expert, 4000, -expert.samples().front().t_s) : ForceSeries{});
   plot_->trainee().clear();
   plot_->setCursorTime(std::nullopt);
   plot_->setTimeWindow(std::make_pair(0.0, rig_.spec().duration_s));
-  plot_->setTitle(tr("Trial: %1").arg(qs(guidance::modeName(mode_))));
-  scores_label_->setText(tr("Trial running…"));
+  plot_->setTitle(title);
+  scores->setText(tr("Trial running…"));
   refreshButtons();
-  return true;
 }
 
 bool MainWindow::stopTrial() {
@@ -262,29 +276,18 @@ bool MainWindow::stopTrial() {
 void MainWindow::finishTrial() {
   session::TrialResult result = rig_.finish();
   const std::string failure = result.failure;
-  const Activity was = activity_;
+  const bool study_trial = activity_ == Activity::kStudyTrial;
   activity_ = Activity::kFree;
   startFreeRun();
   paper_->setReferenceCue(std::nullopt);
-  if (!result.failure.empty() && was == Activity::kStudyTrial && study_) {
-    // A mentored trial whose expert was not there: marked failed, as the runner marks it.
-    try {
-      study_->failTrial(result.failure);
-    } catch (const std::exception& e) {
-      study_->abandonTrial();
-      result.failure += "\n\n" + what(e).toStdString();
-    }
-    refreshStudyPanel();
-    showError(tr("The trial failed"), qs(result.failure) + tr("\n\nNothing was recorded; Next runs this trial again."));
+  // A study trial whose mentor was not there recorded nothing: the Study tab marks it failed.
+  if (study_trial && !failure.empty()) {
+    study_tab_->trialFailed(failure);
     refreshButtons();
     return;
   }
   if (result.profile.empty()) {
-    // A study trial that recorded nothing is run again.
-    if (was == Activity::kStudyTrial && study_) {
-      study_->abandonTrial();
-      refreshStudyPanel();
-    }
+    if (study_trial) study_tab_->trialAbandoned();  // it runs again
     showError(tr("The trial recorded nothing"), tr("the loop delivered no samples in the trial's window"));
     refreshButtons();
     return;
@@ -298,41 +301,26 @@ void MainWindow::finishTrial() {
   plot_->setTimeWindow(std::nullopt);
   plot_holds_result_ = true;
 
-  QLabel* scores_label = scores_label_;
-  if (was == Activity::kStudyTrial && study_) {
-    scores_label = study_scores_;
-    try {
-      const std::string disturbed = study_->completeTrial(std::move(result), now_s());
-      last_trial_saved_ = true;
-      const bool again = !disturbed.empty() && study_->state() == StudySession::State::kReady;
-      statusBar()->showMessage(again ? tr("The trial was disturbed (%1): it is kept, and runs again.").arg(qs(disturbed))
-                               : disturbed.empty() ? tr("Trial stored in the study database.")
-                                                   : tr("Trial stored, flagged as disturbed (%1).").arg(qs(disturbed)),
-                               8000);
-    } catch (const std::exception& e) {
-      showError(tr("The trial could not be stored in the study database"),
-                what(e) + tr("\n\nThe trial is kept: save it with File → Save last trial… (Ctrl+Shift+S); "
-                             "the study will run this trial again."));
-    }
-    refreshStudyPanel();
-    // The subject sees no score during a study unless the study file asks (the paper showed none).
-    if (!study_->study().protocol.show_scores) {
+  // A study trial goes to the study's database; its score is shown when the protocol says so.
+  if (study_trial) {
+    const StudyTab::Stored stored = study_tab_->trialEnded(std::move(result));
+    last_trial_saved_ = stored.stored;
+    if (stored.show_scores) {
+      showScores(*last_trial_expert_, *last_trial_, study_tab_->scoresLabel());
+    } else {
       last_scores_.reset();
-      scores_label->setText(tr("Trial stored. No score is shown during the study (protocol.show_scores)."));
-      refreshButtons();
-      return;
     }
+    refreshButtons();
+    return;
   }
-  showScores(*last_trial_expert_, *last_trial_, scores_label);
-  // A trial the device or the loop cut short (failure) is scored, but is no point of the curve.
-  if (was == Activity::kTrial && last_scores_ && failure.empty()) learning_curve_->add(trial_mode_, *last_scores_);
-  if (was == Activity::kTrial) {
-    scores_label_->setText(scores_label_->text() + tr("<br>%1 ticks, %2 overruns, %3 missed samples, %4 faults")
-                                                       .arg(result.ticks)
-                                                       .arg(result.overruns)
-                                                       .arg(result.missed_samples)
-                                                       .arg(result.faults));
-  }
+  // A training trial is scored; one the device or the loop cut short (failure) is no point of the curve.
+  showScores(*last_trial_expert_, *last_trial_, scores_label_);
+  if (last_scores_ && failure.empty()) learning_curve_->add(trial_mode_, *last_scores_);
+  scores_label_->setText(scores_label_->text() + tr("<br>%1 ticks, %2 overruns, %3 missed samples, %4 faults")
+                                                     .arg(result.ticks)
+                                                     .arg(result.overruns)
+                                                     .arg(result.missed_samples)
+                                                     .arg(result.faults));
   refreshButtons();
 }
 
@@ -470,7 +458,7 @@ void MainWindow::abortActivity() {
     case Activity::kStudyTrial:
     case Activity::kRecording:
       (void)rig_.finish();
-      if (activity_ == Activity::kStudyTrial && study_) study_->abandonTrial();
+      if (activity_ == Activity::kStudyTrial) study_tab_->trialAbandoned();  // it runs again
       if (activity_ == Activity::kRecording) take_label_->setText(tr("Recording aborted; nothing kept."));
       if (activity_ == Activity::kTrial) scores_label_->setText(tr("Trial aborted; nothing kept."));
       activity_ = Activity::kFree;
@@ -560,166 +548,21 @@ void MainWindow::primaryAction() {
   }
 }
 
-// ---- Study --------------------------------------------------------------------------------
+// ---- Study (the Study tab's) ----------------------------------------------------------------
+
+StudySession* MainWindow::study() const { return study_tab_->session(); }
 
 bool MainWindow::openStudy(const QString& file) {
-  if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) {
-    showError(tr("A study cannot be opened now"), tr("finish the trial or recording first"));
-    return false;
-  }
-  try {
-    auto session = std::make_unique<StudySession>(file.toStdString());
-    closeStudy();
-    study_ = std::move(session);
-    settings_->setValue("study/file", file);
-  } catch (const std::exception& e) {
-    showError(tr("The study could not be opened"), what(e));
-    return false;
-  }
-  const session::StudyDefinition& study = study_->study();
-  study_label_->setText(tr("<b>%1</b> (%2): skill %3, %4 training + %5 recall trials per mode, rest %6 s")
-                            .arg(qs(study.name).toHtmlEscaped(), QFileInfo(file).fileName().toHtmlEscaped(),
-                                 qs(study.skill).toHtmlEscaped())
-                            .arg(study.protocol.training_trials)
-                            .arg(study.protocol.recall_trials)
-                            .arg(study.protocol.rest_s));
-  fillStudySubjects();
-  // Nothing of the tab used before stays on show: a reviewed trial (orange), a take, a playback.
-  if (activity_ == Activity::kPlayback) abortActivity();
-  paper_->overlay().clear();
-  paper_->trail().clear();
-  plot_->clear();
-  (void)rig_.finish();
-  useEnvironment(study_->environment());
-  showReference(nullptr);
+  if (!study_tab_->open(file)) return false;
   tabs_->setCurrentIndex(kTabStudy);
-  refreshStudyPanel();
-  refreshButtons();
   return true;
 }
 
-void MainWindow::fillStudySubjects() {
-  subject_combo_->clear();
-  if (!study_) return;
-  for (const session::SubjectRecord& s : study_->subjects()) {
-    subject_combo_->addItem(tr("%1 (%2)").arg(qs(s.id), qs(s.spec.participant)), qs(s.id));
-  }
-}
+bool MainWindow::selectStudySubject(const QString& subject) { return study_tab_->selectSubject(subject); }
 
-bool MainWindow::selectStudySubject(const QString& subject) {
-  if (!study_ || activity_ == Activity::kStudyTrial) return false;
-  try {
-    std::string kind;
-    for (const auto& s : study_->subjects()) {
-      if (s.id == subject.toStdString()) kind = s.spec.participant;
-    }
-    if (kind != "person" &&
-        !confirm(tr("Subject %1 is a \"%2\" participant, not a person. Run its trials here with the mouse anyway?")
-                     .arg(subject, qs(kind)))) {
-      return false;
-    }
-    study_->selectSubject(subject.toStdString(), now_s());
-  } catch (const std::exception& e) {
-    showError(tr("The subject could not be selected"), what(e));
-    return false;
-  }
-  if (activity_ == Activity::kPlayback) abortActivity();
-  showReference(&study_->expert());
-  paper_->setReferenceShown(false);
-  paper_->trail().clear();
-  paper_->overlay().clear();
-  plot_->clear();
-  refreshStudyPanel();
-  refreshButtons();
-  return true;
-}
+bool MainWindow::studyNext() { return study_tab_->next(); }
 
-void MainWindow::refreshStudyPanel() {
-  if (!study_) {
-    study_progress_->clear();
-    study_prompt_->clear();
-    return;
-  }
-  const auto state = study_->state();
-  study_progress_->setText(state == StudySession::State::kNoSubject ? tr("Pick a subject and press Begin.")
-                                                                    : tr("Subject %1: %2 of %3 trials done (%4)")
-                                                                          .arg(qs(study_->subject()))
-                                                                          .arg(study_->completedCount())
-                                                                          .arg(study_->totalCount())
-                                                                          .arg(qs(stateName(state))));
-  QString prompt = qs(study_->prompt());
-  if (state == StudySession::State::kResting) {
-    prompt = tr("Rest %1 s, then: %2").arg(std::ceil(study_->restRemaining_s(now_s())), 0, 'f', 0).arg(prompt);
-  }
-  if (const session::TrialRecord* t = study_->currentTrial(); t != nullptr && state != StudySession::State::kFinished) {
-    prompt += t->plan.view.show_reference ? tr("<br><small>the reference is shown</small>")
-                                          : tr("<br><small>from memory: the reference is hidden</small>");
-    // Recall is recall: the reference is gone from the moment its trial is announced, rest included.
-    if (!t->plan.view.show_reference && activity_ != Activity::kStudyTrial) {
-      paper_->setReferenceShown(false);
-      plot_->setExpert(ForceSeries{});
-    }
-  }
-  study_prompt_->setText(prompt);
-  const bool free = activity_ == Activity::kFree || activity_ == Activity::kPlayback;
-  const bool next = state == StudySession::State::kReady || state == StudySession::State::kResting;
-  study_next_button_->setEnabled(activity_ == Activity::kStudyTrial || (free && next));
-}
-
-bool MainWindow::studyNext() {
-  if (!study_ || (activity_ != Activity::kFree && activity_ != Activity::kPlayback)) return false;
-  const auto state = study_->state();
-  if (state != StudySession::State::kReady && state != StudySession::State::kResting) return false;
-  if (activity_ == Activity::kPlayback) abortActivity();
-  try {
-    const session::TrialRecord plan_record = *study_->currentTrial();
-    session::TrialSetup setup = study_->currentSetup();
-    setup.settle_s = settle_spin_->value();  // the person's "get ready" (not recorded)
-    study_->beginTrial();
-    try {
-      rig_.start(study_->environment(), trialRunSpec(setup, true), hand_, session::Clock::kRealTime);
-    } catch (...) {
-      study_->abandonTrial();
-      throw;
-    }
-    activity_ = Activity::kStudyTrial;
-    trial_expert_ = &study_->expert();
-    trial_shows_reference_ = plan_record.plan.view.show_reference;
-    showReference(trial_expert_);
-    paper_->setReferenceShown(trial_shows_reference_);
-    paper_->trail().clear();
-    paper_->overlay().clear();
-    plot_->setExpert(trial_shows_reference_
-                         ? ForceSeries::fromProfile(*trial_expert_, 4000, -trial_expert_->samples().front().t_s)
-                         : ForceSeries{});
-    plot_->trainee().clear();
-    plot_->setCursorTime(std::nullopt);
-    plot_->setTimeWindow(std::make_pair(0.0, rig_.spec().duration_s));
-    plot_->setTitle(qs(study_->prompt()));
-    study_scores_->setText(tr("Trial running…"));
-  } catch (const std::exception& e) {
-    showError(tr("The study trial could not start"), what(e));
-    startFreeRun();
-    return false;
-  }
-  refreshStudyPanel();
-  refreshButtons();
-  return true;
-}
-
-void MainWindow::closeStudy() {
-  if (activity_ == Activity::kStudyTrial || activity_ == Activity::kMentoring) return;  // the device is in use
-  if (!study_) return;
-  (void)rig_.finish();  // the loop runs on the study's paper: stop it before the study goes
-  study_.reset();
-  subject_combo_->clear();
-  study_label_->setText(tr("No study open."));
-  showReference(reference_profile_ ? &*reference_profile_ : nullptr);
-  paper_->setReferenceShown(show_reference_check_->isChecked());
-  useEnvironment(*default_environment_);
-  refreshStudyPanel();
-  refreshButtons();
-}
+void MainWindow::closeStudy() { study_tab_->close(); }
 
 // ---- Review -------------------------------------------------------------------------------
 

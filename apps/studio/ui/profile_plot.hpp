@@ -22,6 +22,7 @@ class ProfilePlot final : public QWidget {
     expert_ = std::move(series);
     update();
   }
+  [[nodiscard]] const ForceSeries& expert() const { return expert_; }
   /// The trainee's forces (solid), appended live or set at once.
   ForceSeries& trainee() { return trainee_; }
   void setTrainee(ForceSeries series) {
