@@ -3,6 +3,7 @@
 // window is saved as a screenshot (studio_smoke.png in the build folder) and its pixels are
 // checked for the paper's grain, the expert's reference and the pen's trail. Then a take is
 // recorded and saved, a study trial is run and stored, and the study is reviewed.
+#include <QComboBox>
 #include <QLabel>
 #include <QStatusBar>
 #include <QTabWidget>
@@ -23,6 +24,7 @@
 #include "ui/paper_view.hpp"
 #include "ui/pen_scene_view.hpp"
 #include "ui/profile_plot.hpp"
+#include "ui/record_tab.hpp"
 
 using namespace hattr;
 using namespace hattr::studio;
@@ -282,6 +284,20 @@ class StudioSmokeTest : public QObject {
     QCOMPARE(w.rig().spec().metadata.extra.at("reference_file"), std::string("take2.csv"));
     w.abortActivity();
     QVERIFY2(w.loadReference(QString::fromStdString(expert_file_.string())), qPrintable(w.lastError()));
+
+    // With the pen-down trigger the take starts at the pen's touch and ends by itself a second
+    // after the pen is lifted (the Record tab watches the rig).
+    QComboBox* trigger = w.recordTab()->widgets().trigger;
+    trigger->setCurrentIndex(0);
+    QVERIFY2(w.startRecording(), qPrintable(w.lastError()));
+    QTest::qWait(400);  // settle
+    driveFor(w, 0.6, Vec3(-0.01, -0.01, 0.0));
+    QCOMPARE(w.activity(), MainWindow::Activity::kRecording);
+    QTRY_COMPARE_WITH_TIMEOUT(w.activity(), MainWindow::Activity::kFree, 3000);
+    QVERIFY(w.take().has_value());
+    QVERIFY(w.take()->penDownCount() > 100);
+    QVERIFY(w.take()->samples().front().pen_down);  // nothing before the touch
+    trigger->setCurrentIndex(1);
   }
 
   void aStudyTrialIsStoredAndReviewed() {

@@ -36,6 +36,7 @@
 #include "ui/paper_view.hpp"
 #include "ui/pen_scene_view.hpp"
 #include "ui/profile_plot.hpp"
+#include "ui/record_tab.hpp"
 #include "ui/review_tab.hpp"
 #include "ui/study_tab.hpp"
 #include "ui/ui_text.hpp"
@@ -219,61 +220,59 @@ void MainWindow::buildWriteTab() {
   tabs_->addTab(page, tr("Write"));
 }
 
+// The Record tab records on the window's rig, paper and plot (RecordHost).
 void MainWindow::buildRecordTab() {
-  auto* page = new QWidget;
-  auto* layout = new QVBoxLayout(page);
-  layout->addWidget(
-      wrappedLabel(tr("<b>Record an expert.</b> Name the expert and the character, then record: "
-                      "with the pen-down trigger the take starts when the pen touches the paper and "
-                      "ends after it has been lifted for a second.")));
-  auto* form = new QFormLayout;
-  expert_name_ = new QLineEdit;
-  expert_name_->setPlaceholderText(tr("e.g. expert1"));
-  character_ = new QLineEdit;
-  character_->setPlaceholderText(tr("e.g. na"));
-  trigger_ = new QComboBox;
-  trigger_->addItem(tr("Pen down starts, 1 s pen-up stops"));
-  trigger_->addItem(tr("Record / Stop buttons"));
-  form->addRow(tr("Expert"), expert_name_);
-  form->addRow(tr("Character"), character_);
-  form->addRow(tr("Trigger"), trigger_);
-  layout->addLayout(form);
-  record_button_ = new QPushButton(tr("Record (R)"));
-  connect(record_button_, &QPushButton::clicked, this, [this] {
-    if (activity_ == Activity::kRecording) {
-      stopRecording();
-    } else {
-      startRecording();
+  RecordHost host;
+  host.idle = [this] { return activity_ == Activity::kFree || activity_ == Activity::kPlayback; };
+  host.recording = [this] { return activity_ == Activity::kRecording; };
+  host.begin = [this](const RunSpec& spec) {
+    if (activity_ == Activity::kPlayback) abortActivity();
+    playback_.load(nullptr);
+    try {
+      rig_.start(*environment_, spec, hand_, session::Clock::kRealTime);
+    } catch (...) {
+      startFreeRun();
+      throw;
     }
-  });
-  replay_take_button_ = new QPushButton(tr("Review take (P)"));
-  connect(replay_take_button_, &QPushButton::clicked, this, [this] {
-    if (take_) startPlayback(&*take_, nullptr);
-  });
-  retake_button_ = new QPushButton(tr("Re-take"));
-  connect(retake_button_, &QPushButton::clicked, this, [this] {
-    if (take_ && !take_saved_ && !confirm(tr("The current take is not saved. Discard it and record again?"))) return;
-    forgetTake();
-    startRecording();
-  });
-  save_take_button_ = new QPushButton(tr("Save take… (Ctrl+S)"));
-  connect(save_take_button_, &QPushButton::clicked, this, [this] {
-    if (!take_) return;
-    const QString file =
-        askSaveFile(tr("Save the take as a haptic profile"),
-                    qs(suggestedTakeFileName(expert_name_->text().toStdString(), character_->text().toStdString())));
-    if (!file.isEmpty()) saveTake(file);
-  });
-  use_take_button_ = new QPushButton(tr("Use as the reference (Train)"));
-  use_take_button_->setToolTip(tr("Train against this take without saving it first"));
-  connect(use_take_button_, &QPushButton::clicked, this, [this] { (void)useTakeAsReference(); });
-  for (auto* b : {record_button_, replay_take_button_, retake_button_, save_take_button_, use_take_button_}) {
-    layout->addWidget(b);
-  }
-  take_label_ = wrappedLabel(tr("No take yet."));
-  layout->addWidget(take_label_);
-  layout->addStretch(1);
-  tabs_->addTab(page, tr("Record"));
+    activity_ = Activity::kRecording;
+    paper_->trail().clear();
+    paper_->overlay().clear();
+    plot_->trainee().clear();
+    plot_->setCursorTime(std::nullopt);
+    plot_->setTitle(tr("Recording"));
+  };
+  host.end = [this] {
+    session::TrialResult result = rig_.finish();
+    activity_ = Activity::kFree;
+    startFreeRun();
+    return result;
+  };
+  host.show = [this](const HapticProfile& take) {
+    paper_->trail().assign(take);
+    plot_->setTrainee(ForceSeries::fromProfile(take));
+    plot_->setExpert({});
+    plot_->setTimeWindow(std::nullopt);
+    plot_->setTitle(tr("Take"));
+    plot_holds_result_ = true;
+  };
+  host.play = [this](const HapticProfile& take) { startPlayback(&take, nullptr); };
+  host.use_as_reference = [this](const HapticProfile& take) { return makeTakeTheReference(take); };
+  host.take_changed = [this] {
+    if (!record_tab_->take()) {
+      reference_is_take_ = false;  // a reference made of it stays, as a take nobody can save now
+    } else if (reference_is_take_) {
+      nameTakeReference();
+    }
+  };
+  host.save = [this](const HapticProfile& profile, const QString& file, bool& saved) {
+    return saveProfileTo(profile, file, saved);
+  };
+  host.error = [this](const QString& what, const QString& detail) { showError(what, detail); };
+  host.confirm = [this](const QString& question) { return confirm(question); };
+  host.ask_save_file = [this](const QString& title, const QString& name) { return askSaveFile(title, name); };
+  host.changed = [this] { refreshButtons(); };
+  record_tab_ = new RecordTab(rig_, *settings_, std::move(host));
+  tabs_->addTab(record_tab_, tr("Record"));
 }
 
 void MainWindow::buildTrainTab() {
@@ -479,7 +478,7 @@ void MainWindow::buildActions() {
     if (!f.isEmpty()) loadTabletCalibration(f);
   });
   file->addSeparator();
-  add(file, tr("Save take…"), QKeySequence(Qt::CTRL | Qt::Key_S), [this] { save_take_button_->click(); });
+  add(file, tr("Save take…"), QKeySequence(Qt::CTRL | Qt::Key_S), [this] { record_tab_->askSave(); });
   add(file, tr("Save last trial…"), QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_S),
       [this] { save_trial_button_->click(); });
   file->addSeparator();
@@ -492,7 +491,7 @@ void MainWindow::buildActions() {
       [this] { abortActivity(); });
   add(act, tr("Record / stop recording"), QKeySequence(Qt::Key_R), [this] {
     tabs_->setCurrentIndex(kTabRecord);
-    record_button_->click();
+    record_tab_->toggle();
   });
   add(act, tr("Start trial"), QKeySequence(Qt::Key_T), [this] {
     tabs_->setCurrentIndex(kTabTrain);
@@ -562,9 +561,6 @@ void MainWindow::loadSettings() {
   press_label_->setText(tr("%1 N").arg(input.press_N, 0, 'f', 1));
   arrows_check_->setChecked(s.value("view/arrows", true).toBool());
   scene_check_->setChecked(s.value("view/scene_3d", false).toBool());
-  expert_name_->setText(s.value("record/name").toString());
-  character_->setText(s.value("record/character").toString());
-  trigger_->setCurrentIndex(s.value("record/trigger", 0).toInt());
   indexing_combo_->setCurrentIndex(s.value("train/indexing", 0).toInt());
   show_reference_check_->setChecked(s.value("train/show_reference", true).toBool());
   settle_spin_->setValue(s.value("train/settle_s", 1.5).toDouble());
@@ -600,9 +596,7 @@ void MainWindow::saveSettings() {
   s.setValue("view/arrows", arrows_check_->isChecked());
   s.setValue("view/scene_3d", scene_check_->isChecked());
   s.setValue("window/view_splitter", view_splitter_->saveState());
-  s.setValue("record/name", expert_name_->text());
-  s.setValue("record/character", character_->text());
-  s.setValue("record/trigger", trigger_->currentIndex());
+  record_tab_->saveSettings();
   s.setValue("train/mode", static_cast<int>(mode_));
   s.setValue("train/indexing", indexing_combo_->currentIndex());
   s.setValue("train/show_reference", show_reference_check_->isChecked());
@@ -614,7 +608,7 @@ void MainWindow::saveSettings() {
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {
-  if (take_ && !take_saved_ && !confirm(tr("The take is not saved. Quit and lose it?"))) {
+  if (!record_tab_->mayClose()) {
     event->ignore();
     return;
   }
@@ -785,19 +779,7 @@ void MainWindow::onFrame() {
       if (status.window_done || status.writing_over) finishTrial();
       break;
     }
-    case Activity::kRecording:
-      if (rig_.spec().record == RecordMode::kPenDown) {
-        banner = status.recording ? tr("Recording… lift the pen for 1 s to stop")
-                                  : (status.settling ? tr("Get ready…") : tr("Put the pen down to start recording"));
-      } else if (status.settling) {
-        banner = tr("Get ready…");
-      } else {
-        if (!recording_armed_) rig_.armRecording();
-        recording_armed_ = true;
-        banner = tr("Recording… press R to stop");
-      }
-      if (status.pen_down_done) stopRecording();
-      break;
+    case Activity::kRecording: banner = record_tab_->recordingBanner(); break;
     case Activity::kPlayback: {
       const double t = playback_.time_s(now);
       const std::size_t i = playback_.indexAt(t);
@@ -860,12 +842,7 @@ void MainWindow::onStatus() {
 
 void MainWindow::refreshButtons() {
   const bool free = activity_ == Activity::kFree || activity_ == Activity::kPlayback;
-  record_button_->setText(activity_ == Activity::kRecording ? tr("Stop recording (R)") : tr("Record (R)"));
-  record_button_->setEnabled(free || activity_ == Activity::kRecording);
-  replay_take_button_->setEnabled(take_.has_value() && free);
-  retake_button_->setEnabled(take_.has_value() && free);
-  save_take_button_->setEnabled(take_.has_value());
-  use_take_button_->setEnabled(take_.has_value() && free);
+  record_tab_->refresh();
   trial_button_->setText(activity_ == Activity::kTrial ? tr("Stop trial (Space, Ctrl+.)") : tr("Start trial (Space)"));
   trial_button_->setEnabled((free && reference_profile_) || activity_ == Activity::kTrial);
   replay_trial_button_->setEnabled(last_trial_.has_value() && free);

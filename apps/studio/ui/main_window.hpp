@@ -41,6 +41,7 @@ class MentorTab;
 class PaperView;
 class PenSceneView;
 class ProfilePlot;
+class RecordTab;
 class ReviewTab;
 class StudySession;
 class StudyTab;
@@ -114,7 +115,8 @@ class MainWindow final : public QMainWindow {
   [[nodiscard]] guidance::TrainingMode mode() const { return mode_; }
   [[nodiscard]] const std::optional<analysis::TrialScore>& lastScores() const { return last_scores_; }
   [[nodiscard]] const std::optional<HapticProfile>& lastTrial() const { return last_trial_; }
-  [[nodiscard]] const std::optional<HapticProfile>& take() const { return take_; }
+  /// The Record tab's take (none before one is recorded).
+  [[nodiscard]] const std::optional<HapticProfile>& take() const;
   /// The open study session (null: none); the Study tab owns it.
   [[nodiscard]] StudySession* study() const;
   [[nodiscard]] PaperView* paperView() const { return paper_; }
@@ -128,6 +130,7 @@ class MainWindow final : public QMainWindow {
   [[nodiscard]] MentorTab* mentorTab() const { return mentor_; }
   [[nodiscard]] ReviewTab* reviewTab() const { return review_; }
   [[nodiscard]] StudyTab* studyTab() const { return study_tab_; }
+  [[nodiscard]] RecordTab* recordTab() const { return record_tab_; }
   [[nodiscard]] LearningCurve* learningCurve() const { return learning_curve_; }
 
  protected:
@@ -165,8 +168,9 @@ class MainWindow final : public QMainWindow {
   /// The training reference, read from `file` (empty: not from a file, not remembered), named
   /// `name` in trials' metadata, described by `label_html`.
   void setReference(HapticProfile profile, const QString& file, const QString& name, const QString& label_html);
+  /// The Record tab's take becomes the reference (false: refused, with a message).
+  bool makeTakeTheReference(const HapticProfile& take);
   void nameTakeReference();
-  void forgetTake();
   void refreshButtons();
   [[nodiscard]] double now_s() const;
 
@@ -214,12 +218,7 @@ class MainWindow final : public QMainWindow {
   guidance::TrainingMode trial_mode_ = guidance::TrainingMode::kBasic;  // the mode it started in
   bool trial_shows_reference_ = true;
 
-  // Record.
-  bool recording_armed_ = false;  // start/stop buttons: armed once the settle phase is over
-  std::optional<HapticProfile> take_;
-  bool take_saved_ = true;
-  QString take_file_;              // where the take was saved (empty: not saved)
-  bool reference_is_take_ = false;  // the reference is the take (named by take_file_)
+  bool reference_is_take_ = false;  // the reference is the Record tab's take (named by its file)
 
   // Review.
   std::function<bool(const QUrl&)> url_opener_;
@@ -254,16 +253,8 @@ class MainWindow final : public QMainWindow {
   QLabel* status_activity_ = nullptr;
   // Write tab.
   QLabel* world_label_ = nullptr;
-  // Record tab.
-  QLineEdit* expert_name_ = nullptr;
-  QLineEdit* character_ = nullptr;
-  QComboBox* trigger_ = nullptr;
-  QPushButton* record_button_ = nullptr;
-  QPushButton* replay_take_button_ = nullptr;
-  QPushButton* retake_button_ = nullptr;
-  QPushButton* save_take_button_ = nullptr;
-  QPushButton* use_take_button_ = nullptr;
-  QLabel* take_label_ = nullptr;
+  // Record tab (the take it records is its own).
+  RecordTab* record_tab_ = nullptr;
   // Train tab.
   QLabel* reference_label_ = nullptr;
   QComboBox* mode_combo_ = nullptr;

@@ -23,21 +23,12 @@
 #include "ui/mentor_tab.hpp"
 #include "ui/paper_view.hpp"
 #include "ui/profile_plot.hpp"
+#include "ui/record_tab.hpp"
 #include "ui/review_tab.hpp"
 #include "ui/study_tab.hpp"
 #include "ui/ui_text.hpp"
 
 namespace hattr::studio {
-namespace {
-
-QString describeProfile(const HapticProfile& p) {
-  return QObject::tr("%1 samples, %2 s, %3 with the pen down")
-      .arg(p.size())
-      .arg(p.duration_s(), 0, 'f', 2)
-      .arg(p.penDownCount());
-}
-
-}  // namespace
 
 // ---- Train --------------------------------------------------------------------------------
 
@@ -60,22 +51,20 @@ bool MainWindow::loadReference(const QString& file) {
   }
 }
 
-bool MainWindow::useTakeAsReference() {
-  if (!take_) {
-    showError(tr("No take to use"), tr("record a take first (Record tab)"));
-    return false;
-  }
+bool MainWindow::useTakeAsReference() { return record_tab_->useAsReference(); }
+
+bool MainWindow::makeTakeTheReference(const HapticProfile& take) {
   if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) {
     showError(tr("The reference cannot change now"), tr("finish the trial, recording or session first"));
     return false;
   }
   try {
-    checkReferenceProfile(*take_, "the take");
+    checkReferenceProfile(take, "the take");
   } catch (const std::exception& e) {
     showError(tr("The take cannot be the reference"), what(e));
     return false;
   }
-  setReference(*take_, QString(), QStringLiteral("take (not saved)"), QString());
+  setReference(take, QString(), QStringLiteral("take (not saved)"), QString());
   reference_is_take_ = true;
   nameTakeReference();
   tabs_->setCurrentIndex(kTabTrain);
@@ -84,22 +73,14 @@ bool MainWindow::useTakeAsReference() {
 
 // The take as the reference is named by the file it was saved to, if it was; else "take (not saved)".
 void MainWindow::nameTakeReference() {
-  const QString who = expert_name_->text().trimmed().isEmpty() ? tr("unnamed") : expert_name_->text().trimmed();
-  const QString what_char = character_->text().trimmed().isEmpty() ? tr("no character") : character_->text().trimmed();
-  const bool saved = !take_file_.isEmpty();  // set by saveTake, cleared with the take
-  reference_file_ = saved ? take_file_ : QString();
-  reference_name_ = saved ? QFileInfo(take_file_).fileName() : QStringLiteral("take (not saved)");
+  const QString& take_file = record_tab_->takeFile();  // set by a save, cleared with the take
+  const bool saved = !take_file.isEmpty();
+  reference_file_ = saved ? take_file : QString();
+  reference_name_ = saved ? QFileInfo(take_file).fileName() : QStringLiteral("take (not saved)");
   reference_label_->setText(tr("Reference: <b>the take</b> (%1, %2, %3): %4")
-                                .arg(who.toHtmlEscaped(), what_char.toHtmlEscaped(),
-                                     saved ? tr("saved as %1").arg(take_file_.toHtmlEscaped()) : tr("not saved"),
+                                .arg(record_tab_->expertName().toHtmlEscaped(), record_tab_->character().toHtmlEscaped(),
+                                     saved ? tr("saved as %1").arg(take_file.toHtmlEscaped()) : tr("not saved"),
                                      describeProfile(*reference_profile_)));
-}
-
-void MainWindow::forgetTake() {
-  take_.reset();
-  take_saved_ = true;
-  take_file_.clear();
-  reference_is_take_ = false;  // a reference made of it stays, as a take nobody can save now
 }
 
 void MainWindow::setReference(HapticProfile profile, const QString& file, const QString& name,
@@ -352,84 +333,15 @@ bool MainWindow::saveLastTrial(const QString& file) {
   return saveProfileTo(*last_trial_, file, last_trial_saved_);
 }
 
-// ---- Record -------------------------------------------------------------------------------
+// ---- Record (the Record tab's) --------------------------------------------------------------
 
-bool MainWindow::startRecording() {
-  if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) return false;
-  if (take_ && !take_saved_ && !confirm(tr("The current take is not saved. Discard it and record a new one?"))) {
-    return false;
-  }
-  RunSpec spec;
-  spec.record = trigger_->currentIndex() == 0 ? RecordMode::kPenDown : RecordMode::kCommand;
-  spec.metadata.subject = expert_name_->text().trimmed().toStdString();
-  spec.metadata.skill = character_->text().trimmed().toStdString();
-  spec.metadata.source = "recorded";
-  playback_.load(nullptr);
-  try {
-    rig_.start(*environment_, spec, hand_, session::Clock::kRealTime);
-  } catch (const std::exception& e) {
-    showError(tr("The recording could not start"), what(e));
-    startFreeRun();
-    return false;
-  }
-  recording_armed_ = false;  // the start/stop trigger arms once the pen has settled
-  forgetTake();
-  activity_ = Activity::kRecording;
-  paper_->trail().clear();
-  paper_->overlay().clear();
-  plot_->trainee().clear();
-  plot_->setCursorTime(std::nullopt);
-  plot_->setTitle(tr("Recording"));
-  take_label_->setText(tr("Recording…"));
-  refreshButtons();
-  return true;
-}
+const std::optional<HapticProfile>& MainWindow::take() const { return record_tab_->take(); }
 
-bool MainWindow::stopRecording() {
-  if (activity_ != Activity::kRecording) return false;
-  // The person ends the take (its end_reason "stopped"), unless the pen-up trigger already did.
-  if (!rig_.status().pen_down_done) rig_.requestStop();
-  rig_.disarmRecording();
-  session::TrialResult result = rig_.finish();
-  activity_ = Activity::kFree;
-  startFreeRun();
-  if (result.profile.empty()) {
-    take_label_->setText(tr("Nothing was recorded (the pen never touched the paper)."));
-    refreshButtons();
-    return false;
-  }
-  take_ = std::move(result.profile);  // startRecording forgot the previous take
-  take_saved_ = false;
-  paper_->trail().assign(*take_);
-  plot_->setTrainee(ForceSeries::fromProfile(*take_));
-  plot_->setExpert({});
-  plot_->setTimeWindow(std::nullopt);
-  plot_->setTitle(tr("Take"));
-  plot_holds_result_ = true;
-  take_label_->setText(tr("Take: %1; %2 missed samples. Not saved yet.")
-                           .arg(describeProfile(*take_))
-                           .arg(qs(take_->metadata().extra["missed_samples"])));
-  refreshButtons();
-  return true;
-}
+bool MainWindow::startRecording() { return record_tab_->start(); }
 
-bool MainWindow::saveTake(const QString& file) {
-  if (!take_) return false;
-  try {
-    // The take is renamed as the person typed it; the take in memory stays as it is.
-    HapticProfile named = nameTake(*take_, expert_name_->text().toStdString(), character_->text().toStdString());
-    bool saved = false;
-    if (!saveProfileTo(named, file, saved)) return false;
-    take_saved_ = true;
-    take_file_ = file;
-    take_label_->setText(tr("Take: %1. Saved as %2.").arg(describeProfile(*take_), file.toHtmlEscaped()));
-    if (reference_is_take_) nameTakeReference();  // the reference is now that file
-    return true;
-  } catch (const std::exception& e) {
-    showError(tr("The take was not saved (it is still here)"), what(e));
-    return false;
-  }
-}
+bool MainWindow::stopRecording() { return record_tab_->stop(); }
+
+bool MainWindow::saveTake(const QString& file) { return record_tab_->save(file); }
 
 bool MainWindow::saveProfileTo(const HapticProfile& profile, const QString& file, bool& saved_flag) {
   try {
@@ -459,7 +371,7 @@ void MainWindow::abortActivity() {
     case Activity::kRecording:
       (void)rig_.finish();
       if (activity_ == Activity::kStudyTrial) study_tab_->trialAbandoned();  // it runs again
-      if (activity_ == Activity::kRecording) take_label_->setText(tr("Recording aborted; nothing kept."));
+      if (activity_ == Activity::kRecording) record_tab_->aborted();
       if (activity_ == Activity::kTrial) scores_label_->setText(tr("Trial aborted; nothing kept."));
       activity_ = Activity::kFree;
       paper_->setReferenceCue(std::nullopt);
@@ -507,7 +419,7 @@ void MainWindow::togglePlayback() {
   // Nothing playing: play what the tab shows.
   switch (tabs_->currentIndex()) {
     case kTabRecord:
-      if (take_) startPlayback(&*take_, nullptr);
+      if (take()) startPlayback(&*take(), nullptr);
       break;
     case kTabReview:
       if (review_->trial() != nullptr) startPlayback(review_->trial(), review_->expert());
@@ -527,13 +439,7 @@ void MainWindow::clearTrail() {
 
 void MainWindow::primaryAction() {
   switch (tabs_->currentIndex()) {
-    case kTabRecord:
-      if (activity_ == Activity::kRecording) {
-        stopRecording();
-      } else {
-        startRecording();
-      }
-      break;
+    case kTabRecord: record_tab_->toggle(); break;
     case kTabTrain:
       if (activity_ == Activity::kTrial) {
         stopTrial();

@@ -1,12 +1,14 @@
 #pragma once
-/// Small helpers the studio's widgets share: library text to Qt, an exception's text, and the
-/// word-wrapped, selectable label every tab uses. GUI thread only (wrappedLabel).
+/// Small helpers the studio's widgets share: library text to Qt, an exception's text, the
+/// word-wrapped, selectable label every tab uses, and a profile in a few words. GUI thread only (wrappedLabel).
 
 #include <QLabel>
 #include <QString>
 #include <exception>
 #include <string>
 #include <string_view>
+
+#include "hattr/core/haptic_profile.hpp"
 
 namespace hattr::studio {
 
@@ -20,6 +22,14 @@ inline QLabel* wrappedLabel(const QString& text = {}) {
   label->setWordWrap(true);
   label->setTextInteractionFlags(Qt::TextSelectableByMouse);
   return label;
+}
+
+/// A profile in a few words: its samples, its length and how many have the pen down.
+inline QString describeProfile(const HapticProfile& p) {
+  return QObject::tr("%1 samples, %2 s, %3 with the pen down")
+      .arg(p.size())
+      .arg(p.duration_s(), 0, 'f', 2)
+      .arg(p.penDownCount());
 }
 
 }  // namespace hattr::studio
