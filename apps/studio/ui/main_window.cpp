@@ -39,6 +39,7 @@
 #include "ui/record_tab.hpp"
 #include "ui/review_tab.hpp"
 #include "ui/study_tab.hpp"
+#include "ui/train_tab.hpp"
 #include "ui/ui_text.hpp"
 
 namespace hattr::studio {
@@ -256,12 +257,16 @@ void MainWindow::buildRecordTab() {
     plot_holds_result_ = true;
   };
   host.play = [this](const HapticProfile& take) { startPlayback(&take, nullptr); };
-  host.use_as_reference = [this](const HapticProfile& take) { return makeTakeTheReference(take); };
+  host.use_as_reference = [this](const HapticProfile& take) {
+    if (!train_tab_->useTake(take, takeName())) return false;
+    tabs_->setCurrentIndex(kTabTrain);
+    return true;
+  };
   host.take_changed = [this] {
-    if (!record_tab_->take()) {
-      reference_is_take_ = false;  // a reference made of it stays, as a take nobody can save now
-    } else if (reference_is_take_) {
-      nameTakeReference();
+    if (record_tab_->take()) {
+      train_tab_->takeRenamed(takeName());
+    } else {
+      train_tab_->takeGone();
     }
   };
   host.save = [this](const HapticProfile& profile, const QString& file, bool& saved) {
@@ -275,77 +280,48 @@ void MainWindow::buildRecordTab() {
   tabs_->addTab(record_tab_, tr("Record"));
 }
 
+// The Train tab runs its trials on the window's rig, paper and plot (TrainHost).
 void MainWindow::buildTrainTab() {
-  auto* page = new QWidget;
-  auto* layout = new QVBoxLayout(page);
-  layout->addWidget(
-      wrappedLabel(tr("<b>Train</b> against an expert's haptic profile. After the trial, DTW scores "
-                      "compare your trace (shape: x, y) and your force (fx, fy, fz) with the "
-                      "expert's; lower is closer.")));
-  reference_label_ = wrappedLabel(tr("No reference loaded."));
-  layout->addWidget(reference_label_);
-  auto* open = new QPushButton(tr("Open reference… (Ctrl+O)"));
-  connect(open, &QPushButton::clicked, this, [this] {
-    const QString file = askOpenFile(tr("Open a reference profile"), tr("Haptic profiles (*.csv);;All files (*)"));
-    if (!file.isEmpty()) loadReference(file);
-  });
-  layout->addWidget(open);
-  auto* form = new QFormLayout;
-  mode_combo_ = new QComboBox;
-  for (const auto mode : {guidance::TrainingMode::kBasic, guidance::TrainingMode::kPositionControl,
-                          guidance::TrainingMode::kForceControl}) {
-    mode_combo_->addItem(
-        QString::fromLatin1(guidance::modeName(mode).data(), static_cast<qsizetype>(guidance::modeName(mode).size())));
-  }
-  mode_combo_->setToolTip(tr("BASIC: no assistance (1) · PCONTROL: position guidance (2) · ALPHA: force guidance (3)"));
-  connect(mode_combo_, &QComboBox::activated, this,
-          [this](int index) { setMode(static_cast<guidance::TrainingMode>(index)); });
-  indexing_combo_ = new QComboBox;
-  indexing_combo_->addItem(tr("time (the paper's)"));
-  indexing_combo_->addItem(tr("progress (follows you)"));
-  show_reference_check_ = new QCheckBox(tr("Show the reference"));
-  show_reference_check_->setChecked(true);
-  connect(show_reference_check_, &QCheckBox::toggled, this, [this](bool on) {
-    if (activity_ != Activity::kStudyTrial) paper_->setReferenceShown(on);
-  });
-  settle_spin_ = new QDoubleSpinBox;
-  settle_spin_->setRange(0.3, 10.0);
-  settle_spin_->setSingleStep(0.5);
-  settle_spin_->setSuffix(tr(" s"));
-  settle_spin_->setValue(1.5);
-  settle_spin_->setToolTip(
-      tr("Before each trial the pen is held lifted this long while the forces ramp in; move "
-         "to the start meanwhile"));
-  form->addRow(tr("Mode"), mode_combo_);
-  form->addRow(tr("Indexing"), indexing_combo_);
-  form->addRow(tr("Get ready"), settle_spin_);
-  form->addRow(QString(), show_reference_check_);
-  layout->addLayout(form);
-  trial_button_ = new QPushButton(tr("Start trial (Space)"));
-  connect(trial_button_, &QPushButton::clicked, this, [this] {
-    if (activity_ == Activity::kTrial) {
-      stopTrial();
-    } else {
-      startTrial();
-    }
-  });
-  replay_trial_button_ = new QPushButton(tr("Replay trial (P)"));
-  connect(replay_trial_button_, &QPushButton::clicked, this, [this] {
+  TrainHost host;
+  host.idle = [this] { return activity_ == Activity::kFree || activity_ == Activity::kPlayback; };
+  host.trial_running = [this] { return activity_ == Activity::kTrial; };
+  host.may_change_reference = [this] { return activity_ != Activity::kTrial && activity_ != Activity::kStudyTrial; };
+  host.rate_hz = [this] { return environment_->rate_hz(); };
+  host.start_trial = [this](const session::TrialSetup& setup, const HapticProfile& expert, bool reference_on_paper,
+                            const QString& title, QLabel* scores) {
+    beginLiveTrial(*environment_, setup, Activity::kTrial, expert, reference_on_paper, true, title, scores);
+  };
+  host.stop_trial = [this] { (void)stopTrial(); };
+  host.switch_mode = [this](guidance::TrainingMode mode) { return rig_.switchMode(mode); };
+  host.show_reference = [this](const HapticProfile& reference, bool shown) {
+    if (activity_ != Activity::kFree && activity_ != Activity::kRecording) return;  // a trial or session has the views
+    showReference(&reference);
+    paper_->setReferenceShown(shown);
+    // The new reference alone on the plot: the last take's curves go; it stays until the pen writes.
+    plot_->setTrainee({});
+    plot_->setCursorTime(std::nullopt);
+    plot_->setTimeWindow(std::nullopt);
+    plot_->setTitle(tr("Reference"));
+    plot_holds_result_ = true;
+    plot_->setExpert(ForceSeries::fromProfile(reference, 4000, -reference.samples().front().t_s));
+  };
+  host.reference_shown = [this](bool shown) {
+    if (activity_ != Activity::kStudyTrial) paper_->setReferenceShown(shown);
+  };
+  host.has_last_trial = [this] { return last_trial_.has_value(); };
+  host.replay_last_trial = [this] {
     if (last_trial_) startPlayback(&*last_trial_, last_trial_expert_ ? &*last_trial_expert_ : nullptr);
-  });
-  save_trial_button_ = new QPushButton(tr("Save trial… (Ctrl+Shift+S)"));
-  connect(save_trial_button_, &QPushButton::clicked, this, [this] {
+  };
+  host.save_last_trial = [this] {
     if (!last_trial_) return;
     const QString file = askSaveFile(tr("Save the trial as a haptic profile"), QStringLiteral("trial.csv"));
     if (!file.isEmpty()) saveLastTrial(file);
-  });
-  for (auto* b : {trial_button_, replay_trial_button_, save_trial_button_}) layout->addWidget(b);
-  scores_label_ = wrappedLabel();
-  layout->addWidget(scores_label_);
-  learning_curve_ = new LearningCurve;
-  layout->addWidget(learning_curve_);
-  layout->addStretch(1);
-  tabs_->addTab(page, tr("Train"));
+  };
+  host.error = [this](const QString& what, const QString& detail) { showError(what, detail); };
+  host.ask_open_file = [this](const QString& title, const QString& filter) { return askOpenFile(title, filter); };
+  host.changed = [this] { refreshButtons(); };
+  train_tab_ = new TrainTab(*settings_, std::move(host));
+  tabs_->addTab(train_tab_, tr("Train"));
 }
 
 // The Study tab runs its trials on the window's rig, paper and plot (StudyHost).
@@ -363,8 +339,8 @@ void MainWindow::buildStudyTab() {
   host.use_environment = [this](session::TrialEnvironment* environment) {
     (void)rig_.finish();  // the loop runs on the paper that may go
     if (environment == nullptr) {
-      showReference(reference_profile_ ? &*reference_profile_ : nullptr);
-      paper_->setReferenceShown(show_reference_check_->isChecked());
+      showReference(train_tab_->reference());
+      paper_->setReferenceShown(train_tab_->referenceShown());
     }
     useEnvironment(environment != nullptr ? *environment : *default_environment_);
   };
@@ -381,7 +357,7 @@ void MainWindow::buildStudyTab() {
     beginLiveTrial(environment, setup, Activity::kStudyTrial, expert, shows_reference, shows_reference, title, scores);
   };
   host.stop_trial = [this] { (void)stopTrial(); };
-  host.settle_s = [this] { return settle_spin_->value(); };
+  host.settle_s = [this] { return train_tab_->settle_s(); };
   host.now_s = [this] { return now_s(); };
   host.error = [this](const QString& what, const QString& detail) { showError(what, detail); };
   host.confirm = [this](const QString& question) { return confirm(question); };
@@ -480,7 +456,7 @@ void MainWindow::buildActions() {
   file->addSeparator();
   add(file, tr("Save take…"), QKeySequence(Qt::CTRL | Qt::Key_S), [this] { record_tab_->askSave(); });
   add(file, tr("Save last trial…"), QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_S),
-      [this] { save_trial_button_->click(); });
+      [this] { train_tab_->widgets().save->click(); });
   file->addSeparator();
   add(file, tr("Quit"), QKeySequence(Qt::CTRL | Qt::Key_Q), [this] { close(); });
 
@@ -561,10 +537,6 @@ void MainWindow::loadSettings() {
   press_label_->setText(tr("%1 N").arg(input.press_N, 0, 'f', 1));
   arrows_check_->setChecked(s.value("view/arrows", true).toBool());
   scene_check_->setChecked(s.value("view/scene_3d", false).toBool());
-  indexing_combo_->setCurrentIndex(s.value("train/indexing", 0).toInt());
-  show_reference_check_->setChecked(s.value("train/show_reference", true).toBool());
-  settle_spin_->setValue(s.value("train/settle_s", 1.5).toDouble());
-  setMode(static_cast<guidance::TrainingMode>(std::clamp(s.value("train/mode", 0).toInt(), 0, 2)));
   // The tablet calibration of last time, quietly (a file that went bad: the defaults).
   const QString calibration = s.value("input/tablet_calibration").toString();
   if (!calibration.isEmpty() && QFileInfo::exists(calibration)) {
@@ -597,12 +569,7 @@ void MainWindow::saveSettings() {
   s.setValue("view/scene_3d", scene_check_->isChecked());
   s.setValue("window/view_splitter", view_splitter_->saveState());
   record_tab_->saveSettings();
-  s.setValue("train/mode", static_cast<int>(mode_));
-  s.setValue("train/indexing", indexing_combo_->currentIndex());
-  s.setValue("train/show_reference", show_reference_check_->isChecked());
-  s.setValue("train/settle_s", settle_spin_->value());
-  // An unsaved take as the reference is not remembered; the last file reference stays.
-  if (!reference_file_.isEmpty()) s.setValue("train/reference_file", reference_file_);
+  train_tab_->saveSettings();
   s.setValue("world/file", world_file_);
   s.sync();
 }
@@ -834,19 +801,15 @@ void MainWindow::onStatus() {
   static const char* kNames[] = {"writing", "recording", "training trial", "study trial", "playback", "mentoring"};
   // The mode the loop runs: a study trial's own (a recall trial is BASIC whatever its mode),
   // otherwise the Train tab's.
-  const guidance::TrainingMode shown = activity_ == Activity::kStudyTrial ? rig_.spec().guidance.mode : mode_;
+  const guidance::TrainingMode shown = activity_ == Activity::kStudyTrial ? rig_.spec().guidance.mode : train_tab_->mode();
   status_activity_->setText(tr("Activity: %1 · mode %2")
                                 .arg(QString::fromLatin1(kNames[static_cast<int>(activity_)]))
                                 .arg(qs(std::string(guidance::modeName(shown)))));
 }
 
 void MainWindow::refreshButtons() {
-  const bool free = activity_ == Activity::kFree || activity_ == Activity::kPlayback;
   record_tab_->refresh();
-  trial_button_->setText(activity_ == Activity::kTrial ? tr("Stop trial (Space, Ctrl+.)") : tr("Start trial (Space)"));
-  trial_button_->setEnabled((free && reference_profile_) || activity_ == Activity::kTrial);
-  replay_trial_button_->setEnabled(last_trial_.has_value() && free);
-  save_trial_button_->setEnabled(last_trial_.has_value());
+  train_tab_->refresh();
   study_tab_->refresh();
   review_->refresh(playback_.loaded());
 }

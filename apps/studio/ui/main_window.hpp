@@ -45,6 +45,8 @@ class RecordTab;
 class ReviewTab;
 class StudySession;
 class StudyTab;
+class TrainTab;
+struct TakeName;
 
 class MainWindow final : public QMainWindow {
   Q_OBJECT
@@ -112,7 +114,8 @@ class MainWindow final : public QMainWindow {
   void primaryAction();
 
   [[nodiscard]] Activity activity() const { return activity_; }
-  [[nodiscard]] guidance::TrainingMode mode() const { return mode_; }
+  /// The Train tab's mode.
+  [[nodiscard]] guidance::TrainingMode mode() const;
   [[nodiscard]] const std::optional<analysis::TrialScore>& lastScores() const { return last_scores_; }
   [[nodiscard]] const std::optional<HapticProfile>& lastTrial() const { return last_trial_; }
   /// The Record tab's take (none before one is recorded).
@@ -131,7 +134,8 @@ class MainWindow final : public QMainWindow {
   [[nodiscard]] ReviewTab* reviewTab() const { return review_; }
   [[nodiscard]] StudyTab* studyTab() const { return study_tab_; }
   [[nodiscard]] RecordTab* recordTab() const { return record_tab_; }
-  [[nodiscard]] LearningCurve* learningCurve() const { return learning_curve_; }
+  [[nodiscard]] LearningCurve* learningCurve() const;
+  [[nodiscard]] TrainTab* trainTab() const { return train_tab_; }
 
  protected:
   void closeEvent(QCloseEvent* event) override;
@@ -165,12 +169,8 @@ class MainWindow final : public QMainWindow {
   void finishTrial();
   void showScores(const HapticProfile& expert, const HapticProfile& trial, QLabel* where);
   void showReference(const HapticProfile* expert);
-  /// The training reference, read from `file` (empty: not from a file, not remembered), named
-  /// `name` in trials' metadata, described by `label_html`.
-  void setReference(HapticProfile profile, const QString& file, const QString& name, const QString& label_html);
-  /// The Record tab's take becomes the reference (false: refused, with a message).
-  bool makeTakeTheReference(const HapticProfile& take);
-  void nameTakeReference();
+  /// How the Record tab names its take, for the Train tab's reference.
+  [[nodiscard]] TakeName takeName() const;
   void refreshButtons();
   [[nodiscard]] double now_s() const;
 
@@ -204,21 +204,12 @@ class MainWindow final : public QMainWindow {
   Sample latest_{};
   bool plot_holds_result_ = false;  // the plot shows a trial or take until the pen writes again
 
-  // Train.
-  std::optional<HapticProfile> reference_profile_;
-  std::shared_ptr<const guidance::ReferenceTrajectory> reference_;
-  QString reference_file_;  // remembered in settings; empty for an unsaved take
-  QString reference_name_;  // in the trials' metadata (reference_file)
-  guidance::TrainingMode mode_ = guidance::TrainingMode::kBasic;
+  // The last trial (training or study) and its scores.
   std::optional<HapticProfile> last_trial_;
   std::optional<HapticProfile> last_trial_expert_;
   bool last_trial_saved_ = true;
   std::optional<analysis::TrialScore> last_scores_;
   const HapticProfile* trial_expert_ = nullptr;  // the reference of the running trial
-  guidance::TrainingMode trial_mode_ = guidance::TrainingMode::kBasic;  // the mode it started in
-  bool trial_shows_reference_ = true;
-
-  bool reference_is_take_ = false;  // the reference is the Record tab's take (named by its file)
 
   // Review.
   std::function<bool(const QUrl&)> url_opener_;
@@ -255,17 +246,8 @@ class MainWindow final : public QMainWindow {
   QLabel* world_label_ = nullptr;
   // Record tab (the take it records is its own).
   RecordTab* record_tab_ = nullptr;
-  // Train tab.
-  QLabel* reference_label_ = nullptr;
-  QComboBox* mode_combo_ = nullptr;
-  QComboBox* indexing_combo_ = nullptr;
-  QCheckBox* show_reference_check_ = nullptr;
-  QDoubleSpinBox* settle_spin_ = nullptr;
-  QPushButton* trial_button_ = nullptr;
-  QPushButton* save_trial_button_ = nullptr;
-  QPushButton* replay_trial_button_ = nullptr;
-  QLabel* scores_label_ = nullptr;
-  LearningCurve* learning_curve_ = nullptr;
+  // Train tab (the reference and the mode are its own).
+  TrainTab* train_tab_ = nullptr;
   // Study tab (the study session it runs is its own).
   StudyTab* study_tab_ = nullptr;
   // Review tab (the study database it reviews is its own).

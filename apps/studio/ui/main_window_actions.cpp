@@ -26,85 +26,24 @@
 #include "ui/record_tab.hpp"
 #include "ui/review_tab.hpp"
 #include "ui/study_tab.hpp"
+#include "ui/train_tab.hpp"
 #include "ui/ui_text.hpp"
 
 namespace hattr::studio {
 
 // ---- Train --------------------------------------------------------------------------------
 
-bool MainWindow::loadReference(const QString& file) {
-  if (activity_ == Activity::kTrial || activity_ == Activity::kStudyTrial) {
-    showError(tr("The reference cannot change now"), tr("finish or abort the trial first (Esc)"));
-    return false;
-  }
-  try {
-    HapticProfile profile = loadReferenceProfile(file.toStdString());
-    const QString label = tr("Reference <b>%1</b> (%2, %3): %4")
-                              .arg(QFileInfo(file).fileName().toHtmlEscaped(),
-                                   qs(profile.metadata().subject).toHtmlEscaped(),
-                                   qs(profile.metadata().skill).toHtmlEscaped(), describeProfile(profile));
-    setReference(std::move(profile), file, QFileInfo(file).fileName(), label);
-    return true;
-  } catch (const std::exception& e) {
-    showError(tr("The reference could not be loaded"), what(e));
-    return false;
-  }
-}
+bool MainWindow::loadReference(const QString& file) { return train_tab_->loadReference(file); }
 
 bool MainWindow::useTakeAsReference() { return record_tab_->useAsReference(); }
 
-bool MainWindow::makeTakeTheReference(const HapticProfile& take) {
-  if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) {
-    showError(tr("The reference cannot change now"), tr("finish the trial, recording or session first"));
-    return false;
-  }
-  try {
-    checkReferenceProfile(take, "the take");
-  } catch (const std::exception& e) {
-    showError(tr("The take cannot be the reference"), what(e));
-    return false;
-  }
-  setReference(take, QString(), QStringLiteral("take (not saved)"), QString());
-  reference_is_take_ = true;
-  nameTakeReference();
-  tabs_->setCurrentIndex(kTabTrain);
-  return true;
+TakeName MainWindow::takeName() const {
+  return {.file = record_tab_->takeFile(), .expert = record_tab_->expertName(), .character = record_tab_->character()};
 }
 
-// The take as the reference is named by the file it was saved to, if it was; else "take (not saved)".
-void MainWindow::nameTakeReference() {
-  const QString& take_file = record_tab_->takeFile();  // set by a save, cleared with the take
-  const bool saved = !take_file.isEmpty();
-  reference_file_ = saved ? take_file : QString();
-  reference_name_ = saved ? QFileInfo(take_file).fileName() : QStringLiteral("take (not saved)");
-  reference_label_->setText(tr("Reference: <b>the take</b> (%1, %2, %3): %4")
-                                .arg(record_tab_->expertName().toHtmlEscaped(), record_tab_->character().toHtmlEscaped(),
-                                     saved ? tr("saved as %1").arg(take_file.toHtmlEscaped()) : tr("not saved"),
-                                     describeProfile(*reference_profile_)));
-}
+guidance::TrainingMode MainWindow::mode() const { return train_tab_->mode(); }
 
-void MainWindow::setReference(HapticProfile profile, const QString& file, const QString& name,
-                              const QString& label_html) {
-  reference_profile_ = std::move(profile);
-  reference_file_ = file;
-  reference_name_ = name;
-  reference_is_take_ = false;
-  reference_ = nullptr;  // built at the trial's rate when a trial starts
-  reference_label_->setText(label_html);
-  learning_curve_->clear();  // scores against another reference do not compare
-  if (activity_ == Activity::kFree || activity_ == Activity::kRecording) {
-    showReference(&*reference_profile_);
-    paper_->setReferenceShown(show_reference_check_->isChecked());
-    // The new reference alone on the plot: the last take's curves go; it stays until the pen writes.
-    plot_->setTrainee({});
-    plot_->setCursorTime(std::nullopt);
-    plot_->setTimeWindow(std::nullopt);
-    plot_->setTitle(tr("Reference"));
-    plot_holds_result_ = true;
-    plot_->setExpert(ForceSeries::fromProfile(*reference_profile_, 4000, -reference_profile_->samples().front().t_s));
-  }
-  refreshButtons();
-}
+LearningCurve* MainWindow::learningCurve() const { return train_tab_->learningCurve(); }
 
 bool MainWindow::loadWorld(const QString& file) {
   if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) {
@@ -163,47 +102,9 @@ bool MainWindow::loadTabletCalibration(const QString& file) {
 
 bool MainWindow::openReport() { return review_->openReport(); }
 
-void MainWindow::setMode(guidance::TrainingMode mode) {
-  mode_ = mode;
-  mode_combo_->setCurrentIndex(static_cast<int>(mode));
-  // During a trial the mode switches through the servo mailbox, with the cross-fade.
-  if (activity_ == Activity::kTrial && !rig_.switchMode(mode)) {
-    showError(tr("The mode could not be switched"), tr("the servo loop's mailbox is full; try again"));
-  }
-}
+void MainWindow::setMode(guidance::TrainingMode mode) { train_tab_->setMode(mode); }
 
-bool MainWindow::startTrial() {
-  if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) return false;
-  if (!reference_profile_) {
-    showError(tr("No reference"), tr("open an expert's haptic profile first (Ctrl+O)"));
-    return false;
-  }
-  try {
-    reference_ = std::make_shared<guidance::ReferenceTrajectory>(*reference_profile_, environment_->rate_hz());
-    session::TrialSetup setup;
-    setup.guidance.mode = mode_;
-    setup.guidance.playback.indexing =
-        indexing_combo_->currentIndex() == 0 ? guidance::Indexing::kTime : guidance::Indexing::kProgress;
-    setup.reference = reference_;
-    // A study's default end: 1 s with the pen lifted after writing, at most 3 × the expert.
-    const session::TrialEndRule end = session::Protocol{}.trial_end;
-    setup.duration_s = end.maxDuration_s(reference_->duration_s());
-    setup.pen_up_end_s = end.pen_up_s;
-    setup.settle_s = settle_spin_->value();
-    setup.clock = session::Clock::kRealTime;
-    setup.metadata.subject = "trainee";
-    setup.metadata.skill = reference_profile_->metadata().skill;
-    setup.metadata.source = "studio";
-    setup.metadata.extra["reference_file"] = reference_name_.toStdString();
-    beginLiveTrial(*environment_, setup, Activity::kTrial, *reference_profile_, show_reference_check_->isChecked(), true,
-                   tr("Trial: %1").arg(qs(guidance::modeName(mode_))), scores_label_);
-  } catch (const std::exception& e) {
-    showError(tr("The trial could not start"), what(e));
-    return false;
-  }
-  trial_mode_ = mode_;
-  return true;
-}
+bool MainWindow::startTrial() { return train_tab_->start(); }
 
 void MainWindow::beginLiveTrial(session::TrialEnvironment& environment, const session::TrialSetup& setup,
                                 Activity kind, const HapticProfile& expert, bool reference_on_paper,
@@ -218,7 +119,6 @@ void MainWindow::beginLiveTrial(session::TrialEnvironment& environment, const se
   }
   activity_ = kind;
   trial_expert_ = &expert;
-  trial_shows_reference_ = reference_on_paper;
   // The paper: the reference (or not), nothing else; the plot: the trial's window.
   showReference(trial_expert_);
   paper_->setReferenceShown(reference_on_paper);
@@ -294,14 +194,9 @@ void MainWindow::finishTrial() {
     refreshButtons();
     return;
   }
-  // A training trial is scored; one the device or the loop cut short (failure) is no point of the curve.
-  showScores(*last_trial_expert_, *last_trial_, scores_label_);
-  if (last_scores_ && failure.empty()) learning_curve_->add(trial_mode_, *last_scores_);
-  scores_label_->setText(scores_label_->text() + tr("<br>%1 ticks, %2 overruns, %3 missed samples, %4 faults")
-                                                     .arg(result.ticks)
-                                                     .arg(result.overruns)
-                                                     .arg(result.missed_samples)
-                                                     .arg(result.faults));
+  // A training trial is scored, and is a point of the Train tab's learning curve.
+  showScores(*last_trial_expert_, *last_trial_, train_tab_->scoresLabel());
+  train_tab_->trialEnded(last_scores_, result);
   refreshButtons();
 }
 
@@ -372,7 +267,7 @@ void MainWindow::abortActivity() {
       (void)rig_.finish();
       if (activity_ == Activity::kStudyTrial) study_tab_->trialAbandoned();  // it runs again
       if (activity_ == Activity::kRecording) record_tab_->aborted();
-      if (activity_ == Activity::kTrial) scores_label_->setText(tr("Trial aborted; nothing kept."));
+      if (activity_ == Activity::kTrial) train_tab_->aborted();
       activity_ = Activity::kFree;
       paper_->setReferenceCue(std::nullopt);
       startFreeRun();

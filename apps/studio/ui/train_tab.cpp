@@ -1,0 +1,245 @@
+#include "ui/train_tab.hpp"
+
+#include <QCheckBox>
+#include <QComboBox>
+#include <QDoubleSpinBox>
+#include <QFileInfo>
+#include <QFormLayout>
+#include <QLabel>
+#include <QPushButton>
+#include <QSettings>
+#include <QVBoxLayout>
+#include <algorithm>
+
+#include "core/profile_files.hpp"
+#include "hattr/session/study.hpp"
+#include "ui/learning_curve.hpp"
+#include "ui/ui_text.hpp"
+
+namespace hattr::studio {
+
+TrainTab::TrainTab(QSettings& settings, TrainHost host, QWidget* parent)
+    : QWidget(parent), settings_(settings), host_(std::move(host)) {
+  buildUi();
+  w_.indexing->setCurrentIndex(settings_.value("train/indexing", 0).toInt());
+  w_.show_reference->setChecked(settings_.value("train/show_reference", true).toBool());
+  w_.settle->setValue(settings_.value("train/settle_s", 1.5).toDouble());
+  mode_ = static_cast<guidance::TrainingMode>(std::clamp(settings_.value("train/mode", 0).toInt(), 0, 2));
+  w_.mode->setCurrentIndex(static_cast<int>(mode_));
+}
+
+TrainTab::~TrainTab() = default;
+
+// ---- Construction ------------------------------------------------------------------------
+
+void TrainTab::buildUi() {
+  auto* layout = new QVBoxLayout(this);
+  layout->addWidget(
+      wrappedLabel(tr("<b>Train</b> against an expert's haptic profile. After the trial, DTW scores "
+                      "compare your trace (shape: x, y) and your force (fx, fy, fz) with the "
+                      "expert's; lower is closer.")));
+  w_.reference = wrappedLabel(tr("No reference loaded."));
+  layout->addWidget(w_.reference);
+  auto* open = new QPushButton(tr("Open reference… (Ctrl+O)"));
+  connect(open, &QPushButton::clicked, this, [this] {
+    const QString file = host_.ask_open_file(tr("Open a reference profile"), tr("Haptic profiles (*.csv);;All files (*)"));
+    if (!file.isEmpty()) loadReference(file);
+  });
+  layout->addWidget(open);
+
+  // The mode, its indexing, the get-ready time and whether the reference is drawn.
+  auto* form = new QFormLayout;
+  w_.mode = new QComboBox;
+  for (const auto mode : {guidance::TrainingMode::kBasic, guidance::TrainingMode::kPositionControl,
+                          guidance::TrainingMode::kForceControl}) {
+    w_.mode->addItem(qs(guidance::modeName(mode)));
+  }
+  w_.mode->setToolTip(tr("BASIC: no assistance (1) · PCONTROL: position guidance (2) · ALPHA: force guidance (3)"));
+  connect(w_.mode, &QComboBox::activated, this, [this](int index) { setMode(static_cast<guidance::TrainingMode>(index)); });
+  w_.indexing = new QComboBox;
+  w_.indexing->addItem(tr("time (the paper's)"));
+  w_.indexing->addItem(tr("progress (follows you)"));
+  w_.show_reference = new QCheckBox(tr("Show the reference"));
+  w_.show_reference->setChecked(true);
+  connect(w_.show_reference, &QCheckBox::toggled, this, [this](bool on) { host_.reference_shown(on); });
+  w_.settle = new QDoubleSpinBox;
+  w_.settle->setRange(0.3, 10.0);
+  w_.settle->setSingleStep(0.5);
+  w_.settle->setSuffix(tr(" s"));
+  w_.settle->setValue(1.5);
+  w_.settle->setToolTip(
+      tr("Before each trial the pen is held lifted this long while the forces ramp in; move "
+         "to the start meanwhile"));
+  form->addRow(tr("Mode"), w_.mode);
+  form->addRow(tr("Indexing"), w_.indexing);
+  form->addRow(tr("Get ready"), w_.settle);
+  form->addRow(QString(), w_.show_reference);
+  layout->addLayout(form);
+
+  // The trial's buttons, its scores and the learning curve.
+  w_.trial = new QPushButton(tr("Start trial (Space)"));
+  connect(w_.trial, &QPushButton::clicked, this, [this] {
+    if (host_.trial_running()) {
+      host_.stop_trial();
+    } else {
+      start();
+    }
+  });
+  w_.replay = new QPushButton(tr("Replay trial (P)"));
+  connect(w_.replay, &QPushButton::clicked, this, [this] { host_.replay_last_trial(); });
+  w_.save = new QPushButton(tr("Save trial… (Ctrl+Shift+S)"));
+  connect(w_.save, &QPushButton::clicked, this, [this] { host_.save_last_trial(); });
+  for (auto* b : {w_.trial, w_.replay, w_.save}) layout->addWidget(b);
+  w_.scores = wrappedLabel();
+  layout->addWidget(w_.scores);
+  w_.curve = new LearningCurve;
+  layout->addWidget(w_.curve);
+  layout->addStretch(1);
+}
+
+// ---- The reference ------------------------------------------------------------------------
+
+bool TrainTab::loadReference(const QString& file) {
+  if (!host_.may_change_reference()) {
+    host_.error(tr("The reference cannot change now"), tr("finish or abort the trial first (Esc)"));
+    return false;
+  }
+  try {
+    HapticProfile profile = loadReferenceProfile(file.toStdString());
+    const QString label = tr("Reference <b>%1</b> (%2, %3): %4")
+                              .arg(QFileInfo(file).fileName().toHtmlEscaped(),
+                                   qs(profile.metadata().subject).toHtmlEscaped(),
+                                   qs(profile.metadata().skill).toHtmlEscaped(), describeProfile(profile));
+    setReference(std::move(profile), file, QFileInfo(file).fileName(), label);
+    return true;
+  } catch (const std::exception& e) {
+    host_.error(tr("The reference could not be loaded"), what(e));
+    return false;
+  }
+}
+
+bool TrainTab::useTake(const HapticProfile& take, const TakeName& name) {
+  if (!host_.idle()) {
+    host_.error(tr("The reference cannot change now"), tr("finish the trial, recording or session first"));
+    return false;
+  }
+  try {
+    checkReferenceProfile(take, "the take");
+  } catch (const std::exception& e) {
+    host_.error(tr("The take cannot be the reference"), what(e));
+    return false;
+  }
+  setReference(take, QString(), QString(), QString());
+  reference_is_take_ = true;
+  nameTake(name);
+  return true;
+}
+
+void TrainTab::takeRenamed(const TakeName& name) {
+  if (reference_is_take_) nameTake(name);
+}
+
+// The take as the reference is named by the file it was saved to, if it was; else "take (not saved)".
+void TrainTab::nameTake(const TakeName& name) {
+  const bool saved = !name.file.isEmpty();
+  reference_file_ = name.file;
+  reference_name_ = saved ? QFileInfo(name.file).fileName() : QStringLiteral("take (not saved)");
+  w_.reference->setText(tr("Reference: <b>the take</b> (%1, %2, %3): %4")
+                            .arg(name.expert.toHtmlEscaped(), name.character.toHtmlEscaped(),
+                                 saved ? tr("saved as %1").arg(name.file.toHtmlEscaped()) : tr("not saved"),
+                                 describeProfile(*reference_)));
+}
+
+void TrainTab::setReference(HapticProfile profile, const QString& file, const QString& name,
+                            const QString& label_html) {
+  reference_ = std::move(profile);
+  reference_file_ = file;
+  reference_name_ = name;
+  reference_is_take_ = false;
+  w_.reference->setText(label_html);
+  w_.curve->clear();  // scores against another reference do not compare
+  host_.show_reference(*reference_, referenceShown());
+  host_.changed();
+}
+
+// ---- The mode and the trial -----------------------------------------------------------------
+
+void TrainTab::setMode(guidance::TrainingMode mode) {
+  mode_ = mode;
+  w_.mode->setCurrentIndex(static_cast<int>(mode));
+  // During a trial the mode switches through the servo mailbox, with the cross-fade.
+  if (host_.trial_running() && !host_.switch_mode(mode)) {
+    host_.error(tr("The mode could not be switched"), tr("the servo loop's mailbox is full; try again"));
+  }
+}
+
+bool TrainTab::start() {
+  if (!host_.idle()) return false;
+  if (!reference_) {
+    host_.error(tr("No reference"), tr("open an expert's haptic profile first (Ctrl+O)"));
+    return false;
+  }
+  try {
+    auto reference = std::make_shared<guidance::ReferenceTrajectory>(*reference_, host_.rate_hz());
+    session::TrialSetup setup;
+    setup.guidance.mode = mode_;
+    setup.guidance.playback.indexing =
+        w_.indexing->currentIndex() == 0 ? guidance::Indexing::kTime : guidance::Indexing::kProgress;
+    // A study's default end: 1 s with the pen lifted after writing, at most 3 × the expert.
+    const session::TrialEndRule end = session::Protocol{}.trial_end;
+    setup.duration_s = end.maxDuration_s(reference->duration_s());
+    setup.pen_up_end_s = end.pen_up_s;
+    setup.reference = std::move(reference);
+    setup.settle_s = settle_s();
+    setup.clock = session::Clock::kRealTime;
+    setup.metadata.subject = "trainee";
+    setup.metadata.skill = reference_->metadata().skill;
+    setup.metadata.source = "studio";
+    setup.metadata.extra["reference_file"] = reference_name_.toStdString();
+    host_.start_trial(setup, *reference_, referenceShown(), tr("Trial: %1").arg(qs(guidance::modeName(mode_))),
+                      w_.scores);
+  } catch (const std::exception& e) {
+    host_.error(tr("The trial could not start"), what(e));
+    return false;
+  }
+  trial_mode_ = mode_;
+  return true;
+}
+
+void TrainTab::trialEnded(const std::optional<analysis::TrialScore>& scores, const session::TrialResult& result) {
+  // A trial the device or the loop cut short (failure) is scored, but is no point of the curve.
+  if (scores && result.failure.empty()) w_.curve->add(trial_mode_, *scores);
+  w_.scores->setText(w_.scores->text() + tr("<br>%1 ticks, %2 overruns, %3 missed samples, %4 faults")
+                                             .arg(result.ticks)
+                                             .arg(result.overruns)
+                                             .arg(result.missed_samples)
+                                             .arg(result.faults));
+}
+
+void TrainTab::aborted() { w_.scores->setText(tr("Trial aborted; nothing kept.")); }
+
+// ---- Buttons and settings -------------------------------------------------------------------
+
+void TrainTab::refresh() {
+  const bool idle = host_.idle();
+  const bool running = host_.trial_running();
+  w_.trial->setText(running ? tr("Stop trial (Space, Ctrl+.)") : tr("Start trial (Space)"));
+  w_.trial->setEnabled((idle && reference_) || running);
+  w_.replay->setEnabled(host_.has_last_trial() && idle);
+  w_.save->setEnabled(host_.has_last_trial());
+}
+
+void TrainTab::saveSettings() {
+  settings_.setValue("train/mode", static_cast<int>(mode_));
+  settings_.setValue("train/indexing", w_.indexing->currentIndex());
+  settings_.setValue("train/show_reference", w_.show_reference->isChecked());
+  settings_.setValue("train/settle_s", w_.settle->value());
+  // An unsaved take as the reference is not remembered; the last file reference stays.
+  if (!reference_file_.isEmpty()) settings_.setValue("train/reference_file", reference_file_);
+}
+
+bool TrainTab::referenceShown() const { return w_.show_reference->isChecked(); }
+
+double TrainTab::settle_s() const { return w_.settle->value(); }
+
+}  // namespace hattr::studio
