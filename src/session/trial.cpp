@@ -9,6 +9,7 @@
 #include "hattr/core/error.hpp"
 #include "hattr/device/device_uri.hpp"
 #include "hattr/servo/servo_loop.hpp"
+#include "hattr/session/trial_watch.hpp"
 
 namespace hattr::session {
 namespace {
@@ -32,16 +33,6 @@ device::HandCommand lifted(device::HandCommand command) noexcept {
   return command;
 }
 
-/// A device (a network link) that stays disconnected this long, or a loop whose clock (a
-/// device's own) stops ticking this long, ends the trial; shorter dropouts and stalls zero the
-/// force, ramp in again and are counted in the trial's result and metadata.
-constexpr auto kGiveUpAfter = std::chrono::milliseconds(50);
-
-/// A loop on hattr's own real-time thread that misses ticks was held up (the host descheduled
-/// it, an SDK call hung): the loop counts that as a stall, zeroes the force and ramps in
-/// again. Only a loop stuck this long ends the trial.
-constexpr auto kOwnLoopStuckAfter = std::chrono::seconds(1);
-
 /// A real-time trial ends with its recording window (loop time); the wall clock ends it this
 /// long after the window would have ended had the loop kept pace, whatever the loop's time says.
 constexpr double kWindowEndBackstop_s = 2.0;
@@ -55,62 +46,20 @@ struct WaitEnd {
   bool stopped = false;
 };
 
-/// A watcher that itself woke this late was frozen with the process (a host stall): it saw
-/// nothing of that time, so the lost and stopped timers start again instead of blaming the
-/// device or the loop for the host's pause (the loop counts the stall itself).
-constexpr auto kWatcherLate = std::chrono::milliseconds(10);
-
-/// Waits `seconds` of a real-time run, watching every 2 ms for what ends a trial early: a
-/// latched fault, a device lost for longer than kGiveUpAfter, a device clock that stopped
-/// calling for as long, our own loop stuck for kOwnLoopStuckAfter; and, when given, the
+/// Waits `seconds` of a real-time run, watching every 2 ms for what ends a trial early
+/// (TrialWatch: a fault, a lost device, a stopped clock, a stuck loop); and, when given, the
 /// recorder's end rule, the end of its window and a stop request.
 WaitEnd waitForEnd(const servo::ServoLoop& loop, const device::Device& device, double seconds,
                    const Recorder* recorder = nullptr, const TrialStop* stop = nullptr) {
   using Clock = std::chrono::steady_clock;
   const auto until = Clock::now() + std::chrono::duration<double>(seconds);
-  const auto& c = loop.counters();
-  bool lost = false;
-  Clock::time_point lost_since{};
-  std::uint64_t last_ticks = c.ticks.load();
-  auto last_tick_seen = Clock::now();
-  auto last_wake = last_tick_seen;
-  const auto stopped_after = loop.clock() == servo::LoopClock::kDevice
-                                 ? std::chrono::duration_cast<Clock::duration>(kGiveUpAfter)
-                                 : std::chrono::duration_cast<Clock::duration>(kOwnLoopStuckAfter);
+  TrialWatch watch(loop, device);
   while (Clock::now() < until) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
-    const auto now = Clock::now();
-    // Frozen with the process: judge only time this watcher was awake for.
-    if (now - last_wake > kWatcherLate) {
-      last_tick_seen = now;
-      lost_since = now;
-    }
-    last_wake = now;
-    if (c.faults.load() > 0) {
-      const std::string reason = device.faultReason();
-      return {fmt::format("device fault: {}", reason.empty() ? "the safety path latched a fault" : reason)};
-    }
+    if (std::string failure = watch.check(); !failure.empty()) return {std::move(failure)};
     if (recorder != nullptr && recorder->writingOver()) return {.writing_over = true};
     if (recorder != nullptr && recorder->reachedEnd()) return {};
     if (stop != nullptr && stop->requested()) return {.stopped = true};
-    // Lost: disconnected without a break for the give-up time.
-    if (!c.disconnected.load()) {
-      lost = false;
-    } else if (!lost) {
-      lost = true;
-      lost_since = now;
-    } else if (now - lost_since > kGiveUpAfter) {
-      const std::string reason = device.faultReason();
-      return {fmt::format("device lost: {}", reason.empty() ? "the device disconnected" : reason)};
-    }
-    // Stopped: no tick for the give-up time (the device's clock) or the stuck time (our own).
-    if (const std::uint64_t ticks = c.ticks.load(); ticks != last_ticks) {
-      last_ticks = ticks;
-      last_tick_seen = now;
-    } else if (now - last_tick_seen > stopped_after) {
-      return {loop.clock() == servo::LoopClock::kDevice ? "the device's clock stopped calling the servo loop"
-                                                         : "the servo loop stopped ticking"};
-    }
   }
   return {};
 }

@@ -182,6 +182,52 @@ class StudioRigTest : public QObject {
     QVERIFY2(outcome.passed, outcome.failures.c_str());
   }
 
+  // A device fault ends a studio trial as it ends runTrial's: at the fault, with the device's
+  // reason, marked failed, what came before kept and nothing after it.
+  void liveRigEndsATrialAtADeviceFaultAsRunTrialDoes() {
+    session::TrialEnvironment env(std::string("plugin:") + HATTR_FAKE_VENDOR_PLUGIN + "?clock=device&error_after=500",
+                                  render::WorldConfig{}, 1000.0);
+    MouseHand hand;
+    hand.setInput({.x_m = 0.0, .y_m = 0.0, .pen_down = false, .press_N = 1.2});
+    const session::TrialSetup setup{.duration_s = 2.0, .settle_s = 0.3};
+    const test::RealTimeOutcome outcome = test::passesUnlessTheHostStalls([&](std::uint64_t& host_stalls) {
+      const session::TrialResult expected = session::runTrial(env, setup, hand);
+      LiveRig rig;
+      rig.start(env, trialRunSpec(setup, false), hand, session::Clock::kRealTime);
+      const auto begin = std::chrono::steady_clock::now();
+      while (!rig.status().failed && std::chrono::steady_clock::now() - begin < std::chrono::seconds(3)) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      }
+      const bool failed_status = rig.status().failed;
+      const bool window_done = rig.status().window_done;
+      const session::TrialResult r = rig.finish();
+      host_stalls = r.stalls + expected.stalls;
+      std::string failures;
+      const auto check = [&failures](bool ok, const std::string& what) {
+        if (!ok) failures += what + "; ";
+      };
+      check(expected.failure.find("fake SDK: amplifier fault") != std::string::npos,
+            "runTrial's failure: " + expected.failure);
+      check(failed_status && window_done, "the rig's status does not say failed and done");
+      check(r.failure == expected.failure, "failure: \"" + r.failure + "\", runTrial's \"" + expected.failure + "\"");
+      check(r.end_reason == session::kEndFailed, "end_reason: expected failed, got " + r.end_reason);
+      check(r.ticks < 1000, "the loop ran " + std::to_string(r.ticks) + " ticks, past the fault at 500");
+      check(r.profile.size() > 100, "recorded " + std::to_string(r.profile.size()) + " samples before the fault");
+      if (!r.profile.empty()) {
+        check(r.profile.metadata().extra.count("failed") == 1 && r.profile.metadata().extra.at("failed") == r.failure,
+              "the profile is not marked failed with the reason");
+        // From the fault on the loop commanded zero; the faulting tick is the last one kept.
+        check(r.profile.samples().back().f_cmd_W.norm() == 0.0, "the last recorded command is not zero");
+        check(r.profile.size() <= expected.profile.size() + 5,
+              "recorded " + std::to_string(r.profile.size()) + " samples, runTrial " +
+                  std::to_string(expected.profile.size()) + ": more than the ticks up to the fault");
+      }
+      return failures;
+    });
+    if (outcome.every_attempt_stalled) QSKIP(("the host stalled every attempt: " + outcome.failures).c_str());
+    QVERIFY2(outcome.passed, outcome.failures.c_str());
+  }
+
   void liveRigRefusesABadPenUpTimeSayingWhy() {
     MouseHand hand;
     LiveRig rig;

@@ -104,12 +104,15 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
   stop_taken_ = false;
   mentor_failure_.clear();
   mentor_checked_ = false;
+  watch_.reset();
+  failure_.clear();
   stop_.reset();
   status_recording_ = false;
   status_window_done_ = false;
   status_pen_down_done_ = false;
   status_writing_over_ = false;
   status_stopped_ = false;
+  status_failed_ = false;
   status_recorded_ = 0;
   status_loop_time_s_ = 0.0;
   if (spec.record == RecordMode::kPenDown) recorder_->start();  // armed; records from the first pen-down
@@ -119,6 +122,7 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
     relay_stop_.store(false);
     relay_thread_ = std::thread([this] {
       while (!relay_stop_.load(std::memory_order_acquire)) {
+        watchTrial();  // before the pump: a failure's last tick is set before its samples are taken
         pump();
         std::this_thread::sleep_for(kRelayPoll);
       }
@@ -184,6 +188,25 @@ void LiveRig::pump() {
   publishStatus();
 }
 
+// What ends a real-time trial early, judged as runTrial judges it (session::TrialWatch, from
+// the moment the loop runs): nothing after the failure is recorded, nothing before it lost.
+void LiveRig::watchTrial() {
+  if (spec_.record != RecordMode::kWindow || stop_taken_ || status_window_done_.load(std::memory_order_acquire)) {
+    return;
+  }
+  if (!watch_) {
+    if (loop_->running()) watch_ = std::make_unique<session::TrialWatch>(*loop_, *device_);
+    return;
+  }
+  std::string failure = watch_->check();
+  if (failure.empty()) return;
+  recorder_->stopBefore(loop_->counters().ticks.load(std::memory_order_acquire));
+  stop_taken_ = true;  // the window's recording is settled: no arming after this
+  failure_ = std::move(failure);
+  status_failed_.store(true, std::memory_order_release);
+  status_window_done_.store(true, std::memory_order_release);
+}
+
 std::optional<Vec3> LiveRig::referenceCue() const noexcept {
   if (!guidance_ || !spec_.reference || live_ != nullptr) return std::nullopt;
   const double index = guidance_->cueIndex();
@@ -213,7 +236,7 @@ void LiveRig::publishStatus() {
     status_writing_over_.store(true, std::memory_order_release);
     if (spec_.record == RecordMode::kWindow) status_window_done_.store(true, std::memory_order_release);
   }
-  status_stopped_.store(stop_taken_, std::memory_order_release);
+  status_stopped_.store(stop_taken_ && failure_.empty(), std::memory_order_release);
   const bool recording = recorder_->recording();
   if (spec_.record == RecordMode::kPenDown && was_recording_ && !recording) {
     status_pen_down_done_.store(true, std::memory_order_release);
@@ -245,14 +268,15 @@ session::TrialResult LiveRig::finish() {
   result.max_period_error_s = static_cast<double>(loop_->periodError().max_ns()) * 1e-9;
   result.clock = std::string(servo::loopClockName(loop_->clock()));
   // The mentor's session ends with the loop; its notes go with the recording, as runTrial's.
-  result.failure = mentor_failure_;
+  result.failure = !mentor_failure_.empty() ? mentor_failure_ : failure_;
   const std::map<std::string, std::string> live_notes =
       live_ ? live_->endTrial(result) : std::map<std::string, std::string>{};
-  session::noteTrialEnd(result, *recorder_, stop_taken_);
+  session::noteTrialEnd(result, *recorder_, stop_taken_ && result.failure.empty());
   result.profile.metadata().extra.insert(live_notes.begin(), live_notes.end());
   if (!result.failure.empty()) result.profile.metadata().extra["failed"] = result.failure;
 
   // Tear down in dependency order: the recorder reads the relay, the loop drives the device.
+  watch_.reset();
   recorder_.reset();
   relay_.reset();
   loop_.reset();
@@ -293,6 +317,7 @@ RigStatus LiveRig::status() const noexcept {
   status.pen_down_done = status_pen_down_done_.load(std::memory_order_acquire);
   status.writing_over = status_writing_over_.load(std::memory_order_acquire);
   status.stopped = status_stopped_.load(std::memory_order_acquire);
+  status.failed = status_failed_.load(std::memory_order_acquire);
   status.recorded_samples = status_recorded_.load(std::memory_order_relaxed);
   return status;
 }

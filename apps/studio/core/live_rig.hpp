@@ -31,6 +31,7 @@
 #include "hattr/servo/servo_loop.hpp"
 #include "hattr/session/recorder.hpp"
 #include "hattr/session/trial.hpp"
+#include "hattr/session/trial_watch.hpp"
 
 namespace hattr::studio {
 
@@ -81,6 +82,9 @@ struct RigStatus {
   bool writing_over = false;   ///< the end rule ended the recording (the pen lifted long enough)
   bool stopped = false;        ///< a stop request was taken: nothing after it is recorded
   bool pen_down_done = false;  ///< kPenDown: recorded and stopped after a long pen-up
+  /// kWindow in real time: the device or the loop ended the trial early, as runTrial's
+  /// session::TrialWatch judges it (a fault, a lost device, a stopped clock); finish() says why.
+  bool failed = false;
   std::uint64_t recorded_samples = 0;
   double loop_time_s = 0.0;  ///< loop time of the newest sample the relay took
 };
@@ -112,7 +116,8 @@ class LiveRig {
   /// Stops the run (the device is commanded zero force) and returns what was recorded
   /// (an empty profile when nothing was), with the run's counters and, as runTrial reports
   /// them (session::noteTrialEnd), its end reason — "pen lifted", "stopped" after
-  /// requestStop(), else "maximum duration" — and writing span. A mentored run also carries
+  /// requestStop(), "failed" after a failure (RigStatus::failed; its text in `failure` and the
+  /// profile's "failed", nothing after it recorded), else "maximum duration" — and writing span. A mentored run also carries
   /// the mentor's notes, its lost links (mentor_link_faults) and, when the mentor was not
   /// there at the settle's end, the failure (nothing recorded). No-op result when idle.
   session::TrialResult finish();
@@ -150,6 +155,7 @@ class LiveRig {
 
  private:
   void pump();           // relay: loop ring → recorder; consumer thread only
+  void watchTrial();     // consumer thread only (real time): what ends a trial early
   void takeStop();       // consumer thread only
   void checkMentor();    // consumer thread only: the mentor's link at the settle's end
   void publishStatus();  // consumer thread only
@@ -177,6 +183,8 @@ class LiveRig {
   bool was_recording_ = false;
   bool stop_taken_ = false;
   std::string mentor_failure_;  // the mentor was unavailable when the settle ended
+  std::unique_ptr<session::TrialWatch> watch_;  // real time, kWindow: made once the loop runs
+  std::string failure_;                         // what the watch saw end the trial
   bool mentor_checked_ = false;  // the settle's end was checked
 
   // Published for the GUI thread.
@@ -185,6 +193,7 @@ class LiveRig {
   std::atomic<bool> status_pen_down_done_{false};
   std::atomic<bool> status_writing_over_{false};
   std::atomic<bool> status_stopped_{false};
+  std::atomic<bool> status_failed_{false};
   std::atomic<std::uint64_t> status_recorded_{0};
   std::atomic<double> status_loop_time_s_{0.0};
 };

@@ -161,9 +161,15 @@ void MainWindow::finishTrial() {
   activity_ = Activity::kFree;
   startFreeRun();
   paper_->setReferenceCue(std::nullopt);
-  // A study trial whose mentor was not there recorded nothing: the Study tab marks it failed.
+  // A study trial the device, the loop or an absent mentor broke off is not data (as the study
+  // runner has it): the Study tab marks it failed.
   if (study_trial && !failure.empty()) {
     study_tab_->trialFailed(failure);
+    refreshButtons();
+    return;
+  }
+  if (!failure.empty() && result.profile.empty()) {
+    showError(tr("The trial failed before it began"), qs(failure) + tr("\n\nNothing was recorded."));
     refreshButtons();
     return;
   }
@@ -194,9 +200,14 @@ void MainWindow::finishTrial() {
     refreshButtons();
     return;
   }
-  // A training trial is scored, and is a point of the Train tab's learning curve.
+  // A training trial is scored, and is a point of the Train tab's learning curve unless it
+  // was cut short.
   showScores(*last_trial_expert_, *last_trial_, train_tab_->scoresLabel());
   train_tab_->trialEnded(last_scores_, result);
+  if (!failure.empty()) {
+    showError(tr("The trial ended early"),
+              qs(failure) + tr("\n\nWhat was recorded until then is kept and scored; it is no point of the learning curve."));
+  }
   refreshButtons();
 }
 

@@ -187,7 +187,8 @@ void StudyTab::trialFailed(const std::string& failure) {
     message += "\n\n" + std::string(e.what());
   }
   refreshPanel();
-  host_.error(tr("The trial failed"), qs(message) + tr("\n\nNothing was recorded; Next runs this trial again."));
+  host_.error(tr("The trial failed"),
+              qs(message) + tr("\n\nIt is not kept (marked failed in the study database); Next runs it again."));
 }
 
 void StudyTab::trialAbandoned() {

@@ -79,8 +79,8 @@ class StudyTab final : public QWidget {
   void close();
 
   // ---- A trial's end, handed back by the window. ----------------------------------------------
-  /// The trial failed before anything was recorded (a mentor who was not there): it is marked
-  /// failed in the database, and the study runs it again.
+  /// The device, the loop or an absent mentor broke the trial off: as the study runner does, it
+  /// is marked failed in the database (nothing of it stored), and the study runs it again.
   void trialFailed(const std::string& failure);
   /// The trial recorded nothing, or was aborted: the study runs it again.
   void trialAbandoned();
