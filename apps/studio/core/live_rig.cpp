@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <map>
 
 #include "hattr/core/error.hpp"
@@ -106,6 +107,7 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
   mentor_checked_ = false;
   watch_.reset();
   failure_.clear();
+  failure_tick_ = std::numeric_limits<std::uint64_t>::max();
   stop_.reset();
   status_recording_ = false;
   status_window_done_ = false;
@@ -156,11 +158,11 @@ void LiveRig::advanceSimulated(double seconds) {
 
 // Loop ring → relay → recorder. A trial's window arms and disarms the recorder at the
 // exact sample, the recorder having taken everything before it; a stop request disarms it
-// for good at the first sample taken after it.
+// for good at the first sample taken after it, and a failure at the first of its tick on.
 void LiveRig::pump() {
   TickSample item;
   while (loop_->samples().tryPop(item)) {
-    if (!stop_taken_ && stop_.requested()) takeStop();
+    if (!stop_taken_ && (stop_.requested() || item.tick >= failure_tick_)) takeStop();
     if (spec_.record == RecordMode::kWindow && !stop_taken_) {
       const bool in_window = item.sample.t_s >= window_begin_s_ && item.sample.t_s < window_end_s_;
       // As runTrial: a mentor not there when the settle ends fails the trial, nothing recorded.
@@ -189,9 +191,12 @@ void LiveRig::pump() {
 }
 
 // What ends a real-time trial early, judged as runTrial judges it (session::TrialWatch, from
-// the moment the loop runs): nothing after the failure is recorded, nothing before it lost.
+// the moment the loop runs). The failure's tick is the loop's count when it is seen: the relay
+// takes every sample before it through the window as usual (however far behind the loop it is),
+// and stops the recording at the first sample from it on (pump).
 void LiveRig::watchTrial() {
-  if (spec_.record != RecordMode::kWindow || stop_taken_ || status_window_done_.load(std::memory_order_acquire)) {
+  if (spec_.record != RecordMode::kWindow || stop_taken_ || !failure_.empty() ||
+      status_window_done_.load(std::memory_order_acquire)) {
     return;
   }
   if (!watch_) {
@@ -200,8 +205,7 @@ void LiveRig::watchTrial() {
   }
   std::string failure = watch_->check();
   if (failure.empty()) return;
-  recorder_->stopBefore(loop_->counters().ticks.load(std::memory_order_acquire));
-  stop_taken_ = true;  // the window's recording is settled: no arming after this
+  failure_tick_ = loop_->counters().ticks.load(std::memory_order_acquire);
   failure_ = std::move(failure);
   status_failed_.store(true, std::memory_order_release);
   status_window_done_.store(true, std::memory_order_release);
@@ -219,6 +223,7 @@ void LiveRig::checkMentor() {
   mentor_checked_ = true;
   if (!mentor_failure_.empty()) {
     takeStop();
+    status_failed_.store(true, std::memory_order_release);
     status_window_done_.store(true, std::memory_order_release);
   }
 }
@@ -236,7 +241,8 @@ void LiveRig::publishStatus() {
     status_writing_over_.store(true, std::memory_order_release);
     if (spec_.record == RecordMode::kWindow) status_window_done_.store(true, std::memory_order_release);
   }
-  status_stopped_.store(stop_taken_ && failure_.empty(), std::memory_order_release);
+  // Stopped by a request; a failure's stop is the failure's.
+  status_stopped_.store(stop_taken_ && failure_.empty() && mentor_failure_.empty(), std::memory_order_release);
   const bool recording = recorder_->recording();
   if (spec_.record == RecordMode::kPenDown && was_recording_ && !recording) {
     status_pen_down_done_.store(true, std::memory_order_release);
@@ -271,7 +277,7 @@ session::TrialResult LiveRig::finish() {
   result.failure = !mentor_failure_.empty() ? mentor_failure_ : failure_;
   const std::map<std::string, std::string> live_notes =
       live_ ? live_->endTrial(result) : std::map<std::string, std::string>{};
-  session::noteTrialEnd(result, *recorder_, stop_taken_ && result.failure.empty());
+  session::noteTrialEnd(result, *recorder_, stop_taken_);  // a failure's end reason comes first
   result.profile.metadata().extra.insert(live_notes.begin(), live_notes.end());
   if (!result.failure.empty()) result.profile.metadata().extra["failed"] = result.failure;
 

@@ -17,6 +17,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -82,8 +83,9 @@ struct RigStatus {
   bool writing_over = false;   ///< the end rule ended the recording (the pen lifted long enough)
   bool stopped = false;        ///< a stop request was taken: nothing after it is recorded
   bool pen_down_done = false;  ///< kPenDown: recorded and stopped after a long pen-up
-  /// kWindow in real time: the device or the loop ended the trial early, as runTrial's
-  /// session::TrialWatch judges it (a fault, a lost device, a stopped clock); finish() says why.
+  /// The trial failed: in real time the device or the loop ended it early, as runTrial's
+  /// session::TrialWatch judges it (a fault, a lost device, a stopped clock), or a mentored
+  /// trial's expert was not there when the settle ended; finish() says why.
   bool failed = false;
   std::uint64_t recorded_samples = 0;
   double loop_time_s = 0.0;  ///< loop time of the newest sample the relay took
@@ -185,6 +187,7 @@ class LiveRig {
   std::string mentor_failure_;  // the mentor was unavailable when the settle ended
   std::unique_ptr<session::TrialWatch> watch_;  // real time, kWindow: made once the loop runs
   std::string failure_;                         // what the watch saw end the trial
+  std::uint64_t failure_tick_ = std::numeric_limits<std::uint64_t>::max();  // the loop's tick count when seen
   bool mentor_checked_ = false;  // the settle's end was checked
 
   // Published for the GUI thread.

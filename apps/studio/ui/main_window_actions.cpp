@@ -54,10 +54,12 @@ bool MainWindow::loadWorld(const QString& file) {
     auto environment = std::make_unique<session::TrialEnvironment>(default_environment_->deviceUri(),
                                                                    render::loadWorldConfig(file.toStdString()),
                                                                    default_environment_->rate_hz());
-    (void)rig_.finish();
+    // The rig runs on the default paper unless a study is open (then the study's stays).
+    const bool in_use = study() == nullptr;
+    if (in_use) (void)rig_.finish();
     default_environment_ = std::move(environment);
     world_file_ = file;
-    if (study() == nullptr) useEnvironment(*default_environment_);
+    if (in_use) useEnvironment(*default_environment_);
     return true;
   } catch (const std::exception& e) {
     showError(tr("The world configuration could not be loaded"), what(e));
@@ -74,11 +76,12 @@ bool MainWindow::setDevice(const QString& uri) {
     (void)validateStudioDevice(uri.toStdString());
     auto environment = std::make_unique<session::TrialEnvironment>(uri.toStdString(), default_environment_->world(),
                                                                    default_environment_->rate_hz());
-    (void)rig_.finish();
+    // A study keeps its own device; the new one is used when it is closed.
+    const bool in_use = study() == nullptr;
+    if (in_use) (void)rig_.finish();
     default_environment_ = std::move(environment);
     settings_->setValue("device/uri", uri);
-    // A study keeps its own device; the new one is used when it is closed.
-    if (study() == nullptr) useEnvironment(*default_environment_);
+    if (in_use) useEnvironment(*default_environment_);
     return true;
   } catch (const std::exception& e) {
     showError(tr("The device cannot be used"), what(e));
@@ -169,6 +172,7 @@ void MainWindow::finishTrial() {
     return;
   }
   if (!failure.empty() && result.profile.empty()) {
+    train_tab_->scoresLabel()->setText(tr("The trial failed before it began; nothing kept."));
     showError(tr("The trial failed before it began"), qs(failure) + tr("\n\nNothing was recorded."));
     refreshButtons();
     return;
@@ -374,7 +378,7 @@ bool MainWindow::selectStudySubject(const QString& subject) { return study_tab_-
 
 bool MainWindow::studyNext() { return study_tab_->next(); }
 
-void MainWindow::closeStudy() { study_tab_->close(); }
+void MainWindow::closeStudy() { study_tab_->closeStudy(); }
 
 // ---- Review -------------------------------------------------------------------------------
 

@@ -132,7 +132,7 @@ void MainWindow::buildStudyTab() {
   StudyHost host;
   host.idle = [this] { return activity_ == Activity::kFree || activity_ == Activity::kPlayback; };
   host.trial_running = [this] { return activity_ == Activity::kStudyTrial; };
-  host.device_busy = [this] { return activity_ == Activity::kStudyTrial || activity_ == Activity::kMentoring; };
+  host.device_busy = [this] { return activity_ != Activity::kFree && activity_ != Activity::kPlayback; };
   host.clear_views = [this] {
     if (activity_ == Activity::kPlayback) abortActivity();
     paper_->overlay().clear();

@@ -69,7 +69,7 @@ void StudyTab::buildUi() {
   });
   layout->addWidget(w_.next);
   w_.close = new QPushButton(tr("Close study"));
-  connect(w_.close, &QPushButton::clicked, this, &StudyTab::close);
+  connect(w_.close, &QPushButton::clicked, this, &StudyTab::closeStudy);
   layout->addWidget(w_.close);
   w_.scores = wrappedLabel();
   layout->addWidget(w_.scores);
@@ -90,7 +90,7 @@ bool StudyTab::open(const QString& file) {
     host_.error(tr("The study could not be opened"), what(e));
     return false;
   }
-  close();
+  closeStudy();
   study_ = std::move(session);
   settings_.setValue("study/file", file);
   const session::StudyDefinition& study = study_->study();
@@ -166,7 +166,7 @@ bool StudyTab::next() {
   return true;
 }
 
-void StudyTab::close() {
+void StudyTab::closeStudy() {
   if (!study_ || host_.device_busy()) return;
   host_.use_environment(nullptr);  // the rig runs on the study's paper: it moves before the study goes
   study_.reset();
@@ -186,6 +186,7 @@ void StudyTab::trialFailed(const std::string& failure) {
     study_->abandonTrial();
     message += "\n\n" + std::string(e.what());
   }
+  w_.scores->setText(tr("The trial failed; it runs again."));
   refreshPanel();
   host_.error(tr("The trial failed"),
               qs(message) + tr("\n\nIt is not kept (marked failed in the study database); Next runs it again."));
@@ -193,6 +194,7 @@ void StudyTab::trialFailed(const std::string& failure) {
 
 void StudyTab::trialAbandoned() {
   study_->abandonTrial();
+  w_.scores->setText(tr("Nothing kept; this trial runs again."));
   refreshPanel();
 }
 

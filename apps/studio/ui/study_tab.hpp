@@ -28,7 +28,8 @@ struct StudyHost {
   std::function<bool()> idle;
   /// A trial of this study runs on the rig.
   std::function<bool()> trial_running;
-  /// The device is in use (a study trial or a mentoring session): the study cannot close.
+  /// The rig or the device is in use (a trial, a recording or a mentoring session): the study,
+  /// whose paper they run on, cannot close.
   std::function<bool()> device_busy;
   /// What the previous tab left on show goes: a playback stops; the overlay, the trail and the
   /// plot are cleared.
@@ -76,7 +77,7 @@ class StudyTab final : public QWidget {
   /// Cuts the rest short and starts the next trial.
   bool next();
   /// Closes the study; the rig goes back to the window's own paper and device.
-  void close();
+  void closeStudy();
 
   // ---- A trial's end, handed back by the window. ----------------------------------------------
   /// The device, the loop or an absent mentor broke the trial off: as the study runner does, it

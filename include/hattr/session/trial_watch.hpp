@@ -42,7 +42,9 @@ class TrialWatch {
 
   /// One look at `now` (every few milliseconds, from one thread): why the trial must end now
   /// ("device fault: ...", "device lost: ...", "the device's clock stopped calling the servo
-  /// loop", "the servo loop stopped ticking"), or empty while it may go on.
+  /// loop", "the servo loop stopped ticking"), or empty while it may go on. runTrial looks
+  /// here before it looks at the recorder's end: a failure seen in the same look as the end
+  /// wins (before this class, a lost or stopped device came after the end rule there).
   [[nodiscard]] std::string check(Clock::time_point now = Clock::now());
 
  private:
