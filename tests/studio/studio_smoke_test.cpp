@@ -355,7 +355,14 @@ class StudioSmokeTest : public QObject {
     QCOMPARE(w.activity(), MainWindow::Activity::kFree);
     QVERIFY(w.paperView()->overlay().empty());
     QVERIFY(w.paperView()->trail().empty());
+    // A training trial runs on the open study's paper: the study cannot close under it.
+    QVERIFY2(w.startTrial(), qPrintable(w.lastError()));
     w.closeStudy();
+    QVERIFY(w.study() != nullptr);
+    QCOMPARE(w.activity(), MainWindow::Activity::kTrial);
+    w.abortActivity();
+    w.closeStudy();
+    QVERIFY(w.study() == nullptr);
 
     // Opening another study for review forgets the first one's trial and scores.
     QVERIFY2(w.showReviewTrial(db.trials("P01")[0].id), qPrintable(w.lastError()));
