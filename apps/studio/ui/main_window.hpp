@@ -167,6 +167,11 @@ class MainWindow final : public QMainWindow {
                       const HapticProfile& expert, bool reference_on_paper, bool expert_on_plot, const QString& title,
                       QLabel* scores);
   void finishTrial();
+  /// Starts the rig on `environment` for a run of `kind` (a playback stops first); a run that
+  /// cannot start leaves the free writing going and throws what the rig threw.
+  void startRun(session::TrialEnvironment& environment, const RunSpec& spec, Activity kind);
+  /// Nothing runs on the rig but the free writing (a playback may play).
+  [[nodiscard]] bool idle() const { return activity_ == Activity::kFree || activity_ == Activity::kPlayback; }
   void showScores(const HapticProfile& expert, const HapticProfile& trial, QLabel* where);
   void showReference(const HapticProfile* expert);
   /// How the Record tab names its take, for the Train tab's reference.

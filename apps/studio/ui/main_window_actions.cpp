@@ -46,7 +46,7 @@ guidance::TrainingMode MainWindow::mode() const { return train_tab_->mode(); }
 LearningCurve* MainWindow::learningCurve() const { return train_tab_->learningCurve(); }
 
 bool MainWindow::loadWorld(const QString& file) {
-  if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) {
+  if (!idle()) {
     showError(tr("The world cannot change now"), tr("finish the trial or recording first"));
     return false;
   }
@@ -68,7 +68,7 @@ bool MainWindow::loadWorld(const QString& file) {
 }
 
 bool MainWindow::setDevice(const QString& uri) {
-  if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) {
+  if (!idle()) {
     showError(tr("The device cannot change now"), tr("finish the trial or recording first"));
     return false;
   }
@@ -109,18 +109,22 @@ void MainWindow::setMode(guidance::TrainingMode mode) { train_tab_->setMode(mode
 
 bool MainWindow::startTrial() { return train_tab_->start(); }
 
-void MainWindow::beginLiveTrial(session::TrialEnvironment& environment, const session::TrialSetup& setup,
-                                Activity kind, const HapticProfile& expert, bool reference_on_paper,
-                                bool expert_on_plot, const QString& title, QLabel* scores) {
+void MainWindow::startRun(session::TrialEnvironment& environment, const RunSpec& spec, Activity kind) {
   if (activity_ == Activity::kPlayback) abortActivity();
   playback_.load(nullptr);
   try {
-    rig_.start(environment, trialRunSpec(setup, true), hand_, session::Clock::kRealTime);
+    rig_.start(environment, spec, hand_, session::Clock::kRealTime);
   } catch (...) {
     startFreeRun();
     throw;
   }
   activity_ = kind;
+}
+
+void MainWindow::beginLiveTrial(session::TrialEnvironment& environment, const session::TrialSetup& setup,
+                                Activity kind, const HapticProfile& expert, bool reference_on_paper,
+                                bool expert_on_plot, const QString& title, QLabel* scores) {
+  startRun(environment, trialRunSpec(setup, true), kind);
   trial_expert_ = &expert;
   // The paper: the reference (or not), nothing else; the plot: the trial's window.
   showReference(trial_expert_);
@@ -300,7 +304,7 @@ void MainWindow::abortActivity() {
 
 void MainWindow::startPlayback(const HapticProfile* profile, const HapticProfile* expert) {
   if (profile == nullptr || profile->empty()) return;
-  if (activity_ != Activity::kFree && activity_ != Activity::kPlayback) return;
+  if (!idle()) return;
   playback_.load(profile);
   playback_.setSpeed(review_->speed());
   playback_expert_ = expert;

@@ -27,18 +27,10 @@ namespace hattr::studio {
 // The Record tab records on the window's rig, paper and plot (RecordHost).
 void MainWindow::buildRecordTab() {
   RecordHost host;
-  host.idle = [this] { return activity_ == Activity::kFree || activity_ == Activity::kPlayback; };
+  host.idle = [this] { return idle(); };
   host.recording = [this] { return activity_ == Activity::kRecording; };
   host.begin = [this](const RunSpec& spec) {
-    if (activity_ == Activity::kPlayback) abortActivity();
-    playback_.load(nullptr);
-    try {
-      rig_.start(*environment_, spec, hand_, session::Clock::kRealTime);
-    } catch (...) {
-      startFreeRun();
-      throw;
-    }
-    activity_ = Activity::kRecording;
+    startRun(*environment_, spec, Activity::kRecording);
     paper_->trail().clear();
     paper_->overlay().clear();
     plot_->trainee().clear();
@@ -86,7 +78,7 @@ void MainWindow::buildRecordTab() {
 // The Train tab runs its trials on the window's rig, paper and plot (TrainHost).
 void MainWindow::buildTrainTab() {
   TrainHost host;
-  host.idle = [this] { return activity_ == Activity::kFree || activity_ == Activity::kPlayback; };
+  host.idle = [this] { return idle(); };
   host.trial_running = [this] { return activity_ == Activity::kTrial; };
   host.may_change_reference = [this] { return activity_ != Activity::kTrial && activity_ != Activity::kStudyTrial; };
   host.rate_hz = [this] { return environment_->rate_hz(); };
@@ -130,9 +122,9 @@ void MainWindow::buildTrainTab() {
 // The Study tab runs its trials on the window's rig, paper and plot (StudyHost).
 void MainWindow::buildStudyTab() {
   StudyHost host;
-  host.idle = [this] { return activity_ == Activity::kFree || activity_ == Activity::kPlayback; };
+  host.idle = [this] { return idle(); };
   host.trial_running = [this] { return activity_ == Activity::kStudyTrial; };
-  host.device_busy = [this] { return activity_ != Activity::kFree && activity_ != Activity::kPlayback; };
+  host.device_busy = [this] { return !idle(); };
   host.clear_views = [this] {
     if (activity_ == Activity::kPlayback) abortActivity();
     paper_->overlay().clear();
@@ -173,7 +165,7 @@ void MainWindow::buildStudyTab() {
 
 void MainWindow::buildReviewTab() {
   ReviewHost host;
-  host.may_show = [this] { return activity_ == Activity::kFree || activity_ == Activity::kPlayback; };
+  host.may_show = [this] { return idle(); };
   host.show = [this](const HapticProfile& trial, const HapticProfile& expert, const QString& title, QLabel* scores) {
     showReviewed(trial, expert, title, scores);
   };
