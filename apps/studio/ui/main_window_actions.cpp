@@ -109,18 +109,6 @@ void MainWindow::setMode(guidance::TrainingMode mode) { train_tab_->setMode(mode
 
 bool MainWindow::startTrial() { return train_tab_->start(); }
 
-void MainWindow::startRun(session::TrialEnvironment& environment, const RunSpec& spec, Activity kind) {
-  if (activity_ == Activity::kPlayback) abortActivity();
-  playback_.load(nullptr);
-  try {
-    rig_.start(environment, spec, hand_, session::Clock::kRealTime);
-  } catch (...) {
-    startFreeRun();
-    throw;
-  }
-  activity_ = kind;
-}
-
 void MainWindow::beginLiveTrial(session::TrialEnvironment& environment, const session::TrialSetup& setup,
                                 Activity kind, const HapticProfile& expert, bool reference_on_paper,
                                 bool expert_on_plot, const QString& title, QLabel* scores) {

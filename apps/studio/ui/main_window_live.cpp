@@ -111,6 +111,18 @@ void MainWindow::startFreeRun() {
   if (activity_ != Activity::kPlayback) activity_ = Activity::kFree;
 }
 
+void MainWindow::startRun(session::TrialEnvironment& environment, const RunSpec& spec, Activity kind) {
+  if (activity_ == Activity::kPlayback) abortActivity();
+  playback_.load(nullptr);
+  try {
+    rig_.start(environment, spec, hand_, session::Clock::kRealTime);
+  } catch (...) {
+    startFreeRun();
+    throw;
+  }
+  activity_ = kind;
+}
+
 void MainWindow::consumeLive(const Sample& sample) {
   switch (activity_) {
     case Activity::kTrial:
