@@ -10,7 +10,6 @@
 #include "hattr/core/error.hpp"
 #include "hattr/device/device_uri.hpp"
 #include "hattr/io/profile_csv.hpp"
-#include "hattr/session/study_export.hpp"
 
 namespace hattr::session {
 namespace {
@@ -37,119 +36,6 @@ class ScriptParticipant final : public Participant {
 };
 
 }  // namespace
-
-std::string noteLoopCounters(TrialResult& result) {
-  const std::string disturbed = disturbanceOf(result);
-  auto& extra = result.profile.metadata().extra;
-  extra["loop_ticks"] = fmt::format("{}", result.ticks);
-  extra["loop_overruns"] = fmt::format("{}", result.overruns);
-  extra["loop_stalls"] = fmt::format("{}", result.stalls);
-  extra["missed_samples"] = fmt::format("{}", result.missed_samples);
-  extra["safety_faults"] = fmt::format("{}", result.faults);
-  extra["device_link_faults"] = fmt::format("{}", result.link_faults);
-  if (result.mentor_link_faults > 0) extra["mentor_link_faults"] = fmt::format("{}", result.mentor_link_faults);
-  if (!disturbed.empty()) extra["disturbed"] = disturbed;
-  return disturbed;
-}
-
-std::uint64_t studyLiveSeed(const SubjectSpec& subject, const TrialPlan& plan, int attempt) {
-  return subject.seed * 1'000'003ULL + static_cast<std::uint64_t>(plan.sequence) * 31ULL +
-         static_cast<std::uint64_t>(attempt);
-}
-
-TrialSetup studyTrialSetup(const StudyDefinition& study, const TrialPlan& plan,
-                           std::shared_ptr<const guidance::ReferenceTrajectory> reference) {
-  HATTR_THROW_UNLESS(reference != nullptr, "study \"{}\", subject {}, trial {}: expected the expert's reference "
-                     "trajectory, got none", study.name, plan.subject, plan.sequence);
-  // The mode's guidance in training, none (BASIC) in recall.
-  TrialSetup setup;
-  setup.guidance.mode = plan.view.guidance ? plan.mode : guidance::TrainingMode::kBasic;
-  setup.guidance.playback.indexing = study.indexing;
-  // The trial ends when the subject is done (pen up long enough) or at the maximum; an old
-  // study file without trial_end keeps its fixed window.
-  if (study.protocol.fixed_window) {
-    setup.duration_s = reference->duration_s() + study.protocol.tail_s;
-  } else {
-    setup.duration_s = study.protocol.trial_end.maxDuration_s(reference->duration_s());
-    setup.pen_up_end_s = study.protocol.trial_end.pen_up_s;
-  }
-  setup.reference = std::move(reference);
-  setup.metadata.subject = plan.subject;
-  setup.metadata.skill = study.skill;
-  setup.metadata.source = fmt::format("study:{}", study.name);
-  setup.metadata.extra["study_mode"] = std::string(guidance::modeName(plan.mode));
-  setup.metadata.extra["phase"] = std::string(phaseName(plan.phase));
-  setup.metadata.extra["trial"] = fmt::format("{}", plan.index);
-  setup.metadata.extra["sequence"] = fmt::format("{}", plan.sequence);
-  setup.metadata.extra["reference_shown"] = plan.view.show_reference ? "yes" : "no";
-  return setup;
-}
-
-namespace {
-
-/// The rescue folder of a run: the option, or beside a study file, or ./hattr-unstored.
-std::filesystem::path rescueFolder(const StudyDatabase& db, const RunOptions& options) {
-  if (!options.rescue_folder.empty()) return options.rescue_folder;
-  if (db.onPostgres()) return std::filesystem::current_path() / "hattr-unstored";
-  return std::filesystem::path(db.file().string() + ".unstored");
-}
-
-/// Writes a recording the store refused into `folder`, under its export name (a name already
-/// there gets -2, -3...); returns where.
-std::filesystem::path rescueRecording(const std::filesystem::path& folder, const TrialPlan& plan,
-                                      const HapticProfile& profile) {
-  const std::filesystem::path base = folder / trialFileName(plan);
-  std::filesystem::create_directories(base.parent_path());
-  std::filesystem::path file = base;
-  for (int n = 2; std::filesystem::exists(file); ++n) {
-    file = base.parent_path() / fmt::format("{}-{}{}", base.stem().string(), n, base.extension().string());
-  }
-  io::writeProfileCsv(profile, file);
-  return file;
-}
-
-}  // namespace
-
-void StudyRunner::storeOrRescue(const TrialRecord& record, const HapticProfile& profile, const std::string& outcome,
-                                const std::string& disturbed, const RunOptions& options) {
-  try {
-    withDatabase([&](StudyDatabase& db) { db.completeTrial(record.id, profile, outcome, disturbed); });
-  } catch (const SubjectTakenOver&) {
-    throw;  // another station runs this subject now: its trial, not this one's
-  } catch (const Error& e) {
-    // The store refused the trial: its recording is kept in a file, never lost.
-    std::filesystem::path file;
-    try {
-      file = rescueRecording(rescueFolder(db_, options), record.plan, profile);
-    } catch (const std::exception& also) {
-      throw Error(fmt::format("{}; and the recording could not be kept in a file either: {}", e.what(), also.what()));
-    }
-    const TrialPlan& plan = record.plan;
-    throw Error(fmt::format("{}; subject {}'s {} {} trial {} (sequence {}) was not stored: its recording is kept in {} "
-                            "(a profile CSV), and the trial runs again when the study resumes",
-                            e.what(), plan.subject, guidance::modeName(plan.mode), phaseName(plan.phase), plan.index,
-                            plan.sequence, file.string()));
-  }
-}
-
-bool repeatDisturbedTrial(const Protocol& protocol, const std::string& disturbed, int repeats_so_far) {
-  return !disturbed.empty() && protocol.disturbed == DisturbedPolicy::kRepeat && repeats_so_far < protocol.max_repeats;
-}
-
-std::string disturbanceOf(const TrialResult& r) {
-  std::vector<std::string> parts;
-  const auto add = [&parts](std::uint64_t n, const char* one, const char* many) {
-    if (n > 0) parts.push_back(fmt::format("{} {}", n, n == 1 ? one : many));
-  };
-  add(r.stalls, "stall (force zeroed)", "stalls (force zeroed)");
-  add(r.missed_samples, "missed sample", "missed samples");
-  add(r.faults, "safety fault", "safety faults");
-  add(r.link_faults, "lost device link", "lost device links");
-  add(r.mentor_link_faults, "lost link to the mentor", "lost links to the mentor");
-  std::string text;
-  for (const auto& p : parts) text += (text.empty() ? "" : " · ") + p;
-  return text;
-}
 
 std::unique_ptr<Participant> makeScriptParticipant(const SubjectRecord& subject, const HapticProfile& expert) {
   const auto& options = subject.spec.options;
@@ -280,19 +166,14 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
     return 0;  // another station finished it meanwhile
   }
   const auto participant = factory_(subject, expert_);
+  SubjectTrials steps(db_.study(), subject, std::move(trials), reference_);
 
   // Resume: the participant relives the trials already done, in order.
-  int completed = 0;
-  for (const TrialRecord& t : trials) {
-    if (t.status != TrialStatus::kCompleted) break;
-    participant->trialCompleted(t.plan, storedProfile(t.id));
-    ++completed;
-  }
-
+  relivePassed(steps, *participant);
   const std::int64_t session = withDatabase([&](StudyDatabase& db) { return db.beginSession(subject.id); });
   int ran = 0;
   try {
-    runTrialsLeft(subject, options, budget, environment, trials, completed, *participant, session, ran);
+    runTrialsLeft(subject, options, budget, environment, steps, *participant, session, ran);
   } catch (const SubjectTakenOver&) {
     // Another station took the subject over (this one's lease lapsed): it runs the rest.
     held_elsewhere_ = true;
@@ -303,63 +184,52 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
   return ran;
 }
 
+void StudyRunner::relivePassed(SubjectTrials& steps, Participant& participant) {
+  for (const TrialRecord& done : steps.passCompleted()) {
+    participant.trialCompleted(done.plan, storedProfile(done.id));
+  }
+}
+
 void StudyRunner::runTrialsLeft(const SubjectRecord& subject, const RunOptions& options, int budget,
-                                EnvironmentSlot& environment, const std::vector<TrialRecord>& trials, int completed,
-                                Participant& participant, std::int64_t session, int& ran) {
+                                EnvironmentSlot& environment, SubjectTrials& steps, Participant& participant,
+                                std::int64_t session, int& ran) {
   const StudyDefinition& study = db_.study();
-  for (std::size_t i = static_cast<std::size_t>(completed); i < trials.size(); ++i) {
+  const std::filesystem::path rescue_folder =
+      options.rescue_folder.empty() ? defaultRescueFolder(db_) : options.rescue_folder;
+  for (; steps.current() != nullptr; relivePassed(steps, participant)) {
     if ((budget >= 0 && ran >= budget) || stopping_) break;
-    const TrialRecord& record = trials[i];
+    const TrialRecord record = *steps.current();
     const TrialPlan& plan = record.plan;
-    // A trial completed after a gap (an earlier one left pending) is never run again: the
-    // participant relives it in its place, as on resume.
-    if (record.status == TrialStatus::kCompleted) {
-      participant.trialCompleted(plan, storedProfile(record.id));
-      continue;
-    }
-    if (i > static_cast<std::size_t>(completed) || completed > 0) participant.rest(study.protocol.rest_s);
-    participant.prompt(fmt::format("{} with {}: trial {} of {}", plan.phase == Phase::kTraining ? "Training" : "Recall",
-                                    guidance::modeName(plan.mode), plan.index,
-                                    plan.phase == Phase::kTraining ? study.protocol.training_trials
-                                                                   : study.protocol.recall_trials));
+    if (steps.restBefore()) participant.rest(study.protocol.rest_s);
+    participant.prompt(steps.prompt());
 
-    // The trial, set up as every app sets up a study trial; the runner's clock.
-    TrialSetup setup = studyTrialSetup(study, plan, reference_);
-    setup.clock = options.clock;
-    setup.live_guidance = options.mentor;
-
-    // The trial; a disturbed one is kept and run again while the policy says so.
+    // The trial, set up as every app sets up a study trial, on the runner's clock; a disturbed
+    // one is kept and run again while the policy says so.
     TrialResult result;
-    std::string disturbed;
-    for (int attempt = 0;; ++attempt) {
-      setup.inject_stall_at_s = options.inject_stall_at_s
-                                    ? withDatabase([&](StudyDatabase&) { return options.inject_stall_at_s(plan, attempt); })
-                                    : -1.0;
-      setup.live_seed = studyLiveSeed(subject.spec, plan, attempt);
-      withDatabase([&](StudyDatabase& db) { db.markRunning(record.id, session); });
+    SubjectTrials::Outcome outcome;
+    do {
+      TrialSetup setup = steps.setup(options.clock, options.mentor);
+      setup.inject_stall_at_s =
+          options.inject_stall_at_s
+              ? withDatabase([&](StudyDatabase&) { return options.inject_stall_at_s(plan, steps.attempt()); })
+              : -1.0;
+      withDatabase([&](StudyDatabase& db) { steps.begin(db, session); });
       if (!environment) environment = std::make_unique<TrialEnvironment>(study.device, world_, study.rate_hz);
       result = runTrial(*environment, setup, participant.handForTrial(plan));
-      // A trial the device broke off is not data: mark it, keep everything stored, and stop.
-      if (!result.failure.empty()) {
-        withDatabase([&](StudyDatabase& db) {
-          db.failTrial(record.id, result.failure);
-          db.endSession(session);
-        });
+      outcome = withDatabase([&](StudyDatabase& db) { return steps.end(db, result, rescue_folder); });
+      // A trial the device broke off is not data: marked failed, everything stored kept, and the run stops.
+      if (outcome.ending == SubjectTrials::Ending::kFailed) {
+        withDatabase([&](StudyDatabase& db) { db.endSession(session); });
         throw Error(fmt::format("subject {}: {} trial {} with {} failed: {}; completed trials are kept, and `study "
                                 "run` repeats this one",
                                 subject.id, phaseName(plan.phase), plan.index, guidance::modeName(plan.mode),
                                 result.failure));
       }
-      // Nothing in the profile may depend on when it ran, so a resumed study is bit-identical.
-      result.profile.metadata().created_utc = "";
-      disturbed = noteLoopCounters(result);
-      if (!repeatDisturbedTrial(study.protocol, disturbed, attempt)) break;
-      withDatabase([&](StudyDatabase& db) { db.keepDisturbedAttempt(record.id, result.profile, disturbed); });
-      participant.prompt(fmt::format("That trial was disturbed ({}): once more", disturbed));
-    }
-    const std::string outcome = fmt::format("ok: {} samples, {} missed, {} faults{}", result.profile.size(),
-                                            result.missed_samples, result.faults, disturbed.empty() ? "" : "; disturbed");
-    storeOrRescue(record, result.profile, outcome, disturbed, options);
+      if (outcome.ending == SubjectTrials::Ending::kRepeat) {
+        participant.prompt(fmt::format("That trial was disturbed ({}): once more", outcome.disturbed));
+      }
+    } while (outcome.ending == SubjectTrials::Ending::kRepeat);
+
     // The participant learns from what was stored (at a declared resolution, not what was
     // measured), as it does on resume: a resumed study stays bit-identical.
     participant.trialCompleted(plan, study.resolution.empty() ? result.profile : storedProfile(record.id));
@@ -368,10 +238,8 @@ void StudyRunner::runTrialsLeft(const SubjectRecord& subject, const RunOptions& 
     }
     ++ran;
     if (options.progress) {
-      TrialRecord done = record;
-      done.status = TrialStatus::kCompleted;
       withDatabase([&](StudyDatabase&) {  // one progress call at a time
-        options.progress({subject.id, static_cast<int>(i) + 1, static_cast<int>(trials.size()), &done});
+        options.progress({subject.id, static_cast<int>(steps.position()), steps.totalCount(), &outcome.trial});
       });
     }
   }

@@ -9,6 +9,7 @@
 #include "hattr/core/error.hpp"
 #include "hattr/device/device_uri.hpp"
 #include "hattr/servo/servo_loop.hpp"
+#include "hattr/session/trial_run.hpp"
 #include "hattr/session/trial_watch.hpp"
 
 namespace hattr::session {
@@ -36,8 +37,6 @@ device::HandCommand lifted(device::HandCommand command) noexcept {
 /// A real-time trial ends with its recording window (loop time); the wall clock ends it this
 /// long after the window would have ended had the loop kept pace, whatever the loop's time says.
 constexpr double kWindowEndBackstop_s = 2.0;
-/// Ticks a simulated-time trial runs between drains of the loop's sample ring.
-constexpr std::size_t kSimulatedChunk = 64;
 
 /// How a real-time wait ended: a failure (why), the end rule, a stop request, or the time ran out.
 struct WaitEnd {
@@ -187,93 +186,55 @@ TrialSetup scriptedTrialSetup(const device::ProfileHandScript& hand, const Hapti
 }
 
 TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::HandScript& hand) {
-  HATTR_THROW_UNLESS(std::isfinite(setup.duration_s) && setup.duration_s > 0.0 && setup.duration_s <= 3600.0,
-                     "trial duration: expected (0, 3600] s, got {}", setup.duration_s);
-  HATTR_THROW_UNLESS(std::isfinite(setup.pen_up_end_s) && setup.pen_up_end_s >= 0.0 && setup.pen_up_end_s <= 60.0,
-                     "trial end: pen-up time: expected [0, 60] s (0: off), got {}", setup.pen_up_end_s);
-  const double ramp_s = servo::SafetyConfig{}.ramp_time_s;
-  HATTR_THROW_UNLESS(std::isfinite(setup.settle_s) && setup.settle_s >= ramp_s && setup.settle_s <= 60.0,
-                     "trial settle time: expected [{}, 60] s (at least the safety ramp), got {}", ramp_s, setup.settle_s);
-  TrialResult result;
-
-  // Guidance, with its gains clamped to what the device renders passively with the paper; a
-  // mentored mode's comes live from the expert's pen, after a settle long enough for the link.
-  guidance::GuidanceConfig config = setup.guidance;
-  result.clamps = clampTrialGains(config, env);
-  guidance::TrainingGuidance guidance(setup.reference, config);
-  LiveGuidance* const live = guidance::isMentored(config.mode) ? setup.live_guidance : nullptr;
-  HATTR_THROW_UNLESS(live != nullptr || !guidance::isMentored(config.mode),
-                     "mode {}: a mentored mode needs an expert's station (a study file's mentor block, or "
-                     "`hattr mentor follow` for a session outside a study)", guidance::modeName(config.mode));
-  const double settle_s = live ? std::max(setup.settle_s, live->minimumSettle_s()) : setup.settle_s;
-  GuidanceController& stage =
-      live ? live->beginTrial(config.mode, env, settle_s, setup.live_seed) : static_cast<GuidanceController&>(guidance);
-  guidance.startTrial(settle_s);
-
-  // Device, paper, loop, recorder; the hand settles before the script starts. A device that
-  // cannot be simulated runs in real time whatever the setup asks.
-  SettlingHand settling(hand, settle_s);
-  const auto device = openTrialDevice(env.deviceUri(), settling);
-  const Clock clock = device->clocking() == device::DeviceClocking::kSimulatable ? setup.clock : Clock::kRealTime;
-  env.paper().reset();
-  // In simulated time the recorder drains the ring every kSimulatedChunk ticks, so a small
-  // ring does (a real-time loop keeps the default, seconds of samples, for a late consumer).
-  servo::ServoConfig servo_config{.rate_hz = env.rate_hz()};
-  if (clock == Clock::kSimulated) servo_config.sample_ring_capacity = 16 * kSimulatedChunk;
-  servo::ServoLoop loop(*device, servo_config);
-  loop.setWorld(&env.paper());
-  loop.setGuidance(&stage);
-  ProfileMetadata metadata = trialMetadata(setup.metadata, env, config, result.clamps, clock);
-  if (clock == Clock::kRealTime && device->clocking() == device::DeviceClocking::kDeviceClock) {
-    metadata.extra["clock"] = "device";
-  }
-  RecorderConfig recorder_config{.trigger = setup.trigger, .nominal_period_s = 1.0 / env.rate_hz()};
-  recorder_config.end_after_pen_up_s = setup.pen_up_end_s;
-  if (setup.pen_up_end_s > 0.0) recorder_config.pen_up_stop_s = setup.pen_up_end_s;
+  TrialRun run(env, setup, hand);
+  servo::ServoLoop& loop = run.loop();
+  const double settle_s = run.settle_s();
   // In real time the recording is the loop-time window [settle, settle + duration): its
   // length does not depend on when this thread wakes to start and stop it.
-  if (clock == Clock::kRealTime) {
+  RecorderConfig recorder_config = run.recorderConfig();
+  if (run.clock() == Clock::kRealTime) {
     recorder_config.window_begin_s = settle_s;
     recorder_config.window_end_s = settle_s + setup.duration_s;
   }
-  Recorder recorder(loop.samples(), recorder_config, metadata);
+  Recorder recorder(loop.samples(), recorder_config, run.metadata());
 
   const auto settle_ticks = static_cast<std::size_t>(std::llround(settle_s * env.rate_hz()));
   auto ticks = static_cast<std::size_t>(std::llround(setup.duration_s * env.rate_hz()));
   // The end: the recorder decides the end rule sample by sample (it stops recording with the
   // sample that ends the trial); between chunks, or every 2 ms in real time, we stop the loop.
+  std::string failure;
   bool stopped = false;
-  if (clock == Clock::kSimulated) {
-    const auto run = [&](std::size_t count) {
+  if (run.clock() == Clock::kSimulated) {
+    const auto advance = [&](std::size_t count) {
       for (std::size_t done = 0; done < count && !recorder.writingOver(); done += kSimulatedChunk) {
         loop.runSimulated(std::min(kSimulatedChunk, count - done));
         recorder.drain();
       }
     };
-    run(settle_ticks);
-    if (live) result.failure = live->unavailable();
-    if (!result.failure.empty()) ticks = 0;  // no mentor: nothing is recorded
+    advance(settle_ticks);
+    failure = run.mentorUnavailable();
+    if (!failure.empty()) ticks = 0;  // no mentor: nothing is recorded
     recorder.start();
     // A host stall injected at its time (rehearsing a study's policy), else straight through.
     const auto stall_tick = setup.inject_stall_at_s >= 0.0
                                 ? std::min(ticks, static_cast<std::size_t>(std::llround(setup.inject_stall_at_s * env.rate_hz())))
                                 : ticks;
-    run(stall_tick);
+    advance(stall_tick);
     if (stall_tick < ticks) {
       loop.delaySimulated(std::chrono::nanoseconds(std::llround(setup.injected_stall_s * 1e9)));
-      run(ticks - stall_tick);
+      advance(ticks - stall_tick);
     }
   } else {
     loop.requireConsumer(&recorder.consumerTime());
     recorder.startThread();
     recorder.start();  // armed from the first tick: the window decides what is kept
     loop.start();
-    result.failure = waitForEnd(loop, *device, settle_s).failure;
-    if (result.failure.empty() && live) result.failure = live->unavailable();
-    if (result.failure.empty()) {
+    failure = waitForEnd(loop, run.device(), settle_s).failure;
+    if (failure.empty()) failure = run.mentorUnavailable();
+    if (failure.empty()) {
       // Until the window's end; the wall clock only backs it up for a loop far behind it.
-      const WaitEnd end = waitForEnd(loop, *device, setup.duration_s + kWindowEndBackstop_s, &recorder, setup.stop);
-      result.failure = end.failure;
+      const WaitEnd end = waitForEnd(loop, run.device(), setup.duration_s + kWindowEndBackstop_s, &recorder, setup.stop);
+      failure = end.failure;
       stopped = end.stopped;
     }
     // Nothing after the end (a fault, a stop request) is recorded, and nothing before it lost
@@ -284,24 +245,7 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
   }
   recorder.stop();
 
-  const auto& counters = loop.counters();
-  result.ticks = counters.ticks.load();
-  result.overruns = counters.overruns.load();
-  result.faults = counters.faults.load();
-  result.link_faults = counters.link_faults.load();
-  result.stalls = counters.stalls.load();
-  result.max_period_error_s = static_cast<double>(loop.periodError().max_ns()) * 1e-9;
-  result.clock = std::string(servo::loopClockName(loop.clock()));
-  result.missed_samples = recorder.missed();
-  const std::map<std::string, std::string> live_notes = live ? live->endTrial(result) : std::map<std::string, std::string>{};
-  noteTrialEnd(result, recorder, stopped);
-  result.profile.metadata().extra.insert(live_notes.begin(), live_notes.end());
-  if (!result.failure.empty()) result.profile.metadata().extra["failed"] = result.failure;
-  if (result.link_faults > 0) {
-    result.profile.metadata().extra["link_faults"] =
-        fmt::format("{} ({} ticks without the device, force zeroed)", result.link_faults,
-                    counters.disconnected_ticks.load());
-  }
+  TrialResult result = run.finish(recorder, std::move(failure), stopped);
   if (result.profile.empty() && result.failure.empty()) {
     throw Error("the trial recorded no samples (with the pen-down trigger: the pen never touched the paper)");
   }

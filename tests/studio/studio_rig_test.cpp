@@ -1,6 +1,7 @@
 // The live rig (the studio's runTrial that stays open) and the study stepper (the studio's
 // StudyRunner for a person): the same library calls, the same bits.
 #include <QtTest>
+#include <sqlite3.h>
 #include <chrono>
 #include <fstream>
 #include <thread>
@@ -678,6 +679,40 @@ class StudioRigTest : public QObject {
     const session::TrialRecord first = db.trials("P01")[0];
     QCOMPARE(first.status, session::TrialStatus::kInterrupted);
     QVERIFY2(first.outcome.find("failed: no answer from the expert's station") == 0, first.outcome.c_str());
+    std::filesystem::remove_all(dir);
+  }
+
+  // The store refuses the trial (as a full disk would): the studio loses nothing. The recording
+  // is kept beside the study file, as `hattr study run` keeps it, and the trial runs again.
+  void studySessionKeepsARecordingTheStoreRefusesBesideTheStudy() {
+    const auto dir = makeStudyFolder("refused");
+    { (void)session::StudyDatabase::create(dir / "s.sqlite", session::loadStudy(dir / "study.json")); }
+    sqlite3* raw = nullptr;
+    QCOMPARE(sqlite3_open((dir / "s.sqlite").c_str(), &raw), SQLITE_OK);
+    QCOMPARE(sqlite3_exec(raw, "CREATE TRIGGER refuse_all BEFORE INSERT ON samples BEGIN SELECT RAISE(ABORT, 'refuse_all'); END;",
+                          nullptr, nullptr, nullptr),
+             SQLITE_OK);
+    sqlite3_close(raw);
+    {
+      StudySession session(dir / "s.sqlite");
+      session.selectSubject("P01", 0.0);
+      try {
+        runOneTrial(session, 1.0);
+        QFAIL("the refused store was not reported");
+      } catch (const Error& e) {
+        QVERIFY2(QString(e.what()).contains(QString::fromStdString("its recording is kept in " +
+                                                                   (dir / "s.sqlite.unstored" / "trials" / "P01").string())),
+                 e.what());
+      }
+      QCOMPARE(session.state(), StudySession::State::kReady);
+      QCOMPARE(session.completedCount(), 0);
+      QCOMPARE(session.currentTrial()->plan.sequence, 0);
+    }
+    int kept = 0;
+    for (const auto& entry : std::filesystem::recursive_directory_iterator(dir / "s.sqlite.unstored")) {
+      if (entry.is_regular_file() && !io::readProfileCsv(entry.path()).empty()) ++kept;
+    }
+    QCOMPARE(kept, 1);
     std::filesystem::remove_all(dir);
   }
 

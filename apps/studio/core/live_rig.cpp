@@ -6,18 +6,30 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <map>
 
 #include "hattr/core/error.hpp"
-#include "hattr/device/device_uri.hpp"
-#include "hattr/device/simulated_device.hpp"
 
 namespace hattr::studio {
 namespace {
 
 constexpr std::size_t kRelayCapacity = 1024;                 // power of two
-constexpr std::size_t kSimulatedChunk = 64;                  // ticks between drains, as runTrial
 constexpr auto kRelayPoll = std::chrono::microseconds(500);  // as Recorder::startThread
+
+/// The trial set-up of a run, as session::TrialRun builds it.
+session::TrialSetup trialSetupOf(const RunSpec& spec, session::Clock clock) {
+  session::TrialSetup setup;
+  setup.guidance = spec.guidance;
+  setup.reference = spec.reference;
+  setup.metadata = spec.metadata;
+  setup.duration_s = spec.duration_s;
+  setup.pen_up_end_s = spec.pen_up_end_s;
+  setup.settle_s = spec.settle_s;
+  setup.clock = clock;
+  setup.trigger = spec.record == RecordMode::kPenDown ? session::RecordTrigger::kPenDown : session::RecordTrigger::kCommand;
+  setup.live_guidance = spec.live_guidance;
+  setup.live_seed = spec.live_seed;
+  return setup;
+}
 
 }  // namespace
 
@@ -43,57 +55,26 @@ LiveRig::~LiveRig() { (void)finish(); }
 void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec, device::HandScript& hand,
                     session::Clock clock) {
   if (active()) (void)finish();
-  HATTR_THROW_UNLESS(spec.record != RecordMode::kWindow ||
-                         (std::isfinite(spec.duration_s) && spec.duration_s > 0.0 && spec.duration_s <= 3600.0),
-                     "trial duration: expected (0, 3600] s, got {}", spec.duration_s);
-  const double ramp_s = servo::SafetyConfig{}.ramp_time_s;
-  HATTR_THROW_UNLESS(std::isfinite(spec.settle_s) && spec.settle_s >= ramp_s && spec.settle_s <= 60.0,
-                     "settle time: expected [{}, 60] s (at least the safety ramp), got {}", ramp_s, spec.settle_s);
   HATTR_THROW_UNLESS(std::isfinite(spec.pen_up_stop_s) && spec.pen_up_stop_s > 0.0,
                      "pen-up stop time: expected > 0 s, got {}", spec.pen_up_stop_s);
-  HATTR_THROW_UNLESS(std::isfinite(spec.pen_up_end_s) && spec.pen_up_end_s >= 0.0 && spec.pen_up_end_s <= 60.0,
-                     "trial end: pen-up time: expected [0, 60] s (0: off), got {}", spec.pen_up_end_s);
+  // The trial's pipeline, built by the library as runTrial builds it (a mentored mode's
+  // settle lengthened to the mentor's minimum).
+  auto run = std::make_unique<session::TrialRun>(environment, trialSetupOf(spec, clock), hand,
+                                                 spec.follow_during_settle);
   spec_ = spec;
-  clock_ = clock;
-  // Guidance, device, paper and loop, set up as runTrial sets them up; a mentored mode's
-  // guidance comes live from the expert's pen, after a settle long enough for the link.
-  guidance::GuidanceConfig config = spec.guidance;
-  clamps_ = session::clampTrialGains(config, environment);
-  auto guidance = std::make_unique<guidance::TrainingGuidance>(spec.reference, config);
-  live_ = guidance::isMentored(config.mode) ? spec.live_guidance : nullptr;
-  HATTR_THROW_UNLESS(live_ != nullptr || !guidance::isMentored(config.mode),
-                     "mode {}: a mentored mode needs an expert's station (the study file's mentor block)",
-                     guidance::modeName(config.mode));
-  if (live_) spec_.settle_s = std::max(spec.settle_s, live_->minimumSettle_s());
-  GuidanceController& stage =
-      live_ ? live_->beginTrial(config.mode, environment, spec_.settle_s, spec.live_seed)
-            : static_cast<GuidanceController&>(*guidance);
-  guidance->startTrial(spec_.settle_s);
-  auto settling = std::make_unique<session::SettlingHand>(hand, spec_.settle_s, spec.follow_during_settle);
-  auto device = session::openTrialDevice(environment.deviceUri(), *settling);
-  environment.paper().reset();
-  auto loop = std::make_unique<servo::ServoLoop>(*device, servo::ServoConfig{.rate_hz = environment.rate_hz()});
-  loop->setWorld(&environment.paper());
-  loop->setGuidance(&stage);
-  const ProfileMetadata metadata = session::trialMetadata(spec.metadata, environment, config, clamps_, clock);
+  spec_.settle_s = run->settle_s();
+  clock_ = run->clock();
 
   // The recorder takes samples through a relay ring, so a trial's window starts and ends
   // at exact ticks whatever the clock; it decides the end rule itself, as in runTrial.
   auto relay = std::make_unique<SpscRing<TickSample>>(kRelayCapacity);
-  session::RecorderConfig recorder_config{.trigger = spec.record == RecordMode::kPenDown
-                                                         ? session::RecordTrigger::kPenDown
-                                                         : session::RecordTrigger::kCommand,
-                                          .nominal_period_s = 1.0 / environment.rate_hz(),
-                                          .pen_up_stop_s = spec.pen_up_stop_s};
-  recorder_config.end_after_pen_up_s = spec.pen_up_end_s;
-  if (spec.pen_up_end_s > 0.0) recorder_config.pen_up_stop_s = spec.pen_up_end_s;
-  auto recorder = std::make_unique<session::Recorder>(*relay, recorder_config, metadata);
+  session::RecorderConfig recorder_config = run->recorderConfig();
+  if (spec.pen_up_end_s <= 0.0) recorder_config.pen_up_stop_s = spec.pen_up_stop_s;
+  auto recorder = std::make_unique<session::Recorder>(*relay, recorder_config, run->metadata());
 
   environment_ = &environment;
-  settling_ = std::move(settling);
-  device_ = std::move(device);
-  guidance_ = std::move(guidance);
-  loop_ = std::move(loop);
+  run_ = std::move(run);
+  loop_ = &run_->loop();
   relay_ = std::move(relay);
   recorder_ = std::move(recorder);
   const double half_period_s = 0.5 / environment.rate_hz();  // time stamps are not exact multiples
@@ -119,7 +100,7 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
   status_loop_time_s_ = 0.0;
   if (spec.record == RecordMode::kPenDown) recorder_->start();  // armed; records from the first pen-down
 
-  if (clock == session::Clock::kRealTime) {
+  if (clock_ == session::Clock::kRealTime) {
     loop_->requireConsumer(&recorder_->consumerTime());
     relay_stop_.store(false);
     relay_thread_ = std::thread([this] {
@@ -141,6 +122,7 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
 
 void LiveRig::advanceSimulated(double seconds) {
   HATTR_DEMAND(loop_ && clock_ == session::Clock::kSimulated, "advanceSimulated() needs a simulated run");
+  using session::kSimulatedChunk;
   const auto ticks = static_cast<std::size_t>(std::llround(seconds * environment_->rate_hz()));
   const auto settle_ticks = static_cast<std::uint64_t>(std::llround(spec_.settle_s * environment_->rate_hz()));
   // As runTrial: a trial's loop stops with the chunk in which its window ended; a mentored
@@ -148,11 +130,11 @@ void LiveRig::advanceSimulated(double seconds) {
   for (std::size_t done = 0; done < ticks && !status_window_done_.load(std::memory_order_acquire);) {
     std::size_t chunk = std::min(kSimulatedChunk, ticks - done);
     const std::uint64_t ran = loop_->counters().ticks.load();
-    if (live_ && !mentor_checked_ && ran < settle_ticks) chunk = std::min<std::size_t>(chunk, settle_ticks - ran);
+    if (run_->live() && !mentor_checked_ && ran < settle_ticks) chunk = std::min<std::size_t>(chunk, settle_ticks - ran);
     loop_->runSimulated(chunk);
     done += chunk;
     pump();
-    if (live_ && !mentor_checked_ && loop_->counters().ticks.load() == settle_ticks) checkMentor();
+    if (run_->live() && !mentor_checked_ && loop_->counters().ticks.load() == settle_ticks) checkMentor();
   }
 }
 
@@ -166,7 +148,7 @@ void LiveRig::pump() {
     if (spec_.record == RecordMode::kWindow && !stop_taken_) {
       const bool in_window = item.sample.t_s >= window_begin_s_ && item.sample.t_s < window_end_s_;
       // As runTrial: a mentor not there when the settle ends fails the trial, nothing recorded.
-      if (in_window && !window_armed_ && live_ && !mentor_checked_) checkMentor();  // (real time)
+      if (in_window && !window_armed_ && run_->live() && !mentor_checked_) checkMentor();  // (real time)
       if (!stop_taken_ && in_window != window_armed_) {
         recorder_->drain();
         if (in_window) {
@@ -200,7 +182,7 @@ void LiveRig::watchTrial() {
     return;
   }
   if (!watch_) {
-    if (loop_->running()) watch_ = std::make_unique<session::TrialWatch>(*loop_, *device_);
+    if (loop_->running()) watch_ = std::make_unique<session::TrialWatch>(*loop_, run_->device());
     return;
   }
   std::string failure = watch_->check();
@@ -212,14 +194,14 @@ void LiveRig::watchTrial() {
 }
 
 std::optional<Vec3> LiveRig::referenceCue() const noexcept {
-  if (!guidance_ || !spec_.reference || live_ != nullptr) return std::nullopt;
-  const double index = guidance_->cueIndex();
+  if (!run_ || !spec_.reference || run_->live() != nullptr) return std::nullopt;
+  const double index = run_->guidance().cueIndex();
   if (index < 0.0) return std::nullopt;
   return spec_.reference->at(index).p_WT;
 }
 
 void LiveRig::checkMentor() {
-  mentor_failure_ = live_->unavailable();
+  mentor_failure_ = run_->mentorUnavailable();
   mentor_checked_ = true;
   if (!mentor_failure_.empty()) {
     takeStop();
@@ -263,33 +245,15 @@ session::TrialResult LiveRig::finish() {
     pump();
   }
   recorder_->stop();
+  // The result as runTrial reports it; a failure's end reason comes first.
+  result = run_->finish(*recorder_, !mentor_failure_.empty() ? mentor_failure_ : failure_, stop_taken_);
 
-  result.clamps = clamps_;
-  result.ticks = loop_->counters().ticks.load();
-  result.overruns = loop_->counters().overruns.load();
-  result.faults = loop_->counters().faults.load();
-  result.missed_samples = recorder_->missed();
-  result.stalls = loop_->counters().stalls.load();
-  result.link_faults = loop_->counters().link_faults.load();
-  result.max_period_error_s = static_cast<double>(loop_->periodError().max_ns()) * 1e-9;
-  result.clock = std::string(servo::loopClockName(loop_->clock()));
-  // The mentor's session ends with the loop; its notes go with the recording, as runTrial's.
-  result.failure = !mentor_failure_.empty() ? mentor_failure_ : failure_;
-  const std::map<std::string, std::string> live_notes =
-      live_ ? live_->endTrial(result) : std::map<std::string, std::string>{};
-  session::noteTrialEnd(result, *recorder_, stop_taken_);  // a failure's end reason comes first
-  result.profile.metadata().extra.insert(live_notes.begin(), live_notes.end());
-  if (!result.failure.empty()) result.profile.metadata().extra["failed"] = result.failure;
-
-  // Tear down in dependency order: the recorder reads the relay, the loop drives the device.
+  // Tear down in dependency order: the recorder reads the relay, the run's loop drives its device.
   watch_.reset();
   recorder_.reset();
   relay_.reset();
-  loop_.reset();
-  device_.reset();
-  settling_.reset();
-  guidance_.reset();
-  live_ = nullptr;
+  loop_ = nullptr;
+  run_.reset();
   environment_ = nullptr;
   return result;
 }

@@ -1,16 +1,13 @@
 #pragma once
-/// The studio's live rig: one run of the pipeline that session::runTrial builds — a device
-/// opened by URI (a simulated pen held by a hand script), the paper of a TrialEnvironment,
-/// TrainingGuidance with gains clamped by guidance::clampGains, the ServoLoop and a
-/// session::Recorder — but kept open while it runs, so the GUI can watch the loop's triple
-/// buffer, post mailbox commands (mode switches) and start or stop recording.
-///
-/// runTrial owns its loop and returns only when the trial is over, so the studio cannot use
-/// it for a person who must see the pen move. LiveRig mirrors it step by step (same device
-/// set-up, same settle phase, same metadata, same recorder); with the same hand in simulated
-/// time it records the same profile bit for bit (tests/studio/studio_rig_test.cpp). A library
-/// version of runTrial that exposes its loop while it runs would let this file shrink to a
-/// call (see the report in docs/studio.md).
+/// The studio's live rig: a trial's pipeline built by the library (session::TrialRun, which
+/// runTrial builds and reports every trial with: the set-up checked, the guidance with its
+/// clamped gains or a mentor's live stage, the settling hand, the device, the paper and the
+/// servo loop; the result when it ends), driven from the window instead of in one call, so the
+/// GUI can watch the loop's triple buffer, post mailbox commands (mode switches) and start or
+/// stop recording while a person writes. What is the rig's own: the relay that feeds the
+/// recorder and arms it at the exact sample where a trial's window begins, the stop key, and
+/// runTrial's watch (session::TrialWatch) run from the relay thread. With the same hand in
+/// simulated time it records what runTrial records, bit for bit (tests/studio/studio_rig_test.cpp).
 ///
 /// Threads: the GUI thread calls every member; the servo thread runs the loop; in real time
 /// a relay thread takes every sample from the loop's ring and hands it to the recorder.
@@ -32,6 +29,7 @@
 #include "hattr/servo/servo_loop.hpp"
 #include "hattr/session/recorder.hpp"
 #include "hattr/session/trial.hpp"
+#include "hattr/session/trial_run.hpp"
 #include "hattr/session/trial_watch.hpp"
 
 namespace hattr::studio {
@@ -151,8 +149,6 @@ class LiveRig {
   [[nodiscard]] const servo::LiveCounters* counters() const noexcept;
   /// What the servo thread got from the real-time settings (after start in real time).
   [[nodiscard]] std::string realtimeSummary() const;
-  /// Every gain and world clamp applied to this run.
-  [[nodiscard]] const std::vector<std::string>& clamps() const noexcept { return clamps_; }
   [[nodiscard]] session::TrialEnvironment* environment() const noexcept { return environment_; }
 
  private:
@@ -165,12 +161,8 @@ class LiveRig {
   session::TrialEnvironment* environment_ = nullptr;
   RunSpec spec_;
   session::Clock clock_ = session::Clock::kSimulated;
-  std::vector<std::string> clamps_;
-  std::unique_ptr<session::SettlingHand> settling_;
-  std::unique_ptr<device::Device> device_;
-  std::unique_ptr<guidance::TrainingGuidance> guidance_;
-  session::LiveGuidance* live_ = nullptr;  // a mentored run's guidance (spec_.live_guidance)
-  std::unique_ptr<servo::ServoLoop> loop_;
+  std::unique_ptr<session::TrialRun> run_;  // the library's pipeline of this run
+  servo::ServoLoop* loop_ = nullptr;        // run_'s loop
   std::unique_ptr<session::Recorder> recorder_;
   std::unique_ptr<SpscRing<TickSample>> relay_;
   std::thread relay_thread_;

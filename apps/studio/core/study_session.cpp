@@ -5,7 +5,6 @@
 #include "hattr/core/error.hpp"
 #include "hattr/net/study_mentor.hpp"
 #include "hattr/render/world_config.hpp"
-#include "hattr/session/study_runner.hpp"
 
 namespace hattr::studio {
 
@@ -30,9 +29,11 @@ StudySession::~StudySession() {
 
 void StudySession::selectSubject(const std::string& subject_id, double now_s) {
   HATTR_THROW_UNLESS(state_ != State::kRunning, "study: cannot change subject while a trial runs");
-  bool found = false;
-  for (const session::SubjectRecord& s : db_.subjects()) found = found || s.id == subject_id;
-  HATTR_THROW_UNLESS(found, "study {}: no subject \"{}\"", db_.file().string(), subject_id);
+  std::optional<session::SubjectRecord> record;
+  for (const session::SubjectRecord& s : db_.subjects()) {
+    if (s.id == subject_id) record = s;
+  }
+  HATTR_THROW_UNLESS(record.has_value(), "study {}: no subject \"{}\"", db_.file().string(), subject_id);
   // The subject for this station alone (a PostgreSQL study's other stations may hold it); the
   // one before is given back.
   const session::SubjectClaim claim = db_.claimSubject(subject_id);
@@ -44,19 +45,14 @@ void StudySession::selectSubject(const std::string& subject_id, double now_s) {
     session_id_.reset();
   }
   subject_ = subject_id;
-  trials_ = db_.trials(subject_id);
-  repeats_ = 0;  // as the runner: a trial's attempts count from 0 in each run
-
-  // Resume at the first trial not completed, as the runner does; trials completed after a
-  // gap are skipped when their turn comes (never run again).
-  completed_ = 0;
-  for (const session::TrialRecord& t : trials_) completed_ += t.status == session::TrialStatus::kCompleted ? 1 : 0;
-  next_ = 0;
-  skipCompleted();
-  if (next_ >= trials_.size()) {
+  trials_.emplace(db_.study(), *record, db_.trials(subject_id), reference_);
+  // Resume at the first trial not completed; trials completed after a gap are passed when
+  // their turn comes (never run again). A rest comes first unless this is the first trial.
+  (void)trials_->passCompleted();
+  if (trials_->current() == nullptr) {
     state_ = State::kFinished;
-  } else if (next_ > 0) {
-    state_ = State::kResting;  // resuming: the runner rests before the first trial too
+  } else if (trials_->restBefore()) {
+    state_ = State::kResting;
     rest_until_s_ = now_s + db_.study().protocol.rest_s;
   } else {
     state_ = State::kReady;
@@ -83,73 +79,45 @@ double StudySession::restRemaining_s(double now_s) const noexcept {
 }
 
 const session::TrialRecord* StudySession::currentTrial() const noexcept {
-  return next_ < trials_.size() && state_ != State::kNoSubject ? &trials_[next_] : nullptr;
+  return trials_ && state_ != State::kNoSubject ? trials_->current() : nullptr;
 }
 
 std::string StudySession::prompt() const {
-  const session::TrialRecord* record = currentTrial();
-  if (record == nullptr) return state_ == State::kFinished ? "Every trial is done. Thank you!" : "";
-  const session::TrialPlan& plan = record->plan;
-  const session::Protocol& protocol = db_.study().protocol;
-  return fmt::format("{} with {}: trial {} of {}", plan.phase == session::Phase::kTraining ? "Training" : "Recall",
-                     guidance::modeName(plan.mode), plan.index,
-                     plan.phase == session::Phase::kTraining ? protocol.training_trials : protocol.recall_trials);
+  if (currentTrial() == nullptr) return state_ == State::kFinished ? "Every trial is done. Thank you!" : "";
+  return trials_->prompt();
 }
 
 session::TrialSetup StudySession::currentSetup() const {
-  const session::TrialRecord* record = currentTrial();
-  HATTR_DEMAND(record != nullptr, "no current trial for subject {}", subject_);
-  // StudyRunner's set-up, in real time for a person.
-  session::TrialSetup setup = session::studyTrialSetup(db_.study(), record->plan, reference_);
-  setup.clock = session::Clock::kRealTime;
-  setup.live_guidance = mentor_.get();
-  for (const session::SubjectRecord& s : db_.subjects()) {
-    if (s.id == subject_) setup.live_seed = session::studyLiveSeed(s.spec, record->plan, repeats_);
-  }
-  return setup;
+  HATTR_DEMAND(currentTrial() != nullptr, "no current trial for subject {}", subject_);
+  return trials_->setup(session::Clock::kRealTime, mentor_.get());  // in real time, for a person
 }
 
 void StudySession::beginTrial() {
   HATTR_DEMAND(state_ == State::kReady || state_ == State::kResting, "study: beginTrial() in state {}",
                stateName(state_));
-  const session::TrialRecord* record = currentTrial();
-  HATTR_DEMAND(record != nullptr, "study: no trial to begin");
+  HATTR_DEMAND(currentTrial() != nullptr, "study: no trial to begin");
   if (!session_id_) session_id_ = db_.beginSession(subject_);
-  db_.markRunning(record->id, *session_id_);
+  trials_->begin(db_, *session_id_);
   state_ = State::kRunning;
 }
 
 std::string StudySession::completeTrial(session::TrialResult result, double now_s) {
   HATTR_DEMAND(state_ == State::kRunning, "study: completeTrial() in state {}", stateName(state_));
-  if (result.profile.empty()) {
-    state_ = State::kReady;
-    throw Error("the trial recorded no samples; it stays to be run again");
-  }
-  // Nothing in the profile may depend on when it ran (the runner's rule).
-  result.profile.metadata().created_utc = "";
-  const session::TrialRecord& record = trials_[next_];
-  const std::string disturbed = session::noteLoopCounters(result);
+  HATTR_DEMAND(result.failure.empty(), "study: a failed trial goes to failTrial()");
+  session::SubjectTrials::Outcome outcome;
   try {
-    if (session::repeatDisturbedTrial(db_.study().protocol, disturbed, repeats_)) {
-      db_.keepDisturbedAttempt(record.id, result.profile, disturbed);
-      ++repeats_;
-      state_ = State::kReady;  // the same trial again
-      return disturbed;
-    }
-    db_.completeTrial(record.id, result.profile,
-                      fmt::format("ok: {} samples, {} missed, {} faults{}", result.profile.size(), result.missed_samples,
-                                  result.faults, disturbed.empty() ? "" : "; disturbed"),
-                      disturbed);
+    outcome = trials_->end(db_, result, {});
   } catch (...) {
     state_ = State::kReady;  // not stored: the trial stays running in the database, to be run again
     throw;
   }
-  repeats_ = 0;
-  trials_[next_].status = session::TrialStatus::kCompleted;
-  ++completed_;
-  ++next_;
-  skipCompleted();
-  if (next_ >= trials_.size()) {
+  if (outcome.ending != session::SubjectTrials::Ending::kStored) {
+    state_ = State::kReady;  // disturbed: the same trial again
+    return outcome.disturbed;
+  }
+  // Stored: a rest before the next trial, or the subject is done (the session ends).
+  (void)trials_->passCompleted();
+  if (trials_->current() == nullptr) {
     state_ = State::kFinished;
     db_.endSession(*session_id_);
     session_id_.reset();
@@ -157,18 +125,13 @@ std::string StudySession::completeTrial(session::TrialResult result, double now_
     state_ = State::kResting;
     rest_until_s_ = now_s + db_.study().protocol.rest_s;
   }
-  return disturbed;
+  return outcome.disturbed;
 }
 
 void StudySession::failTrial(const std::string& reason) {
   HATTR_DEMAND(state_ == State::kRunning, "study: failTrial() in state {}", stateName(state_));
-  db_.failTrial(trials_[next_].id, reason);
-  repeats_ = 0;  // the runner stops at a failed trial; its next run starts the trial at attempt 0
+  trials_->fail(db_, reason);
   state_ = State::kReady;
-}
-
-void StudySession::skipCompleted() {
-  while (next_ < trials_.size() && trials_[next_].status == session::TrialStatus::kCompleted) ++next_;
 }
 
 void StudySession::abandonTrial() {

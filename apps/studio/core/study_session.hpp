@@ -1,13 +1,13 @@
 #pragma once
-/// A person's study session at the studio: the protocol of session::StudyRunner, stepped by
-/// the GUI instead of run in one call, because a person needs to see the pen, rest between
-/// trials and start each trial when ready. The steps and every database call are the
-/// runner's: the study database opened as the runner (exclusive lock, trials left running
-/// marked interrupted), resume at the first trial not completed, the runner's rule for
-/// rests and its prompts, the same TrialEnvironment and TrialSetup for each trial, the trial
-/// marked running before it starts and stored with its profile in one transaction when it
-/// ends (created_utc cleared, the runner's outcome text). With a scripted hand in simulated
-/// time it stores what the runner stores, bit for bit (tests/studio/studio_rig_test.cpp).
+/// A person's study session at the studio: session::StudyRunner's protocol, stepped by the
+/// GUI instead of run in one call, because a person needs to see the pen, rest between trials
+/// and start each trial when ready. The steps are the library's session::SubjectTrials, which
+/// the runner steps too: resume at the first trial not completed, rests, prompts, each trial's
+/// set-up, the trial marked running before it starts, and at its end stored (or rescued to a
+/// file when the store refuses it), kept as a disturbed attempt and run again, or marked
+/// failed. What is the studio's own: the database opened as the runner opens it (exclusive
+/// lock, trials left running marked interrupted), the rest's countdown, and the state the
+/// panel shows.
 ///
 /// A study with mentored modes gets its expert's station from the study file's mentor
 /// block (net::makeStudyMentor), as `hattr study run` does: currentSetup() hands it to the
@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "hattr/session/study_database.hpp"
+#include "hattr/session/subject_trials.hpp"
 #include "hattr/session/trial.hpp"
 
 namespace hattr::studio {
@@ -80,40 +81,35 @@ class StudySession {
   /// window —, the study metadata), on the real-time clock. The caller sets the settle time
   /// (the person's "get ready") and the stop request.
   [[nodiscard]] session::TrialSetup currentSetup() const;
-  [[nodiscard]] int completedCount() const noexcept { return completed_; }
-  [[nodiscard]] int totalCount() const noexcept { return static_cast<int>(trials_.size()); }
+  [[nodiscard]] int completedCount() const noexcept { return trials_ ? trials_->completedCount() : 0; }
+  [[nodiscard]] int totalCount() const noexcept { return trials_ ? trials_->totalCount() : 0; }
 
   /// Starts the current trial: begins the session if needed, marks the trial running.
   /// Only when ready (or resting: the rest is cut short).
   void beginTrial();
-  /// Stores the finished trial (profile and status in one transaction) and moves on: to a
-  /// rest before the next trial, or to finished (the session ends). Throws hattr::Error
-  /// for an empty recording or when the database refuses the write; either way the state
-  /// goes back to ready and the trial (still marked running) can be run again. A trial the
-  /// loop disturbed is handled by the protocol's policy: with "repeat" it is kept as a
-  /// disturbed attempt and the state goes back to ready for the same trial. Returns the
-  /// disturbance ("" when clean).
+  /// The trial ended (session::SubjectTrials::end): stored, and on to a rest before the next
+  /// trial or to finished (the session ends); or, disturbed with the "repeat" policy, kept as
+  /// an attempt and back to ready for the same trial. Throws hattr::Error for an empty
+  /// recording or when the database refuses the write (the recording is then kept in the
+  /// study's rescue folder, and the error says where); either way the state goes back to ready
+  /// and the trial (still marked running) can be run again. A failed result is failTrial's.
+  /// Returns the disturbance ("" when clean).
   std::string completeTrial(session::TrialResult result, double now_s);
-  /// The trial failed (its mentor was not there; session::TrialResult::failure): marked
-  /// failed with the reason, as the runner marks it, and back to ready to run it again.
+  /// The trial failed (the device or its mentor broke it off; session::TrialResult::failure):
+  /// marked failed with the reason, as the runner marks it, and back to ready to run it again.
   void failTrial(const std::string& reason);
   /// The person abandoned the trial: it stays marked running until run again (each run
   /// counts an attempt; a crash leaves it to be marked interrupted). Back to ready.
   void abandonTrial();
 
  private:
-  void skipCompleted();  ///< moves next_ past completed trials
-
   session::StudyDatabase db_;
-  int repeats_ = 0;  ///< disturbed attempts of the current trial run again so far
   HapticProfile expert_;
   std::unique_ptr<session::TrialEnvironment> environment_;
   std::shared_ptr<const guidance::ReferenceTrajectory> reference_;
   std::unique_ptr<session::LiveGuidance> mentor_;  ///< the mentored modes' expert station
   std::string subject_;
-  std::vector<session::TrialRecord> trials_;
-  std::size_t next_ = 0;  // index of the current trial in trials_
-  int completed_ = 0;
+  std::optional<session::SubjectTrials> trials_;  // the subject's, once picked
   std::optional<std::int64_t> session_id_;
   State state_ = State::kNoSubject;
   double rest_until_s_ = 0.0;

@@ -210,8 +210,8 @@ StudyTab::Stored StudyTab::trialEnded(session::TrialResult result) {
                8000);
   } catch (const std::exception& e) {
     host_.error(tr("The trial could not be stored in the study database"),
-                what(e) + tr("\n\nThe trial is kept: save it with File → Save last trial… (Ctrl+Shift+S); "
-                             "the study will run this trial again."));
+                what(e) + tr("\n\nIt is also still the last trial: File → Save last trial… (Ctrl+Shift+S) "
+                             "saves it where you choose. The study runs this trial again."));
   }
   refreshPanel();
   // The subject sees no score during a study unless the study file asks (the paper showed none).

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "hattr/session/study_database.hpp"
+#include "hattr/session/subject_trials.hpp"
 #include "hattr/session/trial.hpp"
 
 namespace hattr::session {
@@ -75,35 +76,6 @@ struct RunOptions {
   std::filesystem::path rescue_folder;
 };
 
-/// How the servo loop disturbed a trial, for people ("2 stalls (force zeroed) · 3 missed
-/// samples"); empty when it ran clean. Stalls, missed samples, safety faults, lost device
-/// links and lost links to a mentor disturb a trial; overruns alone (late ticks) do not, and are stored all the same.
-std::string disturbanceOf(const TrialResult& result);
-
-/// Writes the loop's counters of a trial (ticks, overruns, stalls, missed samples, safety
-/// faults, lost links) and its disturbance into its recording's metadata; returns the
-/// disturbance (disturbanceOf).
-std::string noteLoopCounters(TrialResult& result);
-
-/// The set-up of one study trial, as every app runs it (StudyRunner, the studio's study
-/// session): the mode's guidance in training, none (BASIC) in recall, the study's indexing,
-/// `reference` (the study's expert at the study's rate); the end: protocol.trial_end (the pen
-/// lifted for pen_up_s after writing began, at most maxDuration_s of the expert's duration),
-/// or for an old study file with protocol.fixed_window the expert's duration plus tail_s and
-/// no end rule; the study metadata (subject = plan.subject, skill, source "study:<name>",
-/// study_mode, phase, trial, sequence, reference_shown). The caller sets the clock, the stop
-/// request, the settle time and any injected stall. Throws InputError when `reference` is null.
-TrialSetup studyTrialSetup(const StudyDefinition& study, const TrialPlan& plan,
-                           std::shared_ptr<const guidance::ReferenceTrajectory> reference);
-
-/// The seed of a mentored trial's link (LiveGuidance::beginTrial): a simulated mentor's link
-/// draws the same losses for the same trial and attempt, resumed or not, in every app.
-std::uint64_t studyLiveSeed(const SubjectSpec& subject, const TrialPlan& plan, int attempt);
-
-/// Whether a study runs a disturbed trial again: the policy is "repeat" and it has been
-/// repeated fewer than protocol.max_repeats times.
-bool repeatDisturbedTrial(const Protocol& protocol, const std::string& disturbed, int repeats_so_far);
-
 class StudyRunner {
  public:
   /// `db` must be opened with OpenMode::kRunner.
@@ -126,16 +98,13 @@ class StudyRunner {
   /// runner can claim runs to its end; those other stations hold set held_elsewhere_.
   int runEverySubjectOnce(const RunOptions& options, int ran_before);
   int runSubject(const SubjectRecord& subject, const RunOptions& options, int budget, EnvironmentSlot& environment);
-  /// The subject's trials from `completed` on, in its session; counts them in `ran`.
+  /// The subject's trials left, in its session; counts them in `ran`.
   void runTrialsLeft(const SubjectRecord& subject, const RunOptions& options, int budget, EnvironmentSlot& environment,
-                     const std::vector<TrialRecord>& trials, int completed, Participant& participant,
-                     std::int64_t session, int& ran);
+                     SubjectTrials& trials, Participant& participant, std::int64_t session, int& ran);
+  /// The participant relives the completed trials at the current position, in order.
+  void relivePassed(SubjectTrials& trials, Participant& participant);
   /// A completed trial's profile as stored (through withDatabase).
   HapticProfile storedProfile(std::int64_t trial_id);
-  /// Stores a finished trial, or, when the store refuses it, keeps its recording in the rescue
-  /// folder and throws an Error saying where.
-  void storeOrRescue(const TrialRecord& record, const HapticProfile& profile, const std::string& outcome,
-                     const std::string& disturbed, const RunOptions& options);
   int runSubjectsAtOnce(const std::vector<SubjectRecord>& subjects, const RunOptions& options);
   /// `f(db_)` with the database to this thread alone.
   template <class F>

@@ -1,0 +1,203 @@
+#include "hattr/session/subject_trials.hpp"
+
+#include <algorithm>
+
+#include <fmt/format.h>
+
+#include "hattr/core/error.hpp"
+#include "hattr/io/profile_csv.hpp"
+#include "hattr/session/study_export.hpp"
+
+namespace hattr::session {
+
+std::string noteLoopCounters(TrialResult& result) {
+  const std::string disturbed = disturbanceOf(result);
+  auto& extra = result.profile.metadata().extra;
+  extra["loop_ticks"] = fmt::format("{}", result.ticks);
+  extra["loop_overruns"] = fmt::format("{}", result.overruns);
+  extra["loop_stalls"] = fmt::format("{}", result.stalls);
+  extra["missed_samples"] = fmt::format("{}", result.missed_samples);
+  extra["safety_faults"] = fmt::format("{}", result.faults);
+  extra["device_link_faults"] = fmt::format("{}", result.link_faults);
+  if (result.mentor_link_faults > 0) extra["mentor_link_faults"] = fmt::format("{}", result.mentor_link_faults);
+  if (!disturbed.empty()) extra["disturbed"] = disturbed;
+  return disturbed;
+}
+
+std::uint64_t studyLiveSeed(const SubjectSpec& subject, const TrialPlan& plan, int attempt) {
+  return subject.seed * 1'000'003ULL + static_cast<std::uint64_t>(plan.sequence) * 31ULL +
+         static_cast<std::uint64_t>(attempt);
+}
+
+TrialSetup studyTrialSetup(const StudyDefinition& study, const TrialPlan& plan,
+                           std::shared_ptr<const guidance::ReferenceTrajectory> reference) {
+  HATTR_THROW_UNLESS(reference != nullptr, "study \"{}\", subject {}, trial {}: expected the expert's reference "
+                     "trajectory, got none", study.name, plan.subject, plan.sequence);
+  // The mode's guidance in training, none (BASIC) in recall.
+  TrialSetup setup;
+  setup.guidance.mode = plan.view.guidance ? plan.mode : guidance::TrainingMode::kBasic;
+  setup.guidance.playback.indexing = study.indexing;
+  // The trial ends when the subject is done (pen up long enough) or at the maximum; an old
+  // study file without trial_end keeps its fixed window.
+  if (study.protocol.fixed_window) {
+    setup.duration_s = reference->duration_s() + study.protocol.tail_s;
+  } else {
+    setup.duration_s = study.protocol.trial_end.maxDuration_s(reference->duration_s());
+    setup.pen_up_end_s = study.protocol.trial_end.pen_up_s;
+  }
+  setup.reference = std::move(reference);
+  setup.metadata.subject = plan.subject;
+  setup.metadata.skill = study.skill;
+  setup.metadata.source = fmt::format("study:{}", study.name);
+  setup.metadata.extra["study_mode"] = std::string(guidance::modeName(plan.mode));
+  setup.metadata.extra["phase"] = std::string(phaseName(plan.phase));
+  setup.metadata.extra["trial"] = fmt::format("{}", plan.index);
+  setup.metadata.extra["sequence"] = fmt::format("{}", plan.sequence);
+  setup.metadata.extra["reference_shown"] = plan.view.show_reference ? "yes" : "no";
+  return setup;
+}
+
+
+bool repeatDisturbedTrial(const Protocol& protocol, const std::string& disturbed, int repeats_so_far) {
+  return !disturbed.empty() && protocol.disturbed == DisturbedPolicy::kRepeat && repeats_so_far < protocol.max_repeats;
+}
+
+std::string disturbanceOf(const TrialResult& r) {
+  std::vector<std::string> parts;
+  const auto add = [&parts](std::uint64_t n, const char* one, const char* many) {
+    if (n > 0) parts.push_back(fmt::format("{} {}", n, n == 1 ? one : many));
+  };
+  add(r.stalls, "stall (force zeroed)", "stalls (force zeroed)");
+  add(r.missed_samples, "missed sample", "missed samples");
+  add(r.faults, "safety fault", "safety faults");
+  add(r.link_faults, "lost device link", "lost device links");
+  add(r.mentor_link_faults, "lost link to the mentor", "lost links to the mentor");
+  std::string text;
+  for (const auto& p : parts) text += (text.empty() ? "" : " · ") + p;
+  return text;
+}
+
+namespace {
+
+/// Writes a recording the store refused into `folder`, under its export name (a name already
+/// there gets -2, -3...); returns where.
+std::filesystem::path rescueRecording(const std::filesystem::path& folder, const TrialPlan& plan,
+                                      const HapticProfile& profile) {
+  const std::filesystem::path base = folder / trialFileName(plan);
+  std::filesystem::create_directories(base.parent_path());
+  std::filesystem::path file = base;
+  for (int n = 2; std::filesystem::exists(file); ++n) {
+    file = base.parent_path() / fmt::format("{}-{}{}", base.stem().string(), n, base.extension().string());
+  }
+  io::writeProfileCsv(profile, file);
+  return file;
+}
+
+}  // namespace
+
+std::filesystem::path defaultRescueFolder(const StudyDatabase& db) {
+  if (db.onPostgres()) return std::filesystem::current_path() / "hattr-unstored";
+  return std::filesystem::path(db.file().string() + ".unstored");
+}
+
+SubjectTrials::SubjectTrials(const StudyDefinition& study, SubjectRecord subject, std::vector<TrialRecord> trials,
+                             std::shared_ptr<const guidance::ReferenceTrajectory> reference)
+    : study_(study), subject_(std::move(subject)), trials_(std::move(trials)), reference_(std::move(reference)) {
+  completed_ = static_cast<int>(std::count_if(trials_.begin(), trials_.end(), [](const TrialRecord& t) {
+    return t.status == TrialStatus::kCompleted;
+  }));
+}
+
+std::vector<TrialRecord> SubjectTrials::passCompleted() {
+  std::vector<TrialRecord> passed;
+  for (; next_ < trials_.size() && trials_[next_].status == TrialStatus::kCompleted; ++next_) {
+    passed.push_back(trials_[next_]);
+  }
+  return passed;
+}
+
+const TrialRecord* SubjectTrials::current() const noexcept {
+  return next_ < trials_.size() ? &trials_[next_] : nullptr;
+}
+
+std::string SubjectTrials::prompt() const {
+  HATTR_DEMAND(current() != nullptr, "subject {}: no trial left to prompt for", subject_.id);
+  const TrialPlan& plan = current()->plan;
+  const bool training = plan.phase == Phase::kTraining;
+  return fmt::format("{} with {}: trial {} of {}", training ? "Training" : "Recall", guidance::modeName(plan.mode),
+                     plan.index, training ? study_.protocol.training_trials : study_.protocol.recall_trials);
+}
+
+TrialSetup SubjectTrials::setup(Clock clock, LiveGuidance* mentor) const {
+  HATTR_DEMAND(current() != nullptr, "subject {}: no trial left to set up", subject_.id);
+  TrialSetup setup = studyTrialSetup(study_, current()->plan, reference_);
+  setup.clock = clock;
+  setup.live_guidance = mentor;
+  setup.live_seed = studyLiveSeed(subject_.spec, current()->plan, attempt_);
+  return setup;
+}
+
+void SubjectTrials::begin(StudyDatabase& db, std::int64_t session) const {
+  HATTR_DEMAND(current() != nullptr, "subject {}: no trial left to begin", subject_.id);
+  db.markRunning(current()->id, session);
+}
+
+void SubjectTrials::fail(StudyDatabase& db, const std::string& reason) {
+  HATTR_DEMAND(current() != nullptr, "subject {}: no trial to fail", subject_.id);
+  db.failTrial(current()->id, reason);
+  attempt_ = 0;  // a failed trial stops the run; its next run starts at attempt 0
+}
+
+SubjectTrials::Outcome SubjectTrials::end(StudyDatabase& db, TrialResult& result,
+                                          const std::filesystem::path& rescue_folder) {
+  HATTR_DEMAND(current() != nullptr, "subject {}: no trial to end", subject_.id);
+  TrialRecord& record = trials_[next_];
+  // A trial the device or the mentor broke off is not data.
+  if (!result.failure.empty()) {
+    fail(db, result.failure);
+    return {Ending::kFailed, "", record};
+  }
+  if (result.profile.empty()) throw Error("the trial recorded no samples; it stays to be run again");
+  // Nothing in the profile may depend on when it ran, so a resumed study is bit-identical.
+  result.profile.metadata().created_utc = "";
+  const std::string disturbed = noteLoopCounters(result);
+  // A disturbed trial is kept as an attempt and run again while the policy says so.
+  if (repeatDisturbedTrial(study_.protocol, disturbed, attempt_)) {
+    db.keepDisturbedAttempt(record.id, result.profile, disturbed);
+    ++attempt_;
+    return {Ending::kRepeat, disturbed, record};
+  }
+  const std::string outcome = fmt::format("ok: {} samples, {} missed, {} faults{}", result.profile.size(),
+                                          result.missed_samples, result.faults, disturbed.empty() ? "" : "; disturbed");
+  storeOrRescue(db, record, result.profile, outcome, disturbed, rescue_folder);
+  record.status = TrialStatus::kCompleted;
+  ++completed_;
+  ++next_;
+  attempt_ = 0;
+  return {Ending::kStored, disturbed, record};
+}
+
+void SubjectTrials::storeOrRescue(StudyDatabase& db, const TrialRecord& record, const HapticProfile& profile,
+                                  const std::string& outcome, const std::string& disturbed,
+                                  const std::filesystem::path& rescue_folder) {
+  try {
+    db.completeTrial(record.id, profile, outcome, disturbed);
+  } catch (const SubjectTakenOver&) {
+    throw;  // another station runs this subject now: its trial, not this one's
+  } catch (const Error& e) {
+    // The store refused the trial: its recording is kept in a file, never lost.
+    std::filesystem::path file;
+    try {
+      file = rescueRecording(rescue_folder.empty() ? defaultRescueFolder(db) : rescue_folder, record.plan, profile);
+    } catch (const std::exception& also) {
+      throw Error(fmt::format("{}; and the recording could not be kept in a file either: {}", e.what(), also.what()));
+    }
+    const TrialPlan& plan = record.plan;
+    throw Error(fmt::format("{}; subject {}'s {} {} trial {} (sequence {}) was not stored: its recording is kept in {} "
+                            "(a profile CSV), and the trial runs again when the study resumes",
+                            e.what(), plan.subject, guidance::modeName(plan.mode), phaseName(plan.phase), plan.index,
+                            plan.sequence, file.string()));
+  }
+}
+
+}  // namespace hattr::session
