@@ -196,8 +196,12 @@ void StudyRunner::runTrialsLeft(const SubjectRecord& subject, const RunOptions& 
   const StudyDefinition& study = db_.study();
   const std::filesystem::path rescue_folder =
       options.rescue_folder.empty() ? defaultRescueFolder(db_) : options.rescue_folder;
-  for (; steps.current() != nullptr; relivePassed(steps, participant)) {
+  for (;;) {
     if ((budget >= 0 && ran >= budget) || stopping_) break;
+    // A trial completed after a gap (an earlier one left pending) is never run again: the
+    // participant relives it in its place, as on resume.
+    relivePassed(steps, participant);
+    if (steps.current() == nullptr) break;
     const TrialRecord record = *steps.current();
     const TrialPlan& plan = record.plan;
     if (steps.restBefore()) participant.rest(study.protocol.rest_s);

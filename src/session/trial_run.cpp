@@ -28,8 +28,7 @@ void checkSetup(const TrialSetup& setup) {
 }  // namespace
 
 TrialRun::TrialRun(TrialEnvironment& environment, const TrialSetup& setup, device::HandScript& hand,
-                   bool follow_during_settle)
-    : environment_(environment) {
+                   bool follow_during_settle) {
   checkSetup(setup);
   // Guidance, with its gains clamped to what the device renders passively with the paper; a
   // mentored mode's comes live from the expert's pen, after a settle long enough for the link.

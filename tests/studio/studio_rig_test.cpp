@@ -217,6 +217,13 @@ class StudioRigTest : public QObject {
       if (!r.profile.empty()) {
         check(r.profile.metadata().extra.count("failed") == 1 && r.profile.metadata().extra.at("failed") == r.failure,
               "the profile is not marked failed with the reason");
+        // The same pipeline's metadata: the device's own clock is named as runTrial names it.
+        const auto clock_of = [](const session::TrialResult& t) {
+          const auto it = t.profile.metadata().extra.find("clock");
+          return it == t.profile.metadata().extra.end() ? std::string("(none)") : it->second;
+        };
+        check(clock_of(r) == "device" && clock_of(expected) == "device",
+              "clock: the rig's \"" + clock_of(r) + "\", runTrial's \"" + clock_of(expected) + "\"");
         // From the fault on the loop commanded zero; the faulting tick is the last one kept.
         check(r.profile.samples().back().f_cmd_W.norm() == 0.0, "the last recorded command is not zero");
         check(r.profile.size() <= expected.profile.size() + 5,

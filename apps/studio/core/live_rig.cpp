@@ -21,7 +21,7 @@ session::TrialSetup trialSetupOf(const RunSpec& spec, session::Clock clock) {
   setup.guidance = spec.guidance;
   setup.reference = spec.reference;
   setup.metadata = spec.metadata;
-  setup.duration_s = spec.duration_s;
+  setup.duration_s = spec.record == RecordMode::kWindow ? spec.duration_s : 1.0;  // only a trial's window ends
   setup.pen_up_end_s = spec.pen_up_end_s;
   setup.settle_s = spec.settle_s;
   setup.clock = clock;

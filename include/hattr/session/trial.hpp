@@ -187,7 +187,7 @@ ProfileMetadata trialMetadata(ProfileMetadata base, const TrialEnvironment& envi
 
 /// After the recorder stopped: the trial's end reason (failed, pen lifted, `stopped`, or the
 /// maximum duration), its writing span, and the recording, with these in its metadata
-/// (end_reason, writing_begin_s, writing_end_s). runTrial and the studio's live rig use it.
+/// (end_reason, writing_begin_s, writing_end_s). TrialRun::finish uses it.
 void noteTrialEnd(TrialResult& result, Recorder& recorder, bool stopped);
 
 /// A trial of a hand script, as `hattr record`, `hattr train` and Python's hattr.run_trial set

@@ -7,7 +7,9 @@
 /// the studio's live rig drives one from its window, showing the pen while it runs. Either way
 /// the trial is built and reported by the same code.
 ///
-/// Main thread only; the loop it owns runs on its own thread in real time.
+/// Built, finished and destroyed on one thread; while it runs, the loop it owns runs on its own
+/// thread in real time, and device(), live() and mentorUnavailable() may be read from another
+/// (the studio's relay thread).
 
 #include <memory>
 #include <string>
@@ -63,7 +65,6 @@ class TrialRun {
   TrialResult finish(Recorder& recorder, std::string failure, bool stopped);
 
  private:
-  TrialEnvironment& environment_;
   std::vector<std::string> clamps_;
   std::unique_ptr<guidance::TrainingGuidance> guidance_;
   LiveGuidance* live_ = nullptr;
