@@ -59,6 +59,13 @@ TrialResult cleanResult(StudyDatabase& db) {
   return result;
 }
 
+/// A trial's result that the loop disturbed with `stalls` stalls.
+TrialResult stalledResult(StudyDatabase& db, std::uint64_t stalls) {
+  TrialResult result = cleanResult(db);
+  result.stalls = stalls;
+  return result;
+}
+
 TEST(SubjectTrials, PassesCompletedTrialsInOrderAndRestsBeforeEveryTrialButTheFirst) {
   OneSubjectStudy study;
   StudyDatabase db = StudyDatabase::open(study.file(), OpenMode::kRunner);
@@ -111,8 +118,7 @@ TEST(SubjectTrials, ADisturbedTrialIsKeptAndRunAgainUntilThePolicyStoresIt) {
   EXPECT_EQ(steps.setup(Clock::kRealTime, nullptr).live_seed, studyLiveSeed(spec, first.plan, 0));
 
   steps.begin(db, session);
-  TrialResult stalled = cleanResult(db);
-  stalled.stalls = 1;
+  TrialResult stalled = stalledResult(db, 1);
   const SubjectTrials::Outcome again = steps.end(db, stalled, {});
   EXPECT_EQ(again.ending, SubjectTrials::Ending::kRepeat);
   EXPECT_EQ(again.disturbed, "1 stall (force zeroed)");
@@ -124,8 +130,7 @@ TEST(SubjectTrials, ADisturbedTrialIsKeptAndRunAgainUntilThePolicyStoresIt) {
 
   // Repeated once already (max_repeats 1): the next disturbed attempt is stored, flagged.
   steps.begin(db, session);
-  TrialResult stalled_again = cleanResult(db);
-  stalled_again.stalls = 2;
+  TrialResult stalled_again = stalledResult(db, 2);
   const SubjectTrials::Outcome stored = steps.end(db, stalled_again, {});
   EXPECT_EQ(stored.ending, SubjectTrials::Ending::kStored);
   EXPECT_EQ(stored.disturbed, "2 stalls (force zeroed)");
@@ -143,8 +148,7 @@ TEST(SubjectTrials, AFailedTrialIsMarkedFailedNothingIsStoredAndItRunsAgainFromA
   SubjectTrials steps = stepsOf(db);
   const std::int64_t session = db.beginSession("S01");
   steps.begin(db, session);
-  TrialResult stalled = cleanResult(db);
-  stalled.stalls = 1;
+  TrialResult stalled = stalledResult(db, 1);
   ASSERT_EQ(steps.end(db, stalled, {}).ending, SubjectTrials::Ending::kRepeat);
   ASSERT_EQ(steps.attempt(), 1);
 

@@ -74,7 +74,6 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
 
   environment_ = &environment;
   run_ = std::move(run);
-  loop_ = &run_->loop();
   relay_ = std::move(relay);
   recorder_ = std::move(recorder);
   const double half_period_s = 0.5 / environment.rate_hz();  // time stamps are not exact multiples
@@ -101,7 +100,7 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
   if (spec.record == RecordMode::kPenDown) recorder_->start();  // armed; records from the first pen-down
 
   if (clock_ == session::Clock::kRealTime) {
-    loop_->requireConsumer(&recorder_->consumerTime());
+    run_->loop().requireConsumer(&recorder_->consumerTime());
     relay_stop_.store(false);
     relay_thread_ = std::thread([this] {
       while (!relay_stop_.load(std::memory_order_acquire)) {
@@ -112,7 +111,7 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
       pump();
     });
     try {
-      loop_->start();
+      run_->loop().start();
     } catch (...) {
       (void)finish();
       throw;
@@ -121,7 +120,7 @@ void LiveRig::start(session::TrialEnvironment& environment, const RunSpec& spec,
 }
 
 void LiveRig::advanceSimulated(double seconds) {
-  HATTR_DEMAND(loop_ && clock_ == session::Clock::kSimulated, "advanceSimulated() needs a simulated run");
+  HATTR_DEMAND(run_ && clock_ == session::Clock::kSimulated, "advanceSimulated() needs a simulated run");
   using session::kSimulatedChunk;
   const auto ticks = static_cast<std::size_t>(std::llround(seconds * environment_->rate_hz()));
   const auto settle_ticks = static_cast<std::uint64_t>(std::llround(spec_.settle_s * environment_->rate_hz()));
@@ -129,12 +128,12 @@ void LiveRig::advanceSimulated(double seconds) {
   // trial's chunks also stop at the settle's last tick, where runTrial asks for the mentor.
   for (std::size_t done = 0; done < ticks && !status_window_done_.load(std::memory_order_acquire);) {
     std::size_t chunk = std::min(kSimulatedChunk, ticks - done);
-    const std::uint64_t ran = loop_->counters().ticks.load();
+    const std::uint64_t ran = run_->loop().counters().ticks.load();
     if (run_->live() && !mentor_checked_ && ran < settle_ticks) chunk = std::min<std::size_t>(chunk, settle_ticks - ran);
-    loop_->runSimulated(chunk);
+    run_->loop().runSimulated(chunk);
     done += chunk;
     pump();
-    if (run_->live() && !mentor_checked_ && loop_->counters().ticks.load() == settle_ticks) checkMentor();
+    if (run_->live() && !mentor_checked_ && run_->loop().counters().ticks.load() == settle_ticks) checkMentor();
   }
 }
 
@@ -143,7 +142,7 @@ void LiveRig::advanceSimulated(double seconds) {
 // for good at the first sample taken after it, and a failure at the first of its tick on.
 void LiveRig::pump() {
   TickSample item;
-  while (loop_->samples().tryPop(item)) {
+  while (run_->loop().samples().tryPop(item)) {
     if (!stop_taken_ && (stop_.requested() || item.tick >= failure_tick_)) takeStop();
     if (spec_.record == RecordMode::kWindow && !stop_taken_) {
       const bool in_window = item.sample.t_s >= window_begin_s_ && item.sample.t_s < window_end_s_;
@@ -182,12 +181,12 @@ void LiveRig::watchTrial() {
     return;
   }
   if (!watch_) {
-    if (loop_->running()) watch_ = std::make_unique<session::TrialWatch>(*loop_, run_->device());
+    if (run_->loop().running()) watch_ = std::make_unique<session::TrialWatch>(run_->loop(), run_->device());
     return;
   }
   std::string failure = watch_->check();
   if (failure.empty()) return;
-  failure_tick_ = loop_->counters().ticks.load(std::memory_order_acquire);
+  failure_tick_ = run_->loop().counters().ticks.load(std::memory_order_acquire);
   failure_ = std::move(failure);
   status_failed_.store(true, std::memory_order_release);
   status_window_done_.store(true, std::memory_order_release);
@@ -236,9 +235,9 @@ void LiveRig::publishStatus() {
 
 session::TrialResult LiveRig::finish() {
   session::TrialResult result;
-  if (!loop_) return result;
+  if (!run_) return result;
   if (clock_ == session::Clock::kRealTime) {
-    loop_->stop();
+    run_->loop().stop();
     relay_stop_.store(true, std::memory_order_release);
     if (relay_thread_.joinable()) relay_thread_.join();
   } else {
@@ -252,7 +251,6 @@ session::TrialResult LiveRig::finish() {
   watch_.reset();
   recorder_.reset();
   relay_.reset();
-  loop_ = nullptr;
   run_.reset();
   environment_ = nullptr;
   return result;
@@ -266,9 +264,9 @@ void LiveRig::disarmRecording() noexcept {
   if (recorder_) recorder_->stop();
 }
 
-bool LiveRig::readLatest(Sample& out) noexcept { return loop_ ? loop_->latest().read(out) : false; }
+bool LiveRig::readLatest(Sample& out) noexcept { return run_ ? run_->loop().latest().read(out) : false; }
 
-bool LiveRig::post(const servo::ServoCommand& command) noexcept { return loop_ ? loop_->post(command) : false; }
+bool LiveRig::post(const servo::ServoCommand& command) noexcept { return run_ ? run_->loop().post(command) : false; }
 
 bool LiveRig::switchMode(guidance::TrainingMode mode) noexcept {
   return post(servo::ServoCommand{.type = servo::ServoCommand::Type::kSetGuidanceParameter,
@@ -278,8 +276,8 @@ bool LiveRig::switchMode(guidance::TrainingMode mode) noexcept {
 
 RigStatus LiveRig::status() const noexcept {
   RigStatus status;
-  if (!loop_) return status;
-  status.running = clock_ == session::Clock::kSimulated || loop_->running();
+  if (!run_) return status;
+  status.running = clock_ == session::Clock::kSimulated || run_->loop().running();
   status.loop_time_s = status_loop_time_s_.load(std::memory_order_relaxed);
   status.settling = status.loop_time_s < spec_.settle_s;
   status.recording = status_recording_.load(std::memory_order_relaxed);
@@ -292,11 +290,11 @@ RigStatus LiveRig::status() const noexcept {
   return status;
 }
 
-const servo::LiveCounters* LiveRig::counters() const noexcept { return loop_ ? &loop_->counters() : nullptr; }
+const servo::LiveCounters* LiveRig::counters() const noexcept { return run_ ? &run_->loop().counters() : nullptr; }
 
 std::string LiveRig::realtimeSummary() const {
-  if (!loop_ || clock_ != session::Clock::kRealTime) return "simulated clock";
-  const servo::RealtimeReport& r = loop_->realtimeReport();
+  if (!run_ || clock_ != session::Clock::kRealTime) return "simulated clock";
+  const servo::RealtimeReport& r = run_->loop().realtimeReport();
   if (r.fifo && r.memory_locked) return "SCHED_FIFO, memory locked";
   return r.fifo ? "SCHED_FIFO" : "normal scheduling";
 }

@@ -142,7 +142,7 @@ class LiveRig {
   /// progress indexing alike), or nothing (no reference, a mentored run, before the trial).
   [[nodiscard]] std::optional<Vec3> referenceCue() const noexcept;
 
-  [[nodiscard]] bool active() const noexcept { return loop_ != nullptr; }
+  [[nodiscard]] bool active() const noexcept { return run_ != nullptr; }
   [[nodiscard]] RigStatus status() const noexcept;
   [[nodiscard]] const RunSpec& spec() const noexcept { return spec_; }
   /// The loop's live counters (ticks, overruns, faults, drops). Only while active().
@@ -161,8 +161,7 @@ class LiveRig {
   session::TrialEnvironment* environment_ = nullptr;
   RunSpec spec_;
   session::Clock clock_ = session::Clock::kSimulated;
-  std::unique_ptr<session::TrialRun> run_;  // the library's pipeline of this run
-  servo::ServoLoop* loop_ = nullptr;        // run_'s loop
+  std::unique_ptr<session::TrialRun> run_;  // the library's pipeline of this run (its loop, device, guidance)
   std::unique_ptr<session::Recorder> recorder_;
   std::unique_ptr<SpscRing<TickSample>> relay_;
   std::thread relay_thread_;
