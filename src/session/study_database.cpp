@@ -259,9 +259,16 @@ std::vector<Sample> decodeRowSamples(std::string_view bytes, const RawChannels& 
 
 std::vector<Sample> decodeTrialSamples(std::string_view bytes, std::string_view encoding, const RawChannels& raw,
                                        std::size_t count) {
-  if (encoding == kCompactSamples) return io::decodeSamples(bytes, storedChannels(raw), count);
+  if (encoding == kCompactSamples || encoding == kCompactSamplesV1) {
+    // The block says its revision too: the two must agree.
+    const std::string_view starts_as = io::sampleEncodingOf(bytes);
+    HATTR_THROW_UNLESS(starts_as == encoding, "samples: a block marked {} starts as {} (damaged)", encoding,
+                       starts_as.empty() ? "neither hsc1 nor hsc2" : starts_as);
+    return io::decodeSamples(bytes, storedChannels(raw), count);
+  }
   if (encoding == kRowSamples) return decodeRowSamples(bytes, raw, count);
-  throw InputError(fmt::format("samples: encoding \"{}\": expected {} or {}", encoding, kCompactSamples, kRowSamples));
+  throw InputError(fmt::format("samples: encoding \"{}\": expected {}, {} or {}", encoding, kCompactSamples,
+                               kCompactSamplesV1, kRowSamples));
 }
 
 namespace {

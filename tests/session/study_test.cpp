@@ -586,11 +586,19 @@ TEST(SamplePacking, IsExactLosslessAndWholeStepsAtAResolution) {
   }
   EXPECT_THROW((void)decodeTrialSamples("short", kCompactSamples, RawChannels{}, 1), InputError);
   EXPECT_THROW((void)decodeTrialSamples("short", kRowSamples, RawChannels{}, 1), InputError);
+  // A block's mark and its own revision must agree.
+  const HapticProfile p = test::randomProfile(rng, 20, RawChannels{});
+  try {
+    (void)decodeTrialSamples(encodeTrialSamples(p), kCompactSamplesV1, RawChannels{}, p.size());
+    FAIL() << "decoded";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("samples: a block marked hsc1 starts as hsc2 (damaged)"));
+  }
   try {
     (void)decodeTrialSamples("", "gzip", RawChannels{}, 0);
     FAIL() << "decoded";
   } catch (const InputError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("samples: encoding \"gzip\": expected hsc1 or f64-rows"));
+    EXPECT_THAT(e.what(), HasSubstr("samples: encoding \"gzip\": expected hsc2, hsc1 or f64-rows"));
   }
 }
 
@@ -666,9 +674,9 @@ TEST(StudyDatabase, MigratesSchema3InPlaceRewritingEveryStoredTrialCompactlyAndL
     sqlite3_finalize(st);
     return n;
   };
-  EXPECT_EQ(count("SELECT COUNT(*) FROM samples WHERE encoding = 'hsc1'"), 3);
-  EXPECT_EQ(count("SELECT COUNT(*) FROM disturbed_attempts WHERE encoding = 'hsc1'"), 1);
-  EXPECT_EQ(count("SELECT COUNT(*) FROM samples WHERE hex(substr(data, 1, 4)) = '48534301'"), 3);  // "HSC\x01"
+  EXPECT_EQ(count("SELECT COUNT(*) FROM samples WHERE encoding = 'hsc2'"), 3);
+  EXPECT_EQ(count("SELECT COUNT(*) FROM disturbed_attempts WHERE encoding = 'hsc2'"), 1);
+  EXPECT_EQ(count("SELECT COUNT(*) FROM samples WHERE hex(substr(data, 1, 4)) = '48534302'"), 3);  // "HSC\x02"
   sqlite3_close(db);
 }
 

@@ -2,17 +2,21 @@
 /// The compact encoding of a trial's samples (issue 17): what the study store keeps.
 ///
 /// Lossless by default: each stored channel, column by column, is predicted from what came
-/// before it (a quadratic through the last three values for continuous channels, a straight
-/// line for time and tilt, the last value for flags and raw pressure, and the commanded force
-/// as guidance force minus the user's force), and only the difference of the bit patterns is
-/// kept, zigzagged, byte-shuffled and compressed with zstd. Decoding gives back every double
-/// bit for bit. The predictions are IEEE double operations compiled without contraction, so
-/// any conforming build decodes any blob.
+/// before it, and only the difference of the bit patterns is kept, zigzagged, laid out and
+/// compressed with zstd. Continuous channels choose, per block of 128 samples, the prediction
+/// that leaves the fewest bits (polynomials through the last values, the same with what they
+/// missed 4 or 8 samples before, and for positions the velocity's step); time and tilt follow a
+/// line, flags and raw pressure their last value, and the commanded force is predicted as
+/// guidance force minus the user's force. Positions, velocities and the user's force are kept
+/// as each residual's bit length and its bits, the others in byte planes. Decoding gives back
+/// every double bit for bit. The predictions are IEEE double operations compiled without
+/// contraction, so any conforming build decodes any blob.
 ///
 /// Optionally a declared per-channel resolution (e.g. 1 µm, 1 mN): each value is stored as the
-/// nearest whole multiple k·step, the integers predicted and compressed the same way, and the
-/// reader returns exactly k·step. docs/study-store.md has the format and the measurements that
-/// chose it (bench/sample_compression.py).
+/// nearest whole multiple k·step, the integers predicted as in the first revision (a quadratic
+/// for the continuous channels) and kept in byte planes, and the reader returns exactly k·step. docs/study-store.md has the format and the measurements that
+/// chose it (bench/sample_compression.py). Blocks of the first revision (hsc1: one fixed
+/// prediction per channel, byte planes only) are still read.
 #include <cstddef>
 #include <map>
 #include <span>
@@ -50,7 +54,13 @@ std::string encodeSamples(std::span<const Sample> samples, std::span<const Chann
 /// not one, is cut short, names other channels or another count.
 std::vector<Sample> decodeSamples(std::string_view blob, std::span<const Channel> channels, std::size_t count);
 
-/// True if `blob` starts as encodeSamples' blobs do (to tell them from older stores' raw rows).
+/// The encoding encodeSamples writes, as the study store names it.
+inline constexpr std::string_view kSampleEncoding = "hsc2";
+
+/// "hsc1" or "hsc2" for a blob that starts as either revision does (both are read), else "".
+std::string_view sampleEncodingOf(std::string_view blob) noexcept;
+
+/// True if `blob` starts as a block of either revision does (to tell them from older stores' raw rows).
 bool isEncodedSamples(std::string_view blob) noexcept;
 
 }  // namespace hattr::io

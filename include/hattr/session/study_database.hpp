@@ -208,10 +208,12 @@ class StudyDatabase {
   StudyDefinition study_;
 };
 
-/// The samples tables' encodings: "hsc1", io/sample_codec's compact blocks (since schema 4),
-/// and "f64-rows", schema 3's little-endian doubles, one row per sample (read, and rewritten as
-/// hsc1 by the migration to schema 4).
-inline constexpr std::string_view kCompactSamples = "hsc1";
+/// The samples tables' encodings: "hsc2" (io::kSampleEncoding), io/sample_codec's compact
+/// blocks as this build writes them; "hsc1", their first revision (schema 4's blocks before
+/// hsc2), still read; and "f64-rows", schema 3's little-endian doubles, one row per sample (read,
+/// and rewritten compactly by the migration to schema 4).
+inline constexpr std::string_view kCompactSamples = io::kSampleEncoding;
+inline constexpr std::string_view kCompactSamplesV1 = "hsc1";
 inline constexpr std::string_view kRowSamples = "f64-rows";
 
 /// A profile's samples as the samples table stores them: io::encodeSamples on the profile's
