@@ -77,10 +77,11 @@ def polynomial(v, order):
     return p
 
 
-def plus_miss(v, p, lag):
-    """The prediction plus what it missed `lag` samples before."""
+def plus_miss(v, p, lag, first):
+    """The prediction plus what it missed `lag` samples before, from sample `first` + `lag` on
+    (`first`: where `p` itself starts: 3 for the quadratic, 1 for the kinematic prediction)."""
     out = p.copy()
-    out[lag + 3:] = p[lag + 3:] + (v[3:-lag] - p[3:-lag])
+    out[lag + first:] = p[lag + first:] + (v[first:-lag] - p[first:-lag])
     return out
 
 
@@ -92,7 +93,7 @@ def kinematic(p, v, t):
     w = np.ones(len(y))
     eps = 1e-9 * np.mean(np.abs(y)) + 1e-300
     a, b = 0.5, 0.5
-    for _ in range(3):
+    for _ in range(3):  # a plain fit, then two reweighted
         sw = np.sqrt(w)
         (a, b), *_ = np.linalg.lstsq(x * sw[:, None], y * sw, rcond=None)
         w = 1.0 / (np.abs(y - x @ np.array([a, b])) + eps)
@@ -109,12 +110,12 @@ def options(name, columns, variant):
     found = [polynomial(v, order) for order in (0, 1, 2, 3)]
     quadratic = found[2]
     if variant.get("periodic"):
-        found += [plus_miss(v, quadratic, 4), plus_miss(v, quadratic, 8)]
+        found += [plus_miss(v, quadratic, 4, 3), plus_miss(v, quadratic, 8, 3)]
     if variant.get("kinematic") and name in ("x", "y", "z"):
         k = kinematic(v, columns["v" + name], columns["t"])
         found.append(k)
         if variant.get("periodic"):
-            found.append(plus_miss(v, k, 4) if len(v) > 8 else k)
+            found.append(plus_miss(v, k, 4, 1) if len(v) > 5 else k)
     return found
 
 

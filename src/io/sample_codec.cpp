@@ -10,7 +10,6 @@
 #include <zstd.h>
 
 #include <algorithm>
-#include <array>
 #include <bit>
 #include <cfloat>
 #include <cmath>
@@ -58,8 +57,10 @@ enum class Option : std::uint8_t {
   kKinematic = 6,           ///< the last position moved by the interval times a·v_i + b·v_(i-1)
   kKinematicPeriodic4 = 7,  ///< that, plus what it missed 4 samples before
 };
-constexpr std::size_t kOptions = 6;
-constexpr std::size_t kKinematicOptions = 8;
+constexpr std::size_t kOptions = 6;           // kPrevious .. kPeriodic8
+constexpr std::size_t kKinematicOptions = 8;  // and the two kinematic ones
+static_assert(kOptions == static_cast<std::size_t>(Option::kKinematic) &&
+              kKinematicOptions == static_cast<std::size_t>(Option::kKinematicPeriodic4) + 1);
 
 /// How a channel's residuals are laid out before zstd (hsc2).
 enum class Coding : std::uint8_t {
@@ -192,6 +193,7 @@ struct Kinematics {
 /// How many values before it an option needs to predict a value (hsc2).
 constexpr std::size_t historyOf(Option o) {
   constexpr std::size_t kHistory[] = {1, 2, 3, 4, 7, 11, 1, 5};
+  static_assert(std::size(kHistory) == kKinematicOptions);
   return kHistory[static_cast<std::size_t>(o)];
 }
 
@@ -328,6 +330,8 @@ void encodeChosenColumn(std::size_t options, const double* v, const Kinematics& 
   }
 }
 
+/// A chosen channel's column back from its residuals, block by block, each with the prediction
+/// its choice names (the encoder's, made here from the values already decoded).
 void decodeChosenColumn(const std::uint8_t* choices, const std::uint64_t* residuals, const Kinematics& k, double* column,
                         std::size_t n) {
   using D = Doubles;
@@ -349,7 +353,7 @@ void decodeChosenColumn(const std::uint8_t* choices, const std::uint64_t* residu
 }
 
 /// a and b of a position's kinematic prediction, fitted to the trial: Δp ≈ Δt·(a·v_i + b·v_(i-1)),
-/// by least squares reweighted thrice towards the least absolute misses (the stored bits grow
+/// by least squares, then twice more reweighted towards the least absolute misses (the stored bits grow
 /// with the log of the miss, so a few large misses must not steer the fit). The fit only
 /// decides how small the residuals are: the decoder uses the stored a and b.
 std::pair<double, double> fitKinematics(const double* position, const double* velocity, const double* time, std::size_t n) {
@@ -375,6 +379,7 @@ std::pair<double, double> fitKinematics(const double* position, const double* ve
     const std::pair<double, double> next = {(r1 * s22 - r2 * s12) / det, (r2 * s11 - r1 * s12) / det};
     if (!std::isfinite(next.first) || !std::isfinite(next.second)) return fit;
     fit = next;
+    if (round == 2) break;
     for (std::size_t i = 1; i < n; ++i) {
       const double dt = time[i] - time[i - 1];
       const double miss = position[i] - position[i - 1] - dt * (fit.first * velocity[i] + fit.second * velocity[i - 1]);
@@ -499,7 +504,8 @@ std::uint64_t readBitLengths(const unsigned char* changes, std::uint8_t* lengths
   std::uint64_t total = 0;
   for (std::size_t i = 0; i < n; ++i) {
     last = static_cast<std::uint8_t>(last + changes[i]);
-    HATTR_THROW_UNLESS(last <= 64, "samples: channel {}, sample {}: a residual of {} bits (damaged)", name, i, last);
+    HATTR_THROW_UNLESS(last <= 64, "samples: channel {}, sample {}: a residual of {} bits, expected at most 64 (damaged)",
+                       name, i, last);
     lengths[i] = static_cast<std::uint8_t>(last);
     total += last > 1 ? static_cast<std::uint64_t>(last - 1) : 0;
   }
@@ -549,7 +555,8 @@ std::string compressInParts(std::string_view content, std::span<const std::size_
   ZSTD_CCtx_reset(context, ZSTD_reset_session_and_parameters);
   ZSTD_CCtx_setParameter(context, ZSTD_c_compressionLevel, level);
   ZSTD_CCtx_setParameter(context, ZSTD_c_checksumFlag, 1);
-  ZSTD_CCtx_setPledgedSrcSize(context, content.size());
+  const std::size_t pledged = ZSTD_CCtx_setPledgedSrcSize(context, content.size());
+  HATTR_THROW_UNLESS(!ZSTD_isError(pledged), "sample encoding: zstd: {}", ZSTD_getErrorName(pledged));
   std::string frame(ZSTD_compressBound(content.size()) + 64 * ends.size(), '\0');
   ZSTD_outBuffer out{frame.data(), frame.size(), 0};
   std::size_t from = 0;
@@ -559,7 +566,7 @@ std::string compressInParts(std::string_view content, std::span<const std::size_
     for (;;) {
       const std::size_t left = ZSTD_compressStream2(context, &out, &in, mode);
       HATTR_THROW_UNLESS(!ZSTD_isError(left), "sample encoding: zstd: {}", ZSTD_getErrorName(left));
-      HATTR_THROW_UNLESS(left == 0 || out.pos < out.size, "sample encoding: zstd: the output buffer is too small");
+      HATTR_DEMAND(left == 0 || out.pos < out.size, "zstd's output buffer was sized by ZSTD_compressBound");
       if (left == 0 && in.pos == in.size) break;
     }
     from = ends[e];
@@ -677,6 +684,216 @@ std::vector<Sample> toSamples(const double* values, std::span<const Channel> cha
   return samples;
 }
 
+/// An hsc1 block: a fixed predictor per channel, every residual in byte planes.
+std::vector<Sample> decodeRevision1(std::string_view blob, std::span<const Channel> channels, std::size_t count) {
+  const BlockHeader header = readBlockHeader(blob, channels, count, kChannelBytesV1);
+  const std::size_t n = header.n, m = header.m;
+  std::vector<Predictor> predictors(m);
+  std::vector<double> steps(m);
+  for (std::size_t c = 0; c < m; ++c) {
+    predictors[c] = predictorV1(channels[c], channels);
+    steps[c] = readChannelEntry(blob, kHeaderBytes + c * kChannelBytesV1, c, channels[c], predictors[c], header.quantized, 2);
+  }
+
+  // The frame: the header's copy and the byte planes, under zstd's checksum.
+  const std::size_t header_bytes = kHeaderBytes + m * kChannelBytesV1;
+  const auto content_size = get<std::uint64_t>(blob, header_bytes);
+  HATTR_THROW_UNLESS(content_size == header_bytes + n * m * 8,
+                     "samples: the encoded block says {} bytes of header and residuals, expected {}", content_size,
+                     header_bytes + n * m * 8);
+  const auto content = decompressContent(blob, header_bytes, content_size);
+  const auto words = std::make_unique_for_overwrite<std::uint64_t[]>(n * m);
+  unshuffle(std::string_view(content.get() + header_bytes, n * m * 8), words.get());
+
+  // Each column from its residuals and predictions, the commanded forces after their parts.
+  const auto values = std::make_unique_for_overwrite<double[]>(n * m);
+  const auto k = std::make_unique_for_overwrite<std::uint64_t[]>(header.quantized ? n * m : 0);
+  for (const std::size_t c : decodingOrder(predictors)) {
+    const auto [user, guide] = commandParts(channels[c]);
+    if (!header.quantized) {
+      const bool command = predictors[c] == Predictor::kCommand;
+      decodeColumn<Doubles>(predictors[c], words.get() + c * n, command ? values.get() + columnOf(channels, guide) * n : nullptr,
+                            command ? values.get() + columnOf(channels, user) * n : nullptr, values.get() + c * n, n);
+      continue;
+    }
+    const Predictor p = stepPredictor(predictors[c], channels, steps, c);
+    const bool command = p == Predictor::kCommand;
+    decodeColumn<Steps>(p, words.get() + c * n, command ? k.get() + columnOf(channels, guide) * n : nullptr,
+                        command ? k.get() + columnOf(channels, user) * n : nullptr, k.get() + c * n, n);
+    fromSteps(k.get() + c * n, steps[c], values.get() + c * n, n);
+  }
+  return toSamples(values.get(), channels, n);
+}
+
+/// What an hsc2 header says about each channel, beyond the first 12 bytes.
+struct LayoutV2 {
+  std::vector<Predictor> predictors;  ///< as stored (kCommand even where steps make it a quadratic)
+  std::vector<Predictor> effective;   ///< what predicts each column
+  std::vector<Coding> codings;
+  std::vector<double> steps;
+  std::vector<std::pair<double, double>> kinematics;  ///< a and b, per channel (kChosenKinematic only)
+  std::size_t header_bytes = 0;                        ///< up to the content size
+  std::size_t chosen = 0, in_planes = 0, in_bits = 0;  ///< channels of each kind
+  std::vector<std::size_t> slot;  ///< each channel's column of residuals: byte-plane channels first, in order
+};
+
+/// The parts of an hsc2 frame's content, after the header's copy, in order.
+struct ContentV2 {
+  std::size_t choices = 0;      ///< bytes: one per block of each chosen channel
+  std::size_t planes = 0;       ///< bytes: 8 per sample of each byte-plane channel
+  std::size_t lengths = 0;      ///< bytes: one per sample of each bit-length channel
+  std::size_t fixed(std::size_t header_bytes) const { return header_bytes + choices + planes + lengths; }
+};
+
+/// The sizes of the content's parts before the bits, for `n` samples.
+ContentV2 contentOf(const LayoutV2& layout, std::size_t n) {
+  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+  return {blocks * layout.chosen, n * layout.in_planes * 8, n * layout.in_bits};
+}
+
+/// How many channels choose per block and how many take each layout, and each one's slot.
+void countKinds(LayoutV2& layout) {
+  for (std::size_t c = 0; c < layout.effective.size(); ++c) {
+    if (optionCount(layout.effective[c]) > 0) ++layout.chosen;
+    if (layout.codings[c] == Coding::kBitLengths) {
+      ++layout.in_bits;
+    } else {
+      ++layout.in_planes;
+    }
+  }
+  layout.slot.resize(layout.effective.size());
+  for (std::size_t c = 0, planes = 0, bits = layout.in_planes; c < layout.slot.size(); ++c) {
+    layout.slot[c] = layout.codings[c] == Coding::kBitLengths ? bits++ : planes++;
+  }
+}
+
+/// The rest of an hsc2 header, each field checked against what this build writes for these
+/// channels.
+LayoutV2 readLayoutV2(std::string_view blob, std::span<const Channel> channels, const BlockHeader& header) {
+  LayoutV2 layout;
+  const std::size_t m = header.m;
+  layout.predictors.resize(m);
+  layout.codings.resize(m);
+  layout.steps.resize(m);
+  layout.kinematics.resize(m);
+  std::size_t kinematic = 0;
+  for (std::size_t c = 0; c < m; ++c) {
+    const std::size_t at = kHeaderBytes + c * kChannelBytesV2;
+    layout.predictors[c] = predictorV2(channels[c], channels, header.quantized);
+    layout.steps[c] = readChannelEntry(blob, at, c, channels[c], layout.predictors[c], header.quantized, 3);
+    layout.codings[c] = codingV2(channels[c], header.quantized);
+    const auto coding = get<std::uint8_t>(blob, at + 2);
+    HATTR_THROW_UNLESS(coding == static_cast<std::uint8_t>(layout.codings[c]), "samples: channel {}: layout {}, expected {}",
+                       nameOf(channels[c]), coding, static_cast<int>(layout.codings[c]));
+    if (layout.predictors[c] == Predictor::kChosenKinematic) ++kinematic;
+  }
+  // The kinematic predictions' a and b, after the channels.
+  std::size_t at = kHeaderBytes + m * kChannelBytesV2;
+  HATTR_THROW_UNLESS(blob.size() >= at + kinematic * 16 + 8, "samples: the encoded block is cut short in its header ({} bytes)",
+                     blob.size());
+  for (std::size_t c = 0; c < m; ++c) {
+    if (layout.predictors[c] != Predictor::kChosenKinematic) continue;
+    layout.kinematics[c] = {get<double>(blob, at), get<double>(blob, at + 8)};
+    HATTR_THROW_UNLESS(std::isfinite(layout.kinematics[c].first) && std::isfinite(layout.kinematics[c].second),
+                       "samples: channel {}: kinematic coefficients {} and {}, expected finite numbers", nameOf(channels[c]),
+                       layout.kinematics[c].first, layout.kinematics[c].second);
+    at += 16;
+  }
+  layout.header_bytes = at;
+  for (std::size_t c = 0; c < m; ++c) {
+    layout.effective.push_back(
+        header.quantized ? stepPredictor(layout.predictors[c], channels, layout.steps, c) : layout.predictors[c]);
+  }
+  countKinds(layout);
+  return layout;
+}
+
+/// A column's kinematic prediction reads the time and the axis's velocity, decoded before it.
+Kinematics kinematicsOf(const LayoutV2& layout, std::span<const Channel> channels, std::size_t c, const double* values,
+                        std::size_t n) {
+  if (layout.effective[c] != Predictor::kChosenKinematic) return {};
+  return {values + columnOf(channels, Channel::kTime) * n, values + columnOf(channels, velocityOf(channels[c])) * n,
+          layout.kinematics[c].first, layout.kinematics[c].second};
+}
+
+/// An hsc2 block.
+std::vector<Sample> decodeRevision2(std::string_view blob, std::span<const Channel> channels, std::size_t count) {
+  const BlockHeader header = readBlockHeader(blob, channels, count, kChannelBytesV2);
+  const std::size_t n = header.n, m = header.m;
+  const LayoutV2 layout = readLayoutV2(blob, channels, header);
+
+  // The content's size, within what its parts allow, before anything is allocated.
+  const ContentV2 parts = contentOf(layout, n);
+  const std::size_t fixed = parts.fixed(layout.header_bytes);
+  const std::size_t most = fixed + (n * layout.in_bits * 63 + 7) / 8;
+  const auto content_size = get<std::uint64_t>(blob, layout.header_bytes);
+  HATTR_THROW_UNLESS(content_size >= fixed && content_size <= most,
+                     "samples: the encoded block says {} bytes of header and residuals, expected {} to {}", content_size,
+                     fixed, most);
+  const auto content = decompressContent(blob, layout.header_bytes, content_size);
+  const auto* bytes = reinterpret_cast<const unsigned char*>(content.get());
+
+  // Each chosen channel's choices, one per block.
+  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+  std::vector<const std::uint8_t*> choices(m, nullptr);
+  std::size_t at = layout.header_bytes;
+  for (std::size_t c = 0; c < m; ++c) {
+    const std::size_t options = optionCount(layout.effective[c]);
+    if (options == 0) continue;
+    choices[c] = bytes + at;
+    for (std::size_t b = 0; b < blocks; ++b) {
+      HATTR_THROW_UNLESS(choices[c][b] < options, "samples: channel {}, block {}: prediction {}, expected below {} (damaged)",
+                         nameOf(channels[c]), b, choices[c][b], options);
+    }
+    at += blocks;
+  }
+
+  // The residuals: byte planes, then bit lengths and bits, each channel's in its slot.
+  const auto words = std::make_unique_for_overwrite<std::uint64_t[]>(n * m);
+  unshuffle(std::string_view(content.get() + at, parts.planes), words.get());
+  at += parts.planes;
+  std::vector<std::uint8_t> lengths(n * layout.in_bits);
+  std::uint64_t total_bits = 0;
+  for (std::size_t c = 0; c < m; ++c) {
+    if (layout.codings[c] != Coding::kBitLengths) continue;
+    const std::size_t q = layout.slot[c] - layout.in_planes;
+    total_bits += readBitLengths(bytes + at + q * n, lengths.data() + q * n, n, nameOf(channels[c]));
+  }
+  at += parts.lengths;
+  HATTR_THROW_UNLESS(content_size - at == (total_bits + 7) / 8,
+                     "samples: the compressed residuals are damaged: {} bytes of bits, expected {}", content_size - at,
+                     (total_bits + 7) / 8);
+  BitReader bits(std::string_view(content.get() + at, content_size - at));
+  for (std::size_t q = 0; q < layout.in_bits; ++q) {
+    readBits(bits, lengths.data() + q * n, words.get() + (layout.in_planes + q) * n, n);
+  }
+  HATTR_THROW_UNLESS(bits.atCleanEnd(), "samples: the compressed residuals are damaged: their last byte has stray bits");
+
+  // Each column from its residuals and predictions: positions after their velocities, the
+  // commanded forces after their parts.
+  const auto values = std::make_unique_for_overwrite<double[]>(n * m);
+  const auto k = std::make_unique_for_overwrite<std::uint64_t[]>(header.quantized ? n * m : 0);
+  for (const std::size_t c : decodingOrder(layout.effective)) {
+    const Predictor p = layout.effective[c];
+    const auto [user, guide] = commandParts(channels[c]);
+    const bool command = p == Predictor::kCommand;
+    if (!header.quantized) {
+      double* column = values.get() + c * n;
+      if (choices[c] != nullptr) {
+        decodeChosenColumn(choices[c], words.get() + layout.slot[c] * n, kinematicsOf(layout, channels, c, values.get(), n), column, n);
+      } else {
+        decodeColumn<Doubles>(p, words.get() + layout.slot[c] * n, command ? values.get() + columnOf(channels, guide) * n : nullptr,
+                              command ? values.get() + columnOf(channels, user) * n : nullptr, column, n);
+      }
+      continue;
+    }
+    decodeColumn<Steps>(p, words.get() + layout.slot[c] * n, command ? k.get() + columnOf(channels, guide) * n : nullptr,
+                        command ? k.get() + columnOf(channels, user) * n : nullptr, k.get() + c * n, n);
+    fromSteps(k.get() + c * n, layout.steps[c], values.get() + c * n, n);
+  }
+  return toSamples(values.get(), channels, n);
+}
+
 }  // namespace
 
 const ChannelResolution& defaultResolution() {
@@ -731,218 +948,11 @@ std::string resolutionJson(const ChannelResolution& resolution) {
   return json.dump();
 }
 
-
-namespace {
-
-/// An hsc1 block: a fixed predictor per channel, every residual in byte planes.
-std::vector<Sample> decodeRevision1(std::string_view blob, std::span<const Channel> channels, std::size_t count) {
-  const BlockHeader h = readBlockHeader(blob, channels, count, kChannelBytesV1);
-  const std::size_t n = h.n, m = h.m;
-  std::vector<Predictor> predictors(m);
-  std::vector<double> steps(m);
-  for (std::size_t c = 0; c < m; ++c) {
-    predictors[c] = predictorV1(channels[c], channels);
-    steps[c] = readChannelEntry(blob, kHeaderBytes + c * kChannelBytesV1, c, channels[c], predictors[c], h.quantized, 2);
-  }
-
-  // The frame: the header's copy and the byte planes, under zstd's checksum.
-  const std::size_t header_bytes = kHeaderBytes + m * kChannelBytesV1;
-  const auto content_size = get<std::uint64_t>(blob, header_bytes);
-  HATTR_THROW_UNLESS(content_size == header_bytes + n * m * 8,
-                     "samples: the encoded block says {} bytes of header and residuals, expected {}", content_size,
-                     header_bytes + n * m * 8);
-  const auto content = decompressContent(blob, header_bytes, content_size);
-  const auto words = std::make_unique_for_overwrite<std::uint64_t[]>(n * m);
-  unshuffle(std::string_view(content.get() + header_bytes, n * m * 8), words.get());
-
-  // Each column from its residuals and predictions, the commanded forces after their parts.
-  const auto values = std::make_unique_for_overwrite<double[]>(n * m);
-  const auto k = std::make_unique_for_overwrite<std::uint64_t[]>(h.quantized ? n * m : 0);
-  for (const std::size_t c : decodingOrder(predictors)) {
-    const auto [user, guide] = commandParts(channels[c]);
-    if (!h.quantized) {
-      const bool command = predictors[c] == Predictor::kCommand;
-      decodeColumn<Doubles>(predictors[c], words.get() + c * n, command ? values.get() + columnOf(channels, guide) * n : nullptr,
-                            command ? values.get() + columnOf(channels, user) * n : nullptr, values.get() + c * n, n);
-      continue;
-    }
-    const Predictor p = stepPredictor(predictors[c], channels, steps, c);
-    const bool command = p == Predictor::kCommand;
-    decodeColumn<Steps>(p, words.get() + c * n, command ? k.get() + columnOf(channels, guide) * n : nullptr,
-                        command ? k.get() + columnOf(channels, user) * n : nullptr, k.get() + c * n, n);
-    fromSteps(k.get() + c * n, steps[c], values.get() + c * n, n);
-  }
-  return toSamples(values.get(), channels, n);
-}
-
-/// What an hsc2 header says about each channel, beyond the first 12 bytes.
-struct LayoutV2 {
-  std::vector<Predictor> predictors;  ///< as stored (kCommand even where steps make it chosen)
-  std::vector<Predictor> effective;   ///< what predicts each column
-  std::vector<Coding> codings;
-  std::vector<double> steps;
-  std::vector<std::pair<double, double>> kinematics;  ///< a and b, per channel (kChosenKinematic only)
-  std::size_t header_bytes = 0;                        ///< up to the content size
-  std::size_t chosen = 0, in_planes = 0, in_bits = 0;  ///< channels of each kind
-  std::vector<std::size_t> slot;  ///< each channel's column of residuals: byte-plane channels first, in order
-};
-
-/// The parts of an hsc2 frame's content, after the header's copy, in order.
-struct ContentV2 {
-  std::size_t choices = 0;      ///< bytes: one per block of each chosen channel
-  std::size_t planes = 0;       ///< bytes: 8 per sample of each byte-plane channel
-  std::size_t lengths = 0;      ///< bytes: one per sample of each bit-length channel
-  std::size_t fixed(std::size_t header_bytes) const { return header_bytes + choices + planes + lengths; }
-};
-
-ContentV2 contentOf(const LayoutV2& layout, std::size_t n) {
-  const std::size_t blocks = (n + kBlock - 1) / kBlock;
-  return {blocks * layout.chosen, n * layout.in_planes * 8, n * layout.in_bits};
-}
-
-void countKinds(LayoutV2& layout) {
-  for (std::size_t c = 0; c < layout.effective.size(); ++c) {
-    if (optionCount(layout.effective[c]) > 0) ++layout.chosen;
-    ++(layout.codings[c] == Coding::kBitLengths ? layout.in_bits : layout.in_planes);
-  }
-  layout.slot.resize(layout.effective.size());
-  for (std::size_t c = 0, planes = 0, bits = layout.in_planes; c < layout.slot.size(); ++c) {
-    layout.slot[c] = layout.codings[c] == Coding::kBitLengths ? bits++ : planes++;
-  }
-}
-
-LayoutV2 readLayoutV2(std::string_view blob, std::span<const Channel> channels, const BlockHeader& h) {
-  LayoutV2 layout;
-  const std::size_t m = h.m;
-  layout.predictors.resize(m);
-  layout.codings.resize(m);
-  layout.steps.resize(m);
-  layout.kinematics.resize(m);
-  std::size_t kinematic = 0;
-  for (std::size_t c = 0; c < m; ++c) {
-    const std::size_t at = kHeaderBytes + c * kChannelBytesV2;
-    layout.predictors[c] = predictorV2(channels[c], channels, h.quantized);
-    layout.steps[c] = readChannelEntry(blob, at, c, channels[c], layout.predictors[c], h.quantized, 3);
-    layout.codings[c] = codingV2(channels[c], h.quantized);
-    const auto coding = get<std::uint8_t>(blob, at + 2);
-    HATTR_THROW_UNLESS(coding == static_cast<std::uint8_t>(layout.codings[c]), "samples: channel {}: coding {}, expected {}",
-                       nameOf(channels[c]), coding, static_cast<int>(layout.codings[c]));
-    if (layout.predictors[c] == Predictor::kChosenKinematic) ++kinematic;
-  }
-  // The kinematic predictions' a and b, after the channels.
-  std::size_t at = kHeaderBytes + m * kChannelBytesV2;
-  HATTR_THROW_UNLESS(blob.size() >= at + kinematic * 16 + 8, "samples: the encoded block is cut short in its header ({} bytes)",
-                     blob.size());
-  for (std::size_t c = 0; c < m; ++c) {
-    if (layout.predictors[c] != Predictor::kChosenKinematic) continue;
-    layout.kinematics[c] = {get<double>(blob, at), get<double>(blob, at + 8)};
-    HATTR_THROW_UNLESS(std::isfinite(layout.kinematics[c].first) && std::isfinite(layout.kinematics[c].second),
-                       "samples: channel {}: kinematic coefficients {} and {}, expected finite numbers", nameOf(channels[c]),
-                       layout.kinematics[c].first, layout.kinematics[c].second);
-    at += 16;
-  }
-  layout.header_bytes = at;
-  for (std::size_t c = 0; c < m; ++c) {
-    layout.effective.push_back(
-        h.quantized ? stepPredictor(layout.predictors[c], channels, layout.steps, c) : layout.predictors[c]);
-  }
-  countKinds(layout);
-  return layout;
-}
-
-/// A column's kinematic prediction reads the time and the axis's velocity, decoded before it.
-Kinematics kinematicsOf(const LayoutV2& layout, std::span<const Channel> channels, std::size_t c, const double* values,
-                        std::size_t n) {
-  if (layout.effective[c] != Predictor::kChosenKinematic) return {};
-  return {values + columnOf(channels, Channel::kTime) * n, values + columnOf(channels, velocityOf(channels[c])) * n,
-          layout.kinematics[c].first, layout.kinematics[c].second};
-}
-
-/// An hsc2 block.
-std::vector<Sample> decodeRevision2(std::string_view blob, std::span<const Channel> channels, std::size_t count) {
-  const BlockHeader h = readBlockHeader(blob, channels, count, kChannelBytesV2);
-  const std::size_t n = h.n, m = h.m;
-  const LayoutV2 layout = readLayoutV2(blob, channels, h);
-
-  // The content's size, within what its parts allow, before anything is allocated.
-  const ContentV2 parts = contentOf(layout, n);
-  const std::size_t fixed = parts.fixed(layout.header_bytes);
-  const std::size_t most = fixed + (n * layout.in_bits * 63 + 7) / 8;
-  const auto content_size = get<std::uint64_t>(blob, layout.header_bytes);
-  HATTR_THROW_UNLESS(content_size >= fixed && content_size <= most,
-                     "samples: the encoded block says {} bytes of header and residuals, expected {} to {}", content_size,
-                     fixed, most);
-  const auto content = decompressContent(blob, layout.header_bytes, content_size);
-  const auto* bytes = reinterpret_cast<const unsigned char*>(content.get());
-
-  // Each chosen channel's choices, one per block.
-  const std::size_t blocks = (n + kBlock - 1) / kBlock;
-  std::vector<const std::uint8_t*> choices(m, nullptr);
-  std::size_t at = layout.header_bytes;
-  for (std::size_t c = 0; c < m; ++c) {
-    const std::size_t options = optionCount(layout.effective[c]);
-    if (options == 0) continue;
-    choices[c] = bytes + at;
-    for (std::size_t b = 0; b < blocks; ++b) {
-      HATTR_THROW_UNLESS(choices[c][b] < options, "samples: channel {}, block {}: prediction {}, expected below {} (damaged)",
-                         nameOf(channels[c]), b, choices[c][b], options);
-    }
-    at += blocks;
-  }
-
-  // The residuals: byte planes, then bit lengths and bits, each channel's in its slot.
-  const auto words = std::make_unique_for_overwrite<std::uint64_t[]>(n * m);
-  unshuffle(std::string_view(content.get() + at, parts.planes), words.get());
-  at += parts.planes;
-  std::vector<std::uint8_t> lengths(n * layout.in_bits);
-  std::uint64_t total_bits = 0;
-  for (std::size_t c = 0; c < m; ++c) {
-    if (layout.codings[c] != Coding::kBitLengths) continue;
-    const std::size_t q = layout.slot[c] - layout.in_planes;
-    total_bits += readBitLengths(bytes + at + q * n, lengths.data() + q * n, n, nameOf(channels[c]));
-  }
-  at += parts.lengths;
-  HATTR_THROW_UNLESS(content_size - at == (total_bits + 7) / 8,
-                     "samples: the compressed residuals are damaged: {} bytes of bits, expected {}", content_size - at,
-                     (total_bits + 7) / 8);
-  BitReader bits(std::string_view(content.get() + at, content_size - at));
-  for (std::size_t q = 0; q < layout.in_bits; ++q) {
-    readBits(bits, lengths.data() + q * n, words.get() + (layout.in_planes + q) * n, n);
-  }
-  HATTR_THROW_UNLESS(bits.atCleanEnd(), "samples: the compressed residuals are damaged: their last byte has stray bits");
-
-  // Each column from its residuals and predictions: positions after their velocities, the
-  // commanded forces after their parts.
-  const auto values = std::make_unique_for_overwrite<double[]>(n * m);
-  const auto k = std::make_unique_for_overwrite<std::uint64_t[]>(h.quantized ? n * m : 0);
-  for (const std::size_t c : decodingOrder(layout.effective)) {
-    const Predictor p = layout.effective[c];
-    const auto [user, guide] = commandParts(channels[c]);
-    const bool command = p == Predictor::kCommand;
-    if (!h.quantized) {
-      double* column = values.get() + c * n;
-      if (choices[c] != nullptr) {
-        decodeChosenColumn(choices[c], words.get() + layout.slot[c] * n, kinematicsOf(layout, channels, c, values.get(), n), column, n);
-      } else {
-        decodeColumn<Doubles>(p, words.get() + layout.slot[c] * n, command ? values.get() + columnOf(channels, guide) * n : nullptr,
-                              command ? values.get() + columnOf(channels, user) * n : nullptr, column, n);
-      }
-      continue;
-    }
-    decodeColumn<Steps>(p, words.get() + layout.slot[c] * n, command ? k.get() + columnOf(channels, guide) * n : nullptr,
-                        command ? k.get() + columnOf(channels, user) * n : nullptr, k.get() + c * n, n);
-    fromSteps(k.get() + c * n, layout.steps[c], values.get() + c * n, n);
-  }
-  return toSamples(values.get(), channels, n);
-}
-
-}  // namespace
-
 bool isEncodedSamples(std::string_view blob) noexcept { return !sampleEncodingOf(blob).empty(); }
 
 std::string_view sampleEncodingOf(std::string_view blob) noexcept {
   if (blob.size() < sizeof kMagicV1) return {};
-  if (std::memcmp(blob.data(), kMagicV1, sizeof kMagicV1) == 0) return "hsc1";
+  if (std::memcmp(blob.data(), kMagicV1, sizeof kMagicV1) == 0) return kSampleEncodingV1;
   if (std::memcmp(blob.data(), kMagicV2, sizeof kMagicV2) == 0) return kSampleEncoding;
   return {};
 }
@@ -1029,8 +1039,8 @@ std::string encodeSamples(std::span<const Sample> samples, std::span<const Chann
     if (!quantized) {
       const double* column = values.get() + c * n;
       if (choices != nullptr) {
-        encodeChosenColumn(optionCount(p), column, kinematicsOf(layout, channels, c, values.get(), n), words.get() + layout.slot[c] * n,
-                                    choices, n);
+        encodeChosenColumn(optionCount(p), column, kinematicsOf(layout, channels, c, values.get(), n),
+                           words.get() + layout.slot[c] * n, choices, n);
       } else {
         encodeColumn<Doubles>(p, column, command ? values.get() + columnOf(channels, guide) * n : nullptr,
                               command ? values.get() + columnOf(channels, user) * n : nullptr, words.get() + layout.slot[c] * n, n);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <set>
 #include <string>
 
 #include <zstd.h>
@@ -13,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "hattr/core/error.hpp"
+#include "support/test_support.hpp"
 
 namespace hattr::io {
 namespace {
@@ -268,6 +270,96 @@ TEST(SampleCodec, AMissThatRepeatsEveryFourSamplesCostsAFractionOfOneThatDoesNot
   EXPECT_LT(repeating, 0.5 * not_repeating);
 }
 
+/// The frame's content of an encoded block whose header (up to its content size) takes
+/// `header_bytes`.
+std::string contentOf(const std::string& blob, std::size_t header_bytes) {
+  const std::string_view frame = std::string_view(blob).substr(header_bytes + 8);
+  std::string content(ZSTD_getFrameContentSize(frame.data(), frame.size()), '\0');
+  EXPECT_EQ(ZSTD_decompress(content.data(), content.size(), frame.data(), frame.size()), content.size());
+  return content;
+}
+
+/// The prediction each block of one chosen column took, past the first block (whose start
+/// lacks the history every prediction needs).
+std::set<int> choicesAfterTheFirstBlock(const std::string& content, std::size_t at, std::size_t blocks) {
+  std::set<int> taken;
+  for (std::size_t b = 1; b < blocks; ++b) taken.insert(static_cast<unsigned char>(content[at + b]));
+  return taken;
+}
+
+TEST(SampleCodec, EachPredictionIsChosenWhereItFitsAndReadBack) {
+  // One column of 1 024 samples (8 blocks) per case, each made for one prediction to leave the
+  // fewest bits: 3 a cubic (its miss changes slowly), 5 the quadratic plus its miss 8 samples
+  // before (a ripple of period 8), 7 the kinematic prediction plus its miss 4 samples before (a
+  // position that steps with its velocity, with a ripple of period 4 on top).
+  const std::size_t n = 1024, blocks = n / 128;
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> ripple(-1e-6, 1e-6);
+  std::normal_distribution<double> noise(0.0, 1e-4);
+  double period8[8], period4[4];
+  for (double& r : period8) r = ripple(rng);
+  for (double& r : period4) r = ripple(rng);
+  std::vector<Sample> quartic(n), rippled(n), stepping(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = static_cast<double>(i) * 1e-3;
+    for (auto* s : {&quartic[i], &rippled[i], &stepping[i]}) s->t_s = t;
+    quartic[i].v_WT.x() = 0.01 + 2.0 * t * t * t * t;
+    rippled[i].v_WT.x() = 0.02 + 0.01 * t + period8[i % 8];
+    stepping[i].v_WT.x() = 0.05 * std::sin(4.0 * t) + noise(rng);
+    stepping[i].p_WT.x() = i == 0 ? 0.01 : stepping[i - 1].p_WT.x() + 1e-3 * stepping[i].v_WT.x();
+  }
+  for (std::size_t i = 0; i < n; ++i) stepping[i].p_WT.x() += period4[i % 4];
+
+  const std::vector<Channel> velocity = {Channel::kTime, Channel::kVx};
+  for (const auto& [samples, wanted] : {std::pair{&quartic, 3}, std::pair{&rippled, 5}}) {
+    const std::string blob = encodeSamples(*samples, velocity);
+    expectSameBits(decodeSamples(blob, velocity, n), *samples, velocity);
+    const std::size_t header = 12 + 2 * 11;  // vx's choices open the content after the header
+    EXPECT_EQ(choicesAfterTheFirstBlock(contentOf(blob, header), header, blocks), std::set<int>{wanted});
+  }
+  const std::vector<Channel> position = {Channel::kTime, Channel::kX, Channel::kVx};
+  const std::string blob = encodeSamples(stepping, position);
+  expectSameBits(decodeSamples(blob, position, n), stepping, position);
+  const std::size_t header = 12 + 3 * 11 + 16;  // with x's a and b
+  EXPECT_EQ(choicesAfterTheFirstBlock(contentOf(blob, header), header, blocks), std::set<int>{7});
+}
+
+TEST(SampleCodec, AnySetOfChannelsWithAnyValuesRoundTrips) {
+  // Random channel sets (a position without its velocity, a commanded force without its parts,
+  // no time...) and random columns: smooth with noise, constant, steps, awkward floats; some
+  // long enough for many blocks, some shorter than a prediction's history.
+  const std::uint64_t seed = test::testSeed(14);
+  SCOPED_TRACE(::testing::Message() << "HATTR_TEST_SEED=" << seed);
+  std::mt19937_64 rng(seed);
+  const auto all = everyStoredChannel();
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int round = 0; round < 40; ++round) {
+    std::vector<Channel> channels;
+    for (const Channel c : all) {
+      if (rng() % 2 == 0) channels.push_back(c);
+    }
+    if (channels.empty()) channels.push_back(all[rng() % all.size()]);
+    const std::size_t n = rng() % 4 == 0 ? rng() % 16 : rng() % 700;
+    std::vector<Sample> samples(n);
+    for (const Channel c : channels) {
+      const auto kind = rng() % 4;
+      const double scale = std::pow(10.0, static_cast<double>(rng() % 12) - 8.0);
+      for (std::size_t i = 0; i < n; ++i) {
+        const double t = static_cast<double>(i) * 1e-3;
+        double v = 0.0;
+        if (kind == 0) v = scale * (std::sin(7.0 * t + static_cast<double>(round)) + 1e-6 * unit(rng));
+        if (kind == 1) v = scale;
+        if (kind == 2) v = i % 97 < 40 ? 0.0 : scale * std::round(4.0 * unit(rng));
+        if (kind == 3) v = test::randomProfile(rng, 1, RawChannels{true, true}).samples()[0].p_WT.x();
+        if (c == Channel::kContact || c == Channel::kPenDown) v = v > 0.0 ? 1.0 : 0.0;
+        setChannelValue(samples[i], c, v);
+      }
+    }
+    SCOPED_TRACE(::testing::Message() << "round " << round << ", " << n << " samples, " << channels.size() << " channels");
+    expectSameBits(decodeSamples(encodeSamples(samples, channels), channels, n), samples, channels);
+  }
+}
+
 /// `blob` with its frame's content changed by `change` and compressed again (with a new
 /// checksum): what a writer with a bug would store.
 template <class Change>
@@ -314,6 +406,11 @@ TEST(SampleCodec, ARevision2BlockWithImpossibleContentIsRefusedWithWhatIsWrong) 
               HasSubstr("channel x, sample 3: a residual of"));
   EXPECT_THAT(message(withContent(blob, header, [](std::string& c) { c.pop_back(); })), HasSubstr("bytes of bits"));
   EXPECT_THAT(message(withContent(blob, header, [](std::string& c) { c.push_back('\0'); })), HasSubstr("bytes of bits"));
+  // The content's declared size must fit its parts.
+  std::string oversized = blob;
+  const std::uint64_t huge = std::uint64_t{1} << 40;
+  std::memcpy(oversized.data() + header, &huge, sizeof huge);
+  EXPECT_THAT(message(oversized), HasSubstr("says 1099511627776 bytes of header and residuals, expected"));
   // The kinematic coefficients must be finite.
   std::string infinite = blob;
   const double inf = std::numeric_limits<double>::infinity();
@@ -393,7 +490,7 @@ TEST(SampleCodec, ADamagedOrForeignBlockIsRefusedWithWhatIsWrong) {
   EXPECT_THAT(message(predictor, channels, 500), HasSubstr("channel x: predictor 1, expected 5"));
   std::string coding = blob;
   coding[12 + 11 * 1 + 2] = 0;  // x's bit lengths said to be byte planes
-  EXPECT_THAT(message(coding, channels, 500), HasSubstr("channel x: coding 0, expected 1"));
+  EXPECT_THAT(message(coding, channels, 500), HasSubstr("channel x: layout 0, expected 1"));
   std::string reserved = blob;
   reserved[11] = 7;
   EXPECT_THAT(message(reserved, channels, 500), HasSubstr("flags are 0x00 0x07"));

@@ -14,9 +14,10 @@
 ///
 /// Optionally a declared per-channel resolution (e.g. 1 µm, 1 mN): each value is stored as the
 /// nearest whole multiple k·step, the integers predicted as in the first revision (a quadratic
-/// for the continuous channels) and kept in byte planes, and the reader returns exactly k·step. docs/study-store.md has the format and the measurements that
-/// chose it (bench/sample_compression.py). Blocks of the first revision (hsc1: one fixed
-/// prediction per channel, byte planes only) are still read.
+/// for the continuous channels) and kept in byte planes, and the reader returns exactly k·step.
+/// docs/study-store.md has the format and the measurements that chose it
+/// (bench/sample_compression.py, bench/sample_codec_parts.py). Blocks of the first revision
+/// (hsc1: one fixed prediction per channel, byte planes only) are still read.
 #include <cstddef>
 #include <map>
 #include <span>
@@ -54,8 +55,9 @@ std::string encodeSamples(std::span<const Sample> samples, std::span<const Chann
 /// not one, is cut short, names other channels or another count.
 std::vector<Sample> decodeSamples(std::string_view blob, std::span<const Channel> channels, std::size_t count);
 
-/// The encoding encodeSamples writes, as the study store names it.
+/// The encoding encodeSamples writes, as the study store names it, and the first revision's.
 inline constexpr std::string_view kSampleEncoding = "hsc2";
+inline constexpr std::string_view kSampleEncodingV1 = "hsc1";
 
 /// "hsc1" or "hsc2" for a blob that starts as either revision does (both are read), else "".
 std::string_view sampleEncodingOf(std::string_view blob) noexcept;

@@ -213,7 +213,7 @@ class StudyDatabase {
 /// hsc2), still read; and "f64-rows", schema 3's little-endian doubles, one row per sample (read,
 /// and rewritten compactly by the migration to schema 4).
 inline constexpr std::string_view kCompactSamples = io::kSampleEncoding;
-inline constexpr std::string_view kCompactSamplesV1 = "hsc1";
+inline constexpr std::string_view kCompactSamplesV1 = io::kSampleEncodingV1;
 inline constexpr std::string_view kRowSamples = "f64-rows";
 
 /// A profile's samples as the samples table stores them: io::encodeSamples on the profile's
