@@ -31,10 +31,19 @@ test: build
 demo: build
 	$(BUILD)/apps/hattr/hattr demo --out demo-out
 
-asan tsan: deps
-	cmake --preset $@ >/dev/null
-	cmake --build --preset $@ -j $(JOBS)
-	scripts/run-ctest build/$@ --preset $@ -j $(JOBS)
+# Address + undefined-behaviour sanitizers over every C++ test (the doc, browser and Python tests
+# only drive the release programs: they are not in this preset).
+asan: deps
+	cmake --preset asan >/dev/null
+	cmake --build --preset asan -j $(JOBS)
+	scripts/run-ctest build/asan --preset asan -j $(JOBS)
+
+# The thread sanitizer where it finds bugs: the programs whose tests start threads or processes
+# (ctest label "threads", tests/CMakeLists.txt), built and run alone.
+tsan: deps
+	cmake --preset tsan >/dev/null
+	cmake --build --preset tsan -j $(JOBS) --target hattr_threaded_tests
+	scripts/run-ctest build/tsan --preset tsan -j $(JOBS) -L threads
 
 sanitize: asan tsan
 

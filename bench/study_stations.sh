@@ -6,9 +6,21 @@
 #   2. one 30-subject study of the paper's protocol (1 980 trials of the simulated expert's 'Na')
 #      run by 1, 2 and 3 stations at once (`hattr study run`), and the same study by one
 #      station on SQLite: wall time, trials per second, and the stores' sizes.
-# Usage: bench/study_stations.sh [BUILD_DIR]   (default build/release). As root, the server
-# runs as the `postgres` user (PostgreSQL refuses root).
+# Usage: bench/study_stations.sh [--quick] [BUILD_DIR]   (default build/release). As root, the
+# server runs as the `postgres` user (PostgreSQL refuses root). --quick: the smoke size the doc
+# test runs (bench_study_store --quick; 3 subjects, 198 trials, and a 4 s lease so that an idle
+# station asks again after 1 s, not 7.5): it proves the script works; its figures mean nothing.
 set -euo pipefail
+subjects=30
+lease=()
+store_size=()
+if [[ "${1:-}" == "--quick" ]]; then
+  subjects=3
+  lease=(--lease-timeout 4)
+  store_size=(--quick)
+  shift
+fi
+trials=$(( subjects * 66 ))
 build=$(realpath "${1:-build/release}")
 hattr="$build/apps/hattr/hattr"
 bin=$(ls -d /usr/lib/postgresql/*/bin | sort -V | tail -1)
@@ -33,18 +45,18 @@ echo "== storing and reading a trial (SQLite, then PostgreSQL)"
 createdb bench_store
 createdb bench_read
 HATTR_BENCH_PG_STORE=$(address bench_store) HATTR_BENCH_PG_READ=$(address bench_read) \
-  "$build/bench/bench_study_store" --benchmark_format=console 2>&1 | grep -E "_(mean|median|stddev) "
+  "$build/bench/bench_study_store" "${store_size[@]}" --benchmark_format=console 2>&1 | grep -E "_(mean|median|stddev) "
 
-echo "== one 30-subject study by 1, 2 and 3 stations"
+echo "== one $subjects-subject study by 1, 2 and 3 stations"
 work=$(mktemp -d /tmp/hattr-stations-XXXXXX)
 cd "$work"
 "$hattr" sim expert --glyph na -o expert.csv >/dev/null
-"$hattr" study example | python3 -c 'import json,sys; s=json.load(sys.stdin); s["subjects"]["count"]=30; s["protocol"]["rest_s"]=0; print(json.dumps(s))' > study.json
+"$hattr" study example | python3 -c 'import json,sys; s=json.load(sys.stdin); s["subjects"]["count"]='"$subjects"'; s["protocol"]["rest_s"]=0; print(json.dumps(s))' > study.json
 "$hattr" study init study.json --db one.sqlite >/dev/null
 start=$(date +%s.%N)
 "$hattr" study run --quiet --db one.sqlite >/dev/null
 end=$(date +%s.%N)
-python3 -c "t=$end-$start; print(f'sqlite, 1 station: {t:.1f} s, {1980/t:.1f} trials/s, file {__import__(\"os\").path.getsize(\"one.sqlite\")/1e6:.1f} MB')"
+python3 -c "t=$end-$start; print(f'sqlite, 1 station: {t:.1f} s, {$trials/t:.1f} trials/s, file {__import__(\"os\").path.getsize(\"one.sqlite\")/1e6:.1f} MB')"
 for stations in 1 2 3; do
   db="stations_$stations"
   createdb "$db"
@@ -52,11 +64,11 @@ for stations in 1 2 3; do
   start=$(date +%s.%N)
   pids=()
   for ((s = 0; s < stations; ++s)); do
-    "$hattr" study run --quiet --db "$(address "$db")" >/dev/null &
+    "$hattr" study run --quiet "${lease[@]}" --db "$(address "$db")" >/dev/null &
     pids+=($!)
   done
   for pid in "${pids[@]}"; do wait "$pid"; done
   end=$(date +%s.%N)
-  python3 -c "t=$end-$start; print(f'postgresql, $stations station(s): {t:.1f} s, {1980/t:.1f} trials/s, database $(size_mb "$db") MB')"
+  python3 -c "t=$end-$start; print(f'postgresql, $stations station(s): {t:.1f} s, {$trials/t:.1f} trials/s, database $(size_mb "$db") MB')"
 done
 cd / && rm -rf "$work"

@@ -4,13 +4,17 @@
 // (docs/study-store.md); read back whole by trialProfile. The same on a PostgreSQL server when
 // HATTR_BENCH_PG_STORE and HATTR_BENCH_PG_READ name two empty databases (bench/study_stations.sh
 // starts a server and gives them).
-//   build/release/bench/bench_study_store
+//   build/release/bench/bench_study_store [--quick]
+// --quick: 2 × 20 iterations: the smoke size bench/study_stations.sh --quick runs (the
+// doc test), which proves the benchmark works and measures nothing.
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <benchmark/benchmark.h>
@@ -105,13 +109,14 @@ void BM_ReadTrial(benchmark::State& state, const char* postgres_variable) {
   state.counters["samples"] = static_cast<double>(trial().size());
 }
 
-/// The SQLite benchmarks, and the PostgreSQL ones when their databases are given.
-void registerBenchmarks() {
-  const auto add = [](const char* name, void (*f)(benchmark::State&, const char*), const char* variable) {
+/// The SQLite benchmarks, and the PostgreSQL ones when their databases are given; 3 × 200
+/// iterations each, or 2 × 20 when quick (two, for the means the scripts read).
+void registerBenchmarks(bool quick) {
+  const auto add = [quick](const char* name, void (*f)(benchmark::State&, const char*), const char* variable) {
     benchmark::RegisterBenchmark(name, f, variable)
         ->Unit(benchmark::kMillisecond)
-        ->Iterations(200)
-        ->Repetitions(3)
+        ->Iterations(quick ? 20 : 200)
+        ->Repetitions(quick ? 2 : 3)
         ->ReportAggregatesOnly(true);
   };
   add("BM_StoreTrial", BM_StoreTrial, nullptr);
@@ -120,10 +125,18 @@ void registerBenchmarks() {
   if (!postgresFor("HATTR_BENCH_PG_READ").empty()) add("BM_ReadTrialPostgres", BM_ReadTrial, "HATTR_BENCH_PG_READ");
 }
 
+/// Takes --quick out of the arguments; whether it was there.
+bool takeQuick(int& argc, char** argv) {
+  const auto end = std::remove(argv + 1, argv + argc, std::string_view("--quick"));
+  const bool quick = end != argv + argc;
+  argc = static_cast<int>(end - argv);
+  return quick;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  registerBenchmarks();
+  registerBenchmarks(takeQuick(argc, argv));
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "support/run_command.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr {
 namespace {
@@ -20,6 +21,8 @@ using test::RunResult;
 const std::string kHattr = HATTR_CLI_PATH;
 
 TEST(HypothesesCli, TabulatesThePapersPointsUnderEachHypothesisWithAnAaCheckEach) {
+  HATTR_SKIP_UNDER_THREAD_SANITIZER("one thread (--threads 1) simulating and scoring 5 studies; subjects at once run "
+                                    "under it in InSilicoStudy.SubjectsRunAtOnceGiveTheSameTrialsToTheBitAsOneAtATime");
   test::TempDir dir;
   const RunResult r = test::runCommand(
       dir, kHattr,
@@ -61,6 +64,7 @@ TEST(HypothesesCli, TabulatesThePapersPointsUnderEachHypothesisWithAnAaCheckEach
 }
 
 TEST(HypothesesCli, PrintsATableAndRefusesAnUnknownHypothesis) {
+  HATTR_SKIP_UNDER_THREAD_SANITIZER("one thread (--threads 1) simulating and scoring a study");
   test::TempDir dir;
   const RunResult table = test::runCommand(
       dir, kHattr,

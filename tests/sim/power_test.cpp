@@ -12,6 +12,7 @@
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/sim/in_silico.hpp"
 #include "support/test_support.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr::sim {
 namespace {
@@ -52,6 +53,8 @@ void expectOutcomeOf(const report::MetricOutcome& got, const report::MetricResul
 // Replicate r is the in-silico study with seed + r, and a design of N subjects analyzes its
 // first N: the same numbers as studies of 3 and of 4 subjects run on their own.
 TEST(PowerStudy, AReplicateIsTheInSilicoStudyWithSeedPlusRAndEachDesignItsFirstSubjects) {
+  HATTR_SKIP_UNDER_THREAD_SANITIZER("a replicate compared with two in silico studies; subjects at once run under it in "
+                                    "InSilicoStudy.SubjectsRunAtOnceGiveTheSameTrialsToTheBitAsOneAtATime");
   test::TempDir dir;
   const PowerStudy power({.training_trials = 1, .recall_trials = 3, .subject_counts = {4, 3}, .replicates = 2,
                           .seed = 5, .threads = 2, .scratch = dir / "scratch"});
@@ -74,6 +77,8 @@ TEST(PowerStudy, AReplicateIsTheInSilicoStudyWithSeedPlusRAndEachDesignItsFirstS
 }
 
 TEST(PowerStudy, UnderAHypothesisAReplicateIsTheInSilicoStudyUnderIt) {
+  HATTR_SKIP_UNDER_THREAD_SANITIZER("a replicate compared with two in silico studies; subjects at once run under it in "
+                                    "InSilicoStudy.SubjectsRunAtOnceGiveTheSameTrialsToTheBitAsOneAtATime");
   test::TempDir dir;
   const PowerStudy power({.training_trials = 2, .recall_trials = 3, .subject_counts = {3}, .replicates = 1, .seed = 8,
                           .threads = 2, .hypothesis = "guidance-dependent", .scratch = dir / "scratch"});

@@ -1,0 +1,14 @@
+#pragma once
+// Tests whose cost is computation, not threads: ThreadSanitizer slows them 15-40 times (the DTW
+// kernel's vector loads, the sample codec, the simulated trials) and finds nothing the tests it
+// still runs would not (docs/architecture.md, "Build and CI in proportion"). Under it they skip
+// themselves, saying why and which test runs their threads under it instead.
+
+#include <gtest/gtest.h>
+
+#if defined(__SANITIZE_THREAD__)
+#define HATTR_SKIP_UNDER_THREAD_SANITIZER(why) \
+  GTEST_SKIP() << "left to the other builds under ThreadSanitizer: " << (why)
+#else
+#define HATTR_SKIP_UNDER_THREAD_SANITIZER(why) static_cast<void>(0)
+#endif
