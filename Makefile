@@ -14,7 +14,8 @@ all: build
 help:
 	@echo "make demo      install deps, build, run the main job (hattr demo)"
 	@echo "make test      install deps, build, run every test (ctest)"
-	@echo "make sanitize  the tests again under address+undefined and thread sanitizers"
+	@echo "make sanitize  the C++ tests again under address+undefined sanitizers, and those that start"
+	@echo "               threads or processes under the thread sanitizer (make asan, make tsan)"
 	@echo "make bench     build and run the benchmarks"
 	@echo "make fuzz      build the libFuzzer targets and fuzz the profile, study and world readers for 60 s each"
 

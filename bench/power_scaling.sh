@@ -12,17 +12,21 @@
 set -euo pipefail
 design="--subjects 10 --replicates 4 --trials 11"
 largest="--subjects 40 --replicates 2 --trials 11"
-if [[ "${1:-}" == "--quick" ]]; then
-  design="--subjects 4 --replicates 2 --trials 2"
-  largest="--subjects 6 --replicates 2 --trials 2"
-  shift
-fi
-build=$(realpath "${1:-build/release}")
+folders=()
+for arg in "$@"; do
+  if [[ "$arg" == "--quick" ]]; then
+    design="--subjects 4 --replicates 2 --trials 2"
+    largest="--subjects 6 --replicates 2 --trials 2"
+  else
+    folders+=("$arg")
+  fi
+done
+build=$(realpath "${folders[0]:-build/release}")
 hattr="$build/apps/hattr/hattr"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1  # these machines run as root
 rate() { python3 -c 'import json,sys; r=json.load(sys.stdin)["run"]; print("%d studies in %.1f s: %.4f studies/s" % (r["studies"], r["seconds"], r["studies_per_second"]))'; }
 
-echo "== the paper's design, 4 replicates"
+echo "== the paper's design ($design)"
 one=$("$hattr" sim power $design --threads 1 --json | tee /tmp/power-one.json | rate)
 echo "1 process, 1 thread:   $one"
 two=$(mpirun -n 2 "$hattr" sim power $design --threads 1 --json | tee /tmp/power-two.json | rate)

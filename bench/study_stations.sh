@@ -8,20 +8,27 @@
 #      station on SQLite: wall time, trials per second, and the stores' sizes.
 # Usage: bench/study_stations.sh [--quick] [BUILD_DIR]   (default build/release). As root, the
 # server runs as the `postgres` user (PostgreSQL refuses root). --quick: the smoke size the doc
-# test runs (bench_study_store --quick; 3 subjects, 198 trials, and a 4 s lease so that an idle
-# station asks again after 1 s, not 7.5): it proves the script works; its figures mean nothing.
+# test runs (bench_study_store --quick; 2 subjects, 132 trials, by 1 and 2 stations, and an 8 s
+# lease so that an idle station asks again after 2 s, not 7.5): it proves the script works; its
+# figures mean nothing.
 set -euo pipefail
 subjects=30
+station_counts=(1 2 3)
 lease=()
 store_size=()
-if [[ "${1:-}" == "--quick" ]]; then
-  subjects=3
-  lease=(--lease-timeout 4)
-  store_size=(--quick)
-  shift
-fi
+folders=()
+for arg in "$@"; do
+  if [[ "$arg" == "--quick" ]]; then
+    subjects=2
+    station_counts=(1 2)
+    lease=(--lease-timeout 8)
+    store_size=(--quick)
+  else
+    folders+=("$arg")
+  fi
+done
 trials=$(( subjects * 66 ))
-build=$(realpath "${1:-build/release}")
+build=$(realpath "${folders[0]:-build/release}")
 hattr="$build/apps/hattr/hattr"
 bin=$(ls -d /usr/lib/postgresql/*/bin | sort -V | tail -1)
 as=()
@@ -47,7 +54,7 @@ createdb bench_read
 HATTR_BENCH_PG_STORE=$(address bench_store) HATTR_BENCH_PG_READ=$(address bench_read) \
   "$build/bench/bench_study_store" "${store_size[@]}" --benchmark_format=console 2>&1 | grep -E "_(mean|median|stddev) "
 
-echo "== one $subjects-subject study by 1, 2 and 3 stations"
+echo "== one $subjects-subject study by ${station_counts[*]} stations"
 work=$(mktemp -d /tmp/hattr-stations-XXXXXX)
 cd "$work"
 "$hattr" sim expert --glyph na -o expert.csv >/dev/null
@@ -57,7 +64,7 @@ start=$(date +%s.%N)
 "$hattr" study run --quiet --db one.sqlite >/dev/null
 end=$(date +%s.%N)
 python3 -c "t=$end-$start; print(f'sqlite, 1 station: {t:.1f} s, {$trials/t:.1f} trials/s, file {__import__(\"os\").path.getsize(\"one.sqlite\")/1e6:.1f} MB')"
-for stations in 1 2 3; do
+for stations in "${station_counts[@]}"; do
   db="stations_$stations"
   createdb "$db"
   "$hattr" study init study.json --db "$(address "$db")" >/dev/null

@@ -4,7 +4,7 @@
 # Paths are hashed relative to the source folder (base_dir) and without the build folder
 # (hash_dir=false, which -g would otherwise add), so a fresh clone in another folder, as CI's,
 # reuses the objects a build of the same sources made before it on this machine
-# (docs/architecture.md, "Build and CI").
+# (docs/architecture.md, "Build and CI in proportion").
 option(HATTR_CCACHE "Compile through ccache when it is installed" ON)
 if(HATTR_CCACHE AND NOT CMAKE_CXX_COMPILER_LAUNCHER)
   find_program(HATTR_CCACHE_PROGRAM ccache)

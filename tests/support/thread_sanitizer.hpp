@@ -6,7 +6,12 @@
 
 #include <gtest/gtest.h>
 
-#if defined(__SANITIZE_THREAD__)
+#if defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define HATTR_UNDER_THREAD_SANITIZER 1
+#endif
+#endif
+#if defined(__SANITIZE_THREAD__) || defined(HATTR_UNDER_THREAD_SANITIZER)
 #define HATTR_SKIP_UNDER_THREAD_SANITIZER(why) \
   GTEST_SKIP() << "left to the other builds under ThreadSanitizer: " << (why)
 #else
