@@ -1,5 +1,5 @@
 #pragma once
-// Tests whose cost is computation, not threads: ThreadSanitizer slows them 15-40 times (the DTW
+// Tests whose cost is computation, not threads: ThreadSanitizer slowed them 8-42 times (the DTW
 // kernel's vector loads, the sample codec, the simulated trials) and finds nothing the tests it
 // still runs would not (docs/architecture.md, "Build and CI in proportion"). Under it they skip
 // themselves, saying why and which test runs their threads under it instead.
