@@ -56,39 +56,39 @@ TEST(PluginLoading, FileThatIsNotASharedObjectIsRefused) {
 }
 
 TEST(PluginLoading, SharedObjectWithoutTheEntrySymbolIsRefused) {
-  const std::string message = openError(uriOf(HATTR_NO_ENTRY_PLUGIN));
+  const std::string message = openError(uriOf(test::builtFile("HATTR_NO_ENTRY_PLUGIN")));
   EXPECT_NE(message.find("no entry symbol \"hattr_plugin_entry\": not a hattr driver plugin"), std::string::npos)
       << message;
 }
 
 TEST(PluginLoading, AbiVersionMismatchNamesBothVersions) {
-  const std::string message = openError(uriOf(HATTR_ABI_MISMATCH_PLUGIN));
+  const std::string message = openError(uriOf(test::builtFile("HATTR_ABI_MISMATCH_PLUGIN")));
   EXPECT_NE(message.find("plugin ABI mismatch: the plugin speaks version 99, this hattr speaks version 1"),
             std::string::npos)
       << message;
 }
 
 TEST(PluginLoading, FailedOpenCarriesThePluginsOwnMessage) {
-  const std::string message = openError(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "fail_open=no%20device%20on%20USB"));
+  const std::string message = openError(uriOf(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), "fail_open=no%20device%20on%20USB"));
   EXPECT_NE(message.find("the plugin could not open the device: fake SDK: no device on USB"), std::string::npos)
       << message;
 }
 
 TEST(PluginLoading, UnknownKeyIsRefusedListingTheAcceptedOnes) {
-  const std::string message = openError(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "colour=red"));
+  const std::string message = openError(uriOf(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), "colour=red"));
   EXPECT_NE(message.find("unknown key \"colour\": expected one of max_force_N, paper_origin, clock"), std::string::npos)
       << message;
 }
 
 TEST(PluginLoading, ReplayAndSimPluginsRefuseUnknownKeysNamingTheirOwn) {
-  EXPECT_NE(openError(uriOf(HATTR_REPLAY_PLUGIN, "force=x.csv")).find("unknown key \"force\": expected one of profile, forces"),
+  EXPECT_NE(openError(uriOf(test::builtFile("HATTR_REPLAY_PLUGIN"), "force=x.csv")).find("unknown key \"force\": expected one of profile, forces"),
             std::string::npos);
-  EXPECT_NE(openError(uriOf(HATTR_SIM_PLUGIN, "colour=red")).find("keys: clock, rate_hz and those of sim://pen"),
+  EXPECT_NE(openError(uriOf(test::builtFile("HATTR_SIM_PLUGIN"), "colour=red")).find("keys: clock, rate_hz and those of sim://pen"),
             std::string::npos);
 }
 
 TEST(PluginLoading, InspectReadsNameAndDescriptionWithoutOpening) {
-  const PluginInfo info = inspectPlugin(HATTR_SIM_PLUGIN);
+  const PluginInfo info = inspectPlugin(test::builtFile("HATTR_SIM_PLUGIN"));
   EXPECT_EQ(info.name, "sim");
   EXPECT_EQ(info.abi_version, 1u);
   EXPECT_NE(info.description.find("simulated pen"), std::string::npos);
@@ -108,7 +108,7 @@ session::TrialResult runCircleTrial(const std::string& device_uri, guidance::Tra
 
 TEST(SimPlugin, TrialThroughThePluginIsBitIdenticalToSimPen) {
   const auto direct = runCircleTrial("sim://pen?mass_kg=0.05", guidance::TrainingMode::kBasic, nullptr);
-  const auto plugged = runCircleTrial(uriOf(HATTR_SIM_PLUGIN, "mass_kg=0.05"), guidance::TrainingMode::kBasic, nullptr);
+  const auto plugged = runCircleTrial(uriOf(test::builtFile("HATTR_SIM_PLUGIN"), "mass_kg=0.05"), guidance::TrainingMode::kBasic, nullptr);
   ASSERT_EQ(direct.profile.size(), plugged.profile.size());
   EXPECT_TRUE(direct.profile.samples() == plugged.profile.samples());
   EXPECT_GT(direct.profile.penDownCount(), 100u);  // the hand really wrote on the paper
@@ -116,13 +116,13 @@ TEST(SimPlugin, TrialThroughThePluginIsBitIdenticalToSimPen) {
   // With guidance toward a reference, too.
   const auto reference = std::make_shared<guidance::ReferenceTrajectory>(direct.profile, 1000.0);
   const auto guided = runCircleTrial("sim://pen", guidance::TrainingMode::kPositionControl, reference);
-  const auto guided_plugged = runCircleTrial(uriOf(HATTR_SIM_PLUGIN), guidance::TrainingMode::kPositionControl, reference);
+  const auto guided_plugged = runCircleTrial(uriOf(test::builtFile("HATTR_SIM_PLUGIN")), guidance::TrainingMode::kPositionControl, reference);
   EXPECT_TRUE(guided.profile.samples() == guided_plugged.profile.samples());
 }
 
 TEST(SimPlugin, TickThroughThePluginNeverAllocates) {
   CircleHand hand(Vec3::Zero(), 0.01, 1.0, 1.0);
-  const auto device = openDevice(uriOf(HATTR_SIM_PLUGIN), &hand);
+  const auto device = openDevice(uriOf(test::builtFile("HATTR_SIM_PLUGIN")), &hand);
   servo::ServoLoop loop(*device, servo::ServoConfig{});
   loop.runSimulated(10);
   const test::NoAllocationScope scope;
@@ -131,7 +131,7 @@ TEST(SimPlugin, TickThroughThePluginNeverAllocates) {
 }
 
 TEST(SimPlugin, ADeviceClockAtAnotherRateThanTheLoopsIsRefused) {
-  const auto device = openDevice(uriOf(HATTR_SIM_PLUGIN, "clock=device&rate_hz=500"), nullptr);
+  const auto device = openDevice(uriOf(test::builtFile("HATTR_SIM_PLUGIN"), "clock=device&rate_hz=500"), nullptr);
   servo::ServoLoop loop(*device, servo::ServoConfig{.rate_hz = 1000.0});
   try {
     loop.start();
@@ -147,7 +147,7 @@ TEST(SimPlugin, ADeviceClockAtAnotherRateThanTheLoopsIsRefused) {
 TEST(SimPlugin, DeviceClockRunsTheLoopAtTheDevicesRate) {
   (void)test::passesUnlessTheHostStalls([&](std::uint64_t& stalls) {
     CircleHand hand(Vec3::Zero(), 0.01, 1.0, 1.0);
-    const auto device = openDevice(uriOf(HATTR_SIM_PLUGIN, "clock=device&rate_hz=1000"), &hand);
+    const auto device = openDevice(uriOf(test::builtFile("HATTR_SIM_PLUGIN"), "clock=device&rate_hz=1000"), &hand);
     ASSERT_EQ(device->clocking(), DeviceClocking::kDeviceClock);
     servo::ServoLoop loop(*device, servo::ServoConfig{});
     // The device's clock drives the loop: 300 ticks come, never sooner than its 1 kHz allows,
@@ -196,7 +196,7 @@ HapticProfile straightStroke() {
 TEST(ReplayPlugin, MovesThePenAlongTheProfileAndKeepsTheForcesItWasSent) {
   const test::TempDir dir;
   io::writeProfileCsv(straightStroke(), dir / "stroke.csv");
-  const std::string uri = uriOf(HATTR_REPLAY_PLUGIN, "profile=" + (dir / "stroke.csv").string() + "&forces=" +
+  const std::string uri = uriOf(test::builtFile("HATTR_REPLAY_PLUGIN"), "profile=" + (dir / "stroke.csv").string() + "&forces=" +
                                                          (dir / "forces.csv").string());
   {
     const auto device = openDevice(uri, nullptr);
@@ -223,7 +223,7 @@ TEST(ReplayPlugin, MovesThePenAlongTheProfileAndKeepsTheForcesItWasSent) {
 
 /// The fake vendor's last force in its own frame, through its test hook.
 Vec3 fakeVendorForce() {
-  void* lib = dlopen(HATTR_FAKE_VENDOR_PLUGIN, RTLD_NOW | RTLD_NOLOAD);
+  void* lib = dlopen(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), RTLD_NOW | RTLD_NOLOAD);
   EXPECT_NE(lib, nullptr);
   void* symbol = dlsym(lib, "fake_vendor_last_force_D");
   void (*hook)(double*) = nullptr;
@@ -235,7 +235,7 @@ Vec3 fakeVendorForce() {
 }
 
 TEST(VendorAdapter, ConvertsMillimetresAndTheSdkFrameBothWays) {
-  const auto device = openDevice(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=host&start_mm=10,-40,5"), nullptr);
+  const auto device = openDevice(uriOf(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), "clock=host&start_mm=10,-40,5"), nullptr);
   PenState pen;
   ASSERT_EQ(device->read(1ms, pen), DeviceStatus::kOk);
   // D: x right, y up, z toward the user; the paper's origin at y_D = -60 mm.
@@ -250,7 +250,7 @@ TEST(VendorAdapter, ConvertsMillimetresAndTheSdkFrameBothWays) {
 }
 
 TEST(VendorAdapter, ReportsTheSdksLimitsInSiAndLowersThemOnRequest) {
-  const auto device = openDevice(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=host"), nullptr);
+  const auto device = openDevice(uriOf(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), "clock=host"), nullptr);
   const DeviceLimits& l = device->limits();
   EXPECT_NEAR(l.max_stiffness_N_per_m, 1260.0, 1e-9);
   EXPECT_NEAR(l.workspace_min_m.x(), -0.08, 1e-12);
@@ -260,15 +260,15 @@ TEST(VendorAdapter, ReportsTheSdksLimitsInSiAndLowersThemOnRequest) {
   EXPECT_DOUBLE_EQ(l.peak_force_N, 3.3);
   EXPECT_DOUBLE_EQ(l.continuous_force_N, 0.88);
 
-  const auto gentle = openDevice(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=host&max_force_N=0.5"), nullptr);
+  const auto gentle = openDevice(uriOf(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), "clock=host&max_force_N=0.5"), nullptr);
   EXPECT_DOUBLE_EQ(gentle->limits().peak_force_N, 0.5);
   EXPECT_DOUBLE_EQ(gentle->limits().continuous_force_N, 0.5);
-  const std::string message = openError(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=host&max_force_N=5"));
+  const std::string message = openError(uriOf(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), "clock=host&max_force_N=5"));
   EXPECT_NE(message.find("max_force_N: expected (0, 3.3] N"), std::string::npos) << message;
 }
 
 TEST(VendorAdapter, ClampsTheForceToThePeakAsTheLastLineOfDefence) {
-  const auto device = openDevice(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=host"), nullptr);
+  const auto device = openDevice(uriOf(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), "clock=host"), nullptr);
   ASSERT_EQ(device->write(Vec3(0.0, 0.0, 10.0)), DeviceStatus::kOk);
   EXPECT_NEAR(fakeVendorForce().norm(), 3.3, 1e-12);
   EXPECT_EQ(device->write(Vec3(std::nan(""), 0.0, 0.0)), DeviceStatus::kFault);
@@ -276,7 +276,7 @@ TEST(VendorAdapter, ClampsTheForceToThePeakAsTheLastLineOfDefence) {
 }
 
 TEST(VendorAdapter, SdkErrorBecomesAFaultWithTheSdksText) {
-  const auto device = openDevice(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=host&error_after=3"), nullptr);
+  const auto device = openDevice(uriOf(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), "clock=host&error_after=3"), nullptr);
   PenState pen;
   for (int i = 0; i < 3; ++i) ASSERT_EQ(device->read(std::chrono::milliseconds(i), pen), DeviceStatus::kOk);
   EXPECT_EQ(device->read(3ms, pen), DeviceStatus::kFault);
@@ -291,7 +291,7 @@ struct ConstantPush final : GuidanceController {
 
 TEST(VendorAdapter, DeviceClockedLoopRunsInsideTheSdksFramesAndStopsAtZeroForce) {
   (void)test::passesUnlessTheHostStalls([&](std::uint64_t& stalls) {
-    const auto device = openDevice(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=device"), nullptr);
+    const auto device = openDevice(uriOf(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), "clock=device"), nullptr);
     servo::ServoLoop loop(*device, servo::ServoConfig{});
     ConstantPush push;
     loop.setGuidance(&push);
@@ -314,7 +314,7 @@ TEST(VendorAdapter, DeviceClockedLoopRunsInsideTheSdksFramesAndStopsAtZeroForce)
 }
 
 TEST(VendorAdapter, NonFiniteReadingLatchesAFaultAndZeroForce) {
-  const auto device = openDevice(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=device&nan_after=50"), nullptr);
+  const auto device = openDevice(uriOf(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), "clock=device&nan_after=50"), nullptr);
   servo::ServoLoop loop(*device, servo::ServoConfig{});
   loop.start();
   std::this_thread::sleep_for(150ms);
@@ -325,7 +325,7 @@ TEST(VendorAdapter, NonFiniteReadingLatchesAFaultAndZeroForce) {
 }
 
 TEST(VendorAdapter, StalledSdkClockIsCountedAsAStall) {
-  const auto device = openDevice(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=device&stall_after=40"), nullptr);
+  const auto device = openDevice(uriOf(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), "clock=device&stall_after=40"), nullptr);
   servo::ServoLoop loop(*device, servo::ServoConfig{});
   loop.start();
   std::this_thread::sleep_for(150ms);
@@ -337,7 +337,7 @@ TEST(VendorAdapter, StalledSdkClockIsCountedAsAStall) {
 // ---- A device fault during a trial and during a study --------------------------------
 
 TEST(DeviceFault, EndsTheTrialEarlyWithTheDevicesReasonAndKeepsWhatWasRecorded) {
-  session::TrialEnvironment env(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=device&error_after=500"), render::WorldConfig{},
+  session::TrialEnvironment env(uriOf(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), "clock=device&error_after=500"), render::WorldConfig{},
                                 1000.0);
   // The fake SDK's clock is an ordinary thread: a loaded host (CI runs two sanitized test
   // processes on two cores) can starve it past the trial's 50 ms give-up time, which ends
@@ -378,7 +378,7 @@ TEST(DeviceFault, AReadThatHangsOnTheLoopsOwnThreadIsAStallNotTheEndOfTheTrial) 
   // A host-clocked loop is hattr's own thread: a gap in its ticks (an SDK call hanging 200 ms,
   // or a host that descheduled it) is counted as a stall and the force ramps in again; only a
   // loop stuck for a second ends the trial.
-  session::TrialEnvironment env(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=host&block_read_at=600&block_read_ms=200"),
+  session::TrialEnvironment env(uriOf(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), "clock=host&block_read_at=600&block_read_ms=200"),
                                 render::WorldConfig{}, 1000.0);
   StillHand hand(HandCommand{.p_target_W = Vec3(0.0, 0.0, 0.005)});
   const session::TrialResult result = session::runTrial(env, {.duration_s = 1.0}, hand);
@@ -410,7 +410,7 @@ pid_t freezeThisProcess(int times, long frozen_ms, long every_ms) {
 TEST(DeviceFault, ADeviceClockFrozenWithTheWholeProcessIsAStallNotTheEndOfTheTrial) {
   // The trial's watcher is frozen with the device's scheduler: it must not take the host's
   // pause for a device clock that stopped calling (which ends the trial); the loop counts it.
-  session::TrialEnvironment env(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=device"), render::WorldConfig{}, 1000.0);
+  session::TrialEnvironment env(uriOf(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), "clock=device"), render::WorldConfig{}, 1000.0);
   StillHand hand(HandCommand{.p_target_W = Vec3(0.0, 0.0, 0.005)});
   const pid_t freezer = freezeThisProcess(4, 120, 300);
   ASSERT_GT(freezer, 0);
@@ -422,7 +422,7 @@ TEST(DeviceFault, ADeviceClockFrozenWithTheWholeProcessIsAStallNotTheEndOfTheTri
 }
 
 TEST(DeviceFault, ADeviceClockThatStopsEndsTheTrial) {
-  session::TrialEnvironment env(uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=device&stall_after=500"), render::WorldConfig{},
+  session::TrialEnvironment env(uriOf(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), "clock=device&stall_after=500"), render::WorldConfig{},
                                 1000.0);
   StillHand hand(HandCommand{.p_target_W = Vec3(0.0, 0.0, 0.005)});
   const session::TrialResult result = session::runTrial(env, {.duration_s = 2.0}, hand);
@@ -443,7 +443,7 @@ void resetFakeVendorTotalReads(void* plugin) {
 TEST(DeviceFault, InAStudyMarksTheTrialFailedAndKeepsEveryCompletedTrial) {
   // Each trial opens (and closes) the plugin: the test holds it loaded so the fake's read
   // count spans them all.
-  void* held = dlopen(HATTR_FAKE_VENDOR_PLUGIN, RTLD_NOW | RTLD_LOCAL);
+  void* held = dlopen(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), RTLD_NOW | RTLD_LOCAL);
   ASSERT_NE(held, nullptr);
   (void)test::passesUnlessTheHostStalls([&](std::uint64_t& stalls) {
     // The fake's clock stops calling only when asked to (it is not, here); a thread of this
@@ -468,7 +468,7 @@ TEST(DeviceFault, InAStudyMarksTheTrialFailedAndKeepsEveryCompletedTrial) {
       "device": "{}", "modes": ["basic"],
       "protocol": {{"training_trials": 2, "recall_trials": 2, "rest_s": 0, "tail_s": 0.05, "disturbed_trials": "flag"}},
       "world": {{"relief": {{"kind": "flat"}}}}, "subjects": {{"count": 1, "participant": "script"}}}})",
-                                uriOf(HATTR_FAKE_VENDOR_PLUGIN, "clock=device&error_after_total=1450")));
+                                uriOf(test::builtFile("HATTR_FAKE_VENDOR_PLUGIN"), "clock=device&error_after_total=1450")));
     auto db = session::StudyDatabase::create(dir / "study.sqlite", session::loadStudy(dir / "study.json"));
     db = session::StudyDatabase::open(dir / "study.sqlite", session::OpenMode::kRunner);
     session::StudyRunner runner(db, &session::makeScriptParticipant);

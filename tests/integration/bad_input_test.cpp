@@ -57,9 +57,9 @@ const fs::path& goodDatabase() {
   static const fs::path db = [] {
     test::writeText(dir / "expert.csv", goodProfile());
     test::writeText(dir / "study.json", study());
-    const auto init = test::runCommand(dir, HATTR_CLI_PATH, "study init " + (dir / "study.json").string() + " --db " +
+    const auto init = test::runCommand(dir, test::builtFile("HATTR_CLI"), "study init " + (dir / "study.json").string() + " --db " +
                                                                 (dir / "good.sqlite").string());
-    const auto run = test::runCommand(dir, HATTR_CLI_PATH, "study run --quiet --db " + (dir / "good.sqlite").string());
+    const auto run = test::runCommand(dir, test::builtFile("HATTR_CLI"), "study run --quiet --db " + (dir / "good.sqlite").string());
     if (init.exit_code != 0 || run.exit_code != 0) throw std::runtime_error("corpus database: " + init.err + run.err);
     return dir / "good.sqlite";
   }();
@@ -323,7 +323,7 @@ TEST_P(BadInputCorpus, ExitsTwoNamingTheFileAndLeavesNothingBehind) {
   const std::string args = c.prepare(dir.path());
   std::set<std::string> before = filesUnder(dir.path());
   before.insert({"run.out", "run.err"});
-  const test::RunResult r = test::runCommand(dir, HATTR_CLI_PATH, args);
+  const test::RunResult r = test::runCommand(dir, test::builtFile("HATTR_CLI"), args);
   EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.err;
   EXPECT_THAT(r.err, HasSubstr(c.expect)) << args;
   if (!c.names.empty()) {
@@ -349,7 +349,7 @@ TEST(BadInputCorpus, HoldsAtLeastSixtyCasesOfEveryKind) {
 TEST(BadInputCorpus, AProfileWithAByteOrderMarkReads) {
   test::TempDir dir;
   test::writeText(dir / "p.csv", "\xEF\xBB\xBF" + goodProfile());
-  const test::RunResult r = test::runCommand(dir, HATTR_CLI_PATH, "profile info " + q(dir / "p.csv"));
+  const test::RunResult r = test::runCommand(dir, test::builtFile("HATTR_CLI"), "profile info " + q(dir / "p.csv"));
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
@@ -361,17 +361,17 @@ TEST(Outputs, AReportIsNeverOverwrittenWithoutForceAndEveryOutputIsCheckedFirst)
   test::TempDir dir;
   fs::copy_file(goodDatabase(), dir / "s.sqlite");
   const std::string report = "study report --db " + q(dir / "s.sqlite") + " --out " + q(dir / "report");
-  ASSERT_EQ(test::runCommand(dir, HATTR_CLI_PATH, report).exit_code, 0);
+  ASSERT_EQ(test::runCommand(dir, test::builtFile("HATTR_CLI"), report).exit_code, 0);
   test::writeText(dir / "report" / "report.md", "my notes");
-  const test::RunResult again = test::runCommand(dir, HATTR_CLI_PATH, report);
+  const test::RunResult again = test::runCommand(dir, test::builtFile("HATTR_CLI"), report);
   EXPECT_EQ(again.exit_code, 2);
   EXPECT_THAT(again.err, HasSubstr("already exists; add --force to replace it (nothing was written)"));
   EXPECT_EQ(test::readText(dir / "report" / "report.md"), "my notes");
-  EXPECT_EQ(test::runCommand(dir, HATTR_CLI_PATH, report + " --force").exit_code, 0);
+  EXPECT_EQ(test::runCommand(dir, test::builtFile("HATTR_CLI"), report + " --force").exit_code, 0);
   EXPECT_NE(test::readText(dir / "report" / "report.md"), "my notes");
   // An --out that is a file: refused before the analysis is stored or anything written.
   test::writeText(dir / "taken", "a file");
-  const test::RunResult file = test::runCommand(dir, HATTR_CLI_PATH, "study analyze --db " + q(dir / "s.sqlite") + " --out " + q(dir / "taken"));
+  const test::RunResult file = test::runCommand(dir, test::builtFile("HATTR_CLI"), "study analyze --db " + q(dir / "s.sqlite") + " --out " + q(dir / "taken"));
   EXPECT_EQ(file.exit_code, 2);
   EXPECT_THAT(file.err, HasSubstr(q(dir / "taken") + ": expected a folder"));
 }
@@ -381,7 +381,7 @@ TEST(Outputs, AReportIsNeverOverwrittenWithoutForceAndEveryOutputIsCheckedFirst)
 TEST(Outputs, TwoOutputsAreCheckedBeforeEitherIsWrittenAndATrialBeforeItRuns) {
   test::TempDir dir;
   test::writeText(dir / "script.csv", "mine");
-  const test::RunResult sim = test::runCommand(dir, HATTR_CLI_PATH, "sim expert -o " + q(dir / "expert.csv") + " --script-out " + q(dir / "script.csv"));
+  const test::RunResult sim = test::runCommand(dir, test::builtFile("HATTR_CLI"), "sim expert -o " + q(dir / "expert.csv") + " --script-out " + q(dir / "script.csv"));
   EXPECT_EQ(sim.exit_code, 2);
   EXPECT_THAT(sim.err, HasSubstr(q(dir / "script.csv") + ": already exists; add --force"));
   EXPECT_FALSE(fs::exists(dir / "expert.csv"));
@@ -389,11 +389,11 @@ TEST(Outputs, TwoOutputsAreCheckedBeforeEitherIsWrittenAndATrialBeforeItRuns) {
 
   test::writeText(dir / "hand.csv", goodProfile());
   test::writeText(dir / "out.csv", "an earlier recording");
-  const test::RunResult record = test::runCommand(dir, HATTR_CLI_PATH, "record --clock sim --hand " + q(dir / "hand.csv") + " -o " + q(dir / "out.csv"));
+  const test::RunResult record = test::runCommand(dir, test::builtFile("HATTR_CLI"), "record --clock sim --hand " + q(dir / "hand.csv") + " -o " + q(dir / "out.csv"));
   EXPECT_EQ(record.exit_code, 2);
   EXPECT_THAT(record.err, HasSubstr("add --force"));
   EXPECT_EQ(test::readText(dir / "out.csv"), "an earlier recording");
-  const test::RunResult nowhere = test::runCommand(dir, HATTR_CLI_PATH, "record --clock sim --hand " + q(dir / "hand.csv") + " -o " + q(dir / "no" / "out.csv"));
+  const test::RunResult nowhere = test::runCommand(dir, test::builtFile("HATTR_CLI"), "record --clock sim --hand " + q(dir / "hand.csv") + " -o " + q(dir / "no" / "out.csv"));
   EXPECT_EQ(nowhere.exit_code, 2);
   EXPECT_THAT(nowhere.err, HasSubstr(q(dir / "no") + ": no such folder"));
 }
@@ -414,7 +414,7 @@ TEST(StudyStatus, ARunningTrialOfALiveRunnerIsNotCountedInterrupted) {
     const int fd = ::open((dir / "s.sqlite").c_str(), O_RDONLY | O_CLOEXEC);
     ASSERT_GE(fd, 0);
     ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
-    const test::RunResult during = test::runCommand(dir, HATTR_CLI_PATH, status);
+    const test::RunResult during = test::runCommand(dir, test::builtFile("HATTR_CLI"), status);
     ::close(fd);
     ASSERT_EQ(during.exit_code, 0) << during.err;
     EXPECT_THAT(during.out, HasSubstr("\"trials_running\": 1"));
@@ -422,7 +422,7 @@ TEST(StudyStatus, ARunningTrialOfALiveRunnerIsNotCountedInterrupted) {
     EXPECT_THAT(during.out, HasSubstr("\"runner_active\": true"));
   }
   // Nobody holds it: that trial's runner died.
-  const test::RunResult after = test::runCommand(dir, HATTR_CLI_PATH, status);
+  const test::RunResult after = test::runCommand(dir, test::builtFile("HATTR_CLI"), status);
   EXPECT_THAT(after.out, HasSubstr("\"trials_running\": 0"));
   EXPECT_THAT(after.out, HasSubstr("\"trials_interrupted\": 1"));
 }
@@ -445,7 +445,7 @@ TEST(StudyStatus, AStudyInAReadOnlyFolderReads) {
     prefix = "runuser -u nobody -- ";
   }
   // A copy of the binary nobody can run (the build tree may sit in a folder only root enters).
-  fs::copy_file(HATTR_CLI_PATH, dir / "hattr");
+  fs::copy_file(test::builtFile("HATTR_CLI"), dir / "hattr");
   fs::permissions(dir / "hattr", fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
                                      fs::perms::others_read | fs::perms::others_exec);
   const test::RunResult r = test::runCommand(dir, prefix + q(dir / "hattr"), "study status --json --db " + q(dir / "shared" / "s.sqlite"));

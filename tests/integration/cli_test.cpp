@@ -29,7 +29,7 @@ struct RunResult {
 RunResult runHattr(const test::TempDir& dir, const std::string& args) {
   const auto out = dir / "stdout.txt";
   const auto err = dir / "stderr.txt";
-  const std::string command = std::string(HATTR_CLI_PATH) + " " + args + " >" + out.string() + " 2>" + err.string();
+  const std::string command = std::string(test::builtFile("HATTR_CLI")) + " " + args + " >" + out.string() + " 2>" + err.string();
   const int status = std::system(command.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, test::readText(out), test::readText(err)};
 }

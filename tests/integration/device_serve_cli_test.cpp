@@ -26,7 +26,7 @@ using ::testing::HasSubstr;
 using test::RunResult;
 
 RunResult runHattr(const test::TempDir& dir, const std::string& args, const std::string& tag = "run") {
-  return test::runCommand(dir, HATTR_CLI_PATH, args, tag);
+  return test::runCommand(dir, test::builtFile("HATTR_CLI"), args, tag);
 }
 
 /// `hattr device serve` in the background, its stdout on a pipe.
@@ -48,7 +48,7 @@ class ServeProcess : public test::BackgroundProcess {
 
  private:
   static std::vector<std::string> arguments(const std::string& key, const std::vector<std::string>& extra) {
-    std::vector<std::string> args = {HATTR_CLI_PATH, "device", "serve", "--device", "sim://pen",
+    std::vector<std::string> args = {test::builtFile("HATTR_CLI"), "device", "serve", "--device", "sim://pen",
                                      "--listen", "127.0.0.1:0", "--key", key, "--json", "--realtime", "skip"};
     args.insert(args.end(), extra.begin(), extra.end());
     return args;

@@ -26,7 +26,7 @@ struct RunResult {
 /// Runs hattr with `args` (shell-quoted by the caller), stdin from `input`.
 RunResult run(const test::TempDir& dir, const std::string& args, const std::string& input = "") {
   test::writeText(dir / "stdin.txt", input);
-  const std::string command = std::string(HATTR_CLI_PATH) + " " + args + " <" + (dir / "stdin.txt").string() + " >" +
+  const std::string command = std::string(test::builtFile("HATTR_CLI")) + " " + args + " <" + (dir / "stdin.txt").string() + " >" +
                               (dir / "out.txt").string() + " 2>" + (dir / "err.txt").string();
   const int status = std::system(command.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, test::readText(dir / "out.txt"), test::readText(dir / "err.txt")};
@@ -69,7 +69,7 @@ TEST(DevicesCli, CheckOnTheSimulatedPenReportsLimitsJitterAndTheGentleForce) {
 TEST(DevicesCli, CheckRunsADeviceClockedPluginOnItsOwnClock) {
   test::TempDir dir;
   (void)test::passesUnlessTheHostStalls([&](std::uint64_t& stalls) {
-    const RunResult r = run(dir, "devices check " + quoted(std::string("plugin:") + HATTR_SIM_PLUGIN + "?clock=device") +
+    const RunResult r = run(dir, "devices check " + quoted(std::string("plugin:") + test::builtFile("HATTR_SIM_PLUGIN") + "?clock=device") +
                                      " --no-confirm --seconds 0.3 --json");
     const auto json = nlohmann::json::parse(r.out);
     stalls = json["stalls"].get<std::uint64_t>();
@@ -101,9 +101,9 @@ TEST(DevicesCli, EveryPluginLoadingFailureExitsTwoWithItsMessage) {
   const std::pair<std::string, std::string> cases[] = {
       {"plugin:/no/such/libx.so", "file not found"},
       {"plugin:" + (dir / "libtext.so").string(), "not a loadable shared object"},
-      {std::string("plugin:") + HATTR_NO_ENTRY_PLUGIN, "no entry symbol \"hattr_plugin_entry\""},
-      {std::string("plugin:") + HATTR_ABI_MISMATCH_PLUGIN, "the plugin speaks version 99, this hattr speaks version 1"},
-      {std::string("plugin:") + HATTR_FAKE_VENDOR_PLUGIN + "?fail_open=unplugged",
+      {std::string("plugin:") + test::builtFile("HATTR_NO_ENTRY_PLUGIN"), "no entry symbol \"hattr_plugin_entry\""},
+      {std::string("plugin:") + test::builtFile("HATTR_ABI_MISMATCH_PLUGIN"), "the plugin speaks version 99, this hattr speaks version 1"},
+      {std::string("plugin:") + test::builtFile("HATTR_FAKE_VENDOR_PLUGIN") + "?fail_open=unplugged",
        "the plugin could not open the device: fake SDK: unplugged"},
       {"plugin:nosuchname", "no libhattr_nosuchname_plugin.so in the plugin search path"},
   };
@@ -139,7 +139,7 @@ TEST(DevicesCli, TrainOnTheSimPluginWritesTheSameSamplesAsOnSimPen) {
 TEST(DevicesCli, ADeviceFaultMidTrialExitsOneAndKeepsWhatWasRecorded) {
   test::TempDir dir;
   test::writeText(dir / "hand.csv", "t_s,x_m,y_m,z_m,fx_N,fy_N,fz_N,pen_down_bool\n0,0,0,0,0,0,-1,1\n2,0.01,0,0,0,0,-1,1\n");
-  const std::string uri = std::string("plugin:") + HATTR_FAKE_VENDOR_PLUGIN + "?clock=device&error_after=600";
+  const std::string uri = std::string("plugin:") + test::builtFile("HATTR_FAKE_VENDOR_PLUGIN") + "?clock=device&error_after=600";
   const RunResult r = run(dir, "record --device " + quoted(uri) + " --hand " + (dir / "hand.csv").string() + " -o " +
                                    (dir / "partial.csv").string());
   EXPECT_EQ(r.exit_code, 1);

@@ -18,14 +18,15 @@ namespace {
 using ::testing::HasSubstr;
 using test::RunResult;
 
-const std::string kHattr = HATTR_CLI_PATH;
+// The CLI, looked up when a test runs (not at start-up: listing the tests needs no build list).
+std::string hattrCli() { return test::builtFile("HATTR_CLI"); }
 
 TEST(HypothesesCli, TabulatesThePapersPointsUnderEachHypothesisWithAnAaCheckEach) {
   HATTR_SKIP_UNDER_THREAD_SANITIZER("one thread (--threads 1) simulating and scoring 5 studies; subjects at once run "
                                     "under it in InSilicoStudy.SubjectsRunAtOnceGiveTheSameTrialsToTheBitAsOneAtATime");
   test::TempDir dir;
   const RunResult r = test::runCommand(
-      dir, kHattr,
+      dir, hattrCli(),
       "sim compare-hypotheses --subjects 3 --trials 2 --aa-seeds 2 --threads 1 --json --out " + (dir / "out").string(),
       "compare");
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -67,7 +68,7 @@ TEST(HypothesesCli, PrintsATable) {
   HATTR_SKIP_UNDER_THREAD_SANITIZER("one thread (--threads 1) simulating and scoring a study");
   test::TempDir dir;
   const RunResult table = test::runCommand(
-      dir, kHattr,
+      dir, hattrCli(),
       "sim compare-hypotheses --hypotheses force-plan --subjects 3 --trials 2 --aa-seeds 0 --threads 1 --out " +
           (dir / "out").string(),
       "table");
@@ -80,12 +81,12 @@ TEST(HypothesesCli, PrintsATable) {
 TEST(HypothesesCli, RefusesAnUnknownHypothesisAndOneGivenTwice) {
   test::TempDir dir;
   const RunResult bad =
-      test::runCommand(dir, kHattr, "sim compare-hypotheses --hypotheses position-plan,telepathy", "bad");
+      test::runCommand(dir, hattrCli(), "sim compare-hypotheses --hypotheses position-plan,telepathy", "bad");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_THAT(bad.err, HasSubstr("--hypotheses: expected one of position-plan, force-plan, guidance-dependent, got "
                                  "\"telepathy\""));
   const RunResult twice =
-      test::runCommand(dir, kHattr, "sim compare-hypotheses --hypotheses force-plan,force-plan", "twice");
+      test::runCommand(dir, hattrCli(), "sim compare-hypotheses --hypotheses force-plan,force-plan", "twice");
   EXPECT_EQ(twice.exit_code, 2);
   EXPECT_THAT(twice.err, HasSubstr("--hypotheses: \"force-plan\" is given twice"));
 }

@@ -24,7 +24,7 @@ using ::testing::HasSubstr;
 using test::RunResult;
 
 RunResult runHattr(const test::TempDir& dir, const std::string& args, const std::string& tag = "run") {
-  return test::runCommand(dir, HATTR_CLI_PATH, args, tag);
+  return test::runCommand(dir, test::builtFile("HATTR_CLI"), args, tag);
 }
 
 /// The expert's writing (a figure of eight in 2.4 s, then the pen lifted) and the trainee's
@@ -44,7 +44,7 @@ std::string makeKey(const test::TempDir& dir) {
 
 /// `hattr mentor lead` on an ephemeral loopback port, its simulated expert writing expert.csv.
 test::BackgroundProcess startLead(const test::TempDir& dir, const std::string& key, std::vector<std::string> extra) {
-  std::vector<std::string> args = {HATTR_CLI_PATH, "mentor", "lead", "--listen", "127.0.0.1:0", "--key", key,
+  std::vector<std::string> args = {test::builtFile("HATTR_CLI"), "mentor", "lead", "--listen", "127.0.0.1:0", "--key", key,
                                    "--hand", (dir / "expert.csv").string(), "--json"};
   args.insert(args.end(), extra.begin(), extra.end());
   return test::BackgroundProcess(args, dir / "lead.err");

@@ -30,7 +30,7 @@ struct RunResult {
 RunResult runPiped(const test::TempDir& dir, const std::string& args) {
   const auto out = dir / "stdout.txt";
   const auto err = dir / "stderr.txt";
-  const std::string command = std::string(HATTR_CLI_PATH) + " " + args + " >" + out.string() + " 2>" + err.string();
+  const std::string command = std::string(test::builtFile("HATTR_CLI")) + " " + args + " >" + out.string() + " 2>" + err.string();
   const int status = std::system(command.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, test::readText(out), test::readText(err)};
 }
@@ -38,7 +38,7 @@ RunResult runPiped(const test::TempDir& dir, const std::string& args) {
 /// hattr on a pseudo-terminal (stdout and stderr both): what a person at a terminal sees.
 RunResult runOnTerminal(const test::TempDir& dir, const std::string& args) {
   const auto seen = dir / "terminal.txt";
-  const std::string command = "TERM=xterm script -qec \"" + std::string(HATTR_CLI_PATH) + " " + args + "\" /dev/null >" +
+  const std::string command = "TERM=xterm script -qec \"" + std::string(test::builtFile("HATTR_CLI")) + " " + args + "\" /dev/null >" +
                               seen.string() + " 2>&1 </dev/null";
   const int status = std::system(command.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, test::readText(seen), ""};

@@ -18,7 +18,8 @@ namespace {
 using ::testing::HasSubstr;
 using test::RunResult;
 
-const std::string kHattr = HATTR_CLI_PATH;
+// The CLI, looked up when a test runs (not at start-up: listing the tests needs no build list).
+std::string hattrCli() { return test::builtFile("HATTR_CLI"); }
 
 /// Sanitized builds run the power analysis on one process and in shards, but not under mpirun:
 /// Open MPI's library is not instrumented, and its own threads and memory hooks are outside
@@ -67,21 +68,21 @@ TEST(PowerCli, OneProcessTwoMpiRanksAndTwoShardsGiveTheSameTableToTheBit) {
   ASSERT_FALSE(launcher.empty()) << "mpirun not found: install Open MPI (apt-get install openmpi-bin libopenmpi-dev, "
                                     "as scripts/install-deps does)";
   test::TempDir dir;
-  const RunResult one = test::runCommand(dir, kHattr, kPower + " --json --out " + (dir / "whole.json").string(), "one");
+  const RunResult one = test::runCommand(dir, hattrCli(), kPower + " --json --out " + (dir / "whole.json").string(), "one");
   ASSERT_EQ(one.exit_code, 0) << one.err;
   const nlohmann::json table = tableOf(one);
   ASSERT_EQ(table["rows"].size(), 2 * kDesigns);  // designs × 2 metrics
   EXPECT_EQ(nlohmann::json::parse(one.out)["run"]["processes"], 1);
 
   // Subjects simulated two at once: the same table.
-  const RunResult threads = test::runCommand(dir, kHattr, kPowerDesign + " --threads 2 --json", "threads");
+  const RunResult threads = test::runCommand(dir, hattrCli(), kPowerDesign + " --threads 2 --json", "threads");
   ASSERT_EQ(threads.exit_code, 0) << threads.err;
   EXPECT_EQ(tableOf(threads), table);
 
   // Two ranks of a real mpirun: replicates split between them, gathered to rank 0.
   if (kRunMpirun) {
     const RunResult ranks =
-        test::runCommand(dir, kMpiEnvironment + launcher, "-n 2 " + kHattr + " " + kPower + " --json", "mpi");
+        test::runCommand(dir, kMpiEnvironment + launcher, "-n 2 " + hattrCli() + " " + kPower + " --json", "mpi");
     ASSERT_EQ(ranks.exit_code, 0) << ranks.err << ranks.out;
     EXPECT_EQ(tableOf(ranks), table);
     EXPECT_EQ(nlohmann::json::parse(ranks.out)["run"]["processes"], 2);
@@ -90,30 +91,30 @@ TEST(PowerCli, OneProcessTwoMpiRanksAndTwoShardsGiveTheSameTableToTheBit) {
   // Two shards, then merged; and the whole run's own outcome file merges to the same.
   for (int shard : {0, 1}) {
     const RunResult s = test::runCommand(
-        dir, kHattr, fmt::format("{} --shard {}/2 --out {}", kPower, shard, (dir / fmt::format("s{}.json", shard)).string()),
+        dir, hattrCli(), fmt::format("{} --shard {}/2 --out {}", kPower, shard, (dir / fmt::format("s{}.json", shard)).string()),
         fmt::format("shard{}", shard));
     ASSERT_EQ(s.exit_code, 0) << s.err;
     EXPECT_THAT(s.out, HasSubstr(fmt::format("shard {}/2: {} studies", shard, kReplicates / 2)));
   }
   const RunResult merged = test::runCommand(
-      dir, kHattr, "sim power merge --json " + (dir / "s0.json").string() + " " + (dir / "s1.json").string(), "merge");
+      dir, hattrCli(), "sim power merge --json " + (dir / "s0.json").string() + " " + (dir / "s1.json").string(), "merge");
   ASSERT_EQ(merged.exit_code, 0) << merged.err;
   EXPECT_EQ(tableOf(merged), table);
-  const RunResult whole = test::runCommand(dir, kHattr, "sim power merge --json " + (dir / "whole.json").string() +
+  const RunResult whole = test::runCommand(dir, hattrCli(), "sim power merge --json " + (dir / "whole.json").string() +
                                                             " --html " + (dir / "power.html").string(), "whole");
   ASSERT_EQ(whole.exit_code, 0) << whole.err;
   EXPECT_EQ(tableOf(whole), table);
   EXPECT_THAT(test::readText(dir / "power.html"), HasSubstr("<svg"));
 
   // A shard missing, or written twice, is refused; nothing is overwritten without --force.
-  const RunResult half = test::runCommand(dir, kHattr, "sim power merge " + (dir / "s0.json").string(), "half");
+  const RunResult half = test::runCommand(dir, hattrCli(), "sim power merge " + (dir / "s0.json").string(), "half");
   EXPECT_EQ(half.exit_code, 2);
   std::vector<int> odd;  // shard 1's replicates
   for (int r = 1; r < kReplicates; r += 2) odd.push_back(r);
   EXPECT_THAT(half.err, HasSubstr(fmt::format("power merge: {} of {} replicates are in the files; missing: {}",
                                               kReplicates / 2, kReplicates, fmt::join(odd, ", "))));
   const RunResult again =
-      test::runCommand(dir, kHattr, kPower + " --shard 0/2 --out " + (dir / "s0.json").string(), "again");
+      test::runCommand(dir, hattrCli(), kPower + " --shard 0/2 --out " + (dir / "s0.json").string(), "again");
   EXPECT_EQ(again.exit_code, 2);
   EXPECT_THAT(again.err, HasSubstr("s0.json"));
 }
@@ -121,7 +122,7 @@ TEST(PowerCli, OneProcessTwoMpiRanksAndTwoShardsGiveTheSameTableToTheBit) {
 TEST(PowerCli, BadArgumentsAreRefusedWithExitTwoAndTheReason) {
   test::TempDir dir;
   const auto refused = [&](const std::string& args, const std::string& reason) {
-    const RunResult r = test::runCommand(dir, kHattr, args, "bad");
+    const RunResult r = test::runCommand(dir, hattrCli(), args, "bad");
     EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.err;
     EXPECT_THAT(r.err, HasSubstr(reason)) << args;
   };
@@ -137,7 +138,7 @@ TEST(PowerCli, BadArgumentsAreRefusedWithExitTwoAndTheReason) {
   const std::string launcher = mpirun();
   ASSERT_FALSE(launcher.empty()) << "mpirun not found: install openmpi-bin (scripts/install-deps)";
   const RunResult both = test::runCommand(dir, kMpiEnvironment + launcher,
-                                          "-n 2 " + kHattr + " sim power --shard 0/2 --out x.json", "mpi-bad");
+                                          "-n 2 " + hattrCli() + " sim power --shard 0/2 --out x.json", "mpi-bad");
   EXPECT_EQ(both.exit_code, 2) << both.err;
   EXPECT_THAT(both.err, HasSubstr("give --shard or mpirun -n, not both"));
 }

@@ -19,7 +19,7 @@ namespace {
 
 /// Starts `hattr study run --db FILE --quiet`; returns the child's pid.
 pid_t startRunner(const std::filesystem::path& db) {
-  return test::spawnProcess({HATTR_CLI_PATH, "study", "run", "--db", db.string(), "--quiet"});
+  return test::spawnProcess({test::builtFile("HATTR_CLI"), "study", "run", "--db", db.string(), "--quiet"});
 }
 
 void makeStudy(const test::TempDir& dir, const std::string& db) {

@@ -25,7 +25,7 @@ constexpr int kTrialsPerSubject = 12;  // 3 modes × (2 training + 2 recall)
 
 /// Starts `hattr study run --db ADDRESS --quiet --lease-timeout 5`, its stderr in `err`.
 pid_t startStation(const std::string& address, const std::filesystem::path& err) {
-  return test::spawnProcess({HATTR_CLI_PATH, "study", "run", "--db", address, "--quiet", "--lease-timeout", "5"}, err);
+  return test::spawnProcess({test::builtFile("HATTR_CLI"), "study", "run", "--db", address, "--quiet", "--lease-timeout", "5"}, err);
 }
 
 void writeStudy(const test::TempDir& dir) {
@@ -56,7 +56,7 @@ int completedTrials(const session::StudyDatabase& db) {
 TEST(StudyStations, ThreeStationsOneKilledTwiceRunTheStudyAsOneStationOnSqlite) {
   test::TempDir dir;
   writeStudy(dir);
-  const std::string cli = HATTR_CLI_PATH;
+  const std::string cli = test::builtFile("HATTR_CLI");
   const std::string address = test::PostgresCluster::shared().createDatabase("stations");
   ASSERT_EQ(test::runCommand(dir, cli, "study init " + (dir / "study.json").string() + " --db '" + address + "'", "init")
                 .exit_code,

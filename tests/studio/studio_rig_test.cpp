@@ -3,6 +3,7 @@
 #include <QtTest>
 #include <sqlite3.h>
 #include <chrono>
+#include <cstdlib>
 #include <fstream>
 #include <thread>
 
@@ -186,7 +187,10 @@ class StudioRigTest : public QObject {
   // A device fault ends a studio trial as it ends runTrial's: at the fault, with the device's
   // reason, marked failed, what came before kept and nothing after it.
   void liveRigEndsATrialAtADeviceFaultAsRunTrialDoes() {
-    session::TrialEnvironment env(std::string("plugin:") + HATTR_FAKE_VENDOR_PLUGIN + "?clock=device&error_after=500",
+    // The fake vendor's plugin, named by ctest (tests/studio/CMakeLists.txt).
+    const char* plugin = std::getenv("HATTR_FAKE_VENDOR_PLUGIN");
+    QVERIFY2(plugin != nullptr, "HATTR_FAKE_VENDOR_PLUGIN is not set: run this test through ctest");
+    session::TrialEnvironment env(std::string("plugin:") + plugin + "?clock=device&error_after=500",
                                   render::WorldConfig{}, 1000.0);
     MouseHand hand;
     hand.setInput({.x_m = 0.0, .y_m = 0.0, .pen_down = false, .press_N = 1.2});

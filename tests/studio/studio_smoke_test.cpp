@@ -29,9 +29,8 @@
 using namespace hattr;
 using namespace hattr::studio;
 
-#ifndef HATTR_STUDIO_SCREENSHOT_DIR
+// Screenshots are kept in the working folder: ctest runs the test in its build folder.
 #define HATTR_STUDIO_SCREENSHOT_DIR "."
-#endif
 
 using test::sendMouse;
 using test::shareDrawn;

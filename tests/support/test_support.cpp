@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -34,6 +35,43 @@ std::optional<std::filesystem::path> svc2004Folder() {
   const auto folder = root / ".." / "shared" / "data" / "svc2004-task2";
   if (!std::filesystem::is_directory(folder)) return std::nullopt;
   return folder;
+}
+
+namespace {
+
+// The build's list of built files: one NAME=path a line.
+std::map<std::string, std::string> readBuiltFiles() {
+  const char* list = std::getenv("HATTR_BUILT_FILES");
+  if (list == nullptr) {
+    std::fputs("HATTR_BUILT_FILES is not set: run this test through ctest, which points it at the build's "
+               "list of built files (tests/CMakeLists.txt)\n", stderr);
+    std::exit(2);
+  }
+  std::ifstream in(list);
+  if (!in) {
+    std::fprintf(stderr, "HATTR_BUILT_FILES names %s, which cannot be read: build the tests again\n", list);
+    std::exit(2);
+  }
+  std::map<std::string, std::string> files;
+  std::string line;
+  while (std::getline(in, line)) {
+    const auto equals = line.find('=');
+    if (equals != std::string::npos) files[line.substr(0, equals)] = line.substr(equals + 1);
+  }
+  return files;
+}
+
+}  // namespace
+
+const char* builtFile(const std::string& name) {
+  static const std::map<std::string, std::string> files = readBuiltFiles();
+  const auto found = files.find(name);
+  if (found == files.end()) {
+    std::fprintf(stderr, "%s is not in the build's list of built files (%s): expected one of the names "
+                 "tests/CMakeLists.txt writes\n", name.c_str(), std::getenv("HATTR_BUILT_FILES"));
+    std::exit(2);
+  }
+  return found->second.c_str();
 }
 
 void writeText(const std::filesystem::path& file, const std::string& text) {

@@ -30,6 +30,13 @@ class TempDir {
 /// nullopt when it is absent (tests then skip with a message).
 std::optional<std::filesystem::path> svc2004Folder();
 
+/// A file the build made (the hattr CLI, a plugin) by its name in the list the build writes
+/// beside the tests (tests/CMakeLists.txt: HATTR_CLI, HATTR_SIM_PLUGIN, ...; ctest passes the
+/// list's path in HATTR_BUILT_FILES). Read at run time rather than compiled in, so a clone in
+/// another folder compiles the same objects and the compiler cache reuses them. A missing list
+/// or name ends the program with exit code 2 and what is missing.
+const char* builtFile(const std::string& name);
+
 /// Writes `text` to `file`.
 void writeText(const std::filesystem::path& file, const std::string& text);
 std::string readText(const std::filesystem::path& file);
