@@ -26,6 +26,7 @@ struct TrialOptions {
   double max_duration_s = 0.0;
   bool force = false;
   bool json = false;
+  bool keep_disturbed = false;
   // train only
   std::string mode = "basic";
   std::string reference;
@@ -61,7 +62,23 @@ void addCommonOptions(CLI::App& cmd, TrialOptions& opt) {
       ->check(CLI::Range(0.0, 3600.0))
       ->capture_default_str();
   cmd.add_flag("--force", opt.force, "Replace the output file if it exists");
-  cmd.add_flag("--json", opt.json, "Print a JSON summary: the profile summary plus clamps, missed_samples, overruns, faults");
+  cmd.add_flag("--json", opt.json,
+               "Print a JSON summary: the profile summary plus clamps, the loop's counters, the physical events and "
+               "the disturbance");
+  cmd.add_flag("--keep-disturbed", opt.keep_disturbed,
+               "Exit 0 for a disturbed trial too (stalls, missed samples, faults, lost links, the pen through the "
+               "paper, the device at its force limit, the pen outside the workspace); it is written, marked, either "
+               "way");
+}
+
+// The physical events for --json: each kind with its count, first time [s] and worst value.
+nlohmann::json physicalEventsJson(const session::PhysicalEvents& events) {
+  const auto one = [](const session::PhysicalEvent& e, const char* worst_name) {
+    return nlohmann::json{{"count", e.count}, {"first_s", e.first_s}, {worst_name, e.worst}};
+  };
+  return {{"penetration", one(events.penetration, "deepest_m")},
+          {"force_saturation", one(events.saturation, "longest_s")},
+          {"workspace", one(events.workspace, "farthest_m")}};
 }
 
 void runTrialCommand(const TrialOptions& opt, bool training) {
@@ -99,6 +116,7 @@ void runTrialCommand(const TrialOptions& opt, bool training) {
                             result.profile.duration_s(), result.failure, opt.output));
   }
   writeRecording(result.profile, opt.output, opt.force);
+  const std::string disturbed = session::disturbanceOf(result);
 
   if (opt.json) {
     nlohmann::json json = profileSummaryJson(result.profile);
@@ -111,14 +129,23 @@ void runTrialCommand(const TrialOptions& opt, bool training) {
     json["stalls"] = result.stalls;
     json["clock"] = result.clock;
     json["end_reason"] = result.end_reason;
+    json["physical_events"] = physicalEventsJson(result.physics);
+    json["disturbed"] = disturbed;
     printJson(json);
-    return;
+  } else {
+    std::cout << fmt::format("{} {} -> {}: {} samples, {:.3f} s, {} missed, {} overruns, {} stalls, {} faults, {} clock\n",
+                             training ? "trained" : "recorded",
+                             training ? std::string(guidance::modeName(setup.guidance.mode)) : std::string("expert"),
+                             opt.output, result.profile.size(), result.profile.duration_s(), result.missed_samples,
+                             result.overruns, result.stalls, result.faults, result.clock);
   }
-  std::cout << fmt::format("{} {} -> {}: {} samples, {:.3f} s, {} missed, {} overruns, {} faults, {} clock\n",
-                           training ? "trained" : "recorded",
-                           training ? std::string(guidance::modeName(setup.guidance.mode)) : std::string("expert"),
-                           opt.output, result.profile.size(), result.profile.duration_s(), result.missed_samples,
-                           result.overruns, result.faults, result.clock);
+  // A disturbed trial is written, marked in its metadata (`disturbed`), and fails the command
+  // unless it was asked to keep it.
+  if (!disturbed.empty() && !opt.keep_disturbed) {
+    throw Error(fmt::format("the trial was disturbed: {}; it is kept in {}, marked `disturbed` in its metadata "
+                            "(--keep-disturbed exits 0 for it)",
+                            disturbed, opt.output));
+  }
 }
 
 }  // namespace

@@ -41,12 +41,13 @@ render::WorldConfig worldOf(const WorldSource& world) {
 }
 
 py::dict trialRecord(session::TrialResult result) {
+  const std::string disturbed = session::disturbanceOf(result);
   return py::dict(py::arg("profile") = std::move(result.profile), py::arg("clamps") = result.clamps,
                   py::arg("ticks") = result.ticks, py::arg("missed_samples") = result.missed_samples,
                   py::arg("overruns") = result.overruns, py::arg("faults") = result.faults,
                   py::arg("link_faults") = result.link_faults, py::arg("stalls") = result.stalls,
                   py::arg("clock") = result.clock, py::arg("end_reason") = result.end_reason,
-                  py::arg("failure") = result.failure);
+                  py::arg("failure") = result.failure, py::arg("disturbed") = disturbed);
 }
 
 }  // namespace
@@ -90,7 +91,8 @@ void bindSimulation(py::module_& m) {
       "`reference` ('basic', 'pcontrol', 'alpha'). Simulated time unless clock='real'. The trial lasts the "
       "script plus tail_s [s], or with pen_up_end_s > 0 [s] ends once the pen has been up that long. world: "
       "None (defaults), a dict or a world file. Returns {profile, clamps, ticks, missed_samples, overruns, "
-      "faults, link_faults, stalls, clock, end_reason, failure}. Releases the GIL.");
+      "faults, link_faults, stalls, clock, end_reason, failure, disturbed}; disturbed says how the trial was "
+      "disturbed (stalls, missed samples, the pen through the paper, the device at its force limit, ...), \"\" when clean. Releases the GIL.");
 
   m.def(
       "simulate_study",

@@ -48,8 +48,18 @@ void SimulatedDevice::advanceTo(double t_s) noexcept {
     }
     const bool command_alive = t - last_write_s_ <= params_.command_timeout_s;
     const Vec3 device_force = command_alive ? command_W_ : Vec3(Vec3::Zero());
-    const Vec3 acceleration = (device_force + hand_force_W_ - params_.damping_N_s_per_m * v_WT_) / params_.mass_kg;
+    // The end stops: past a face of the workspace, a spring pushes back and a damper brakes the
+    // axis (implicitly: v / (1 + h·c/m)).
+    const Vec3 excess = (p_WT_ - params_.limits.workspace_max_m).cwiseMax(0.0) +
+                        (p_WT_ - params_.limits.workspace_min_m).cwiseMin(0.0);
+    const Vec3 stop_force = -params_.end_stop_stiffness_N_per_m * excess;
+    const Vec3 acceleration =
+        (device_force + hand_force_W_ + stop_force - params_.damping_N_s_per_m * v_WT_) / params_.mass_kg;
     v_WT_ += h * acceleration;
+    const double stop_brake = 1.0 / (1.0 + h * params_.end_stop_damping_N_s_per_m / params_.mass_kg);
+    for (int axis = 0; axis < 3; ++axis) {
+      if (excess[axis] != 0.0) v_WT_[axis] *= stop_brake;
+    }
     p_WT_ += h * v_WT_;
   }
   t_s_ = t_s;

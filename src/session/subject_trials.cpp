@@ -10,20 +10,6 @@
 
 namespace hattr::session {
 
-std::string noteLoopCounters(TrialResult& result) {
-  const std::string disturbed = disturbanceOf(result);
-  auto& extra = result.profile.metadata().extra;
-  extra["loop_ticks"] = fmt::format("{}", result.ticks);
-  extra["loop_overruns"] = fmt::format("{}", result.overruns);
-  extra["loop_stalls"] = fmt::format("{}", result.stalls);
-  extra["missed_samples"] = fmt::format("{}", result.missed_samples);
-  extra["safety_faults"] = fmt::format("{}", result.faults);
-  extra["device_link_faults"] = fmt::format("{}", result.link_faults);
-  if (result.mentor_link_faults > 0) extra["mentor_link_faults"] = fmt::format("{}", result.mentor_link_faults);
-  if (!disturbed.empty()) extra["disturbed"] = disturbed;
-  return disturbed;
-}
-
 std::uint64_t studyLiveSeed(const SubjectSpec& subject, const TrialPlan& plan, int attempt) {
   return subject.seed * 1'000'003ULL + static_cast<std::uint64_t>(plan.sequence) * 31ULL +
          static_cast<std::uint64_t>(attempt);
@@ -60,21 +46,6 @@ TrialSetup studyTrialSetup(const StudyDefinition& study, const TrialPlan& plan,
 
 bool repeatDisturbedTrial(const Protocol& protocol, const std::string& disturbed, int repeats_so_far) {
   return !disturbed.empty() && protocol.disturbed == DisturbedPolicy::kRepeat && repeats_so_far < protocol.max_repeats;
-}
-
-std::string disturbanceOf(const TrialResult& r) {
-  std::vector<std::string> parts;
-  const auto add = [&parts](std::uint64_t n, const char* one, const char* many) {
-    if (n > 0) parts.push_back(fmt::format("{} {}", n, n == 1 ? one : many));
-  };
-  add(r.stalls, "stall (force zeroed)", "stalls (force zeroed)");
-  add(r.missed_samples, "missed sample", "missed samples");
-  add(r.faults, "safety fault", "safety faults");
-  add(r.link_faults, "lost device link", "lost device links");
-  add(r.mentor_link_faults, "lost link to the mentor", "lost links to the mentor");
-  std::string text;
-  for (const auto& p : parts) text += (text.empty() ? "" : " · ") + p;
-  return text;
 }
 
 namespace {
@@ -160,6 +131,8 @@ SubjectTrials::Outcome SubjectTrials::end(StudyDatabase& db, TrialResult& result
   if (result.profile.empty()) throw Error("the trial recorded no samples; it stays to be run again");
   // Nothing in the profile may depend on when it ran, so a resumed study is bit-identical.
   result.profile.metadata().created_utc = "";
+  // Its counters and events in the recording (TrialRun::finish wrote them already; a result
+  // built elsewhere gets them here).
   const std::string disturbed = noteLoopCounters(result);
   // A disturbed trial is kept as an attempt and run again while the policy says so.
   if (repeatDisturbedTrial(study_.protocol, disturbed, attempt_)) {

@@ -132,6 +132,38 @@ guidance::WorldImpedance TrialEnvironment::impedance() const noexcept {
           .tangential_stiffness_N_per_m = world_.paper.tangential_stiffness_N_per_m};
 }
 
+std::string disturbanceOf(const TrialResult& r) {
+  std::vector<std::string> parts;
+  const auto add = [&parts](std::uint64_t n, const char* one, const char* many) {
+    if (n > 0) parts.push_back(fmt::format("{} {}", n, n == 1 ? one : many));
+  };
+  add(r.stalls, "stall (force zeroed)", "stalls (force zeroed)");
+  add(r.missed_samples, "missed sample", "missed samples");
+  add(r.faults, "safety fault", "safety faults");
+  add(r.link_faults, "lost device link", "lost device links");
+  add(r.mentor_link_faults, "lost link to the mentor", "lost links to the mentor");
+  const std::string physical = describePhysicalEvents(r.physics);
+  if (!physical.empty()) parts.push_back(physical);
+  std::string text;
+  for (const auto& p : parts) text += (text.empty() ? "" : " · ") + p;
+  return text;
+}
+
+std::string noteLoopCounters(TrialResult& result) {
+  notePhysicalEvents(result.physics, result.profile.metadata());
+  const std::string disturbed = disturbanceOf(result);
+  auto& extra = result.profile.metadata().extra;
+  extra["loop_ticks"] = fmt::format("{}", result.ticks);
+  extra["loop_overruns"] = fmt::format("{}", result.overruns);
+  extra["loop_stalls"] = fmt::format("{}", result.stalls);
+  extra["missed_samples"] = fmt::format("{}", result.missed_samples);
+  extra["safety_faults"] = fmt::format("{}", result.faults);
+  extra["device_link_faults"] = fmt::format("{}", result.link_faults);
+  if (result.mentor_link_faults > 0) extra["mentor_link_faults"] = fmt::format("{}", result.mentor_link_faults);
+  if (!disturbed.empty()) extra["disturbed"] = disturbed;
+  return disturbed;
+}
+
 void noteTrialEnd(TrialResult& result, Recorder& recorder, bool stopped) {
   result.end_reason = std::string(!result.failure.empty() ? kEndFailed
                                   : recorder.writingOver() ? kEndPenLifted

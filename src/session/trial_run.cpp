@@ -28,7 +28,8 @@ void checkSetup(const TrialSetup& setup) {
 }  // namespace
 
 TrialRun::TrialRun(TrialEnvironment& environment, const TrialSetup& setup, device::HandScript& hand,
-                   bool follow_during_settle) {
+                   bool follow_during_settle)
+    : environment_(&environment), bounds_(setup.bounds) {
   checkSetup(setup);
   // Guidance, with its gains clamped to what the device renders passively with the paper; a
   // mentored mode's comes live from the expert's pen, after a settle long enough for the link.
@@ -92,6 +93,10 @@ TrialResult TrialRun::finish(Recorder& recorder, std::string failure, bool stopp
     extra["link_faults"] = fmt::format("{} ({} ticks without the device, force zeroed)", result.link_faults,
                                        counters.disconnected_ticks.load());
   }
+  // What the recording did that a good trial does not, and every counter, in its metadata.
+  result.physics = judgeRecording(result.profile, environment_->limits(), loop_->safety().maxForce_N(),
+                                  environment_->paper().relief(), bounds_);
+  noteLoopCounters(result);
   return result;
 }
 

@@ -33,10 +33,34 @@ TEST(SimulatedDevice, PenHeldStillWithNoForceStaysPut) {
   EXPECT_EQ(device.trueVelocity(), Vec3::Zero());
 }
 
+// A hand pushing 100 N down (nothing under the pen) drives it into the mechanism's end stop:
+// it comes to rest just past the workspace's floor, where the stop's spring holds the push
+// (100 N / 20 kN/m = 5 mm), not 100 mm or a metre below it (issue 38).
+TEST(SimulatedDevice, EndStopsHoldThePenAtItsWorkspace) {
+  SimulatedPenParams params;
+  StillHand hand({.p_target_W = Vec3(0.0, 0.0, 0.0), .press_N = 100.0, .altitude_rad = 1.5707963267948966,
+                  .pen_down = true});
+  SimulatedDevice device(params, &hand);
+  double deepest = 0.0;
+  for (int i = 1; i <= 2000; ++i) {
+    ASSERT_EQ(device.write(Vec3::Zero()), DeviceStatus::kOk);
+    (void)readAt(device, i * 1e-3);
+    deepest = std::min(deepest, device.truePosition().z());
+  }
+  const double floor = params.limits.workspace_min_m.z();
+  const double held = floor - 100.0 / params.end_stop_stiffness_N_per_m;
+  EXPECT_NEAR(device.truePosition().z(), held, 1e-4);
+  EXPECT_LT(std::abs(device.trueVelocity().z()), 1e-3);
+  EXPECT_GT(deepest, held - 0.002) << "the stop's damper keeps the overshoot small";
+}
+
 TEST(SimulatedDevice, ConstantForceAcceleratesAsTheMassDamperModelSays) {
   SimulatedPenParams params;
   params.start_position_W = Vec3::Zero();
   params.max_substep_s = 1e-5;
+  // Free flight: the pen travels 91 mm, past the default workspace's end stops.
+  params.limits.workspace_min_m = Vec3::Constant(-1.0);
+  params.limits.workspace_max_m = Vec3::Constant(1.0);
   SimulatedDevice device(params, nullptr);
   const Vec3 force(0.2, -0.1, 0.05);
   const double m = params.mass_kg;

@@ -210,13 +210,43 @@ TEST(Cli, WorldCheckReportsClampsAndRefusesBadConfigs) {
 }
 
 /// A hand script in millimetres: a loop over 1 s, pressing 1.2 N.
-std::string handScript(double y_offset_mm = 0.0) {
+std::string handScript(double y_offset_mm = 0.0, double press_N = 1.2) {
   std::string text = "# skill: loop\nt_s,x_mm,y_mm,z_mm,fx_N,fy_N,fz_N,pen_down_bool\n";
   for (int i = 0; i <= 100; ++i) {
     const double t = i * 0.01, a = 6.0 * t;
-    text += fmt::format("{},{},{},0,0,0,-1.2,1\n", t, 20 * std::sin(a), 10 * std::sin(2 * a) + y_offset_mm * t);
+    text += fmt::format("{},{},{},0,0,0,{},1\n", t, 20 * std::sin(a), 10 * std::sin(2 * a) + y_offset_mm * t, -press_N);
   }
   return text;
+}
+
+// A hand that presses 20 N where the pen renders 1.75 N sinks through the paper: the recording
+// is written and marked, and the command exits 1 naming what happened, unless told to keep it
+// (issue 38).
+TEST(Cli, ARecordingThroughThePaperIsKeptMarkedAndFailsUnlessKeepDisturbed) {
+  test::TempDir dir;
+  test::writeText(dir / "heavy.csv", handScript(0.0, 20.0));
+  const auto path = [&](const char* name) { return (dir / name).string(); };
+  const RunResult refused = runHattr(dir, "record --hand " + path("heavy.csv") + " -o " + path("heavy_out.csv"));
+  EXPECT_EQ(refused.exit_code, 1) << refused.err;
+  EXPECT_THAT(refused.err, HasSubstr("the trial was disturbed: "));
+  EXPECT_THAT(refused.err, HasSubstr("mm under the paper at "));
+  EXPECT_THAT(refused.err, HasSubstr("--keep-disturbed"));
+  const HapticProfile kept = io::readProfileCsv(path("heavy_out.csv"));
+  EXPECT_THAT(kept.metadata().extra.at("disturbed"), HasSubstr("under the paper"));
+  EXPECT_EQ(kept.metadata().extra.count("physical_penetration"), 1u);
+
+  const RunResult accepted = runHattr(dir, "record --hand " + path("heavy.csv") + " -o " + path("kept.csv") +
+                                               " --keep-disturbed --json");
+  ASSERT_EQ(accepted.exit_code, 0) << accepted.err;
+  const auto json = nlohmann::json::parse(accepted.out);
+  EXPECT_GE(json["physical_events"]["penetration"]["count"].get<int>(), 1);
+  EXPECT_GT(json["physical_events"]["penetration"]["deepest_m"].get<double>(), 0.003);
+  EXPECT_THAT(json["disturbed"].get<std::string>(), HasSubstr("under the paper"));
+
+  test::writeText(dir / "light.csv", handScript());
+  const RunResult clean = runHattr(dir, "record --hand " + path("light.csv") + " -o " + path("light_out.csv") + " --json");
+  ASSERT_EQ(clean.exit_code, 0) << clean.err;
+  EXPECT_EQ(nlohmann::json::parse(clean.out)["disturbed"], "");
 }
 
 TEST(Cli, RecordThenTrainInEveryModeWritesProfilesWithGuidanceApart) {

@@ -83,14 +83,15 @@ TEST(StudyStations, ThreeStationsOneKilledTwiceRunTheStudyAsOneStationOnSqlite) 
   }
 
   // Every trial completed once, with its samples; the killed station's running trial (if it
-  // was in one) interrupted and run again.
+  // was in one) interrupted and run again, and a disturbed attempt (a simulated trainee who
+  // presses harder than the pen renders sinks through the paper) run again by the policy.
   const auto trials = watch.trials();
   ASSERT_EQ(static_cast<int>(trials.size()), total);
   int interruptions = 0;
   for (const auto& t : trials) {
     EXPECT_EQ(t.status, session::TrialStatus::kCompleted) << t.plan.subject << " " << t.plan.sequence;
     EXPECT_GT(t.sample_count, 0);
-    EXPECT_EQ(t.attempts, 1 + t.interruptions) << t.plan.subject << " " << t.plan.sequence;
+    EXPECT_EQ(t.attempts, 1 + t.interruptions + t.disturbed_attempts) << t.plan.subject << " " << t.plan.sequence;
     interruptions += t.interruptions;
   }
   EXPECT_LE(interruptions, 2);

@@ -21,6 +21,7 @@ namespace {
 
 using ::testing::HasSubstr;
 using ::testing::Not;
+using ::testing::StartsWith;
 
 /// A completed small study: 3 scripted subjects (each trial offset at random), 3 modes,
 /// 1 training + 3 recall trials each.
@@ -329,11 +330,15 @@ TEST(DisturbedTrials, FlagKeepsThemInTheAnalysisAndTheReportListsThem) {
   CompletedStudy study(R"("disturbed_trials": "flag",)", stallInS01Recall2());
   auto db = session::StudyDatabase::open(study.dir / "s.sqlite", session::OpenMode::kReadWrite);
   for (const auto& t : s01Recall2(db)) {
-    EXPECT_EQ(t.disturbed, "1 stall (force zeroed)");
+    // The 30 ms stall zeroed the force while the hand pressed: the pen sank through the paper,
+    // and the recording says so too (issue 38).
+    EXPECT_THAT(t.disturbed, StartsWith("1 stall (force zeroed) · the pen "));
+    EXPECT_THAT(t.disturbed, HasSubstr(" mm under the paper at 0.2"));
     EXPECT_EQ(t.disturbed_attempts, 0);
     const HapticProfile p = db.trialProfile(t.id);
     EXPECT_EQ(p.metadata().extra.at("loop_stalls"), "1");
-    EXPECT_EQ(p.metadata().extra.at("disturbed"), "1 stall (force zeroed)");
+    EXPECT_EQ(p.metadata().extra.at("disturbed"), t.disturbed);
+    EXPECT_EQ(p.metadata().extra.count("physical_penetration"), 1u);
   }
   const StudyAnalysis a = analyzeStudy(db);
   ASSERT_EQ(a.flagged.size(), 3u);

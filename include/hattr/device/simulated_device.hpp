@@ -1,7 +1,7 @@
 #pragma once
 /// A simulated force-feedback pen: a point mass with viscous damping in 3-D, integrated
 /// with semi-implicit Euler in sub-steps of at most `max_substep_s`, driven by the device's
-/// commanded force and by a simulated hand. It is the test double for every hardware test
+/// commanded force and by a simulated hand, and held inside its workspace by end stops. It is the test double for every hardware test
 /// and the device of every simulated study. Default parameters: docs/realtime.md.
 
 #include <chrono>
@@ -19,6 +19,10 @@ struct SimulatedPenParams {
   double max_substep_s = 2.5e-4;          ///< integration sub-step bound
   double command_timeout_s = 0.010;       ///< the commanded force drops to zero without a write for this long
   Vec3 start_position_W = Vec3(0.0, 0.0, 0.005);  ///< where the pen starts [m]
+  /// The mechanism's end stops at each face of the workspace box (limits.workspace_*): a stiff
+  /// wall, damped (implicitly, so any mass stays stable), as a real linkage's hard stops.
+  double end_stop_stiffness_N_per_m = 20000.0;
+  double end_stop_damping_N_s_per_m = 40.0;
   HandImpedance hand;
   DeviceLimits limits;
 };

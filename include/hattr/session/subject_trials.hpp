@@ -18,16 +18,6 @@
 
 namespace hattr::session {
 
-/// How the servo loop disturbed a trial, for people ("2 stalls (force zeroed) · 3 missed
-/// samples"); empty when it ran clean. Stalls, missed samples, safety faults, lost device
-/// links and lost links to a mentor disturb a trial; overruns alone (late ticks) do not, and are stored all the same.
-std::string disturbanceOf(const TrialResult& result);
-
-/// Writes the loop's counters of a trial (ticks, overruns, stalls, missed samples, safety
-/// faults, lost links) and its disturbance into its recording's metadata; returns the
-/// disturbance (disturbanceOf).
-std::string noteLoopCounters(TrialResult& result);
-
 /// The set-up of one study trial, as every app runs it (through SubjectTrials::setup): the
 /// mode's guidance in training, none (BASIC) in recall, the study's indexing, `reference` (the
 /// study's expert at the study's rate); the end: protocol.trial_end (the pen lifted for pen_up_s

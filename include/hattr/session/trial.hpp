@@ -17,6 +17,7 @@
 #include "hattr/guidance/training_guidance.hpp"
 #include "hattr/render/world_config.hpp"
 #include "hattr/session/recorder.hpp"
+#include "hattr/session/trial_physics.hpp"
 
 namespace hattr::session {
 
@@ -126,6 +127,8 @@ struct TrialSetup {
   /// A mentored mode's guidance (required for one, unused otherwise); must outlive the trial.
   LiveGuidance* live_guidance = nullptr;
   std::uint64_t live_seed = 1;   ///< passed to LiveGuidance::beginTrial
+  /// What the recording is judged against when the trial ends (TrialResult::physics).
+  PhysicalBounds bounds;
 };
 
 struct TrialResult {
@@ -139,6 +142,9 @@ struct TrialResult {
   std::uint64_t mentor_link_faults = 0;  ///< times a mentored trial's link to the expert was lost
   std::uint64_t stalls = 0;            ///< loop or device-clock stalls (force zeroed)
   double max_period_error_s = 0.0;     ///< the largest |period − nominal| of a real-time run [s]
+  /// What the recording did that a good trial does not (the pen through the paper, the device
+  /// at its force limit, the pen outside the workspace), judged against TrialSetup::bounds.
+  PhysicalEvents physics;
   std::string clock;                   ///< the clock that ran it: simulated, real-time, device
   /// Why it ended: "pen lifted", "maximum duration", "stopped" or "failed" (kEnd...). Also in
   /// the profile's metadata as `end_reason`, with `writing_begin_s` and `writing_end_s`: the
@@ -184,6 +190,17 @@ std::vector<std::string> clampTrialGains(guidance::GuidanceConfig& config, const
 ProfileMetadata trialMetadata(ProfileMetadata base, const TrialEnvironment& environment,
                               const guidance::GuidanceConfig& config, const std::vector<std::string>& clamps,
                               Clock clock);
+
+/// How a trial was disturbed, for people ("2 stalls (force zeroed) · 3 missed samples · the pen
+/// 186.0 mm under the paper at 1.234 s"); empty when it ran clean. Stalls, missed samples, safety
+/// faults, lost device links, lost links to a mentor and physical events (TrialResult::physics)
+/// disturb a trial; overruns alone (late ticks) do not, and are stored all the same.
+std::string disturbanceOf(const TrialResult& result);
+
+/// Writes the loop's counters of a trial (ticks, overruns, stalls, missed samples, safety
+/// faults, lost links), its physical events and its disturbance into its recording's metadata;
+/// returns the disturbance (disturbanceOf). TrialRun::finish calls it for every trial.
+std::string noteLoopCounters(TrialResult& result);
 
 /// After the recorder stopped: the trial's end reason (failed, pen lifted, `stopped`, or the
 /// maximum duration), its writing span, and the recording, with these in its metadata

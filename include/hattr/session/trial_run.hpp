@@ -61,7 +61,9 @@ class TrialRun {
   /// After the loop and the recorder stopped: the trial's result. The loop's counters and the
   /// recorder's missed samples; a mentor's session ended and its notes; the end reason and the
   /// writing span (noteTrialEnd; "failed" when `failure` is not empty, "stopped" when
-  /// `stopped`); the failure and any lost device links noted in the metadata. Call once.
+  /// `stopped`); the failure and any lost device links noted in the metadata; the recording
+  /// judged against the set-up's bounds (TrialResult::physics) and, with every counter, noted in
+  /// its metadata (noteLoopCounters). Call once.
   TrialResult finish(Recorder& recorder, std::string failure, bool stopped);
 
  private:
@@ -75,6 +77,8 @@ class TrialRun {
   std::unique_ptr<servo::ServoLoop> loop_;
   ProfileMetadata metadata_;
   RecorderConfig recorder_config_;
+  TrialEnvironment* environment_;
+  PhysicalBounds bounds_;
 };
 
 }  // namespace hattr::session

@@ -1,0 +1,112 @@
+#include "hattr/session/trial_physics.hpp"
+
+#include <algorithm>
+#include <vector>
+
+#include <fmt/format.h>
+
+namespace hattr::session {
+namespace {
+
+// Counts the episodes of one condition over the samples: an episode begins at the first sample
+// where `depth` is positive and ends at the next where it is not; `worst` keeps the largest depth.
+// With `min_span_s` > 0 an episode counts only once it has lasted that long, and its worst is
+// its length.
+class EpisodeCounter {
+ public:
+  explicit EpisodeCounter(double min_span_s = 0.0) : min_span_s_(min_span_s) {}
+
+  void add(double t_s, double depth) {
+    if (!(depth > 0.0)) {
+      open_ = false;
+      return;
+    }
+    if (!open_) {
+      open_ = true;
+      counted_ = false;
+      begin_s_ = t_s;
+    }
+    const double span = t_s - begin_s_;
+    const bool long_enough = min_span_s_ <= 0.0 || span > min_span_s_;
+    if (long_enough && !counted_) {
+      counted_ = true;
+      ++event_.count;
+      if (event_.first_s < 0.0) event_.first_s = begin_s_;
+    }
+    if (counted_) event_.worst = std::max(event_.worst, min_span_s_ > 0.0 ? span : depth);
+  }
+
+  [[nodiscard]] const PhysicalEvent& event() const { return event_; }
+
+ private:
+  double min_span_s_;
+  bool open_ = false;
+  bool counted_ = false;
+  double begin_s_ = 0.0;
+  PhysicalEvent event_;
+};
+
+// How far a point lies outside the box [m] (0 inside).
+double distanceOutside(const Vec3& p, const Vec3& lo, const Vec3& hi) {
+  const Vec3 below = (lo - p).cwiseMax(0.0);
+  const Vec3 above = (p - hi).cwiseMax(0.0);
+  return (below + above).norm();
+}
+
+std::string phrase(const PhysicalEvent& e, const std::string& what) {
+  const std::string times = e.count > 1 ? fmt::format(", {} times", e.count) : std::string();
+  return fmt::format("{} at {:.3f} s{}", what, e.first_s, times);
+}
+
+std::string metadataValue(const PhysicalEvent& e) {
+  return fmt::format("{} first {} worst {}", e.count, e.first_s, e.worst);
+}
+
+}  // namespace
+
+PhysicalEvents judgeRecording(const HapticProfile& profile, const DeviceLimits& limits, double force_limit_N,
+                              const render::HeightField& relief, const PhysicalBounds& bounds) {
+  EpisodeCounter penetration;
+  EpisodeCounter saturation(bounds.saturation_s);
+  EpisodeCounter workspace;
+  const double at_limit_N = bounds.saturation_fraction * force_limit_N;
+  for (const Sample& s : profile.samples()) {
+    const double depth = relief.heightAt(s.p_WT.x(), s.p_WT.y()) - s.p_WT.z();
+    penetration.add(s.t_s, depth - bounds.penetration_m);
+    // The device at its limit holding up the paper: the paper alone asks for the limit or more.
+    const bool at_limit = force_limit_N > 0.0 && s.f_cmd_W.norm() >= at_limit_N && s.f_user_W.norm() >= at_limit_N;
+    saturation.add(s.t_s, at_limit ? 1.0 : 0.0);
+    workspace.add(s.t_s, distanceOutside(s.p_WT, limits.workspace_min_m, limits.workspace_max_m));
+  }
+  PhysicalEvents events{penetration.event(), saturation.event(), workspace.event()};
+  // The depth beyond the bound was counted; people want the depth under the surface.
+  if (events.penetration.count > 0) events.penetration.worst += bounds.penetration_m;
+  return events;
+}
+
+std::string describePhysicalEvents(const PhysicalEvents& events) {
+  std::vector<std::string> parts;
+  if (events.penetration.count > 0) {
+    parts.push_back(phrase(events.penetration,
+                           fmt::format("the pen {:.1f} mm under the paper", events.penetration.worst * 1e3)));
+  }
+  if (events.saturation.count > 0) {
+    parts.push_back(phrase(events.saturation,
+                           fmt::format("the device at its force limit for {:.3f} s", events.saturation.worst)));
+  }
+  if (events.workspace.count > 0) {
+    parts.push_back(phrase(events.workspace, fmt::format("the pen {:.1f} mm outside the device's workspace",
+                                                         events.workspace.worst * 1e3)));
+  }
+  std::string text;
+  for (const auto& p : parts) text += (text.empty() ? "" : " · ") + p;
+  return text;
+}
+
+void notePhysicalEvents(const PhysicalEvents& events, ProfileMetadata& metadata) {
+  if (events.penetration.count > 0) metadata.extra["physical_penetration"] = metadataValue(events.penetration);
+  if (events.saturation.count > 0) metadata.extra["physical_force_saturation"] = metadataValue(events.saturation);
+  if (events.workspace.count > 0) metadata.extra["physical_workspace"] = metadataValue(events.workspace);
+}
+
+}  // namespace hattr::session
