@@ -8,6 +8,7 @@
 #include "hattr/core/passivity.hpp"
 #include "hattr/device/device_uri.hpp"
 #include "hattr/guidance/training_guidance.hpp"
+#include "hattr/session/trial_physics.hpp"
 
 namespace hattr::net {
 namespace {
@@ -107,6 +108,11 @@ HapticProfile MentorStation::takeRecording() {
   extra["passivity_dissipated_J"] = fmt::format("{}", s.dissipated_J);
   extra["link_faults"] = fmt::format("{}", s.link_faults);
   extra["peer_packets_received"] = fmt::format("{}", s.peers_received);
+  // What the recording did that a good one does not (docs/realtime.md, "Physical events").
+  const session::PhysicalEvents events = session::judgeRecording(
+      profile, environment_->limits(), loop_->safety().maxForce_N(), environment_->paper().relief());
+  session::notePhysicalEvents(events, profile.metadata());
+  if (events.any()) extra["disturbed"] = session::describePhysicalEvents(events);
   return profile;
 }
 

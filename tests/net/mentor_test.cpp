@@ -37,6 +37,28 @@ double trajectoryDtw(const HapticProfile& a, const HapticProfile& b) {
   return sum / static_cast<double>(a.size());
 }
 
+// A mentoring station's recording is judged as a trial's is (issue 38): an expert pressing 18 N
+// where the pen renders 1.75 N sinks through the paper, and the leader's recording says so; the
+// follower's, written with the script's 1.2 N, does not.
+TEST(Mentoring, AStationsRecordingSaysWhenThePenWentThroughThePaper) {
+  const HapticProfile light = expertScript();
+  HapticProfile heavy(light.metadata());
+  for (Sample s : light.samples()) {
+    s.f_user_W *= 15.0;
+    heavy.append(s);
+  }
+  device::ProfileHandScript expert(heavy);
+  LaggingHand trainee(light);
+  const MentoredRun run = runMentoredSimulation(
+      {.coupling = Coupling::kObserve, .seed = 11, .duration_s = 2.4, .settle_s = 0.8, .follower_device = kTraineePen},
+      expert, trainee);
+  const auto& leader = run.leader.metadata().extra;
+  ASSERT_EQ(leader.count("physical_penetration"), 1u);
+  EXPECT_NE(leader.at("disturbed").find("mm under the paper"), std::string::npos) << leader.at("disturbed");
+  EXPECT_EQ(run.follower.metadata().extra.count("physical_penetration"), 0u);
+  EXPECT_EQ(run.follower.metadata().extra.count("disturbed"), 0u);
+}
+
 TEST(Mentoring, EveryCouplingIsStableAt100MsAnd5PercentLossAndGuidanceBringsTheTraineeCloser) {
   const MentoredRun alone = mentored(Coupling::kObserve, 0.1, 0.05);
   const double unguided = trajectoryDtw(alone.leader, alone.follower);

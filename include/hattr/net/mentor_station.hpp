@@ -93,7 +93,8 @@ class MentorStation {
   [[nodiscard]] device::Device& device() noexcept { return *device_; }
   /// Every gain clamped for this device ("position Kd 170 N·s/m -> 0.46 N·s/m: ...").
   [[nodiscard]] const std::vector<std::string>& clamps() const noexcept { return clamps_; }
-  /// The recording so far, with the coupling's totals in its metadata; stops recording.
+  /// The recording so far, with the coupling's totals and its physical events (session::
+  /// judgeRecording; `disturbed` when any) in its metadata; stops recording.
   /// After the recorder's thread stopped (or before it started).
   [[nodiscard]] HapticProfile takeRecording();
   /// Between sessions, the recorder's thread stopped: the next recording starts from nothing.
