@@ -1,8 +1,9 @@
 #pragma once
 /// A simulated force-feedback pen: a point mass with viscous damping in 3-D, integrated
 /// with semi-implicit Euler in sub-steps of at most `max_substep_s`, driven by the device's
-/// commanded force and by a simulated hand, and held inside its workspace by end stops. It is the test double for every hardware test
-/// and the device of every simulated study. Default parameters: docs/realtime.md.
+/// commanded force and by a simulated hand, and held inside its workspace by end stops. It is
+/// the test double for every hardware test and the device of every simulated study. Default
+/// parameters: docs/realtime.md.
 
 #include <chrono>
 #include <string>
