@@ -5,6 +5,7 @@
 #include <thread>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "hattr/core/error.hpp"
 #include "hattr/device/device_uri.hpp"
@@ -144,9 +145,7 @@ std::string disturbanceOf(const TrialResult& r) {
   add(r.mentor_link_faults, "lost link to the mentor", "lost links to the mentor");
   const std::string physical = describePhysicalEvents(r.physics);
   if (!physical.empty()) parts.push_back(physical);
-  std::string text;
-  for (const auto& p : parts) text += (text.empty() ? "" : " · ") + p;
-  return text;
+  return fmt::format("{}", fmt::join(parts, " · "));
 }
 
 std::string noteLoopCounters(TrialResult& result) {

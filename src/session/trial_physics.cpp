@@ -4,20 +4,21 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 namespace hattr::session {
 namespace {
 
 // Counts the episodes of one condition over the samples: an episode begins at the first sample
-// where `depth` is positive and ends at the next where it is not; `worst` keeps the largest depth.
-// With `min_span_s` > 0 an episode counts only once it has lasted that long, and its worst is
-// its length.
+// where it holds and ends at the next where it does not. `worst` keeps the largest value seen in
+// a counted episode, or with `min_span_s` > 0 (an episode counts only once it has lasted that
+// long) the longest span.
 class EpisodeCounter {
  public:
   explicit EpisodeCounter(double min_span_s = 0.0) : min_span_s_(min_span_s) {}
 
-  void add(double t_s, double depth) {
-    if (!(depth > 0.0)) {
+  void add(double t_s, bool holds, double value) {
+    if (!holds) {
       open_ = false;
       return;
     }
@@ -27,13 +28,12 @@ class EpisodeCounter {
       begin_s_ = t_s;
     }
     const double span = t_s - begin_s_;
-    const bool long_enough = min_span_s_ <= 0.0 || span > min_span_s_;
-    if (long_enough && !counted_) {
+    if (!counted_ && (min_span_s_ <= 0.0 || span > min_span_s_)) {
       counted_ = true;
       ++event_.count;
       if (event_.first_s < 0.0) event_.first_s = begin_s_;
     }
-    if (counted_) event_.worst = std::max(event_.worst, min_span_s_ > 0.0 ? span : depth);
+    if (counted_) event_.worst = std::max(event_.worst, min_span_s_ > 0.0 ? span : value);
   }
 
   [[nodiscard]] const PhysicalEvent& event() const { return event_; }
@@ -72,16 +72,14 @@ PhysicalEvents judgeRecording(const HapticProfile& profile, const DeviceLimits& 
   const double at_limit_N = bounds.saturation_fraction * force_limit_N;
   for (const Sample& s : profile.samples()) {
     const double depth = relief.heightAt(s.p_WT.x(), s.p_WT.y()) - s.p_WT.z();
-    penetration.add(s.t_s, depth - bounds.penetration_m);
+    penetration.add(s.t_s, depth > bounds.penetration_m, depth);
     // The device at its limit holding up the paper: the paper alone asks for the limit or more.
     const bool at_limit = force_limit_N > 0.0 && s.f_cmd_W.norm() >= at_limit_N && s.f_user_W.norm() >= at_limit_N;
-    saturation.add(s.t_s, at_limit ? 1.0 : 0.0);
-    workspace.add(s.t_s, distanceOutside(s.p_WT, limits.workspace_min_m, limits.workspace_max_m));
+    saturation.add(s.t_s, at_limit, 0.0);
+    const double outside = distanceOutside(s.p_WT, limits.workspace_min_m, limits.workspace_max_m);
+    workspace.add(s.t_s, outside > 0.0, outside);
   }
-  PhysicalEvents events{penetration.event(), saturation.event(), workspace.event()};
-  // The depth beyond the bound was counted; people want the depth under the surface.
-  if (events.penetration.count > 0) events.penetration.worst += bounds.penetration_m;
-  return events;
+  return {penetration.event(), saturation.event(), workspace.event()};
 }
 
 std::string describePhysicalEvents(const PhysicalEvents& events) {
@@ -98,9 +96,7 @@ std::string describePhysicalEvents(const PhysicalEvents& events) {
     parts.push_back(phrase(events.workspace, fmt::format("the pen {:.1f} mm outside the device's workspace",
                                                          events.workspace.worst * 1e3)));
   }
-  std::string text;
-  for (const auto& p : parts) text += (text.empty() ? "" : " · ") + p;
-  return text;
+  return fmt::format("{}", fmt::join(parts, " · "));
 }
 
 void notePhysicalEvents(const PhysicalEvents& events, ProfileMetadata& metadata) {
