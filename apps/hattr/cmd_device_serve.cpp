@@ -8,7 +8,7 @@
 #include <fmt/format.h>
 
 #include "cli_common.hpp"
-#include "hattr/device/net_protocol.hpp"
+#include "hattr/wire/packet.hpp"
 #include "hattr/net/device_server.hpp"
 
 namespace hattr::cli {
@@ -43,8 +43,8 @@ servo::RealtimePolicy parsePolicy(const std::string& text) {
 
 nlohmann::json statsJson(const net::DeviceServerStats& s) {
   nlohmann::json drops = nlohmann::json::object();
-  for (std::size_t r = 0; r < device::net::kDropReasonCount; ++r) {
-    drops[std::string(device::net::dropReasonName(static_cast<device::net::DropReason>(r)))] = s.drops[r];
+  for (std::size_t r = 0; r < wire::kDropReasonCount; ++r) {
+    drops[std::string(wire::dropReasonName(static_cast<wire::DropReason>(r)))] = s.drops[r];
   }
   return {{"sessions", s.sessions},         {"session_timeouts", s.session_timeouts},
           {"byes", s.byes},                 {"busy_refusals", s.busy_refusals},
@@ -59,7 +59,7 @@ void runServe(const ServeOptions& opt) {
   net::DeviceServerConfig config;
   config.device_uri = opt.device;
   config.listen = opt.listen;
-  config.key = device::net::readKeyFile(opt.key);
+  config.key = wire::readKeyFile(opt.key);
   config.rate_hz = opt.rate_hz;
   config.command_timeout = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.command_timeout_ms * 1e6));
   config.session_timeout = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.session_timeout_ms * 1e6));
@@ -101,9 +101,9 @@ void runServe(const ServeOptions& opt) {
     return;
   }
   std::string drops;
-  for (std::size_t r = 0; r < device::net::kDropReasonCount; ++r) {
+  for (std::size_t r = 0; r < wire::kDropReasonCount; ++r) {
     drops += fmt::format("{}{} {}", drops.empty() ? "" : ", ",
-                         device::net::dropReasonName(static_cast<device::net::DropReason>(r)), s.drops[r]);
+                         wire::dropReasonName(static_cast<wire::DropReason>(r)), s.drops[r]);
   }
   std::cout << fmt::format("served {} at {} Hz on {}\n", opt.device, rate_hz, server.endpoint().text())
             << fmt::format("sessions {} (ended: {} by bye, {} by silence), busy refusals {}\n", s.sessions, s.byes,
@@ -114,7 +114,7 @@ void runServe(const ServeOptions& opt) {
 }
 
 void runKeygen(const KeygenOptions& opt) {
-  device::net::writeKeyFile(opt.out, device::net::randomKey(), opt.force);
+  wire::writeKeyFile(opt.out, wire::randomKey(), opt.force);
   std::cout << fmt::format("wrote a new key to {} (mode 0600); give the same file to the server (--key) and the "
                            "client (udp://HOST:PORT?key=FILE)\n",
                            opt.out);
@@ -131,7 +131,7 @@ void registerDeviceServeCommands(CLI::App& devices) {
   serve->add_option("--device", opt->device, "Device URI to serve (see `hattr devices`)")->capture_default_str();
   serve->add_option("--listen", opt->listen, "HOST:PORT to listen on (IPv4 or localhost; port 0: any free port)")
       ->required();
-  serve->add_option("--key", opt->key, "Shared key file (64 hex characters; `hattr device keygen`)")->required();
+  serve->add_option("--key", opt->key, "Shared key file (64 hex characters, mode 0600; `hattr device keygen`)")->required();
   serve->add_option("--rate", opt->rate_hz, "Servo rate [Hz] (0: the device's nominal rate)")
       ->check(CLI::Range(0.0, 10000.0))
       ->capture_default_str();

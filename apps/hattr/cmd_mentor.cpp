@@ -112,7 +112,7 @@ nlohmann::json summaryJson(const SessionSummary& summary) {
   const net::MentorStats& s = summary.stats;
   nlohmann::json drops = nlohmann::json::object();
   for (std::size_t i = 0; i < s.drops.size(); ++i) {
-    if (s.drops[i]) drops[std::string(device::net::dropReasonName(static_cast<device::net::DropReason>(i)))] = s.drops[i];
+    if (s.drops[i]) drops[std::string(wire::dropReasonName(static_cast<wire::DropReason>(i)))] = s.drops[i];
   }
   return {{"samples", summary.samples},
           {"peers_received", s.peers_received},
@@ -133,12 +133,14 @@ nlohmann::json summaryJson(const SessionSummary& summary) {
 // with --sessions other than 1 then waits for the next follower (a study's next trial).
 void runStation(const MentorOptions& opt, net::MentorRole role) {
   net::MentorConfig mentor{.role = role, .coupling = net::parseCoupling(opt.coupling), .passivity = !opt.no_passivity,
-                           .key = device::net::readKeyFile(opt.key), .deadband = opt.deadband};
-  auto socket = device::net::UdpSocket::bound(
-      role == net::MentorRole::kLeader ? device::net::parseUdpEndpoint(opt.address, "--listen", 0)
-                                       : device::net::UdpEndpoint{.address = 0, .port = 0});
-  if (role == net::MentorRole::kFollower) mentor.leader = device::net::parseUdpEndpoint(opt.address, "--connect");
-  net::UdpDatagramLink link(std::move(socket));
+                           .key = wire::readKeyFile(opt.key), .deadband = opt.deadband};
+  // The leader listens for any follower; the follower's socket is connected to its leader, so
+  // the kernel delivers only the leader's datagrams.
+  if (role == net::MentorRole::kFollower) mentor.leader = wire::parseUdpEndpoint(opt.address, "--connect");
+  wire::UdpDatagramLink link(role == net::MentorRole::kLeader
+                                 ? wire::UdpSocket::bound(wire::parseUdpEndpoint(opt.address, "--listen", 0))
+                                 : wire::UdpSocket::connected(mentor.leader),
+                             wire::UdpDatagramLink::Clock::kLoop);
   const bool serving = role == net::MentorRole::kLeader && opt.sessions != 1;
   HATTR_THROW_UNLESS(!serving || opt.record.empty(), "--record: with --sessions {} each session is its own file: use "
                      "--record-dir DIR", opt.sessions);

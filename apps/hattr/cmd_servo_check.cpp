@@ -40,8 +40,8 @@ nlohmann::json percentilesUs(const DurationHistogram& h) {
 // The network link of a udp:// device: round trip, state age, loss, late packets, drops.
 nlohmann::json linkJson(const device::LinkStats& s) {
   nlohmann::json drops = nlohmann::json::object();
-  for (std::size_t r = 0; r < device::net::kDropReasonCount; ++r) {
-    drops[std::string(device::net::dropReasonName(static_cast<device::net::DropReason>(r)))] = s.drops[r];
+  for (std::size_t r = 0; r < wire::kDropReasonCount; ++r) {
+    drops[std::string(wire::dropReasonName(static_cast<wire::DropReason>(r)))] = s.drops[r];
   }
   const double expected = static_cast<double>(s.states_received + s.states_lost);
   return {{"rtt_us", percentilesUs(s.rtt)},

@@ -5,18 +5,13 @@
 #include "hattr/core/error.hpp"
 #include "hattr/device/device_uri.hpp"
 #include "hattr/device/hand.hpp"
+#include "hattr/wire/datagram_link.hpp"
+#include "hattr/wire/session.hpp"
 
 namespace hattr::net {
 namespace {
 
-using device::net::DropReason;
-using device::net::PacketType;
-
-constexpr std::size_t kMaxDrain = 32;     // datagrams per tick: bounds a tick's work
-constexpr std::size_t kNonceMemory = 64;  // hello nonces remembered against replays
 constexpr double kLiftHeight_m = 0.003;   // a released hand holds the pen at least this high
-
-void bump(std::atomic<std::uint64_t>& counter) noexcept { counter.fetch_add(1, std::memory_order_relaxed); }
 
 /// A force readable from other threads.
 class AtomicVec3 {
@@ -93,9 +88,29 @@ double rateFor(const DeviceServerConfig& config, const device::Device& device) {
   return config.rate_hz > 0.0 ? config.rate_hz : device.limits().nominal_rate_hz;
 }
 
+/// What each WELCOME offers: the served device and the server's timing.
+wire::WelcomePayload offerOf(const DeviceServerConfig& config, const device::Device& device, const servo::ServoLoop& loop) {
+  wire::WelcomePayload offer;
+  offer.rate_hz = 1e9 / static_cast<double>(loop.period().count());
+  offer.session_timeout_ns = config.session_timeout.count();
+  offer.command_timeout_ns = config.command_timeout.count();
+  offer.capabilities = device.capabilities();
+  offer.limits = device.limits();
+  return offer;
+}
+
+/// The drain budget of a tick: a quarter of the period, at most a quarter millisecond.
+wire::SessionTiming timingOf(const DeviceServerConfig& config, const servo::ServoLoop& loop) {
+  wire::SessionTiming timing;
+  timing.session_timeout_ns = config.session_timeout.count();
+  timing.drain_budget_ns = std::min<std::int64_t>(timing.drain_budget_ns, loop.period().count() / 4);
+  return timing;
+}
+
 }  // namespace
 
 /// The server's stage in its own servo loop: network in, STATE out, the client's force back.
+/// The session itself (handshake, checks, timeouts) is wire::ResponderSession's.
 class DeviceServer::Impl final : public GuidanceController {
  public:
   explicit Impl(DeviceServerConfig config)
@@ -104,109 +119,100 @@ class DeviceServer::Impl final : public GuidanceController {
         loop_(served_, servo::ServoConfig{.rate_hz = rateFor(config_, served_),
                                           .realtime = config_.realtime,
                                           .sample_ring_capacity = 1024}),
-        socket_(device::net::UdpSocket::bound(
-            device::net::parseUdpEndpoint(config_.listen, "device server --listen", 0))) {
-    HATTR_THROW_UNLESS(config_.command_timeout.count() > 0 && config_.session_timeout > config_.command_timeout,
-                       "device server: expected 0 < command timeout < session timeout, got {} ns and {} ns",
-                       config_.command_timeout.count(), config_.session_timeout.count());
+        link_(wire::UdpSocket::bound(wire::parseUdpEndpoint(config_.listen, "device server --listen", 0)),
+              wire::UdpDatagramLink::Clock::kMonotonic),
+        session_(checkedKey(config_), wire::PacketType::kCommand, link_, offerOf(config_, served_, loop_),
+                 timingOf(config_, loop_)) {
     loop_.setGuidance(this);
   }
 
-  Vec3 compute(const PenState& pen, const ContactForces& /*contact*/, double /*dt_s*/) noexcept override;
+  Vec3 compute(const PenState& pen, const ContactForces& contact, double dt_s) noexcept override;
 
   void stop() {
     loop_.stop();
-    if (live_.load(std::memory_order_acquire)) {
-      sendBye();
-      endSession();
-    }
+    session_.close(wire::monotonicNs());
+    endSession();
   }
 
   DeviceServerConfig config_;
   RemoteHand hand_;
   ServedDevice served_;
   servo::ServoLoop loop_;
-  device::net::UdpSocket socket_;
-  device::net::RandomStream random_;
+  wire::UdpDatagramLink link_;
+  wire::ResponderSession session_;
 
-  // Session state (servo thread).
-  std::atomic<bool> live_{false};
-  std::uint64_t session_id_ = 0;
-  bool confirmed_ = false;  // an authentic COMMAND of this session arrived: STATEs may flow
-  device::net::Nonce session_nonce_{};
-  device::net::UdpEndpoint client_;
-  device::net::SequenceCheck client_sequence_;
-  std::uint64_t send_sequence_ = 0;
-  std::int64_t last_heard_ns_ = 0;
+  // The client's newest command (servo thread).
+  std::uint64_t generation_ = 0;  // the session the command state belongs to
   bool have_command_ = false;
   bool timed_out_ = false;
+  bool ramp_pending_ = false;     // a ramp restart the loop's mailbox had no room for yet
   Vec3 command_force_ = Vec3::Zero();
   std::int64_t command_arrival_ns_ = 0;
   std::int64_t command_sent_ns_ = 0;
   std::uint64_t command_sequence_ = 0;
-  std::array<device::net::Nonce, kNonceMemory> seen_nonces_{};
-  std::size_t seen_count_ = 0;
-  device::net::PacketBuffer rx_buffer_{};
-  device::net::PacketBuffer tx_buffer_{};
 
   // Readable from any thread.
   AtomicVec3 commanded_;
-  std::atomic<std::uint64_t> sessions_{0};
-  std::atomic<std::uint64_t> session_timeouts_{0};
-  std::atomic<std::uint64_t> byes_{0};
-  std::atomic<std::uint64_t> busy_refusals_{0};
-  std::atomic<std::uint64_t> commands_applied_{0};
   std::atomic<std::uint64_t> command_timeouts_{0};
   std::atomic<std::uint64_t> states_sent_{0};
-  device::net::DropCounters drops_;
 
  private:
-  void handle(const device::net::Packet& packet, const device::net::Received& rx) noexcept;
-  void onHello(const device::net::Nonce& nonce, const device::net::Received& rx) noexcept;
-  void startSession(const device::net::Nonce& nonce, const device::net::Received& rx) noexcept;
+  static const wire::AuthKey& checkedKey(const DeviceServerConfig& config) {
+    HATTR_THROW_UNLESS(config.command_timeout.count() > 0 && config.session_timeout > config.command_timeout,
+                       "device server: expected 0 < command timeout < session timeout, got {} ns and {} ns",
+                       config.command_timeout.count(), config.session_timeout.count());
+    return config.key;
+  }
+  void followSession() noexcept;
+  void takeCommand() noexcept;
   void endSession() noexcept {
-    live_.store(false, std::memory_order_release);
     have_command_ = false;
     hand_.release();
   }
-  void sendWelcome() noexcept;
-  void sendBye() noexcept;
+  void restartRamp() noexcept {
+    ramp_pending_ = !loop_.post({.type = servo::ServoCommand::Type::kRestartRamp});
+  }
   void sendState(const PenState& pen, bool no_command) noexcept;
-  void send(const device::net::Packet& packet, const device::net::UdpEndpoint& to) noexcept {
-    (void)socket_.sendTo(std::span(tx_buffer_.data(), device::net::encodePacket(packet, config_.key, tx_buffer_)), to);
-  }
-  [[nodiscard]] bool nonceSeen(const device::net::Nonce& nonce) const noexcept {
-    const std::size_t n = std::min(seen_count_, kNonceMemory);
-    return std::find(seen_nonces_.begin(), seen_nonces_.begin() + static_cast<std::ptrdiff_t>(n), nonce) !=
-           seen_nonces_.begin() + static_cast<std::ptrdiff_t>(n);
-  }
 };
 
-// One tick: drain the socket, end a silent session, send the pen, return the client's force
-// (zero without a session or a fresh command). The loop's safety path clamps what follows.
-Vec3 DeviceServer::Impl::compute(const PenState& pen, const ContactForces& /*contact*/, double /*dt_s*/) noexcept {
-  device::net::Received rx;
-  for (std::size_t i = 0; i < kMaxDrain; ++i) {
-    if (socket_.receive(rx_buffer_, rx) != device::net::ReceiveStatus::kPacket) break;
-    device::net::Packet packet;
-    DropReason why{};
-    if (rx.size > rx_buffer_.size()) {
-      drops_.count(DropReason::kBadSize);
-    } else if (!device::net::decodePacket(std::span(rx_buffer_.data(), rx.size), config_.key, packet, why)) {
-      drops_.count(why);
-    } else {
-      handle(packet, rx);
-    }
+// A new session starts from zero force with a ramp; an ended one releases the remote hand. A
+// fault latched by the safety path (a device error) stays latched: no client clears it.
+void DeviceServer::Impl::followSession() noexcept {
+  const std::uint64_t generation = session_.generation();
+  if (generation != generation_) {
+    generation_ = generation;
+    have_command_ = false;
+    timed_out_ = false;
+    restartRamp();
+  } else if (ramp_pending_) {
+    restartRamp();
   }
+  if (!session_.live() && have_command_) endSession();
+}
 
-  const std::int64_t now = device::net::monotonicNs();
-  const bool live = live_.load(std::memory_order_relaxed);
-  if (live && now - last_heard_ns_ > config_.session_timeout.count()) {
-    endSession();
-    bump(session_timeouts_);
-    return Vec3::Zero();
-  }
-  if (!live) return Vec3::Zero();
+void DeviceServer::Impl::takeCommand() noexcept {
+  wire::Packet packet;
+  std::int64_t arrival_ns = 0;
+  if (!session_.takeData(packet, arrival_ns)) return;
+  const auto& command = std::get<wire::CommandPayload>(packet.payload);
+  command_force_ = command.f_on_pen_W;
+  commanded_.store(command_force_);
+  have_command_ = true;
+  command_arrival_ns_ = arrival_ns;
+  command_sent_ns_ = packet.header.sender_time_ns;
+  command_sequence_ = packet.header.sequence;
+  if (command.has_hand) hand_.set(command.hand);
+}
+
+// One tick: the session's network work, the newest command, the pen to the client, the
+// client's force (zero without a session or a fresh command). The loop's safety path clamps
+// what follows.
+Vec3 DeviceServer::Impl::compute(const PenState& pen, const ContactForces& /*contact*/, double /*dt_s*/) noexcept {
+  const std::int64_t now = wire::monotonicNs();
+  session_.pump(now);
+  followSession();
+  if (!session_.live()) return Vec3::Zero();
+  takeCommand();
 
   // The client's force while its commands are fresh; after a timeout, zero, then a ramp.
   Vec3 force = Vec3::Zero();
@@ -216,138 +222,35 @@ Vec3 DeviceServer::Impl::compute(const PenState& pen, const ContactForces& /*con
     no_command = false;
     if (timed_out_) {
       timed_out_ = false;
-      (void)loop_.post({.type = servo::ServoCommand::Type::kRestartRamp});
+      restartRamp();
     }
   } else if (have_command_ && !timed_out_) {
     timed_out_ = true;
-    bump(command_timeouts_);
+    command_timeouts_.fetch_add(1, std::memory_order_relaxed);
   }
-  // No stream before the client proves the session with a COMMAND: a replayed HELLO (from any
-  // address) gets one WELCOME, never a stream of STATEs.
-  if (confirmed_) sendState(pen, no_command);
+  // No stream before the client proves the session with a COMMAND.
+  if (session_.confirmed()) sendState(pen, no_command);
   return force;
 }
 
-void DeviceServer::Impl::handle(const device::net::Packet& packet, const device::net::Received& rx) noexcept {
-  const device::net::PacketHeader& h = packet.header;
-  if (h.type == PacketType::kHello) {
-    onHello(std::get<device::net::HelloPayload>(packet.payload).client_nonce, rx);
-    return;
-  }
-  if (h.type != PacketType::kCommand && h.type != PacketType::kBye) {
-    drops_.count(DropReason::kUnexpected);
-    return;
-  }
-  // COMMAND and BYE: the live session's, from its client, newer than any accepted.
-  if (!live_.load(std::memory_order_relaxed) || h.session_id != session_id_ || rx.from != client_) {
-    drops_.count(DropReason::kWrongSession);
-    return;
-  }
-  DropReason why{};
-  if (!client_sequence_.accept(h.sequence, why)) {
-    drops_.count(why);
-    return;
-  }
-  last_heard_ns_ = rx.arrival_ns;
-  if (h.type == PacketType::kBye) {
-    endSession();
-    bump(byes_);
-    return;
-  }
-  const auto& command = std::get<device::net::CommandPayload>(packet.payload);
-  confirmed_ = true;
-  command_force_ = command.f_on_pen_W;
-  commanded_.store(command_force_);
-  have_command_ = true;
-  command_arrival_ns_ = rx.arrival_ns;
-  command_sent_ns_ = h.sender_time_ns;
-  command_sequence_ = h.sequence;
-  if (command.has_hand) hand_.set(command.hand);
-  bump(commands_applied_);
-}
-
-// A retried hello gets its welcome again; a replayed one nothing; another client's a BUSY;
-// a new one (also the same client starting over) a new session.
-void DeviceServer::Impl::onHello(const device::net::Nonce& nonce, const device::net::Received& rx) noexcept {
-  const bool live = live_.load(std::memory_order_relaxed);
-  if (live && rx.from == client_ && nonce == session_nonce_) {
-    sendWelcome();
-    return;
-  }
-  if (nonceSeen(nonce)) {
-    drops_.count(DropReason::kReplayed);
-    return;
-  }
-  if (live && rx.from != client_) {
-    const device::net::Packet busy{{.session_id = 0, .sequence = 0, .sender_time_ns = device::net::monotonicNs()},
-                                   device::net::BusyPayload{nonce}};
-    // Counted before the answer: a client that has read it sees the count.
-    bump(busy_refusals_);
-    drops_.count(DropReason::kBusy);
-    send(busy, rx.from);
-    return;
-  }
-  seen_nonces_[seen_count_++ % kNonceMemory] = nonce;
-  if (live) endSession();
-  startSession(nonce, rx);
-}
-
-void DeviceServer::Impl::startSession(const device::net::Nonce& nonce, const device::net::Received& rx) noexcept {
-  session_id_ = random_.nextNonZero();
-  session_nonce_ = nonce;
-  client_ = rx.from;
-  client_sequence_.reset();
-  send_sequence_ = 0;
-  have_command_ = false;
-  timed_out_ = false;
-  last_heard_ns_ = rx.arrival_ns;
-  live_.store(true, std::memory_order_release);
-  confirmed_ = false;
-  bump(sessions_);
-  // A new session starts clean: a fault latched in an earlier one is cleared, forces ramp in.
-  (void)loop_.post({.type = servo::ServoCommand::Type::kClearFault});
-  (void)loop_.post({.type = servo::ServoCommand::Type::kRestartRamp});
-  sendWelcome();
-}
-
-void DeviceServer::Impl::sendWelcome() noexcept {
-  device::net::WelcomePayload welcome;
-  welcome.client_nonce = session_nonce_;
-  welcome.rate_hz = 1e9 / static_cast<double>(loop_.period().count());
-  welcome.session_timeout_ns = config_.session_timeout.count();
-  welcome.command_timeout_ns = config_.command_timeout.count();
-  welcome.capabilities = served_.capabilities();
-  welcome.limits = served_.limits();
-  send({{.session_id = session_id_, .sequence = ++send_sequence_, .sender_time_ns = device::net::monotonicNs()},
-        welcome},
-       client_);
-}
-
-void DeviceServer::Impl::sendBye() noexcept {
-  send({{.session_id = session_id_, .sequence = ++send_sequence_, .sender_time_ns = device::net::monotonicNs()},
-        device::net::ByePayload{}},
-       client_);
-}
-
 void DeviceServer::Impl::sendState(const PenState& pen, bool no_command) noexcept {
-  device::net::StatePayload state;
+  wire::StatePayload state;
   state.pen = pen;
   state.f_applied_W = served_.lastWritten();
   state.device_status = served_.lastRead();
-  state.server_flags = (no_command ? device::net::kServerNoCommand : 0u) |
-                       (loop_.safety().fault() != servo::SafetyFault::kNone ? device::net::kServerSafetyFault : 0u);
-  const std::int64_t send_ns = device::net::monotonicNs();
+  state.server_flags = (no_command ? wire::kServerNoCommand : 0u) |
+                       (loop_.safety().fault() != servo::SafetyFault::kNone ? wire::kServerSafetyFault : 0u);
+  const std::int64_t send_ns = wire::monotonicNs();
   if (have_command_) {
     state.echo_sender_time_ns = command_sent_ns_;
     state.echo_sequence = command_sequence_;
-    state.hold_ns = std::max<std::int64_t>(0, send_ns - command_arrival_ns_);
+    state.hold_ns = std::clamp<std::int64_t>(send_ns - command_arrival_ns_, 0, wire::kMaxHoldNs);
   }
-  send({{.session_id = session_id_, .sequence = ++send_sequence_, .sender_time_ns = send_ns}, state}, client_);
-  bump(states_sent_);
+  if (session_.send(state, send_ns)) states_sent_.fetch_add(1, std::memory_order_relaxed);
 }
 
 DeviceServer::DeviceServer(DeviceServerConfig config)
-    : impl_(std::make_unique<Impl>(std::move(config))), endpoint_(impl_->socket_.localEndpoint()) {}
+    : impl_(std::make_unique<Impl>(std::move(config))), endpoint_(impl_->link_.localEndpoint()) {}
 
 DeviceServer::~DeviceServer() { stop(); }
 
@@ -357,15 +260,17 @@ void DeviceServer::stop() { impl_->stop(); }
 
 DeviceServerStats DeviceServer::stats() const {
   const Impl& i = *impl_;
+  const wire::SessionStats session = i.session_.stats();
   DeviceServerStats s;
-  s.sessions = i.sessions_.load();
-  s.session_timeouts = i.session_timeouts_.load();
-  s.byes = i.byes_.load();
-  s.busy_refusals = i.busy_refusals_.load();
-  s.commands_applied = i.commands_applied_.load();
+  s.sessions = session.sessions;
+  s.session_timeouts = session.timeouts;
+  s.byes = session.byes_received;
+  s.busy_refusals = session.busy;
+  s.cookies_sent = session.cookies;
+  s.commands_applied = session.data_received;
   s.command_timeouts = i.command_timeouts_.load();
   s.states_sent = i.states_sent_.load();
-  for (std::size_t r = 0; r < device::net::kDropReasonCount; ++r) s.drops[r] = i.drops_[static_cast<DropReason>(r)];
+  s.drops = session.drops;
   const auto& c = i.loop_.counters();
   s.ticks = c.ticks.load();
   s.overruns = c.overruns.load();
@@ -374,7 +279,7 @@ DeviceServerStats DeviceServer::stats() const {
   return s;
 }
 
-bool DeviceServer::sessionLive() const noexcept { return impl_->live_.load(std::memory_order_acquire); }
+bool DeviceServer::sessionLive() const noexcept { return impl_->session_.live(); }
 Vec3 DeviceServer::commandedForce() const noexcept { return impl_->commanded_.load(); }
 Vec3 DeviceServer::appliedForce() const noexcept { return impl_->served_.applied(); }
 servo::ServoLoop& DeviceServer::loop() noexcept { return impl_->loop_; }

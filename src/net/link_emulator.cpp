@@ -38,7 +38,7 @@ LinkEmulator::LinkEmulator(const LinkConditions& conditions, std::size_t capacit
 }
 
 void LinkEmulator::enqueue(std::span<const std::uint8_t> datagram, std::int64_t due_ns, std::uint64_t order) noexcept {
-  if (count_ == pool_.size() || datagram.size() > device::net::kMaxPacketSize) {
+  if (count_ == pool_.size() || datagram.size() > wire::kMaxPacketSize) {
     ++stats_.overflow;
     return;
   }
@@ -103,8 +103,8 @@ std::int64_t LinkEmulator::nextDue() const noexcept {
 
 LinkRelay::LinkRelay(const std::string& listen, const std::string& forward, const LinkConditions& to_forward,
                      const LinkConditions& to_sender)
-    : front_(device::net::UdpSocket::bound(device::net::parseUdpEndpoint(listen, "link relay --listen", 0))),
-      back_(device::net::UdpSocket::connected(device::net::parseUdpEndpoint(forward, "link relay --forward"))),
+    : front_(wire::UdpSocket::bound(wire::parseUdpEndpoint(listen, "link relay --listen", 0))),
+      back_(wire::UdpSocket::connected(wire::parseUdpEndpoint(forward, "link relay --forward"))),
       endpoint_(front_.localEndpoint()),
       to_forward_(to_forward),
       to_sender_(to_sender) {
@@ -124,18 +124,18 @@ LinkStats LinkRelay::backStats() const { return to_sender_.stats(); }
 // Poll both sockets, pass what arrives through the emulators, send what falls due; sleep a
 // little when idle (the relay is a test rig, not a servo loop).
 void LinkRelay::run() {
-  device::net::PacketBuffer buffer{};
+  wire::PacketBuffer buffer{};
   while (!stop_.load(std::memory_order_acquire)) {
-    const std::int64_t now = device::net::monotonicNs();
-    device::net::Received got;
+    const std::int64_t now = wire::monotonicNs();
+    wire::Received got;
     bool busy = false;
-    while (front_.receive(buffer, got) == device::net::ReceiveStatus::kPacket) {
+    while (front_.receive(buffer, got) == wire::ReceiveStatus::kPacket) {
       sender_ = got.from;
       has_sender_ = true;
       to_forward_.send(std::span(buffer.data(), std::min(got.size, buffer.size())), now);
       busy = true;
     }
-    while (back_.receive(buffer, got) == device::net::ReceiveStatus::kPacket) {
+    while (back_.receive(buffer, got) == wire::ReceiveStatus::kPacket) {
       to_sender_.send(std::span(buffer.data(), std::min(got.size, buffer.size())), now);
       busy = true;
     }

@@ -6,19 +6,14 @@
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/wire/session.hpp"
 
 namespace hattr::net {
 namespace {
 
-using device::net::DropReason;
-using device::net::PacketType;
-
-constexpr std::size_t kMaxDrain = 32;  // datagrams handled per tick at most
 constexpr double kPi = 3.141592653589793;
 
 std::int64_t toNs(double seconds) noexcept { return static_cast<std::int64_t>(std::llround(seconds * 1e9)); }
-
-void bump(std::atomic<std::uint64_t>& counter) noexcept { counter.fetch_add(1, std::memory_order_relaxed); }
 
 /// Only the paper plane: the person keeps the pen's height and pressure.
 Vec3 inPlane(const Vec3& v) noexcept { return {v.x(), v.y(), 0.0}; }
@@ -71,203 +66,172 @@ void MentorConfig::validate() const {
 
 // ---- Links ------------------------------------------------------------------------------
 
-bool UdpDatagramLink::receive(std::int64_t /*now_ns*/, device::net::PacketBuffer& buffer, std::size_t& size,
-                              device::net::UdpEndpoint& from) noexcept {
-  device::net::Received got;
-  // A refusal (ICMP: nothing listens at the peer) is no datagram; the missing PEERs say the rest.
-  while (true) {
-    const auto status = socket_.receive(buffer, got);
-    if (status == device::net::ReceiveStatus::kNone) return false;
-    if (status == device::net::ReceiveStatus::kPacket) break;
-  }
-  size = got.size;
-  from = got.from;
-  return true;
-}
-
-bool UdpDatagramLink::send(std::int64_t /*now_ns*/, std::span<const std::uint8_t> datagram,
-                           const device::net::UdpEndpoint& to) noexcept {
-  return socket_.sendTo(datagram, to);
-}
-
 EmulatedLinkPair::EmulatedLinkPair(const LinkConditions& zero_to_one, const LinkConditions& one_to_zero)
     : zero_to_one_(zero_to_one), one_to_zero_(one_to_zero), end0_(one_to_zero_, zero_to_one_, 1), end1_(zero_to_one_, one_to_zero_, 0) {}
 
-device::net::UdpEndpoint EmulatedLinkPair::addressOf(int index) noexcept {
+wire::UdpEndpoint EmulatedLinkPair::addressOf(int index) noexcept {
   return {.address = 0x7F000001u, .port = static_cast<std::uint16_t>(40000 + index)};
 }
 
-bool EmulatedLinkPair::End::receive(std::int64_t now_ns, device::net::PacketBuffer& buffer, std::size_t& size,
-                                    device::net::UdpEndpoint& from) noexcept {
-  if (!in_.receive(now_ns, buffer, size)) return false;
-  from = addressOf(peer_index_);
+bool EmulatedLinkPair::End::receive(std::int64_t now_ns, wire::PacketBuffer& buffer, wire::Received& out) noexcept {
+  if (!in_.receive(now_ns, buffer, out.size)) return false;
+  out.from = addressOf(peer_index_);
+  out.arrival_ns = now_ns;
   return true;
 }
 
 bool EmulatedLinkPair::End::send(std::int64_t now_ns, std::span<const std::uint8_t> datagram,
-                                 const device::net::UdpEndpoint& /*to*/) noexcept {
+                                 const wire::UdpEndpoint& /*to*/) noexcept {
   out_.send(datagram, now_ns);
   return true;
 }
 
 // ---- The coupling -----------------------------------------------------------------------
 
-MentorCoupling::MentorCoupling(const MentorConfig& config, DatagramLink& link) : config_(config), link_(link) {
+/// One station's coupling: its session with the other station, what it last heard, the
+/// coupling's filters and this port's energy.
+class MentorCoupling::Impl {
+ public:
+  Impl(const MentorConfig& config, wire::DatagramLink& link);
+
+  Vec3 compute(const PenState& pen, const ContactForces& contact, double dt_s) noexcept;
+  void followSession(std::int64_t now_ns) noexcept;
+  void takePeer(std::int64_t now_ns) noexcept;
+  void tell(const PenState& pen, const ContactForces& contact, const Vec3& force, bool up, std::int64_t now_ns) noexcept;
+  void publish(bool up) noexcept;
+  Vec3 couplingForce(const PenState& pen, const ContactForces& contact, double dt_s) noexcept;
+  Vec3 passive(const Vec3& force, const Vec3& v_WT, double dt_s) noexcept;
+  /// The deadband's test: does `out` differ enough from the last PEER sent to be sent now?
+  [[nodiscard]] bool worthSending(const wire::PeerPayload& out, std::int64_t now_ns) const noexcept;
+  /// The follower names the coupling; the leader runs the one its follower announces.
+  [[nodiscard]] Coupling activeCoupling() const noexcept {
+    return config_.role == MentorRole::kLeader && have_other_ ? static_cast<Coupling>(other_state_.coupling)
+                                                             : config_.coupling;
+  }
+  static void bump(std::atomic<std::uint64_t>& counter) noexcept { counter.fetch_add(1, std::memory_order_relaxed); }
+
+  MentorConfig config_;
+  std::unique_ptr<wire::Session> session_;
+  wire::InitiatorSession* initiator_ = nullptr;  // the follower's session (null for the leader)
+  std::uint64_t generation_ = 0;
+  std::uint64_t busy_seen_ = 0;
+  std::uint64_t byes_seen_ = 0;
+
+  // The other station as last heard.
+  wire::PeerPayload other_state_{};
+  bool have_other_ = false;
+  std::int64_t other_arrival_ns_ = 0;
+  std::int64_t other_sender_ns_ = 0;
+  bool link_up_ = false;
+  double ramp_ = 0.0;
+
+  // Force coupling: the filtered error rate.
+  Vec3 last_error_ = Vec3::Zero();
+  Vec3 error_rate_ = Vec3::Zero();
+  bool have_error_ = false;
+
+  // The last PEER sent (the deadband compares with it).
+  wire::PeerPayload last_sent_{};
+  std::int64_t last_sent_ns_ = 0;
+  bool have_sent_ = false;
+
+  // Energy bookkeeping of this port (TDPA).
+  double energy_in_J_ = 0.0;
+  double energy_out_J_ = 0.0;
+  double dissipated_J_ = 0.0;
+
+  TripleBuffer<PeerView> peer_view_;
+  std::atomic<bool> link_flag_{false};
+  std::atomic<bool> refused_{false};
+  std::atomic<std::uint64_t> link_faults_{0};
+  std::atomic<std::uint64_t> peers_sent_{0};
+  std::atomic<std::uint64_t> peers_withheld_{0};
+  std::atomic<double> energy_in_snapshot_{0.0};
+  std::atomic<double> energy_out_snapshot_{0.0};
+  std::atomic<double> peer_energy_snapshot_{0.0};
+  std::atomic<double> dissipated_snapshot_{0.0};
+  std::atomic<double> rtt_snapshot_{0.0};
+};
+
+namespace {
+
+wire::SessionTiming mentorTiming(const MentorConfig& config) {
+  wire::SessionTiming timing;
+  timing.session_timeout_ns = toNs(config.session_timeout_s);
+  timing.hello_retry_ns = toNs(config.hello_interval_s);
+  return timing;
+}
+
+/// What the leader's WELCOME says: its timeouts (a station serves no device: rate 1 Hz is a
+/// placeholder the follower ignores).
+wire::WelcomePayload leaderOffer(const MentorConfig& config) {
+  wire::WelcomePayload offer;
+  offer.rate_hz = 1.0;
+  offer.session_timeout_ns = toNs(config.session_timeout_s);
+  offer.command_timeout_ns = toNs(config.hold_s);
+  return offer;
+}
+
+}  // namespace
+
+MentorCoupling::Impl::Impl(const MentorConfig& config, wire::DatagramLink& link) : config_(config) {
   config_.validate();
-  device::net::initCrypto();
-  if (config_.role == MentorRole::kFollower) other_ = config_.leader;
+  if (config_.role == MentorRole::kLeader) {
+    session_ = std::make_unique<wire::ResponderSession>(config_.key, wire::PacketType::kPeer, link,
+                                                        leaderOffer(config_), mentorTiming(config_));
+  } else {
+    auto follower = std::make_unique<wire::InitiatorSession>(config_.key, wire::PacketType::kPeer, link,
+                                                             config_.leader, mentorTiming(config_));
+    initiator_ = follower.get();
+    session_ = std::move(follower);
+  }
 }
 
-void MentorCoupling::send(const device::net::Payload& payload, const device::net::UdpEndpoint& to,
-                          std::int64_t now_ns) noexcept {
-  const device::net::Packet packet{{.session_id = session_id_, .sequence = ++send_sequence_, .sender_time_ns = now_ns},
-                                   payload};
-  (void)link_.send(now_ns, std::span(tx_.data(), device::net::encodePacket(packet, config_.key, tx_)), to);
-}
-
-void MentorCoupling::sayHello(std::int64_t now_ns) noexcept {
-  if (now_ns - last_hello_ns_ < toNs(config_.hello_interval_s)) return;
-  last_hello_ns_ = now_ns;
-  // One nonce per attempt: retries repeat it, so a WELCOME that takes longer than the retry
-  // interval (a long round trip) still answers the attempt.
-  if (!hello_pending_) random_.fill(nonce_);
-  hello_pending_ = true;
-  const device::net::Packet hello{{.session_id = 0, .sequence = 0, .sender_time_ns = now_ns},
-                                  device::net::HelloPayload{nonce_}};
-  (void)link_.send(now_ns, std::span(tx_.data(), device::net::encodePacket(hello, config_.key, tx_)), other_);
-}
-
-// The leader takes one follower; another gets BUSY; a new HELLO from the same follower starts over.
-void MentorCoupling::onHello(const device::net::Nonce& nonce, const device::net::UdpEndpoint& from,
-                             std::int64_t now_ns) noexcept {
-  if (config_.role != MentorRole::kLeader) {
-    drops_.count(DropReason::kUnexpected);
-    return;
-  }
-  const bool live = session_ && now_ns - last_heard_ns_ <= toNs(config_.session_timeout_s);
-  if (live && from == other_ && nonce == nonce_) {  // a retried HELLO: welcome again
-    const device::net::Packet welcome{{.session_id = session_id_, .sequence = 0, .sender_time_ns = now_ns},
-                                      device::net::WelcomePayload{.client_nonce = nonce, .rate_hz = 1.0,
-                                                                  .session_timeout_ns = toNs(config_.session_timeout_s),
-                                                                  .command_timeout_ns = toNs(config_.hold_s)}};
-    (void)link_.send(now_ns, std::span(tx_.data(), device::net::encodePacket(welcome, config_.key, tx_)), from);
-    return;
-  }
-  if (live && from != other_) {
-    const device::net::Packet busy{{.session_id = 0, .sequence = 0, .sender_time_ns = now_ns},
-                                   device::net::BusyPayload{nonce}};
-    (void)link_.send(now_ns, std::span(tx_.data(), device::net::encodePacket(busy, config_.key, tx_)), from);
-    bump(busy_refusals_);
-    drops_.count(DropReason::kBusy);
-    return;
-  }
-  // A new session: a fresh id, so packets of an old one are never accepted.
-  session_ = true;
-  session_id_ = random_.nextNonZero();
-  nonce_ = nonce;
-  other_ = from;
-  peer_sequence_.reset();
-  send_sequence_ = 0;
-  have_sent_ = false;
-  have_other_ = false;
-  last_heard_ns_ = now_ns;
-  bump(sessions_);
-  const device::net::Packet welcome{{.session_id = session_id_, .sequence = 0, .sender_time_ns = now_ns},
-                                    device::net::WelcomePayload{.client_nonce = nonce, .rate_hz = 1.0,
-                                                                .session_timeout_ns = toNs(config_.session_timeout_s),
-                                                                .command_timeout_ns = toNs(config_.hold_s)}};
-  (void)link_.send(now_ns, std::span(tx_.data(), device::net::encodePacket(welcome, config_.key, tx_)), from);
-}
-
-void MentorCoupling::handle(const device::net::Packet& packet, const device::net::UdpEndpoint& from,
-                            std::int64_t now_ns) noexcept {
-  const device::net::PacketHeader& h = packet.header;
-  switch (h.type) {
-    case PacketType::kHello: onHello(std::get<device::net::HelloPayload>(packet.payload).client_nonce, from, now_ns); return;
-    case PacketType::kWelcome: {
-      const auto& welcome = std::get<device::net::WelcomePayload>(packet.payload);
-      if (config_.role != MentorRole::kFollower || from != other_ || welcome.client_nonce != nonce_) {
-        drops_.count(DropReason::kWrongSession);
-        return;
-      }
-      if (!session_ || session_id_ != h.session_id) {
-        session_ = true;
-        session_id_ = h.session_id;
-        peer_sequence_.reset();
-        send_sequence_ = 0;
-        have_sent_ = false;
-        have_other_ = false;
-        last_heard_ns_ = now_ns;
-        bump(sessions_);
-      }
-      hello_pending_ = false;
-      refused_.store(false, std::memory_order_relaxed);
-      return;
-    }
-    case PacketType::kBusy: {
-      const auto& busy = std::get<device::net::BusyPayload>(packet.payload);
-      if (config_.role == MentorRole::kFollower && from == other_ && busy.client_nonce == nonce_) {
-        refused_.store(true, std::memory_order_relaxed);
-      } else {
-        drops_.count(DropReason::kWrongSession);
-      }
-      return;
-    }
-    case PacketType::kPeer:
-    case PacketType::kBye: break;
-    default: drops_.count(DropReason::kUnexpected); return;
-  }
-  // PEER and BYE: the live session's, from the other station, newer than any accepted.
-  if (!session_ || h.session_id != session_id_ || from != other_) {
-    drops_.count(DropReason::kWrongSession);
-    return;
-  }
-  DropReason why{};
-  if (!peer_sequence_.accept(h.sequence, why)) {
-    drops_.count(why);
-    return;
-  }
-  last_heard_ns_ = now_ns;
-  if (h.type == PacketType::kBye) {  // a normal end: the link goes down without a fault
-    if (session_) bump(goodbyes_);
-    session_ = false;
+// A new session starts from nothing heard; a goodbye ends the link without a fault; the
+// follower says HELLO (again every hello_interval) while it has no session, also after a BUSY.
+void MentorCoupling::Impl::followSession(std::int64_t now_ns) noexcept {
+  const std::uint64_t generation = session_->generation();
+  if (generation != generation_) {
+    generation_ = generation;
     have_other_ = false;
-    link_up_ = false;
-    return;
+    have_sent_ = false;
+    refused_.store(false, std::memory_order_relaxed);
   }
-  other_state_ = std::get<device::net::PeerPayload>(packet.payload);
-  other_arrival_ns_ = now_ns;
-  other_sender_ns_ = h.sender_time_ns;
-  have_other_ = true;
-  bump(peers_received_);
-  // Round trip: our echoed time, less the time the other held it.
-  if (other_state_.echo_sender_time_ns > 0) {
-    const double rtt = static_cast<double>(now_ns - other_state_.echo_sender_time_ns - other_state_.hold_ns) * 1e-9;
-    if (rtt >= 0.0) rtt_snapshot_.store(rtt, std::memory_order_relaxed);
+  const wire::SessionStats stats = session_->stats();
+  if (stats.byes_received != byes_seen_) {
+    byes_seen_ = stats.byes_received;
+    link_up_ = false;
+  }
+  if (!session_->live()) have_other_ = false;
+  if (initiator_ == nullptr) return;
+  if (stats.busy != busy_seen_) {
+    busy_seen_ = stats.busy;
+    refused_.store(true, std::memory_order_relaxed);
+  }
+  using State = wire::InitiatorSession::State;
+  if (!session_->live() && initiator_->state() != State::kConnecting &&
+      (initiator_->lastHello_ns() == 0 || now_ns - initiator_->lastHello_ns() >= toNs(config_.hello_interval_s))) {
+    initiator_->connect(now_ns);
   }
 }
 
-void MentorCoupling::drain(std::int64_t now_ns) noexcept {
-  for (std::size_t i = 0; i < kMaxDrain; ++i) {
-    std::size_t size = 0;
-    device::net::UdpEndpoint from;
-    if (!link_.receive(now_ns, rx_, size, from)) return;
-    if (size > rx_.size()) {
-      drops_.count(DropReason::kBadSize);
-      continue;
-    }
-    device::net::Packet packet;
-    DropReason why{};
-    if (!device::net::decodePacket(std::span(rx_.data(), size), config_.key, packet, why)) {
-      drops_.count(why);
-      continue;
-    }
-    handle(packet, from, now_ns);
+void MentorCoupling::Impl::takePeer(std::int64_t now_ns) noexcept {
+  wire::Packet packet;
+  std::int64_t arrival_ns = 0;
+  if (!session_->takeData(packet, arrival_ns)) return;
+  other_state_ = std::get<wire::PeerPayload>(packet.payload);
+  other_arrival_ns_ = arrival_ns;
+  other_sender_ns_ = packet.header.sender_time_ns;
+  have_other_ = true;
+  // Round trip: our echoed time, less the time the other held it (checked: authentic is not sane).
+  const std::int64_t echo = other_state_.echo_sender_time_ns;
+  if (echo > 0 && echo <= now_ns && other_state_.hold_ns <= now_ns - echo) {
+    rtt_snapshot_.store(static_cast<double>(now_ns - echo - other_state_.hold_ns) * 1e-9, std::memory_order_relaxed);
   }
 }
 
 // The raw coupling force on this station's pen, before the fade and the passivity controller.
-Vec3 MentorCoupling::couplingForce(const PenState& pen, const ContactForces& contact, double dt_s) noexcept {
+Vec3 MentorCoupling::Impl::couplingForce(const PenState& pen, const ContactForces& contact, double dt_s) noexcept {
   const CouplingGains& g = config_.gains;
   const bool follower = config_.role == MentorRole::kFollower;
   const Vec3 dp = other_state_.p_WT - pen.p_WT;
@@ -298,7 +262,7 @@ Vec3 MentorCoupling::couplingForce(const PenState& pen, const ContactForces& con
 // cut, by a damper along the pen's velocity, so that the energy given never exceeds the energy
 // the other station's person put in (as last heard). The cut never exceeds the force's own
 // component along the velocity, so it cannot push back.
-Vec3 MentorCoupling::passive(const Vec3& force, const Vec3& v_WT, double dt_s) noexcept {
+Vec3 MentorCoupling::Impl::passive(const Vec3& force, const Vec3& v_WT, double dt_s) noexcept {
   const double power = force.dot(v_WT);
   const double allowance = other_state_.energy_in_J - energy_out_J_;
   const double v2 = v_WT.squaredNorm();
@@ -309,19 +273,14 @@ Vec3 MentorCoupling::passive(const Vec3& force, const Vec3& v_WT, double dt_s) n
   return force - alpha * v_WT;
 }
 
-Vec3 MentorCoupling::compute(const PenState& pen, const ContactForces& contact, double dt_s) noexcept {
+Vec3 MentorCoupling::Impl::compute(const PenState& pen, const ContactForces& contact, double dt_s) noexcept {
   const std::int64_t now_ns = toNs(pen.t_s);
-  drain(now_ns);
-
-  // The session: the follower says HELLO until welcomed; a silent one ends.
-  if (session_ && now_ns - last_heard_ns_ > toNs(config_.session_timeout_s)) {
-    session_ = false;
-    have_other_ = false;
-  }
-  if (!session_ && config_.role == MentorRole::kFollower) sayHello(now_ns);
+  session_->pump(now_ns);
+  followSession(now_ns);
+  takePeer(now_ns);
 
   // The link: fresh PEERs; a lost link zeroes the force at once and fades in when back.
-  const bool up = session_ && have_other_ && now_ns - other_arrival_ns_ <= toNs(config_.hold_s);
+  const bool up = session_->live() && have_other_ && now_ns - other_arrival_ns_ <= toNs(config_.hold_s);
   if (link_up_ && !up) bump(link_faults_);
   link_up_ = up;
   Vec3 force = Vec3::Zero();
@@ -341,58 +300,71 @@ Vec3 MentorCoupling::compute(const PenState& pen, const ContactForces& contact, 
   if (power > 0.0) energy_out_J_ += power;
   if (power < 0.0) energy_in_J_ -= power;
 
-  // Tell the other station. The leader streams only once the follower has sent an authentic
-  // PEER of this session, so a replayed HELLO never starts a stream.
-  if (session_ && (config_.role == MentorRole::kFollower || have_other_)) {
-    device::net::PeerPayload out;
-    out.t_s = pen.t_s;
-    out.p_WT = pen.p_WT;
-    out.v_WT = pen.v_WT;
-    out.f_user_W = contact.f_on_paper_W;
-    out.f_coupling_W = force;
-    out.energy_in_J = energy_in_J_;
-    out.energy_out_J = energy_out_J_;
-    out.echo_sender_time_ns = have_other_ ? other_sender_ns_ : 0;
-    out.hold_ns = have_other_ ? now_ns - other_arrival_ns_ : 0;
-    out.coupling = static_cast<std::uint32_t>(activeCoupling());
-    out.flags = (contact.in_contact ? device::net::kPeerPenDown : 0u) | (up ? device::net::kPeerLinkUp : 0u);
-    if (worthSending(out, now_ns)) {
-      send(out, other_, now_ns);
-      bump(peers_sent_);
-      last_sent_ = out;
-      last_sent_ns_ = now_ns;
-      have_sent_ = true;
-    } else {
-      bump(peers_withheld_);
-    }
-  }
+  tell(pen, contact, force, up, now_ns);
+  publish(up);
+  return force;
+}
 
-  // For other threads.
+// Tell the other station. The leader streams only once the follower has sent an authentic
+// PEER of this session, so a replayed HELLO never starts a stream.
+void MentorCoupling::Impl::tell(const PenState& pen, const ContactForces& contact, const Vec3& force, bool up,
+                                std::int64_t now_ns) noexcept {
+  if (!session_->live() || (config_.role == MentorRole::kLeader && !session_->confirmed())) return;
+  wire::PeerPayload out;
+  out.t_s = pen.t_s;
+  out.p_WT = pen.p_WT;
+  out.v_WT = pen.v_WT;
+  out.f_user_W = contact.f_on_paper_W;
+  out.f_coupling_W = force;
+  out.energy_in_J = energy_in_J_;
+  out.energy_out_J = energy_out_J_;
+  out.echo_sender_time_ns = have_other_ ? other_sender_ns_ : 0;
+  out.hold_ns = have_other_ ? std::clamp<std::int64_t>(now_ns - other_arrival_ns_, 0, wire::kMaxHoldNs) : 0;
+  out.coupling = static_cast<std::uint32_t>(activeCoupling());
+  out.flags = (contact.in_contact ? wire::kPeerPenDown : 0u) | (up ? wire::kPeerLinkUp : 0u);
+  if (!worthSending(out, now_ns)) {
+    bump(peers_withheld_);
+    return;
+  }
+  (void)session_->send(out, now_ns);
+  bump(peers_sent_);
+  last_sent_ = out;
+  last_sent_ns_ = now_ns;
+  have_sent_ = true;
+}
+
+// For other threads.
+void MentorCoupling::Impl::publish(bool up) noexcept {
   if (have_other_) {
     peer_view_.write(PeerView{.valid = true, .t_s = other_state_.t_s, .p_WT = other_state_.p_WT, .v_WT = other_state_.v_WT,
                               .f_user_W = other_state_.f_user_W,
-                              .pen_down = (other_state_.flags & device::net::kPeerPenDown) != 0});
+                              .pen_down = (other_state_.flags & wire::kPeerPenDown) != 0});
   }
-  session_flag_.store(session_, std::memory_order_relaxed);
   link_flag_.store(up, std::memory_order_relaxed);
   energy_in_snapshot_.store(energy_in_J_, std::memory_order_relaxed);
   energy_out_snapshot_.store(energy_out_J_, std::memory_order_relaxed);
   peer_energy_snapshot_.store(other_state_.energy_in_J, std::memory_order_relaxed);
   dissipated_snapshot_.store(dissipated_J_, std::memory_order_relaxed);
-  lost_snapshot_.store(peer_sequence_.lost(), std::memory_order_relaxed);
-  return force;
 }
 
-void MentorCoupling::close(std::int64_t now_ns) noexcept {
-  if (!session_) return;
-  send(device::net::ByePayload{}, other_, now_ns);
-  session_ = false;
-  session_flag_.store(false);
+MentorCoupling::MentorCoupling(const MentorConfig& config, wire::DatagramLink& link)
+    : impl_(std::make_unique<Impl>(config, link)) {}
+
+MentorCoupling::~MentorCoupling() = default;
+
+Vec3 MentorCoupling::compute(const PenState& pen, const ContactForces& contact, double dt_s) noexcept {
+  return impl_->compute(pen, contact, dt_s);
 }
+
+void MentorCoupling::close(std::int64_t now_ns) noexcept { impl_->session_->close(now_ns); }
+
+TripleBuffer<PeerView>& MentorCoupling::peer() noexcept { return impl_->peer_view_; }
+
+const MentorConfig& MentorCoupling::config() const noexcept { return impl_->config_; }
 
 // The perceptual deadband: a change the other person could feel or see, a change of state,
 // or the heartbeat that keeps the link up.
-bool MentorCoupling::worthSending(const device::net::PeerPayload& out, std::int64_t now_ns) const noexcept {
+bool MentorCoupling::Impl::worthSending(const wire::PeerPayload& out, std::int64_t now_ns) const noexcept {
   if (config_.deadband <= 0.0 || !have_sent_) return true;
   if (now_ns - last_sent_ns_ >= toNs(config_.heartbeat_s)) return true;
   if (out.flags != last_sent_.flags || out.coupling != last_sent_.coupling) return true;
@@ -405,24 +377,26 @@ bool MentorCoupling::worthSending(const device::net::PeerPayload& out, std::int6
 }
 
 MentorStats MentorCoupling::stats() const noexcept {
+  const Impl& i = *impl_;
+  const wire::SessionStats session = i.session_->stats();
   MentorStats s;
-  s.session = session_flag_.load(std::memory_order_relaxed);
-  s.link_up = link_flag_.load(std::memory_order_relaxed);
-  s.sessions = sessions_.load();
-  s.busy_refusals = busy_refusals_.load();
-  s.refused_busy = refused_.load();
-  s.link_faults = link_faults_.load();
-  s.goodbyes_received = goodbyes_.load();
-  s.peers_received = peers_received_.load();
-  s.peers_sent = peers_sent_.load();
-  s.peers_withheld = peers_withheld_.load();
-  s.lost = lost_snapshot_.load();
-  for (std::size_t i = 0; i < device::net::kDropReasonCount; ++i) s.drops[i] = drops_[static_cast<DropReason>(i)];
-  s.energy_in_J = energy_in_snapshot_.load();
-  s.energy_out_J = energy_out_snapshot_.load();
-  s.peer_energy_in_J = peer_energy_snapshot_.load();
-  s.dissipated_J = dissipated_snapshot_.load();
-  s.rtt_s = rtt_snapshot_.load();
+  s.session = i.session_->live();
+  s.link_up = i.link_flag_.load(std::memory_order_relaxed);
+  s.sessions = session.sessions;
+  s.busy_refusals = i.config_.role == MentorRole::kLeader ? session.busy : 0;
+  s.refused_busy = i.refused_.load();
+  s.link_faults = i.link_faults_.load();
+  s.goodbyes_received = session.byes_received;
+  s.peers_received = session.data_received;
+  s.peers_sent = i.peers_sent_.load();
+  s.peers_withheld = i.peers_withheld_.load();
+  s.lost = session.data_lost;
+  s.drops = session.drops;
+  s.energy_in_J = i.energy_in_snapshot_.load();
+  s.energy_out_J = i.energy_out_snapshot_.load();
+  s.peer_energy_in_J = i.peer_energy_snapshot_.load();
+  s.dissipated_J = i.dissipated_snapshot_.load();
+  s.rtt_s = i.rtt_snapshot_.load();
   return s;
 }
 
@@ -435,6 +409,7 @@ MentorStats statsSince(const MentorStats& now, const MentorStats& before) noexce
   d.peers_received -= before.peers_received;
   d.peers_sent -= before.peers_sent;
   d.peers_withheld -= before.peers_withheld;
+  d.lost -= before.lost;
   for (std::size_t i = 0; i < d.drops.size(); ++i) d.drops[i] -= before.drops[i];
   d.energy_in_J -= before.energy_in_J;
   d.energy_out_J -= before.energy_out_J;

@@ -57,7 +57,7 @@ device::HandCommand HeldHand::command(double t_s) noexcept {
   return t_s < start ? lifted_ : script_.command(t_s - start);
 }
 
-MentorStation::MentorStation(const StationConfig& config, DatagramLink& link, device::HandScript* hand)
+MentorStation::MentorStation(const StationConfig& config, wire::DatagramLink& link, device::HandScript* hand)
     : config_(config) {
   environment_ = std::make_unique<session::TrialEnvironment>(config_.device_uri, config_.world, config_.rate_hz);
   clamps_ = environment_->worldClamps();
@@ -132,7 +132,7 @@ MentoredRun runMentoredSimulation(const MentoredSetup& setup, device::HandScript
   LinkConditions back = there;
   back.seed = setup.seed * 2654435761u + 1;
   EmulatedLinkPair link(there, back);
-  const device::net::AuthKey key = device::net::randomKey();
+  const wire::AuthKey key = wire::randomKey();
 
   // Two stations; the hands hold the pens lifted while the link comes up.
   session::SettlingHand leader_settling(leader_hand, setup.settle_s);

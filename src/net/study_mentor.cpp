@@ -93,7 +93,7 @@ class SimulatedStudyMentor final : public session::LiveGuidance {
     LinkConditions back = there;
     back.seed = seed * 2654435761u + 1;
     link_.emplace(there, back);
-    const device::net::AuthKey key = device::net::randomKey();
+    const wire::AuthKey key = wire::randomKey();
 
     // The expert's station: their pen and paper, their hand writing the reference after the
     // same settle time as the trainee's, so both start writing together.
@@ -168,8 +168,8 @@ class LiveStudyMentor final : public session::LiveGuidance {
  public:
   explicit LiveStudyMentor(const session::StudyMentor& spec)
       : spec_(spec),
-        leader_(device::net::parseUdpEndpoint(spec.connect, "mentor.connect")),
-        key_(device::net::readKeyFile(spec.key)) {}
+        leader_(wire::parseUdpEndpoint(spec.connect, "mentor.connect")),
+        key_(wire::readKeyFile(spec.key)) {}
 
   /// The handshake (HELLO every 50 ms until welcomed) and the fade-in, with room for a slow link.
   [[nodiscard]] double minimumSettle_s() const noexcept override { return 1.0; }
@@ -180,7 +180,7 @@ class LiveStudyMentor final : public session::LiveGuidance {
     config_ = followerConfig(spec_, mode, environment, clamps_);
     config_.key = key_;
     config_.leader = leader_;
-    link_ = std::make_unique<UdpDatagramLink>(device::net::UdpSocket::bound({.address = 0, .port = 0}));
+    link_ = std::make_unique<wire::UdpDatagramLink>(wire::UdpSocket::connected(leader_), wire::UdpDatagramLink::Clock::kLoop);
     follower_ = std::make_unique<MentorCoupling>(config_, *link_);
     return *follower_;
   }
@@ -209,11 +209,11 @@ class LiveStudyMentor final : public session::LiveGuidance {
 
  private:
   session::StudyMentor spec_;
-  device::net::UdpEndpoint leader_;
-  device::net::AuthKey key_;
+  wire::UdpEndpoint leader_;
+  wire::AuthKey key_;
   MentorConfig config_;
   std::vector<std::string> clamps_;
-  std::unique_ptr<UdpDatagramLink> link_;
+  std::unique_ptr<wire::UdpDatagramLink> link_;
   std::unique_ptr<MentorCoupling> follower_;
 };
 

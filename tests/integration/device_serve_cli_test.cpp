@@ -84,6 +84,8 @@ TEST(DeviceServeCli, KeygenWritesAnOwnerOnlyKeyAndRefusesToOverwriteWithoutForce
 TEST(DeviceServeCli, BadKeyFilesAndAddressesExitTwoWithTheReason) {
   test::TempDir dir;
   test::writeText(dir / "short.key", "abcd\n");
+  std::filesystem::permissions(dir / "short.key", std::filesystem::perms::owner_read | std::filesystem::perms::owner_write,
+                               std::filesystem::perm_options::replace);
   const RunResult bad_key = runHattr(dir, "device serve --listen 127.0.0.1:0 --key " + (dir / "short.key").string());
   EXPECT_EQ(bad_key.exit_code, 2);
   EXPECT_THAT(bad_key.err, HasSubstr("short.key: expected 64 hexadecimal characters"));

@@ -23,7 +23,7 @@ struct Trace {
 Trace run(const LinkConditions& conditions, int n) {
   LinkEmulator link(conditions);
   Trace trace;
-  device::net::PacketBuffer buffer{};
+  wire::PacketBuffer buffer{};
   for (std::int64_t t = 0; t < (n + 1000) * kMs; t += kMs / 10) {
     if (t % kMs == 0 && t / kMs < n) {
       const std::uint8_t byte = static_cast<std::uint8_t>(t / kMs);
@@ -85,7 +85,7 @@ TEST(LinkEmulator, DuplicatesArriveTwiceAndHeldBackOnesArriveLate) {
 
 TEST(LinkEmulator, SendAndReceiveNeverAllocate) {
   LinkEmulator link({.delay_s = 0.01, .jitter_s = 0.002, .loss = 0.1, .duplicate = 0.1});
-  device::net::PacketBuffer buffer{};
+  wire::PacketBuffer buffer{};
   const test::NoAllocationScope scope;
   for (std::int64_t t = 0; t < 2000 * kMs; t += kMs) {
     link.send(std::span(buffer.data(), 100), t);
@@ -107,20 +107,20 @@ TEST(LinkEmulator, RefusesImpossibleConditionsNamingTheField) {
 
 TEST(LinkRelay, CarriesDatagramsBothWaysOverLoopbackWithTheEmulatedDelay) {
   // An echo "server" on loopback behind a relay with 20 ms each way.
-  auto server = device::net::UdpSocket::bound(device::net::parseUdpEndpoint("127.0.0.1:0", "test", 0));
+  auto server = wire::UdpSocket::bound(wire::parseUdpEndpoint("127.0.0.1:0", "test", 0));
   LinkRelay relay("127.0.0.1:0", server.localEndpoint().text(), {.delay_s = 0.02}, {.delay_s = 0.02});
-  auto client = device::net::UdpSocket::connected(relay.endpoint());
+  auto client = wire::UdpSocket::connected(relay.endpoint());
   const std::uint8_t ping[3] = {1, 2, 3};
-  const std::int64_t sent = device::net::monotonicNs();
+  const std::int64_t sent = wire::monotonicNs();
   ASSERT_TRUE(client.send(ping));
-  device::net::PacketBuffer buffer{};
-  device::net::Received got;
+  wire::PacketBuffer buffer{};
+  wire::Received got;
   ASSERT_TRUE(server.waitReadable(1'000 * kMs));
-  ASSERT_EQ(server.receive(buffer, got), device::net::ReceiveStatus::kPacket);
+  ASSERT_EQ(server.receive(buffer, got), wire::ReceiveStatus::kPacket);
   ASSERT_TRUE(server.sendTo(std::span(buffer.data(), got.size), got.from));
   ASSERT_TRUE(client.waitReadable(1'000 * kMs));
-  ASSERT_EQ(client.receive(buffer, got), device::net::ReceiveStatus::kPacket);
-  const double rtt_ms = static_cast<double>(device::net::monotonicNs() - sent) / 1e6;
+  ASSERT_EQ(client.receive(buffer, got), wire::ReceiveStatus::kPacket);
+  const double rtt_ms = static_cast<double>(wire::monotonicNs() - sent) / 1e6;
   EXPECT_EQ(got.size, 3u);
   EXPECT_EQ(buffer[2], 3);
   EXPECT_GE(rtt_ms, 40.0);

@@ -173,7 +173,7 @@ TEST(Mentoring, CouplingNamesRoundTripAndBadOnesAreRefused) {
 TEST(Mentoring, AGoodbyeEndsTheSessionWithoutALinkFaultASilentLinkCountsOne) {
   for (const bool goodbye : {true, false}) {
     EmulatedLinkPair link(LinkConditions{}, LinkConditions{});
-    const device::net::AuthKey key = device::net::randomKey();
+    const wire::AuthKey key = wire::randomKey();
     MentorCoupling leader(MentorConfig{.role = MentorRole::kLeader, .key = key}, link.end(0));
     MentorCoupling follower(MentorConfig{.role = MentorRole::kFollower, .key = key, .leader = EmulatedLinkPair::addressOf(0)},
                             link.end(1));

@@ -23,9 +23,12 @@ HapticProfile expertScript() { return test::figureEightScript(2.0); }
 
 /// A live station on its own real-time loop, its simulated hand released once linked.
 struct LiveStation {
-  LiveStation(MentorRole role, Coupling coupling, const device::net::AuthKey& key, device::net::UdpEndpoint leader,
+  LiveStation(MentorRole role, Coupling coupling, const wire::AuthKey& key, wire::UdpEndpoint leader,
               device::HandScript& script, const std::string& device_uri)
-      : link(device::net::UdpSocket::bound({.address = 0x7F000001u, .port = 0})), hand(script) {
+      : link(role == MentorRole::kLeader ? wire::UdpSocket::bound({.address = 0x7F000001u, .port = 0})
+                                         : wire::UdpSocket::connected(leader),
+             wire::UdpDatagramLink::Clock::kLoop),
+        hand(script) {
     StationConfig config{.device_uri = device_uri};
     config.mentor = MentorConfig{.role = role, .coupling = coupling, .key = key, .leader = leader};
     station = std::make_unique<MentorStation>(config, link, &hand);
@@ -50,7 +53,7 @@ struct LiveStation {
     station->recorder().stopThread();
     return station->takeRecording();
   }
-  UdpDatagramLink link;
+  wire::UdpDatagramLink link;
   HeldHand hand;
   std::unique_ptr<MentorStation> station;
   bool stopped = false;
@@ -83,7 +86,7 @@ Session liveSession(Coupling coupling) {
   const HapticProfile script = expertScript();
   device::ProfileHandScript expert_plan(script);
   LaggingHand trainee_plan(script);
-  const device::net::AuthKey key = device::net::randomKey();
+  const wire::AuthKey key = wire::randomKey();
   LiveStation leader(MentorRole::kLeader, coupling, key, {}, expert_plan, "sim://pen");
   const LinkConditions one_way{.delay_s = 0.05, .loss = 0.05, .seed = 9};
   LinkRelay relay("127.0.0.1:0", leader.link.localEndpoint().text(), one_way, {.delay_s = 0.05, .loss = 0.05, .seed = 10});
@@ -140,9 +143,9 @@ TEST(MentoringOverUdp, KillingEitherStationZeroesTheOthersForceWithin20Ms) {
     (void)test::passesUnlessTheHostStalls([&](std::uint64_t& stalls) {
       const HapticProfile script = expertScript();
       device::ProfileHandScript plan_a(script), plan_b(script);
-      const device::net::AuthKey key = device::net::randomKey();
+      const wire::AuthKey key = wire::randomKey();
       auto leader = std::make_unique<LiveStation>(MentorRole::kLeader, Coupling::kBilateral, key,
-                                                  device::net::UdpEndpoint{}, plan_a, "sim://pen");
+                                                  wire::UdpEndpoint{}, plan_a, "sim://pen");
       auto follower = std::make_unique<LiveStation>(MentorRole::kFollower, Coupling::kBilateral, key,
                                                     leader->link.localEndpoint(), plan_b, "sim://pen");
       ASSERT_TRUE(waitFor([&] { return follower->station->coupling().stats().link_up && leader->station->coupling().stats().link_up; },
@@ -181,7 +184,7 @@ TEST(MentoringOverUdp, KillingEitherStationZeroesTheOthersForceWithin20Ms) {
 TEST(MentoringOverUdp, ASecondFollowerAWrongKeyAndGarbageAreRefusedAndCounted) {
   const HapticProfile script = expertScript();
   device::ProfileHandScript a(script), b(script), c(script);
-  const device::net::AuthKey key = device::net::randomKey();
+  const wire::AuthKey key = wire::randomKey();
   LiveStation leader(MentorRole::kLeader, Coupling::kObserve, key, {}, a, "sim://pen");
   LiveStation first(MentorRole::kFollower, Coupling::kObserve, key, leader.link.localEndpoint(), b, "sim://pen");
   ASSERT_TRUE(waitFor([&] { return first.station->coupling().stats().link_up; }, 3000ms));
@@ -189,16 +192,16 @@ TEST(MentoringOverUdp, ASecondFollowerAWrongKeyAndGarbageAreRefusedAndCounted) {
   ASSERT_TRUE(waitFor([&] { return second.station->coupling().stats().refused_busy; }, 3000ms));
   EXPECT_GE(leader.station->coupling().stats().busy_refusals, 1u);
   // A stranger with another key, and garbage, change nothing and are counted.
-  auto stranger = device::net::UdpSocket::connected(leader.link.localEndpoint());
-  device::net::PacketBuffer buffer{};
-  const device::net::Packet hello{{.sender_time_ns = 1}, device::net::HelloPayload{}};
-  (void)stranger.send(std::span(buffer.data(), device::net::encodePacket(hello, device::net::randomKey(), buffer)));
+  auto stranger = wire::UdpSocket::connected(leader.link.localEndpoint());
+  wire::PacketBuffer buffer{};
+  const wire::Packet hello{{.sender_time_ns = 1}, wire::HelloPayload{}};
+  (void)stranger.send(std::span(buffer.data(), wire::encodePacket(hello, wire::randomKey(), buffer)));
   const std::uint8_t garbage[17] = {1, 2, 3};
   (void)stranger.send(garbage);
   ASSERT_TRUE(waitFor([&] {
     const auto d = leader.station->coupling().stats().drops;
-    return d[static_cast<std::size_t>(device::net::DropReason::kBadMac)] >= 1 &&
-           d[static_cast<std::size_t>(device::net::DropReason::kBadSize)] >= 1;
+    return d[static_cast<std::size_t>(wire::DropReason::kBadMac)] >= 1 &&
+           d[static_cast<std::size_t>(wire::DropReason::kBadSize)] >= 1;
   }, 1000ms));
   EXPECT_TRUE(first.station->coupling().stats().link_up);
   EXPECT_EQ(leader.station->coupling().stats().sessions, 1u);

@@ -21,10 +21,10 @@ struct Served {
   std::filesystem::path key_file = dir / "shared.key";
   std::unique_ptr<DeviceServer> server;
   Served() {
-    device::net::writeKeyFile(key_file, device::net::randomKey(), false);
+    wire::writeKeyFile(key_file, wire::randomKey(), false);
     DeviceServerConfig config;
     config.device_uri = "sim://pen";
-    config.key = device::net::readKeyFile(key_file);
+    config.key = wire::readKeyFile(key_file);
     server = std::make_unique<DeviceServer>(config);
     server->start();
   }

@@ -248,10 +248,10 @@ class StudioInputTest : public QObject {
     {
       const QTemporaryDir dir;
       const std::string key_file = (dir.path() + "/shared.key").toStdString();
-      device::net::writeKeyFile(key_file, device::net::randomKey(), false);
+      wire::writeKeyFile(key_file, wire::randomKey(), false);
       net::DeviceServerConfig config;
       config.device_uri = "sim://pen?continuous_force_N=0.9";
-      config.key = device::net::readKeyFile(key_file);
+      config.key = wire::readKeyFile(key_file);
       net::DeviceServer server(config);
       server.start();
       const QString uri = QString::fromStdString("udp://" + server.endpoint().text() + "?key=" + key_file);

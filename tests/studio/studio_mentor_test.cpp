@@ -71,7 +71,7 @@ MentorSettings leaderSettings(const std::filesystem::path& key_file) {
   return s;
 }
 
-MentorSettings followerSettings(const std::filesystem::path& key_file, const device::net::UdpEndpoint& leader,
+MentorSettings followerSettings(const std::filesystem::path& key_file, const wire::UdpEndpoint& leader,
                                 net::Coupling coupling, const std::string& device_uri = "sim://pen") {
   MentorSettings s;
   s.role = net::MentorRole::kFollower;
@@ -142,7 +142,7 @@ class StudioMentorTest : public QObject {
   void initTestCase() {
     dir_ = test::freshTempDir("mentor");
     key_file_ = dir_ / "mentor.key";
-    device::net::writeKeyFile(key_file_, device::net::randomKey(), false);
+    wire::writeKeyFile(key_file_, wire::randomKey(), false);
   }
 
   void cleanupTestCase() { std::filesystem::remove_all(dir_); }
@@ -341,7 +341,7 @@ class StudioMentorTest : public QObject {
     leader.session.stop();
 
     // Nobody answers: a socket that never replies (so no ICMP either).
-    auto silent = device::net::UdpSocket::bound({.address = 0x7F000001u, .port = 0});
+    auto silent = wire::UdpSocket::bound({.address = 0x7F000001u, .port = 0});
     Station lonely;
     MentorSettings settings = followerSettings(key_file_, silent.localEndpoint(), net::Coupling::kObserve);
     settings.wait_s = 0.5;
@@ -353,7 +353,7 @@ class StudioMentorTest : public QObject {
 
     // A wrong key looks the same: the leader drops the packets unanswered (and counts them).
     const auto other_key = dir_ / "other.key";
-    device::net::writeKeyFile(other_key, device::net::randomKey(), true);
+    wire::writeKeyFile(other_key, wire::randomKey(), true);
     Station host, stranger;
     host.session.start(leaderSettings(key_file_), host.hand);
     settings = followerSettings(other_key, host.session.localEndpoint(), net::Coupling::kObserve);
@@ -361,7 +361,7 @@ class StudioMentorTest : public QObject {
     stranger.session.start(settings, stranger.hand);
     QVERIFY(pollUntil({&host, &stranger}, [&] { return !stranger.session.active(); }));
     QVERIFY(stranger.session.snapshot().failure.starts_with("no other station"));
-    QVERIFY(host.session.snapshot().stats.drops[static_cast<std::size_t>(device::net::DropReason::kBadMac)] >= 1);
+    QVERIFY(host.session.snapshot().stats.drops[static_cast<std::size_t>(wire::DropReason::kBadMac)] >= 1);
     QCOMPARE(host.session.snapshot().phase, MentorPhase::kWaiting);
     host.session.stop();
   }
@@ -372,6 +372,8 @@ class StudioMentorTest : public QObject {
     const auto missing = dir_ / "missing.key";
     const auto short_key = dir_ / "short.key";
     std::ofstream(short_key) << "abc\n";
+    std::filesystem::permissions(short_key, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write,
+                                 std::filesystem::perm_options::replace);
     const auto libraryMessage = [](const std::function<void()>& call) {
       try {
         call();
@@ -383,7 +385,7 @@ class StudioMentorTest : public QObject {
     // A port that is free now (bound and released).
     std::uint16_t port = 0;
     {
-      auto probe = device::net::UdpSocket::bound({.address = 0x7F000001u, .port = 0});
+      auto probe = wire::UdpSocket::bound({.address = 0x7F000001u, .port = 0});
       port = probe.localEndpoint().port;
     }
     const std::string at = "127.0.0.1:" + std::to_string(port);
@@ -396,17 +398,17 @@ class StudioMentorTest : public QObject {
     std::vector<Case> cases;
     MentorSettings s = leaderSettings(missing);
     s.address = at;
-    cases.push_back({"missing key file", s, libraryMessage([&] { (void)device::net::readKeyFile(missing); })});
+    cases.push_back({"missing key file", s, libraryMessage([&] { (void)wire::readKeyFile(missing); })});
     s.key_file = short_key;
-    cases.push_back({"short key file", s, libraryMessage([&] { (void)device::net::readKeyFile(short_key); })});
+    cases.push_back({"short key file", s, libraryMessage([&] { (void)wire::readKeyFile(short_key); })});
     s.key_file = key_file_;
     s.address = "127.0.0.1:notaport";
     cases.push_back({"bad listen address", s,
-                     libraryMessage([&] { (void)device::net::parseUdpEndpoint(s.address, "listen address", 0); })});
+                     libraryMessage([&] { (void)wire::parseUdpEndpoint(s.address, "listen address", 0); })});
     MentorSettings f = followerSettings(key_file_, {.address = 0x7F000001u, .port = 7400}, net::Coupling::kObserve);
     f.address = "expert-host:7400";
     cases.push_back({"bad leader address", f,
-                     libraryMessage([&] { (void)device::net::parseUdpEndpoint(f.address, "leader's address"); })});
+                     libraryMessage([&] { (void)wire::parseUdpEndpoint(f.address, "leader's address"); })});
     for (const Case& c : cases) {
       Station station;
       const std::string got = libraryMessage([&] { station.session.start(c.settings, station.hand); });
@@ -421,7 +423,7 @@ class StudioMentorTest : public QObject {
     QVERIFY(cases[2].expected.starts_with("listen address: port"));
     QVERIFY(cases[3].expected.starts_with("leader's address: host"));
     // Nothing was bound: the port is still free.
-    auto again = device::net::UdpSocket::bound({.address = 0x7F000001u, .port = port});
+    auto again = wire::UdpSocket::bound({.address = 0x7F000001u, .port = port});
     QCOMPARE(again.localEndpoint().port, port);
   }
 
@@ -549,7 +551,7 @@ class StudioMentorTest : public QObject {
     QVERIFY(!tab.connectSession());
     std::string expected;
     try {
-      (void)device::net::readKeyFile(dir_ / "nope.key");
+      (void)wire::readKeyFile(dir_ / "nope.key");
     } catch (const InputError& e) {
       expected = e.what();
     }

@@ -11,8 +11,8 @@
 #include "core/mouse_hand.hpp"
 #include "core/study_session.hpp"
 #include "hattr/core/error.hpp"
-#include "hattr/device/net_protocol.hpp"
-#include "hattr/device/udp_socket.hpp"
+#include "hattr/wire/packet.hpp"
+#include "hattr/wire/udp_socket.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/net/study_mentor.hpp"
 #include "hattr/render/world_config.hpp"
@@ -648,9 +648,9 @@ class StudioRigTest : public QObject {
   // nothing, and is marked failed with the reason; the same trial is next again.
   void studySessionFailsAMentoredTrialWhoseExpertIsNotThere() {
     const auto dir = makeStudyFolder("mentor-absent");
-    device::net::writeKeyFile(dir / "mentor.key", device::net::randomKey(), false);
+    wire::writeKeyFile(dir / "mentor.key", wire::randomKey(), false);
     // A station that never answers: a bound socket nobody reads.
-    const device::net::UdpSocket silent = device::net::UdpSocket::bound({.address = 0x7f000001, .port = 0});
+    const wire::UdpSocket silent = wire::UdpSocket::bound({.address = 0x7f000001, .port = 0});
     const std::string connect = fmt::format("127.0.0.1:{}", silent.localEndpoint().port);
     std::ofstream(dir / "study.json") << test::smallStudyJson(
         "[\"mentor-observe\"]", 2.0, "[{\"id\": \"P01\", \"participant\": \"person\"}]", "flat", kPenUpEnd,

@@ -34,15 +34,14 @@ MentorSetup mentorSetupFor(const MentorSettings& settings) {
   mentor.deadband = settings.deadband;
   // The address, then the key: the library's own messages.
   if (isLeader(settings)) {
-    setup.bind = device::net::parseUdpEndpoint(settings.address, "listen address", 0);
+    setup.bind = wire::parseUdpEndpoint(settings.address, "listen address", 0);
   } else {
-    mentor.leader = device::net::parseUdpEndpoint(settings.address, "leader's address");
-    setup.bind = device::net::UdpEndpoint{.address = 0, .port = 0};
+    mentor.leader = wire::parseUdpEndpoint(settings.address, "leader's address");
   }
   HATTR_THROW_UNLESS(!settings.key_file.empty(),
                      "key file: none chosen; make one with `hattr device keygen --out FILE` and use the same file on "
                      "both stations");
-  mentor.key = device::net::readKeyFile(settings.key_file);
+  mentor.key = wire::readKeyFile(settings.key_file);
   mentor.validate();
   return setup;
 }
@@ -71,7 +70,10 @@ void MentorSession::start(const MentorSettings& settings, device::HandScript& ha
   stop();
   // Everything that can be refused is checked before anything runs.
   const MentorSetup setup = mentorSetupFor(settings);
-  auto link = std::make_unique<net::UdpDatagramLink>(device::net::UdpSocket::bound(setup.bind));
+  // A follower's socket is connected to its leader: the kernel delivers only the leader's datagrams.
+  auto link = std::make_unique<wire::UdpDatagramLink>(isLeader(settings) ? wire::UdpSocket::bound(setup.bind)
+                                                                         : wire::UdpSocket::connected(setup.mentor.leader),
+                                                      wire::UdpDatagramLink::Clock::kLoop);
   net::StationConfig config{.device_uri = settings.device_uri, .world = settings.world, .rate_hz = settings.rate_hz,
                             .mentor = setup.mentor};
   config.metadata.subject = !settings.subject.empty() ? settings.subject : isLeader(settings) ? "expert" : "trainee";
@@ -251,7 +253,7 @@ MentorSnapshot MentorSession::snapshot() const {
   return s;
 }
 
-device::net::UdpEndpoint MentorSession::localEndpoint() const {
+wire::UdpEndpoint MentorSession::localEndpoint() const {
   HATTR_DEMAND(link_ != nullptr, "localEndpoint() needs a running session");
   return link_->localEndpoint();
 }

@@ -56,11 +56,11 @@ struct MentorSettings {
 /// The coupling's configuration and the socket's address, checked.
 struct MentorSetup {
   net::MentorConfig mentor;       ///< role, coupling, key, leader's address, passivity, deadband
-  device::net::UdpEndpoint bind;  ///< where this station's socket is bound (a follower: any port)
+  wire::UdpEndpoint bind;  ///< where a leader's socket is bound (a follower's is connected to mentor.leader)
 };
 
 /// Reads the key file and parses the address as start() does, opening nothing: the library's
-/// messages (device::net::readKeyFile, device::net::parseUdpEndpoint, MentorConfig::validate).
+/// messages (wire::readKeyFile, wire::parseUdpEndpoint, MentorConfig::validate).
 /// Throws InputError.
 MentorSetup mentorSetupFor(const MentorSettings& settings);
 
@@ -129,7 +129,7 @@ class MentorSession {
   /// The gains and world settings clamped to the device (MentorStation::clamps()).
   [[nodiscard]] const std::vector<std::string>& clamps() const noexcept { return clamps_; }
   /// Where the socket is bound (the leader's port when it asked for port 0). Only while active().
-  [[nodiscard]] device::net::UdpEndpoint localEndpoint() const;
+  [[nodiscard]] wire::UdpEndpoint localEndpoint() const;
   /// The station's loop counters, while active() (null otherwise).
   [[nodiscard]] const servo::LiveCounters* counters() const noexcept;
 
@@ -151,7 +151,7 @@ class MentorSession {
   [[nodiscard]] std::string linkLost() const;
 
   MentorSettings settings_;
-  std::unique_ptr<net::UdpDatagramLink> link_;
+  std::unique_ptr<wire::UdpDatagramLink> link_;
   std::unique_ptr<session::SettlingHand> settling_;  // the hand, lifted while the forces ramp in
   std::unique_ptr<net::MentorStation> station_;      // after link_ and settling_: destroyed first
   MentorPhase phase_ = MentorPhase::kIdle;

@@ -43,7 +43,7 @@ QString dropsText(const net::MentorStats& stats) {
   for (std::size_t i = 0; i < stats.drops.size(); ++i) {
     if (stats.drops[i] == 0) continue;
     parts << QStringLiteral("%1 %2")
-                 .arg(qs(device::net::dropReasonName(static_cast<device::net::DropReason>(i))))
+                 .arg(qs(wire::dropReasonName(static_cast<wire::DropReason>(i))))
                  .arg(stats.drops[i]);
   }
   return parts.isEmpty() ? QObject::tr("none") : parts.join(QStringLiteral(", "));

@@ -1,6 +1,7 @@
 #pragma once
-/// What a device can do, declared once by each device (see hattr::device::Device). Plain
-/// data in core, so the renderer and the guidance can check their gains against it. SI.
+/// What a device can do and how it is, declared once by each device (see
+/// hattr::device::Device). Plain data in core, so the renderer and the guidance can check
+/// their gains against it and the wire protocol can carry it. SI.
 
 #include "hattr/core/types.hpp"
 
@@ -19,5 +20,16 @@ struct DeviceLimits {
   double mass_kg = 0.045;                               ///< apparent mass at the tip (for passivity bounds)
   double damping_N_s_per_m = 1.0;                       ///< physical damping (for passivity bounds)
 };
+
+/// What a device measures besides position and velocity.
+struct DeviceCapabilities {
+  bool force_sensor = false;
+  bool pressure = false;
+  bool tilt = false;
+  friend bool operator==(const DeviceCapabilities&, const DeviceCapabilities&) = default;
+};
+
+/// How a device is at one read.
+enum class DeviceStatus { kOk, kFault, kDisconnected };
 
 }  // namespace hattr

@@ -12,17 +12,11 @@
 
 namespace hattr::device {
 
-/// What a device can do (declared in core so render and guidance can use it).
+/// What a device can do, what it measures, how it is (declared in core so render, guidance
+/// and the wire protocol can use them).
 using DeviceLimits = hattr::DeviceLimits;
-
-/// What a device measures besides position and velocity.
-struct DeviceCapabilities {
-  bool force_sensor = false;
-  bool pressure = false;
-  bool tilt = false;
-};
-
-enum class DeviceStatus { kOk, kFault, kDisconnected };
+using DeviceCapabilities = hattr::DeviceCapabilities;
+using DeviceStatus = hattr::DeviceStatus;
 
 /// Who runs the servo loop's clock for a device (ServoLoop::start picks from this).
 enum class DeviceClocking {

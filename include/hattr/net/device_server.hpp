@@ -4,6 +4,10 @@
 /// to one client at a time and applies the forces that client commands (udp:// devices,
 /// hattr::device::UdpDevice). Protocol, handshake and timeouts: docs/protocol.md.
 ///
+/// The session (handshake, checks, timeouts) is wire::ResponderSession, the one the mentoring
+/// leader uses too. A fault the server's safety path latched (a device error) stays latched
+/// across sessions: no client can clear it; restart the server.
+///
 /// Threads: the constructor and start()/stop() are setup code (they throw hattr::Error /
 /// InputError); the network work happens inside the servo tick (a GuidanceController stage:
 /// non-blocking socket calls, no allocation, no locks); counters may be read from any thread.
@@ -15,8 +19,9 @@
 #include <string>
 
 #include "hattr/device/device.hpp"
-#include "hattr/device/net_protocol.hpp"
-#include "hattr/device/udp_socket.hpp"
+#include "hattr/wire/keys.hpp"
+#include "hattr/wire/packet.hpp"
+#include "hattr/wire/udp_socket.hpp"
 #include "hattr/servo/servo_loop.hpp"
 
 namespace hattr::net {
@@ -24,7 +29,7 @@ namespace hattr::net {
 struct DeviceServerConfig {
   std::string device_uri = "sim://pen";                 ///< the local device (any hattr device URI)
   std::string listen = "127.0.0.1:0";                   ///< HOST:PORT to listen on (port 0: any free port)
-  device::net::AuthKey key;                             ///< the shared key (device::net::readKeyFile)
+  wire::AuthKey key;                             ///< the shared key (wire::readKeyFile)
   double rate_hz = 0.0;                                 ///< servo rate [Hz]; 0: the device's nominal rate
   std::chrono::nanoseconds command_timeout{10'000'000};   ///< zero force without a COMMAND for this long
   std::chrono::nanoseconds session_timeout{500'000'000};  ///< end a session silent for this long
@@ -37,10 +42,11 @@ struct DeviceServerStats {
   std::uint64_t session_timeouts = 0;  ///< sessions ended by silence
   std::uint64_t byes = 0;              ///< sessions ended by the client's BYE
   std::uint64_t busy_refusals = 0;     ///< HELLOs answered BUSY
-  std::uint64_t commands_applied = 0;  ///< COMMANDs accepted
+  std::uint64_t cookies_sent = 0;      ///< HELLOs answered with a COOKIE (no valid cookie yet)
+  std::uint64_t commands_applied = 0;  ///< COMMANDs accepted (the newest of each tick is applied)
   std::uint64_t command_timeouts = 0;  ///< times the force went to zero for want of a COMMAND
   std::uint64_t states_sent = 0;
-  std::array<std::uint64_t, device::net::kDropReasonCount> drops{};  ///< by device::net::DropReason
+  std::array<std::uint64_t, wire::kDropReasonCount> drops{};  ///< by wire::DropReason
   std::uint64_t ticks = 0;
   std::uint64_t overruns = 0;
   std::uint64_t stalls = 0;  ///< gaps in the loop's ticks beyond its watchdog (a host that held it up)
@@ -64,7 +70,7 @@ class DeviceServer {
   void stop();
 
   /// Where it listens (the port chosen when the configuration said 0).
-  [[nodiscard]] const device::net::UdpEndpoint& endpoint() const noexcept { return endpoint_; }
+  [[nodiscard]] const wire::UdpEndpoint& endpoint() const noexcept { return endpoint_; }
   [[nodiscard]] DeviceServerStats stats() const;
   /// True while a client's session is live. Any thread.
   [[nodiscard]] bool sessionLive() const noexcept;
@@ -82,7 +88,7 @@ class DeviceServer {
 
  private:
   std::unique_ptr<Impl> impl_;
-  device::net::UdpEndpoint endpoint_;
+  wire::UdpEndpoint endpoint_;
 };
 
 }  // namespace hattr::net

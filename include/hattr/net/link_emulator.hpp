@@ -19,8 +19,8 @@
 #include <thread>
 #include <vector>
 
-#include "hattr/device/net_protocol.hpp"
-#include "hattr/device/udp_socket.hpp"
+#include "hattr/wire/packet.hpp"
+#include "hattr/wire/udp_socket.hpp"
 
 namespace hattr::net {
 
@@ -66,7 +66,7 @@ class LinkEmulator {
     std::int64_t due_ns = 0;
     std::uint64_t order = 0;  ///< send order, to count reordering
     std::size_t size = 0;
-    device::net::PacketBuffer bytes{};
+    wire::PacketBuffer bytes{};
   };
   void enqueue(std::span<const std::uint8_t> datagram, std::int64_t due_ns, std::uint64_t order) noexcept;
 
@@ -93,7 +93,7 @@ class LinkRelay {
   LinkRelay(const LinkRelay&) = delete;
   LinkRelay& operator=(const LinkRelay&) = delete;
 
-  [[nodiscard]] const device::net::UdpEndpoint& endpoint() const noexcept { return endpoint_; }
+  [[nodiscard]] const wire::UdpEndpoint& endpoint() const noexcept { return endpoint_; }
   /// Stops the thread (idempotent).
   void stop();
   /// What each direction did. Only after stop().
@@ -103,10 +103,10 @@ class LinkRelay {
  private:
   void run();
 
-  device::net::UdpSocket front_;  // where the sender sends
-  device::net::UdpSocket back_;   // connected to `forward`
-  device::net::UdpEndpoint endpoint_;
-  device::net::UdpEndpoint sender_{};
+  wire::UdpSocket front_;  // where the sender sends
+  wire::UdpSocket back_;   // connected to `forward`
+  wire::UdpEndpoint endpoint_;
+  wire::UdpEndpoint sender_{};
   bool has_sender_ = false;
   LinkEmulator to_forward_;
   LinkEmulator to_sender_;

@@ -82,7 +82,7 @@ class MentorStation {
   /// Opens the device (a simulated pen held by `hand`, which may be null and must outlive the
   /// station), builds the paper, clamps the coupling's gains to what the device renders
   /// passively beside the paper (as the training modes are), and the loop. Throws InputError.
-  MentorStation(const StationConfig& config, DatagramLink& link, device::HandScript* hand);
+  MentorStation(const StationConfig& config, wire::DatagramLink& link, device::HandScript* hand);
   ~MentorStation();
   MentorStation(const MentorStation&) = delete;
   MentorStation& operator=(const MentorStation&) = delete;

@@ -1,7 +1,7 @@
-// The network protocol: exact round trips, the MAC over every byte, drops by reason,
-// sequence checks, key files and udp:// URIs.
+// The wire protocol's packets and keys: exact round trips, the MAC over every byte, drops by
+// reason, the sequence window, direction keys, key files and udp:// URIs.
 
-#include "hattr/device/net_protocol.hpp"
+#include "hattr/wire/packet.hpp"
 
 #include <sys/stat.h>
 
@@ -15,7 +15,7 @@
 #include "hattr/device/udp_device.hpp"
 #include "support/test_support.hpp"
 
-namespace hattr::device::net {
+namespace hattr::wire {
 namespace {
 
 using ::testing::AllOf;
@@ -31,12 +31,12 @@ AuthKey keyOf(std::uint8_t first) {
 // One packet of every type with awkward, distinct values in every field.
 std::vector<Packet> everyPacketType() {
   const PacketHeader header{.session_id = 0x0102030405060708ull, .sequence = 0xfedcba9876543210ull,
-                            .sender_time_ns = -123456789012345};
+                            .sender_time_ns = 123456789012345};
   Nonce nonce{};
   for (std::size_t i = 0; i < nonce.size(); ++i) nonce[i] = static_cast<std::uint8_t>(0xa0 + i);
 
   WelcomePayload welcome;
-  welcome.client_nonce = nonce;
+  welcome.nonce = nonce;
   welcome.rate_hz = 4000.0;
   welcome.session_timeout_ns = 500'000'000;
   welcome.command_timeout_ns = 10'000'000;
@@ -94,8 +94,11 @@ std::vector<Packet> everyPacketType() {
   peer.coupling = 3;
   peer.flags = kPeerPenDown | kPeerLinkUp;
 
-  return {{header, HelloPayload{nonce}}, {header, welcome}, {header, BusyPayload{nonce}},
-          {header, state},              {header, command}, {header, ByePayload{7}}, {header, peer}};
+  Cookie cookie{};
+  for (std::size_t i = 0; i < cookie.size(); ++i) cookie[i] = static_cast<std::uint8_t>(0x30 + 3 * i);
+  return {{header, HelloPayload{nonce, cookie}}, {header, welcome}, {header, BusyPayload{nonce}},
+          {header, state},                      {header, command}, {header, ByePayload{7}},
+          {header, peer},                       {header, CookiePayload{nonce, cookie}}};
 }
 
 bool samePen(const PenState& a, const PenState& b) {
@@ -115,8 +118,13 @@ bool sameLimits(const DeviceLimits& a, const DeviceLimits& b) {
 
 bool samePayload(const Payload& a, const Payload& b) {
   if (a.index() != b.index()) return false;
-  if (const auto* x = std::get_if<HelloPayload>(&a)) return x->client_nonce == std::get<HelloPayload>(b).client_nonce;
-  if (const auto* x = std::get_if<BusyPayload>(&a)) return x->client_nonce == std::get<BusyPayload>(b).client_nonce;
+  if (const auto* x = std::get_if<HelloPayload>(&a)) {
+    return x->nonce == std::get<HelloPayload>(b).nonce && x->cookie == std::get<HelloPayload>(b).cookie;
+  }
+  if (const auto* x = std::get_if<CookiePayload>(&a)) {
+    return x->nonce == std::get<CookiePayload>(b).nonce && x->cookie == std::get<CookiePayload>(b).cookie;
+  }
+  if (const auto* x = std::get_if<BusyPayload>(&a)) return x->nonce == std::get<BusyPayload>(b).nonce;
   if (const auto* x = std::get_if<ByePayload>(&a)) return x->reason == std::get<ByePayload>(b).reason;
   if (const auto* x = std::get_if<PeerPayload>(&a)) {
     const auto& y = std::get<PeerPayload>(b);
@@ -127,7 +135,7 @@ bool samePayload(const Payload& a, const Payload& b) {
   }
   if (const auto* x = std::get_if<WelcomePayload>(&a)) {
     const auto& y = std::get<WelcomePayload>(b);
-    return x->client_nonce == y.client_nonce && x->rate_hz == y.rate_hz &&
+    return x->nonce == y.nonce && x->rate_hz == y.rate_hz &&
            x->session_timeout_ns == y.session_timeout_ns && x->command_timeout_ns == y.command_timeout_ns &&
            x->capabilities.force_sensor == y.capabilities.force_sensor &&
            x->capabilities.pressure == y.capabilities.pressure && x->capabilities.tilt == y.capabilities.tilt &&
@@ -166,7 +174,8 @@ TEST(NetProtocol, EveryPacketTypeRoundTripsBitForBit) {
 }
 
 TEST(NetProtocol, PacketsHaveFixedSizesAndAnExplicitLittleEndianHeader) {
-  EXPECT_EQ(packetSize(PacketType::kHello), 80u);
+  EXPECT_EQ(packetSize(PacketType::kHello), 216u);  // padded to the WELCOME's size: no answer is larger
+  EXPECT_EQ(packetSize(PacketType::kCookie), 96u);
   EXPECT_EQ(packetSize(PacketType::kWelcome), 216u);
   EXPECT_EQ(packetSize(PacketType::kBusy), 80u);
   EXPECT_EQ(packetSize(PacketType::kState), 232u);
@@ -180,7 +189,7 @@ TEST(NetProtocol, PacketsHaveFixedSizesAndAnExplicitLittleEndianHeader) {
   ASSERT_EQ(encodePacket(command, keyOf(1), b), 168u);
   const std::vector<std::uint8_t> head(b.begin(), b.begin() + 32);
   const std::vector<std::uint8_t> expected = {
-      'H', 'A', 'T', 'R', 1, 0, 5, 0,                     // magic, version 1, type COMMAND
+      'H', 'A', 'T', 'R', 2, 0, 5, 0,                     // magic, version 2, type COMMAND
       0x08, 0x07, 0x06, 0x05, 0x04, 0x03, 0x02, 0x01,     // session id
       0x10, 0x32, 0x54, 0x76, 0x98, 0xba, 0xdc, 0xfe,     // sequence
   };
@@ -207,8 +216,10 @@ TEST(NetProtocol, EveryTamperedByteFailsTheMacAndTheDecode) {
         // Bytes beyond magic, version and type reach the MAC check and fail it.
         if (i >= 8) {
           EXPECT_EQ(why, DropReason::kBadMac) << "byte " << i << ": " << dropReasonName(why);
-        } else if (i < 6) {
+        } else if (i < 4) {
           EXPECT_EQ(why, DropReason::kBadHeader) << "byte " << i;
+        } else if (i < 6) {
+          EXPECT_EQ(why, DropReason::kBadVersion) << "byte " << i;
         }
       }
     }
@@ -242,9 +253,16 @@ TEST(NetProtocol, WrongSizeGarbageAnotherKeyAndNonFiniteValuesAreDroppedWithThei
   EXPECT_EQ(why, DropReason::kBadMac);
 
   PacketBuffer wrong_version = buffer;
-  wrong_version[4] = 2;
+  wrong_version[4] = 1;  // a hattr of protocol version 1
   EXPECT_FALSE(decodePacket(std::span(wrong_version.data(), size), key, out, why));
-  EXPECT_EQ(why, DropReason::kBadHeader);
+  EXPECT_EQ(why, DropReason::kBadVersion);
+
+  // Authentic, but a hold of more than a second (a number that would overflow arithmetic).
+  Packet held = everyPacketType()[3];
+  std::get<StatePayload>(held.payload).hold_ns = kMaxHoldNs + 1;
+  const std::size_t held_size = encodePacket(held, key, buffer);
+  EXPECT_FALSE(decodePacket(std::span(buffer.data(), held_size), key, out, why));
+  EXPECT_EQ(why, DropReason::kBadValue);
 
   Packet nan_force = command;
   std::get<CommandPayload>(nan_force.payload).f_on_pen_W.x() = std::numeric_limits<double>::quiet_NaN();
@@ -270,12 +288,47 @@ TEST(SequenceCheck, AcceptsOnlyStrictlyIncreasingNumbersAndCountsGapsAsLost) {
   EXPECT_EQ(check.lost(), 0u);
 }
 
+TEST(SequenceCheck, OneAuthenticNumberFarAheadCannotBlockTheDirection) {
+  SequenceCheck check;
+  DropReason why{};
+  ASSERT_TRUE(check.accept(10, why));
+  EXPECT_FALSE(check.accept(std::numeric_limits<std::uint64_t>::max(), why));
+  EXPECT_EQ(why, DropReason::kBadValue);
+  EXPECT_FALSE(check.accept(10 + kSequenceWindow + 1, why));
+  EXPECT_EQ(why, DropReason::kBadValue);
+  EXPECT_TRUE(check.accept(11, why));  // the real sender goes on
+  EXPECT_TRUE(check.accept(11 + kSequenceWindow, why));
+  EXPECT_EQ(check.lost(), kSequenceWindow - 1);
+}
+
+TEST(DirectionKeys, EachDirectionHasItsOwnKeySoAPacketNeverVerifiesTheOtherWay) {
+  const AuthKey shared = keyOf(1);
+  const DirectionKeys initiator = directionKeys(shared, Role::kInitiator);
+  const DirectionKeys responder = directionKeys(shared, Role::kResponder);
+  EXPECT_EQ(initiator.send.bytes(), responder.receive.bytes());
+  EXPECT_EQ(initiator.receive.bytes(), responder.send.bytes());
+  EXPECT_NE(initiator.send.bytes(), initiator.receive.bytes());
+  EXPECT_NE(initiator.send.bytes(), shared.bytes());
+  EXPECT_NE(directionKeys(keyOf(2), Role::kInitiator).send.bytes(), initiator.send.bytes());
+
+  // A packet sent by one side, reflected back to it unchanged, fails its own MAC check.
+  const Packet peer = everyPacketType()[6];
+  PacketBuffer buffer{};
+  const std::size_t size = encodePacket(peer, initiator.send, buffer);
+  Packet out;
+  DropReason why{};
+  EXPECT_TRUE(decodePacket(std::span(buffer.data(), size), responder.receive, out, why));
+  EXPECT_FALSE(decodePacket(std::span(buffer.data(), size), initiator.receive, out, why));
+  EXPECT_EQ(why, DropReason::kBadMac);
+}
+
 TEST(KeyFile, ReadsSixtyFourHexCharactersWithOrWithoutANewline) {
   test::TempDir dir;
   const std::string hex = "000102030405060708090a0b0c0d0e0f101112131415161718191A1B1C1D1E1F";
   test::writeText(dir / "a.key", hex);
   test::writeText(dir / "b.key", hex + "\n");
   for (const char* name : {"a.key", "b.key"}) {
+    ASSERT_EQ(::chmod((dir / name).c_str(), 0600), 0);
     const AuthKey key = readKeyFile(dir / name);
     for (std::size_t i = 0; i < kKeySize; ++i) EXPECT_EQ(key.bytes()[i], i) << name << " byte " << i;
   }
@@ -295,6 +348,7 @@ TEST(KeyFile, AnythingElseIsRefusedNamingTheFileWithoutShowingTheKey) {
   };
   for (const auto& [text, message] : cases) {
     test::writeText(dir / "bad.key", text);
+    ASSERT_EQ(::chmod((dir / "bad.key").c_str(), 0600), 0);
     try {
       (void)readKeyFile(dir / "bad.key");
       ADD_FAILURE() << "accepted \"" << text << "\"";
@@ -332,7 +386,41 @@ TEST(KeyFile, WrittenKeysAreOwnerOnlyRandomAndNeverSilentlyReplaced) {
   EXPECT_NE(readKeyFile(file).bytes(), first.bytes());
 }
 
+TEST(KeyFile, AKeyFileGroupOrOthersCanOpenIsRefusedAsSshRefusesAPrivateKey) {
+  const test::TempDir dir;
+  const auto file = dir / "open.key";
+  writeKeyFile(file, randomKey(), false);
+  for (const ::mode_t mode : {0640, 0604, 0644, 0660, 0620}) {
+    ASSERT_EQ(::chmod(file.c_str(), mode), 0);
+    try {
+      (void)readKeyFile(file);
+      ADD_FAILURE() << "accepted mode " << std::oct << mode;
+    } catch (const InputError& e) {
+      EXPECT_THAT(e.what(), AllOf(HasSubstr("open.key"), HasSubstr("mode 0600"), HasSubstr("open to group or others"),
+                                  HasSubstr("chmod 600")));
+    }
+  }
+  ASSERT_EQ(::chmod(file.c_str(), 0400), 0);
+  EXPECT_NO_THROW((void)readKeyFile(file));
+}
+
+TEST(KeyFile, ReplacingAKeyNeverWritesThroughASymbolicLink) {
+  const test::TempDir dir;
+  const auto target = dir / "elsewhere.txt";
+  test::writeText(target, "not a key\n");
+  std::filesystem::create_symlink(target, dir / "link.key");
+  try {
+    writeKeyFile(dir / "link.key", randomKey(), true);
+    ADD_FAILURE() << "wrote through a symbolic link";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), AllOf(HasSubstr("link.key"), HasSubstr("symbolic link")));
+  }
+  EXPECT_EQ(test::readText(target), "not a key\n");
+}
+
 TEST(UdpDeviceUri, KeysAreCheckedAndUnknownOnesListTheAcceptedOnes) {
+  using device::parseDeviceUri;
+  using device::udpDeviceParams;
   const auto params = udpDeviceParams(parseDeviceUri("udp://localhost:5000?key=/tmp/k&hold_ms=5&timeout_s=0.5"));
   EXPECT_EQ(params.server.text(), "127.0.0.1:5000");
   EXPECT_EQ(params.key_file, "/tmp/k");
@@ -357,4 +445,4 @@ TEST(UdpDeviceUri, KeysAreCheckedAndUnknownOnesListTheAcceptedOnes) {
 }
 
 }  // namespace
-}  // namespace hattr::device::net
+}  // namespace hattr::wire

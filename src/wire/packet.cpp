@@ -1,28 +1,21 @@
-#include "hattr/device/net_protocol.hpp"
+#include "hattr/wire/packet.hpp"
 
-#include <fcntl.h>
 #include <sodium.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <bit>
-#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <ctime>
-#include <fstream>
-#include <iterator>
 
-#include <fmt/format.h>
-
-#include "hattr/core/error.hpp"
-
-namespace hattr::device::net {
+namespace hattr::wire {
 namespace {
 
 // Sizes of each packet type: header + payload + MAC (docs/protocol.md has the layouts).
-constexpr std::size_t kHelloSize = kHeaderSize + kNonceSize + kMacSize;      // 80
+// A HELLO is padded to the size of the largest answer (WELCOME): no answer is ever larger
+// than the packet that asked for it, so the responder cannot amplify a spoofed flood.
 constexpr std::size_t kWelcomeSize = kHeaderSize + 152 + kMacSize;           // 216
+constexpr std::size_t kHelloSize = kWelcomeSize;                             // 216
+constexpr std::size_t kCookiePacketSize = kHeaderSize + kNonceSize + kCookieSize + kMacSize;  // 96
 constexpr std::size_t kBusySize = kHeaderSize + kNonceSize + kMacSize;       // 80
 constexpr std::size_t kStateSize = kHeaderSize + 168 + kMacSize;             // 232
 constexpr std::size_t kCommandSize = kHeaderSize + 104 + kMacSize;           // 168
@@ -30,6 +23,7 @@ constexpr std::size_t kByeSize = kHeaderSize + 8 + kMacSize;                 // 
 constexpr std::size_t kPeerSize = kHeaderSize + 144 + kMacSize;              // 208
 static_assert(kStateSize == kMaxPacketSize);
 static_assert(crypto_auth_BYTES == kMacSize && crypto_auth_KEYBYTES == kKeySize);
+static_assert(kHelloSize >= kCookiePacketSize && kHelloSize >= kBusySize);
 
 // Pen-state flags (STATE) and command flags (COMMAND).
 constexpr std::uint32_t kPenHasForce = 1u << 0;
@@ -99,7 +93,7 @@ class Reader {
 PacketType typeOf(const Payload& payload) noexcept {
   constexpr PacketType kTypes[] = {PacketType::kHello, PacketType::kWelcome, PacketType::kBusy,
                                    PacketType::kState, PacketType::kCommand, PacketType::kBye,
-                                   PacketType::kPeer};
+                                   PacketType::kPeer,  PacketType::kCookie};
   return kTypes[payload.index()];
 }
 
@@ -108,14 +102,28 @@ std::uint32_t statusCode(DeviceStatus s) noexcept {
 }
 
 // Payload writers, one per type, in the order of docs/protocol.md.
-void writePayload(Writer& w, const HelloPayload& p) noexcept { w.bytes(p.client_nonce.data(), kNonceSize); }
-void writePayload(Writer& w, const BusyPayload& p) noexcept { w.bytes(p.client_nonce.data(), kNonceSize); }
+// HELLO and COOKIE share their layout: a nonce, a cookie.
+template <typename P>
+void writeNonceAndCookie(Writer& w, const P& p) noexcept {
+  w.bytes(p.nonce.data(), kNonceSize);
+  w.bytes(p.cookie.data(), kCookieSize);
+}
+template <typename P>
+P readNonceAndCookie(Reader& r) noexcept {
+  P p;
+  r.bytes(p.nonce.data(), kNonceSize);
+  r.bytes(p.cookie.data(), kCookieSize);
+  return p;
+}
+void writePayload(Writer& w, const HelloPayload& p) noexcept { writeNonceAndCookie(w, p); }
+void writePayload(Writer& w, const CookiePayload& p) noexcept { writeNonceAndCookie(w, p); }
+void writePayload(Writer& w, const BusyPayload& p) noexcept { w.bytes(p.nonce.data(), kNonceSize); }
 void writePayload(Writer& w, const ByePayload& p) noexcept {
   w.u32(p.reason);
   w.u32(0);
 }
 void writePayload(Writer& w, const WelcomePayload& p) noexcept {
-  w.bytes(p.client_nonce.data(), kNonceSize);
+  w.bytes(p.nonce.data(), kNonceSize);
   w.f64(p.rate_hz);
   w.i64(p.session_timeout_ns);
   w.i64(p.command_timeout_ns);
@@ -175,18 +183,16 @@ void writePayload(Writer& w, const PeerPayload& p) noexcept {
   w.u32(p.flags);
 }
 
+bool inRange(std::int64_t v, std::int64_t lo, std::int64_t hi) noexcept { return v >= lo && v <= hi; }
+
 // Payload readers; false for a value out of range (non-finite numbers are checked by the caller).
 bool readPayload(Reader& r, PacketType type, Payload& out) noexcept {
   switch (type) {
-    case PacketType::kHello: {
-      HelloPayload p;
-      r.bytes(p.client_nonce.data(), kNonceSize);
-      out = p;
-      return true;
-    }
+    case PacketType::kHello: out = readNonceAndCookie<HelloPayload>(r); return true;
+    case PacketType::kCookie: out = readNonceAndCookie<CookiePayload>(r); return true;
     case PacketType::kBusy: {
       BusyPayload p;
-      r.bytes(p.client_nonce.data(), kNonceSize);
+      r.bytes(p.nonce.data(), kNonceSize);
       out = p;
       return true;
     }
@@ -198,7 +204,7 @@ bool readPayload(Reader& r, PacketType type, Payload& out) noexcept {
     }
     case PacketType::kWelcome: {
       WelcomePayload p;
-      r.bytes(p.client_nonce.data(), kNonceSize);
+      r.bytes(p.nonce.data(), kNonceSize);
       p.rate_hz = r.f64();
       p.session_timeout_ns = r.i64();
       p.command_timeout_ns = r.i64();
@@ -217,7 +223,8 @@ bool readPayload(Reader& r, PacketType type, Payload& out) noexcept {
       p.limits.mass_kg = r.f64();
       p.limits.damping_N_s_per_m = r.f64();
       out = p;
-      return dof >= 1 && dof <= 6 && p.rate_hz > 0.0 && p.session_timeout_ns > 0 && p.command_timeout_ns > 0;
+      return dof >= 1 && dof <= 6 && p.rate_hz > 0.0 && p.session_timeout_ns > 0 &&
+             p.session_timeout_ns <= kMaxTimeoutNs && p.command_timeout_ns > 0 && p.command_timeout_ns <= kMaxTimeoutNs;
     }
     case PacketType::kState: {
       StatePayload p;
@@ -241,7 +248,7 @@ bool readPayload(Reader& r, PacketType type, Payload& out) noexcept {
       p.device_status = status == 0 ? DeviceStatus::kOk : status == 1 ? DeviceStatus::kFault : DeviceStatus::kDisconnected;
       p.server_flags = r.u32();
       out = p;
-      return status <= 2 && p.hold_ns >= 0;
+      return status <= 2 && inRange(p.hold_ns, 0, kMaxHoldNs) && p.echo_sender_time_ns >= 0;
     }
     case PacketType::kPeer: {
       PeerPayload p;
@@ -257,7 +264,8 @@ bool readPayload(Reader& r, PacketType type, Payload& out) noexcept {
       p.coupling = r.u32();
       p.flags = r.u32();
       out = p;
-      return p.energy_in_J >= 0.0 && p.energy_out_J >= 0.0 && p.hold_ns >= 0 && p.coupling <= 3;
+      return p.energy_in_J >= 0.0 && p.energy_out_J >= 0.0 && inRange(p.hold_ns, 0, kMaxHoldNs) &&
+             p.echo_sender_time_ns >= 0 && p.coupling <= 3;
     }
     case PacketType::kCommand: {
       CommandPayload p;
@@ -277,16 +285,7 @@ bool readPayload(Reader& r, PacketType type, Payload& out) noexcept {
   return false;
 }
 
-bool isHex(char c) noexcept { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f') || (c >= 'A' && c <= 'F'); }
-std::uint8_t hexValue(char c) noexcept {
-  return static_cast<std::uint8_t>(c <= '9' ? c - '0' : (c | 0x20) - 'a' + 10);
-}
-
 }  // namespace
-
-void initCrypto() {
-  if (sodium_init() < 0) throw Error("libsodium could not be initialised (sodium_init failed)");
-}
 
 std::size_t packetSize(PacketType type) noexcept {
   switch (type) {
@@ -297,6 +296,7 @@ std::size_t packetSize(PacketType type) noexcept {
     case PacketType::kCommand: return kCommandSize;
     case PacketType::kBye: return kByeSize;
     case PacketType::kPeer: return kPeerSize;
+    case PacketType::kCookie: return kCookiePacketSize;
   }
   return 0;
 }
@@ -313,67 +313,11 @@ std::string_view dropReasonName(DropReason reason) noexcept {
     case DropReason::kOutOfOrder: return "out_of_order";
     case DropReason::kUnexpected: return "unexpected";
     case DropReason::kBusy: return "busy";
+    case DropReason::kBadVersion: return "bad_version";
+    case DropReason::kRateLimited: return "rate_limited";
     case DropReason::kCount: break;
   }
   return "unknown";
-}
-
-AuthKey::~AuthKey() { sodium_memzero(bytes_.data(), bytes_.size()); }
-
-// Exactly 64 hex characters and an optional newline; the message never shows key material.
-AuthKey readKeyFile(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  HATTR_THROW_UNLESS(in.good(), "key file {}: cannot open it for reading: {}", file.string(), std::strerror(errno));
-  std::string text;
-  char buffer[130];
-  in.read(buffer, sizeof buffer);
-  text.assign(buffer, static_cast<std::size_t>(in.gcount()));
-  const std::string_view expected = "expected 64 hexadecimal characters (a 32-byte key) and at most a newline";
-  std::string_view body(text);
-  if (body.ends_with('\n')) body.remove_suffix(1);
-  HATTR_THROW_UNLESS(text.size() < sizeof buffer, "key file {}: {}, got a longer file", file.string(), expected);
-  HATTR_THROW_UNLESS(body.size() == 2 * kKeySize, "key file {}: {}, got {} characters before the end or newline", file.string(),
-                     expected, body.size());
-  std::array<std::uint8_t, kKeySize> bytes{};
-  for (std::size_t i = 0; i < body.size(); ++i) {
-    HATTR_THROW_UNLESS(isHex(body[i]), "key file {}: {}, got a character that is not hexadecimal at position {}",
-                       file.string(), expected, i + 1);
-    bytes[i / 2] = static_cast<std::uint8_t>(bytes[i / 2] << 4 | hexValue(body[i]));
-  }
-  AuthKey key(bytes);
-  sodium_memzero(bytes.data(), bytes.size());
-  sodium_memzero(text.data(), text.size());
-  sodium_memzero(buffer, sizeof buffer);
-  return key;
-}
-
-AuthKey randomKey() {
-  initCrypto();
-  std::array<std::uint8_t, kKeySize> bytes{};
-  crypto_auth_keygen(bytes.data());
-  AuthKey key(bytes);
-  sodium_memzero(bytes.data(), bytes.size());
-  return key;
-}
-
-// O_EXCL unless overwriting; mode 0600 from creation on, and forced on a replaced file.
-void writeKeyFile(const std::filesystem::path& file, const AuthKey& key, bool overwrite) {
-  const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (overwrite ? O_TRUNC : O_EXCL);
-  const int fd = ::open(file.c_str(), flags, 0600);
-  if (fd < 0 && errno == EEXIST) {
-    throw InputError(fmt::format("key file {}: exists already; expected a new file name, or --force to replace it",
-                                 file.string()));
-  }
-  if (fd < 0) throw InputError(fmt::format("key file {}: cannot create it: {}", file.string(), std::strerror(errno)));
-  char hex[2 * kKeySize + 1];
-  sodium_bin2hex(hex, sizeof hex, key.bytes().data(), kKeySize);
-  hex[2 * kKeySize] = '\n';
-  const bool ok = ::fchmod(fd, 0600) == 0 && ::write(fd, hex, sizeof hex) == static_cast<ssize_t>(sizeof hex) &&
-                  ::fsync(fd) == 0;
-  const int error = errno;
-  sodium_memzero(hex, sizeof hex);
-  ::close(fd);
-  if (!ok) throw Error(fmt::format("key file {}: cannot write it: {}", file.string(), std::strerror(error)));
 }
 
 std::size_t encodePacket(const Packet& packet, const AuthKey& key, PacketBuffer& out) noexcept {
@@ -399,8 +343,7 @@ bool verifyMac(std::span<const std::uint8_t> datagram, const AuthKey& key) noexc
   return crypto_auth_verify(datagram.data() + body, datagram.data(), body, key.bytes().data()) == 0;
 }
 
-bool decodePacket(std::span<const std::uint8_t> datagram, const AuthKey& key, Packet& out, DropReason& why) noexcept {
-  // The fixed header only: size, magic, version, type.
+bool readHeader(std::span<const std::uint8_t> datagram, PacketHeader& out, DropReason& why) noexcept {
   if (datagram.size() < kHeaderSize + kMacSize || datagram.size() > kMaxPacketSize) {
     why = DropReason::kBadSize;
     return false;
@@ -411,7 +354,7 @@ bool decodePacket(std::span<const std::uint8_t> datagram, const AuthKey& key, Pa
   }
   Reader header(datagram.data(), kMagic.size());
   if (header.u16() != kProtocolVersion) {
-    why = DropReason::kBadHeader;
+    why = DropReason::kBadVersion;
     return false;
   }
   const auto type = static_cast<PacketType>(header.u16());
@@ -424,17 +367,22 @@ bool decodePacket(std::span<const std::uint8_t> datagram, const AuthKey& key, Pa
     why = DropReason::kBadSize;
     return false;
   }
+  out.type = type;
+  out.session_id = header.u64();
+  out.sequence = header.u64();
+  out.sender_time_ns = header.i64();
+  return true;
+}
+
+bool decodePacket(std::span<const std::uint8_t> datagram, const AuthKey& key, Packet& out, DropReason& why) noexcept {
+  if (!readHeader(datagram, out.header, why)) return false;
   // Authentication before any further field is used.
   if (!verifyMac(datagram, key)) {
     why = DropReason::kBadMac;
     return false;
   }
-  out.header.type = type;
-  out.header.session_id = header.u64();
-  out.header.sequence = header.u64();
-  out.header.sender_time_ns = header.i64();
   Reader payload(datagram.data(), kHeaderSize);
-  if (!readPayload(payload, type, out.payload) || !payload.finite()) {
+  if (!readPayload(payload, out.header.type, out.payload) || !payload.finite() || out.header.sender_time_ns < 0) {
     why = DropReason::kBadValue;
     return false;
   }
@@ -442,6 +390,11 @@ bool decodePacket(std::span<const std::uint8_t> datagram, const AuthKey& key, Pa
 }
 
 bool SequenceCheck::accept(std::uint64_t sequence, DropReason& why) noexcept {
+  // Checked arithmetic: newest_ < sequence here, so the difference cannot wrap.
+  if (sequence > newest_ && sequence - newest_ > kSequenceWindow) {
+    why = DropReason::kBadValue;
+    return false;
+  }
   if (sequence > newest_) {
     if (newest_ != 0) lost_ += sequence - newest_ - 1;
     newest_ = sequence;
@@ -449,6 +402,12 @@ bool SequenceCheck::accept(std::uint64_t sequence, DropReason& why) noexcept {
   }
   why = sequence == newest_ ? DropReason::kReplayed : DropReason::kOutOfOrder;
   return false;
+}
+
+std::array<std::uint64_t, kDropReasonCount> DropCounters::snapshot() const noexcept {
+  std::array<std::uint64_t, kDropReasonCount> out{};
+  for (std::size_t i = 0; i < kDropReasonCount; ++i) out[i] = counts_[i].load(std::memory_order_relaxed);
+  return out;
 }
 
 std::uint64_t DropCounters::total() const noexcept {
@@ -486,4 +445,4 @@ std::int64_t monotonicNs() noexcept {
   return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
 }
 
-}  // namespace hattr::device::net
+}  // namespace hattr::wire

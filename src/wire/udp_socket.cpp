@@ -1,4 +1,4 @@
-#include "hattr/device/udp_socket.hpp"
+#include "hattr/wire/udp_socket.hpp"
 
 #include <arpa/inet.h>
 #include <fcntl.h>
@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 
@@ -17,7 +18,7 @@
 
 #include "hattr/core/error.hpp"
 
-namespace hattr::device::net {
+namespace hattr::wire {
 namespace {
 
 sockaddr_in toSockaddr(const UdpEndpoint& e) noexcept {
@@ -38,6 +39,8 @@ int openSocket(std::string_view what) {
   if (fd < 0) throw Error(fmt::format("{}: cannot open a UDP socket: {}", what, std::strerror(errno)));
   const int on = 1;
   (void)::setsockopt(fd, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on);
+  const int bytes = UdpSocket::kReceiveBufferBytes;
+  (void)::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &bytes, sizeof bytes);
   return fd;
 }
 
@@ -87,15 +90,18 @@ UdpSocket UdpSocket::connected(const UdpEndpoint& peer) {
   if (::connect(s.fd_, reinterpret_cast<const sockaddr*>(&a), sizeof a) != 0) {
     throw Error(fmt::format("cannot address {}: {}", peer.text(), std::strerror(errno)));
   }
+  s.connected_ = true;
   return s;
 }
 
-UdpSocket::UdpSocket(UdpSocket&& other) noexcept : fd_(other.fd_) { other.fd_ = -1; }
+UdpSocket::UdpSocket(UdpSocket&& other) noexcept : fd_(other.fd_), connected_(other.connected_) { other.fd_ = -1; }
 
 UdpSocket& UdpSocket::operator=(UdpSocket&& other) noexcept {
   if (this != &other) {
     if (fd_ >= 0) ::close(fd_);
     fd_ = other.fd_;
+    connected_ = other.connected_;
+    clock_offset_ns_ = 0;
     other.fd_ = -1;
   }
   return *this;
@@ -115,7 +121,8 @@ UdpEndpoint UdpSocket::localEndpoint() const {
 }
 
 // recvmsg with MSG_TRUNC (the true size, so an oversized datagram is seen as such) and the
-// kernel's CLOCK_REALTIME arrival stamp, moved onto CLOCK_MONOTONIC.
+// kernel's CLOCK_REALTIME arrival stamp, moved onto CLOCK_MONOTONIC by its age unless the
+// real-time clock stepped since the previous receive.
 ReceiveStatus UdpSocket::receive(std::span<std::uint8_t> buffer, Received& out) noexcept {
   sockaddr_in from{};
   iovec io{buffer.data(), buffer.size()};
@@ -133,9 +140,12 @@ ReceiveStatus UdpSocket::receive(std::span<std::uint8_t> buffer, Received& out) 
   timespec real{};
   ::clock_gettime(CLOCK_MONOTONIC, &mono);
   ::clock_gettime(CLOCK_REALTIME, &real);
+  const std::int64_t offset = nsOf(real) - nsOf(mono);
+  const bool stepped = clock_offset_ns_ != 0 && std::abs(offset - clock_offset_ns_) > kMaxClockStep;
+  clock_offset_ns_ = offset;
   out.arrival_ns = nsOf(mono);
   for (cmsghdr* c = CMSG_FIRSTHDR(&message); c != nullptr; c = CMSG_NXTHDR(&message, c)) {
-    if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
+    if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS && !stepped) {
       timespec stamp{};
       std::memcpy(&stamp, CMSG_DATA(c), sizeof stamp);
       const std::int64_t age = nsOf(real) - nsOf(stamp);
@@ -164,4 +174,4 @@ bool UdpSocket::waitReadable(std::int64_t timeout_ns) const noexcept {
   return ::poll(&p, 1, ms) > 0;
 }
 
-}  // namespace hattr::device::net
+}  // namespace hattr::wire

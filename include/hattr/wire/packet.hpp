@@ -1,48 +1,57 @@
 #pragma once
-/// The hattr network protocol: fixed-size, little-endian UDP packets authenticated with
-/// HMAC-SHA-512-256 (libsodium crypto_auth). One protocol for the network device (udp://,
-/// `hattr device serve`) and, later, live mentoring between two stations: a peer sends
-/// STATE packets (a pen) and COMMAND packets (a force, optionally a simulated hand's
-/// command). The byte layout, the handshake and the timeouts: docs/protocol.md.
+/// The hattr wire protocol, version 2: fixed-size, little-endian UDP packets authenticated with
+/// HMAC-SHA-512-256 (libsodium crypto_auth) under a key per direction. One protocol for the
+/// network device (udp://, `hattr device serve`) and live mentoring between two stations. The
+/// byte layout, the handshake, the threat model and the timeouts: docs/protocol.md.
 ///
 /// Packets are hostile until proven otherwise: sizes are fixed per type, lengths are never
-/// trusted, the MAC is verified before any field beyond the fixed header is used, and every
-/// dropped packet is counted by reason. Units: SI; times are nanoseconds of the sender's
-/// CLOCK_MONOTONIC.
+/// trusted, the MAC is verified before any field beyond the fixed header is used, numbers are
+/// range-checked, and every dropped packet is counted by reason. Units: SI; times are
+/// nanoseconds of the sender's clock (CLOCK_MONOTONIC, or a station's loop time).
 ///
-/// Threads: everything marked noexcept here runs on the servo thread (no allocation, no
-/// locks, no blocking); key-file functions are setup code and throw hattr::InputError.
+/// Threads: everything here is noexcept and runs on the servo thread (no allocation, no
+/// locks, no blocking), except RandomStream's constructor (setup).
 
 #include <array>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
-#include <filesystem>
 #include <span>
 #include <string_view>
 #include <variant>
 
-#include "hattr/device/device.hpp"
-#include "hattr/device/hand.hpp"
+#include "hattr/core/device_limits.hpp"
+#include "hattr/core/hand_command.hpp"
+#include "hattr/core/pen_state.hpp"
+#include "hattr/wire/keys.hpp"
 
-namespace hattr::device::net {
+namespace hattr::wire {
 
 inline constexpr std::array<std::uint8_t, 4> kMagic = {'H', 'A', 'T', 'R'};
-inline constexpr std::uint16_t kProtocolVersion = 1;
+inline constexpr std::uint16_t kProtocolVersion = 2;
 inline constexpr std::size_t kHeaderSize = 32;  ///< magic, version, type, session, sequence, sender time
 inline constexpr std::size_t kMacSize = 32;     ///< crypto_auth tag (HMAC-SHA-512-256)
-inline constexpr std::size_t kKeySize = 32;     ///< crypto_auth key
-inline constexpr std::size_t kNonceSize = 16;   ///< client nonce in HELLO / WELCOME / BUSY
+inline constexpr std::size_t kNonceSize = 16;   ///< the initiator's nonce in HELLO / COOKIE / WELCOME / BUSY
+inline constexpr std::size_t kCookieSize = 16;  ///< the responder's stateless cookie (COOKIE, HELLO)
 inline constexpr std::size_t kMaxPacketSize = 232;
+/// An authentic sequence number more than this ahead of the newest accepted is refused: one
+/// packet can never push a direction's window out of reach (2^16 packets: 65 s at 1 kHz,
+/// far beyond any session timeout).
+inline constexpr std::uint64_t kSequenceWindow = std::uint64_t{1} << 16;
+/// Hold fields (STATE, PEER) above this are refused as out of range [ns].
+inline constexpr std::int64_t kMaxHoldNs = 1'000'000'000;
+/// Timeouts a WELCOME may announce at most [ns] (one hour).
+inline constexpr std::int64_t kMaxTimeoutNs = 3'600'000'000'000;
 
 enum class PacketType : std::uint16_t {
-  kHello = 1,    ///< client → server: open a session (client nonce)
-  kWelcome = 2,  ///< server → client: the session id, the device's limits, capabilities, rate
-  kBusy = 3,     ///< server → client: refused, another client is being served
-  kState = 4,    ///< server → client (or station → station): the pen
-  kCommand = 5,  ///< client → server: the force on the pen, optionally a simulated hand
+  kHello = 1,    ///< initiator → responder: open a session (nonce, and the cookie once it has one)
+  kWelcome = 2,  ///< responder → initiator: the session id, the device's limits, capabilities, rate
+  kBusy = 3,     ///< responder → initiator: refused, another peer is being served
+  kState = 4,    ///< device server → client: the pen
+  kCommand = 5,  ///< client → device server: the force on the pen, optionally a simulated hand
   kBye = 6,      ///< either way: the session ends
   kPeer = 7,     ///< station ↔ station (live mentoring): a pen, its person's force, the coupling's energy
+  kCookie = 8,   ///< responder → initiator: say HELLO again with this cookie (proves the address, bounds replays)
 };
 
 /// The fixed size of a packet of this type [bytes] (0 for an unknown type).
@@ -51,15 +60,17 @@ enum class PacketType : std::uint16_t {
 /// Why a datagram was dropped. Every drop is counted under exactly one reason.
 enum class DropReason : std::uint8_t {
   kBadSize,       ///< size differs from its type's fixed size (or no header at all)
-  kBadHeader,     ///< wrong magic or protocol version
+  kBadHeader,     ///< wrong magic
   kUnknownType,   ///< packet type not in this protocol version
-  kBadMac,        ///< the tag does not verify: tampered, or another key
-  kBadValue,      ///< authentic, but a number is not finite or a field out of range
-  kWrongSession,  ///< authentic, but not of the live session (or from another address)
+  kBadMac,        ///< the tag does not verify: tampered, another key, or this side's own packet reflected
+  kBadValue,      ///< authentic, but a number is not finite, a field out of range, or a sequence jump beyond the window
+  kWrongSession,  ///< not of the live session (or from another address)
   kReplayed,      ///< sequence number (or hello nonce) already seen: duplicate or replay
   kOutOfOrder,    ///< older than a packet already accepted: late
   kUnexpected,    ///< authentic, but not a type this side accepts now
-  kBusy,          ///< a HELLO refused with BUSY: another client is being served
+  kBusy,          ///< a HELLO refused with BUSY: another peer is being served
+  kBadVersion,    ///< magic right, another protocol version (an older or newer hattr)
+  kRateLimited,   ///< a handshake packet beyond the few one pump verifies (a flood): dropped unverified
   kCount,
 };
 inline constexpr std::size_t kDropReasonCount = static_cast<std::size_t>(DropReason::kCount);
@@ -67,30 +78,37 @@ inline constexpr std::size_t kDropReasonCount = static_cast<std::size_t>(DropRea
 [[nodiscard]] std::string_view dropReasonName(DropReason reason) noexcept;
 
 using Nonce = std::array<std::uint8_t, kNonceSize>;
+using Cookie = std::array<std::uint8_t, kCookieSize>;
 
 /// The fixed header every packet starts with.
 struct PacketHeader {
   PacketType type = PacketType::kHello;
-  std::uint64_t session_id = 0;   ///< chosen by the server in WELCOME; 0 before
-  std::uint64_t sequence = 0;     ///< per session and direction, strictly increasing
+  std::uint64_t session_id = 0;   ///< chosen by the responder in WELCOME; 0 before
+  std::uint64_t sequence = 0;     ///< per session and direction, strictly increasing; 0 outside a session
   std::int64_t sender_time_ns = 0;
 };
 
 struct HelloPayload {
-  Nonce client_nonce{};
+  Nonce nonce{};
+  Cookie cookie{};  ///< all zero on the first HELLO of an attempt; then the responder's COOKIE
+};
+
+struct CookiePayload {
+  Nonce nonce{};    ///< echo of the HELLO's nonce
+  Cookie cookie{};
 };
 
 struct WelcomePayload {
-  Nonce client_nonce{};                  ///< echo of the HELLO's nonce
-  double rate_hz = 0.0;                  ///< the server's servo rate
-  std::int64_t session_timeout_ns = 0;   ///< the server ends a silent session after this
-  std::int64_t command_timeout_ns = 0;   ///< the server zeroes the force without a COMMAND for this
+  Nonce nonce{};                         ///< echo of the HELLO's nonce
+  double rate_hz = 0.0;                  ///< the responder's servo rate
+  std::int64_t session_timeout_ns = 0;   ///< the responder ends a silent session after this
+  std::int64_t command_timeout_ns = 0;   ///< the device server zeroes the force without a COMMAND for this
   DeviceCapabilities capabilities;
   DeviceLimits limits;
 };
 
 struct BusyPayload {
-  Nonce client_nonce{};
+  Nonce nonce{};
 };
 
 /// Flags in StatePayload::server_flags.
@@ -134,8 +152,8 @@ struct ByePayload {
   std::uint32_t reason = 0;  ///< 0: normal close
 };
 
-using Payload =
-    std::variant<HelloPayload, WelcomePayload, BusyPayload, StatePayload, CommandPayload, ByePayload, PeerPayload>;
+using Payload = std::variant<HelloPayload, WelcomePayload, BusyPayload, StatePayload, CommandPayload, ByePayload,
+                             PeerPayload, CookiePayload>;
 
 struct Packet {
   PacketHeader header;  ///< header.type is set from the payload when encoding
@@ -144,47 +162,30 @@ struct Packet {
 
 using PacketBuffer = std::array<std::uint8_t, kMaxPacketSize>;
 
-/// A 32-byte authentication key. Never printed; wiped on destruction.
-class AuthKey {
- public:
-  AuthKey() = default;
-  explicit AuthKey(const std::array<std::uint8_t, kKeySize>& bytes) noexcept : bytes_(bytes) {}
-  AuthKey(const AuthKey&) = default;
-  AuthKey& operator=(const AuthKey&) = default;
-  ~AuthKey();
-  [[nodiscard]] const std::array<std::uint8_t, kKeySize>& bytes() const noexcept { return bytes_; }
-
- private:
-  std::array<std::uint8_t, kKeySize> bytes_{};
-};
-
-/// Reads a key file: exactly 64 hexadecimal characters, optionally followed by one newline.
-/// Throws InputError naming the file and what was expected and found (never key material).
-[[nodiscard]] AuthKey readKeyFile(const std::filesystem::path& file);
-/// A fresh random key (libsodium randombytes).
-[[nodiscard]] AuthKey randomKey();
-/// Writes `key` as 64 hex characters and a newline, file mode 0600. Refuses to replace an
-/// existing file unless `overwrite` (InputError); other I/O failures throw hattr::Error.
-void writeKeyFile(const std::filesystem::path& file, const AuthKey& key, bool overwrite);
-
-/// Encodes a packet (header, payload, MAC) into `out`; returns its size. Servo-thread safe.
+/// Encodes a packet (header, payload, MAC under `key`, the sender's direction key) into
+/// `out`; returns its size.
 std::size_t encodePacket(const Packet& packet, const AuthKey& key, PacketBuffer& out) noexcept;
 
-/// Checks and decodes a datagram: size against the type's fixed size, magic and version,
-/// then the MAC, and only then the payload (non-finite numbers → kBadValue). On success
-/// fills `out` and returns true; otherwise sets `why` and leaves `out` unspecified.
-/// Session and sequence checks are the caller's (SequenceCheck). Servo-thread safe.
+/// The fixed header only (no MAC): size against the type's fixed size, magic, version, type.
+/// Cheap: for filtering before the MAC. False with `why` on the first failure.
+[[nodiscard]] bool readHeader(std::span<const std::uint8_t> datagram, PacketHeader& out, DropReason& why) noexcept;
+
+/// Checks and decodes a datagram: readHeader, then the MAC under `key` (the other side's
+/// direction key), and only then the payload (non-finite numbers and fields out of range →
+/// kBadValue). On success fills `out` and returns true; otherwise sets `why` and leaves `out`
+/// unspecified. Session and sequence checks are the session's (wire/session.hpp).
 [[nodiscard]] bool decodePacket(std::span<const std::uint8_t> datagram, const AuthKey& key, Packet& out,
                                 DropReason& why) noexcept;
 
 /// True if the last kMacSize bytes of `datagram` are the tag of the bytes before them.
 [[nodiscard]] bool verifyMac(std::span<const std::uint8_t> datagram, const AuthKey& key) noexcept;
 
-/// Strictly increasing sequence numbers of one direction of one session.
+/// Strictly increasing sequence numbers of one direction of one session, within a window.
 class SequenceCheck {
  public:
-  /// True if `sequence` is newer than every accepted one (then accepted; a gap counts as
-  /// lost). False with `why` = kReplayed (equal to the newest) or kOutOfOrder (older).
+  /// True if `sequence` is newer than every accepted one and at most kSequenceWindow ahead
+  /// (then accepted; a gap counts as lost). False with `why` = kReplayed (equal to the
+  /// newest), kOutOfOrder (older) or kBadValue (beyond the window).
   [[nodiscard]] bool accept(std::uint64_t sequence, DropReason& why) noexcept;
   void reset() noexcept { newest_ = 0; lost_ = 0; }
   [[nodiscard]] std::uint64_t newest() const noexcept { return newest_; }
@@ -205,13 +206,15 @@ class DropCounters {
     return counts_[static_cast<std::size_t>(reason)].load(std::memory_order_relaxed);
   }
   [[nodiscard]] std::uint64_t total() const noexcept;
+  /// A snapshot, indexed by DropReason.
+  [[nodiscard]] std::array<std::uint64_t, kDropReasonCount> snapshot() const noexcept;
 
  private:
   std::array<std::atomic<std::uint64_t>, kDropReasonCount> counts_{};
 };
 
 /// Unpredictable bytes without a system call (ChaCha20 keyed once from the system's
-/// randomness), for session ids and nonces chosen on the servo thread.
+/// randomness), for session ids, nonces and cookie secrets chosen on the servo thread.
 class RandomStream {
  public:
   /// Seeds from libsodium's randombytes. Setup only.
@@ -224,10 +227,7 @@ class RandomStream {
   std::uint64_t counter_ = 0;
 };
 
-/// CLOCK_MONOTONIC now [ns] (the clock of every sender time).
+/// CLOCK_MONOTONIC now [ns] (the clock of every sender time of the network device).
 [[nodiscard]] std::int64_t monotonicNs() noexcept;
 
-/// Makes sure libsodium is initialised (idempotent, thread-safe). Throws hattr::Error if not.
-void initCrypto();
-
-}  // namespace hattr::device::net
+}  // namespace hattr::wire
