@@ -13,6 +13,7 @@
 
 #include "hattr/core/haptic_profile.hpp"
 #include "hattr/render/world_config.hpp"
+#include "hattr/servo/loop_verdict.hpp"
 
 namespace hattr::cli {
 
@@ -33,6 +34,11 @@ std::string profileSummaryText(const HapticProfile& profile);
 
 /// Prints JSON (indented) to stdout.
 void printJson(const nlohmann::json& json);
+
+/// A loop run's verdicts (servo::judgeLoop): JSON [{figure, value, unit, verdict, rule}], and one
+/// text line a figure ("PASS  faults  0  (PASS 0, else FAIL ...)") ending with the overall verdict.
+nlohmann::json verdictsJson(const servo::LoopJudgement& judgement);
+std::string verdictsText(const servo::LoopJudgement& judgement);
 
 void registerProfileCommands(CLI::App& app);
 void registerImportCommands(CLI::App& app);

@@ -132,8 +132,11 @@ int runCheck(const CheckOptions& opt) {
   Sample during;
   const auto reached = [&] { return std::abs(during.f_cmd_W.z() - opt.force_N) < 0.02 * opt.force_N; };
   const auto held_from = std::chrono::steady_clock::now();
-  while (std::chrono::steady_clock::now() - held_from < std::chrono::seconds(1) ||
-         (!reached() && std::chrono::steady_clock::now() - held_from < std::chrono::seconds(5))) {
+  // A latched fault ends the wait: no force follows it.
+  const auto faulted = [&] { return loop.counters().faults.load() > 0; };
+  while ((std::chrono::steady_clock::now() - held_from < std::chrono::seconds(1) ||
+          (!reached() && std::chrono::steady_clock::now() - held_from < std::chrono::seconds(5))) &&
+         !faulted()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
     Sample now;
     if (loop.latest().read(now) && now.f_cmd_W.z() >= during.f_cmd_W.z()) during = now;
@@ -145,10 +148,10 @@ int runCheck(const CheckOptions& opt) {
 
   const auto& c = loop.counters();
   const auto& pe = loop.periodError();
-  // The device must run clean; a stall is the host's scheduling (a warning, docs/realtime.md).
-  const bool loop_ok = c.faults.load() == 0 && c.link_faults.load() == 0;
+  // The device must run clean; what the computer's scheduling does is a WARN (docs/realtime.md).
+  const servo::LoopJudgement judgement = servo::judgeLoop(loop);
   const bool force_ok = reached();
-  const bool ok = loop_ok && force_ok && confirmed.value_or(true);
+  const bool ok = judgement.overall != servo::Verdict::kFail && force_ok && confirmed.value_or(true);
   const auto us = [](std::int64_t ns) { return static_cast<double>(ns) * 1e-3; };
   nlohmann::json json = {
       {"device", opt.uri},
@@ -168,6 +171,8 @@ int runCheck(const CheckOptions& opt) {
       {"fault_reason", device->faultReason()},
       {"force_test", {{"commanded_N", during.f_cmd_W.z()}, {"pen_rise_m", during.p_WT.z() - z_before_m},
                       {"confirmed", confirmed ? nlohmann::json(*confirmed) : nlohmann::json(nullptr)}}},
+      {"verdicts", verdictsJson(judgement)},
+      {"verdict", std::string(servo::verdictName(judgement.overall))},
       {"ok", ok},
   };
   if (opt.json) {
@@ -182,14 +187,17 @@ int runCheck(const CheckOptions& opt) {
                              during.f_cmd_W.z(), (during.p_WT.z() - z_before_m) * 1e3,
                              confirmed ? (*confirmed ? "felt it" : "did NOT feel it") : "not asked")
               << (force_ok ? ""
-                           : fmt::format("failed      the {} N test force was not reached within 5 s{}\n", opt.force_N,
-                                         c.stalls.load() == 0 ? "" : " (each stall restarts the force ramp)"))
+                           : fmt::format("failed      the {} N test force was not reached{}\n", opt.force_N,
+                                         c.faults.load() > 0   ? " (the safety path latched a fault)"
+                                         : c.stalls.load() == 0 ? " within 5 s"
+                                                                : " within 5 s (each stall restarts the force ramp)"))
               << (device->faultReason().empty() ? "" : "fault       " + device->faultReason() + "\n")
-              << (c.stalls.load() == 0 ? ""
-                                       : fmt::format("warning     the loop stalled {} times (force zeroed): this computer's "
-                                                     "scheduling, see docs/realtime.md\n",
-                                                     c.stalls.load()))
-              << (ok ? "check passed\n" : "check FAILED\n");
+              << "\n"
+              << verdictsText(judgement)
+              << (!ok                                           ? "check FAILED\n"
+                  : judgement.overall == servo::Verdict::kWarn ? "check passed with warnings (WARN: this computer's "
+                                                                  "scheduling or load; docs/realtime.md)\n"
+                                                                : "check passed\n");
   }
   return ok ? kOk : kRuntimeFailure;
 }
@@ -221,7 +229,8 @@ void registerDevicesCommands(CLI::App& app) {
                   "was commanded");
   check->add_flag("--json", opt->json,
                   "Print JSON: device, clocking, loop_clock, rate_hz, limits, capabilities, period_error_us, ticks, "
-                  "overruns, faults, link_faults, stalls, force_test {commanded_N, pen_rise_m, confirmed}, ok");
+                  "overruns, faults, link_faults, stalls, force_test {commanded_N, pen_rise_m, confirmed}, verdicts [{figure, value, "
+                  "unit, verdict, rule}], verdict, ok");
   check->callback([opt] {
     if (runCheck(*opt) != kOk) throw Error("the device check failed (see above)");
   });

@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "cli_common.hpp"
+#include "hattr/core/error.hpp"
 #include "hattr/device/device_uri.hpp"
 #include "hattr/device/udp_device.hpp"
 #include "hattr/render/paper_renderer.hpp"
@@ -81,7 +82,8 @@ void waitShowingProgress(Progress& progress, double seconds, const std::function
   }
 }
 
-void runServoCheck(const ServoCheckOptions& opt) {
+/// Runs the check; returns its overall verdict (the figures' worst).
+servo::Verdict runServoCheck(const ServoCheckOptions& opt) {
   servo::RealtimeSettings realtime{.policy = parsePolicy(opt.realtime),
                                    .cpu = opt.cpu,
                                    .final_spin = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.spin_us * 1e3))};
@@ -168,14 +170,18 @@ void runServoCheck(const ServoCheckOptions& opt) {
       {"ratio_p99", floor_p99 > 0.0 ? loop_p99 / floor_p99 : 0.0},
   };
   const auto* udp = dynamic_cast<const device::UdpDevice*>(device.get());
+  servo::LoopJudgement judgement = servo::judgeLoop(loop);
   if (udp != nullptr) {
     json["link"] = linkJson(udp->linkStats());
     json["link"]["server_rate_hz"] = udp->serverRate_hz();
     json["link"]["fault"] = udp->faultReason();
+    servo::judgeLink(udp->linkStats(), judgement);
   }
+  json["verdicts"] = verdictsJson(judgement);
+  json["verdict"] = std::string(servo::verdictName(judgement.overall));
   if (opt.json) {
     printJson(json);
-    return;
+    return judgement.overall;
   }
   const auto row = [](const char* name, const nlohmann::json& p) {
     return fmt::format("{:<22} {:>9.2f} {:>9.2f} {:>9.2f} {:>9.2f}\n", name, p["p50"].get<double>(),
@@ -212,6 +218,8 @@ void runServoCheck(const ServoCheckOptions& opt) {
                              c.link_faults.load(), c.disconnected_ticks.load());
     if (!link["fault"].get<std::string>().empty()) std::cout << "last link fault: " << link["fault"].get<std::string>() << '\n';
   }
+  std::cout << "\n" << verdictsText(judgement);
+  return judgement.overall;
 }
 
 }  // namespace
@@ -220,7 +228,8 @@ void registerServoCheckCommand(CLI::App& app) {
   auto opt = std::make_shared<ServoCheckOptions>();
   auto* cmd = app.add_subcommand("servo-check",
                                  "Run the real-time servo loop (full pipeline) next to a bare sleep loop and report "
-                                 "period error, tick compute time, overruns, drops and faults");
+                                 "period error, tick compute time, overruns, drops and faults, each with a verdict "
+                                 "(PASS, WARN, FAIL; exit 1 on FAIL)");
   cmd->add_option("--rate", opt->rate_hz, "Servo rate [Hz]")->check(CLI::Range(1.0, 10000.0))->capture_default_str();
   cmd->add_option("--seconds", opt->seconds,
                   "Duration of each of the two runs, the bare sleep loop (floor) and then the servo loop: the "
@@ -240,8 +249,13 @@ void registerServoCheckCommand(CLI::App& app) {
                 "Print JSON: loop and floor {period_error_us {p50, p99, p99_9, max}}, loop {tick_compute_us, overruns, "
                 "dropped_samples, faults}, ratio_p99; for udp:// devices also link {rtt_us, state_age_us, clock_offset_us, "
                 "commands_sent, states_received, states_lost, loss, states_late, held_reads, "
-                "disconnected_reads, reconnects, drops {reason: count}}");
-  cmd->callback([opt] { runServoCheck(*opt); });
+                "disconnected_reads, reconnects, drops {reason: count}}; verdicts [{figure, value, unit, verdict, "
+                "rule}] and verdict (PASS, WARN or FAIL: docs/realtime.md)");
+  cmd->callback([opt] {
+    if (runServoCheck(*opt) == servo::Verdict::kFail) {
+      throw Error("servo-check: FAIL: a figure failed its threshold (see the verdicts; docs/realtime.md)");
+    }
+  });
 }
 
 }  // namespace hattr::cli

@@ -106,6 +106,7 @@ class UdpDevice::Impl {
   std::uint64_t last_echo_sequence_ = 0;
   double loop_time_s_ = 0.0;
   bool device_changed_ = false;          // a reconnection found another device
+  Fault ended_by_ = Fault::kNone;        // kServerClosed / kServerBusy: how the last session ended
   std::int64_t best_rtt_ns_ = -1;
   std::int64_t offset_candidate_ns_ = 0;
   std::uint64_t offset_window_ = 0;
@@ -202,6 +203,7 @@ void UdpDevice::Impl::followSession() noexcept {
   if (generation == generation_) return;
   generation_ = generation;
   last_echo_sequence_ = 0;
+  ended_by_ = Fault::kNone;
   bump(reconnects_);
   if (!sameDevice(session_.welcome(), device_)) device_changed_ = true;
 }
@@ -254,15 +256,17 @@ DeviceStatus UdpDevice::Impl::read(std::chrono::nanoseconds now, PenState& out) 
 
   out = state_.pen;
   out.t_s = loop_time_s_;
+  // How the session ended (a BYE, a BUSY to a new hello) holds until a new one opens.
   using State = wire::InitiatorSession::State;
   const State state = session_.state();
-  const bool busy = state == State::kRefused;
-  const bool closed = state == State::kClosed;
+  if (state == State::kRefused) ended_by_ = Fault::kServerBusy;
+  if (state == State::kClosed) ended_by_ = Fault::kServerClosed;
+  const bool busy = ended_by_ == Fault::kServerBusy;
+  const bool closed = ended_by_ == Fault::kServerClosed;
   const std::int64_t gap = mono - std::max(state_arrival_ns_, resume_ns_);
   if (busy || closed || gap > hold_ns_) {
     bump(disconnected_reads_);
-    setFault(busy ? Fault::kServerBusy : closed ? Fault::kServerClosed : Fault::kLinkLost,
-             static_cast<double>(mono - state_arrival_ns_) * 1e-6);
+    setFault(ended_by_ != Fault::kNone ? ended_by_ : Fault::kLinkLost, static_cast<double>(mono - state_arrival_ns_) * 1e-6);
     // Say hello again (a restarted server, a timed-out session): recovery without a restart.
     if (mono - session_.lastHello_ns() >= kRehelloIntervalNs &&
         (mono - state_arrival_ns_ >= kRehelloAfterNs || closed || busy)) {

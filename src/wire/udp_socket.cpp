@@ -120,6 +120,15 @@ UdpEndpoint UdpSocket::localEndpoint() const {
   return {ntohl(a.sin_addr.s_addr), ntohs(a.sin_port)};
 }
 
+std::int64_t monotonicArrival(std::int64_t mono_ns, std::int64_t real_ns, std::int64_t stamp_real_ns,
+                              std::int64_t& offset_ns) noexcept {
+  const std::int64_t offset = real_ns - mono_ns;
+  const bool stepped = offset_ns != 0 && std::abs(offset - offset_ns) > UdpSocket::kMaxClockStep;
+  offset_ns = offset;
+  const std::int64_t age = real_ns - stamp_real_ns;
+  return stepped || age < 0 ? mono_ns : mono_ns - age;
+}
+
 // recvmsg with MSG_TRUNC (the true size, so an oversized datagram is seen as such) and the
 // kernel's CLOCK_REALTIME arrival stamp, moved onto CLOCK_MONOTONIC by its age unless the
 // real-time clock stepped since the previous receive.
@@ -140,16 +149,12 @@ ReceiveStatus UdpSocket::receive(std::span<std::uint8_t> buffer, Received& out) 
   timespec real{};
   ::clock_gettime(CLOCK_MONOTONIC, &mono);
   ::clock_gettime(CLOCK_REALTIME, &real);
-  const std::int64_t offset = nsOf(real) - nsOf(mono);
-  const bool stepped = clock_offset_ns_ != 0 && std::abs(offset - clock_offset_ns_) > kMaxClockStep;
-  clock_offset_ns_ = offset;
   out.arrival_ns = nsOf(mono);
   for (cmsghdr* c = CMSG_FIRSTHDR(&message); c != nullptr; c = CMSG_NXTHDR(&message, c)) {
-    if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS && !stepped) {
+    if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
       timespec stamp{};
       std::memcpy(&stamp, CMSG_DATA(c), sizeof stamp);
-      const std::int64_t age = nsOf(real) - nsOf(stamp);
-      if (age >= 0) out.arrival_ns -= age;
+      out.arrival_ns = monotonicArrival(nsOf(mono), nsOf(real), nsOf(stamp), clock_offset_ns_);
     }
   }
   out.size = static_cast<std::size_t>(n);

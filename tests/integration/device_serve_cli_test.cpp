@@ -106,13 +106,15 @@ TEST(DeviceServeCli, ServoCheckOverUdpReportsTheLinkAndTheServerPrintsItsCounter
     const RunResult check = runHattr(dir, "servo-check --realtime skip --seconds 0.3 --json --device '" + uri + "'");
     server.signal(SIGTERM);
     const int server_exit = server.wait();
-    ASSERT_EQ(check.exit_code, 0) << check.err;
     ASSERT_EQ(server_exit, 0);
     const auto json = nlohmann::json::parse(check.out);
     const auto stats = nlohmann::json::parse(server.readRest());
     // A loop on either side held up beyond its watchdog (a host that descheduled it) loses
-    // the link for a moment: a reconnect then is the host's, not the link's.
+    // the link for a moment: a reconnect then (and the FAIL of its link fault) is the host's,
+    // not the link's.
     stalls = json["loop"]["stalls"].get<std::uint64_t>() + stats["stalls"].get<std::uint64_t>();
+    ASSERT_EQ(check.exit_code, 0) << check.err << check.out;
+    EXPECT_NE(json["verdict"], "FAIL");
     const auto& link = json["link"];
     // The link carried the loop's traffic (how much depends on this host's scheduling: the
     // rate is measured by the benchmarks, not here).
@@ -139,9 +141,12 @@ TEST(DeviceServeCli, RecordOverUdpWritesTheProfileTheServersPenDrew) {
   test::writeText(dir / "hand.csv",
                   "t_s,x_m,y_m,z_m,fx_N,fy_N,fz_N,pen_down_bool\n"
                   "0,0,0,0,0,0,-1,1\n0.1,0.005,0,0,0,0,-1,1\n0.2,0.01,0.002,0,0,0,-1,1\n");
-  const std::string uri = "udp://" + server.address() + "?key=" + key;
-  const RunResult r = runHattr(dir, "record --clock real --tail 0.1 --json --hand " + (dir / "hand.csv").string() +
-                                        " -o " + (dir / "out.csv").string() + " --device '" + uri + "'");
+  // The link's quality is not what this checks: a loaded host (the sanitizers) that holds either
+  // loop up past the hold loses the link for a moment, which marks the trial disturbed (issue 38).
+  const std::string uri = "udp://" + server.address() + "?key=" + key + "&hold_ms=20";
+  const RunResult r = runHattr(dir, "record --clock real --tail 0.1 --json --keep-disturbed --hand " +
+                                        (dir / "hand.csv").string() + " -o " + (dir / "out.csv").string() +
+                                        " --device '" + uri + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto json = nlohmann::json::parse(r.out);
   EXPECT_GT(json["samples"].get<int>(), 10);  // how many depends on this host's scheduling
@@ -204,8 +209,11 @@ TEST(DeviceServeCli, KillingTheServerWithSigkillFaultsTheClientWithTheLinkReason
                  : 0;
     ASSERT_TRUE(session_opened) << "the client's session never opened: " << test::readText(dir / "serve.err");
     EXPECT_EQ(server.wait(), 128 + SIGKILL);
-    ASSERT_EQ(check.exit_code, 0) << check.err;
+    // A link that died fails the check (issue 38): exit 1, the JSON still printed, its verdict FAIL.
+    ASSERT_EQ(check.exit_code, 1) << check.err;
+    EXPECT_THAT(check.err, HasSubstr("servo-check: FAIL"));
     const auto json = nlohmann::json::parse(check.out);
+    EXPECT_EQ(json["verdict"], "FAIL");
     EXPECT_THAT(json["link"]["fault"].get<std::string>(),
                 HasSubstr("link lost: no state from " + server.address() + " for"));
     // How many ticks run after the fault depends on the host's load: at least one did, without force.

@@ -55,6 +55,8 @@ TEST(DevicesCli, CheckOnTheSimulatedPenReportsLimitsJitterAndTheGentleForce) {
     stalls = json["stalls"].get<std::uint64_t>();
     ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
     EXPECT_TRUE(json["ok"].get<bool>());
+    EXPECT_NE(json["verdict"], "FAIL");
+    EXPECT_FALSE(json["verdicts"].empty());
     EXPECT_EQ(json["loop_clock"], "real-time");
     EXPECT_DOUBLE_EQ(json["limits"]["continuous_force_N"].get<double>(), 1.75);
     EXPECT_NEAR(json["force_test"]["commanded_N"].get<double>(), 0.2, 0.2 * 0.02);
@@ -80,6 +82,28 @@ TEST(DevicesCli, CheckRunsADeviceClockedPluginOnItsOwnClock) {
   });
 }
 
+// Issue 38: a stall the check saw is a WARN (the force was zeroed and ramped in again), said in
+// the text and the JSON, and the check still passes; a device that faults FAILs it.
+TEST(DevicesCli, AStallIsAWarningAndADeviceFaultFailsTheCheck) {
+  test::TempDir dir;
+  const std::string fake = std::string("plugin:") + test::builtFile("HATTR_FAKE_VENDOR_PLUGIN");
+  const RunResult stalled =
+      run(dir, "devices check " + quoted(fake + "?clock=device&block_read_at=50&block_read_ms=40") + " --no-confirm --seconds 0.3");
+  EXPECT_EQ(stalled.exit_code, 0) << stalled.out << stalled.err;
+  EXPECT_THAT(stalled.out, HasSubstr("WARN  stalls"));
+  EXPECT_THAT(stalled.out, HasSubstr("verdict WARN"));
+  EXPECT_THAT(stalled.out, HasSubstr("check passed with warnings"));
+
+  const RunResult faulty =
+      run(dir, "devices check " + quoted(fake + "?clock=device&error_after=100") + " --no-confirm --seconds 0.3 --json");
+  EXPECT_EQ(faulty.exit_code, 1) << faulty.out << faulty.err;
+  const auto json = nlohmann::json::parse(faulty.out);
+  EXPECT_EQ(json["verdict"], "FAIL");
+  bool faults_failed = false;
+  for (const auto& f : json["verdicts"]) faults_failed = faults_failed || (f["figure"] == "faults" && f["verdict"] == "FAIL");
+  EXPECT_TRUE(faults_failed) << faulty.out;
+}
+
 TEST(DevicesCli, ThePersonSayingNoFailsTheCheck) {
   test::TempDir dir;
   const RunResult r = run(dir, "devices check sim://pen --seconds 0.2", "n\n");
@@ -89,7 +113,7 @@ TEST(DevicesCli, ThePersonSayingNoFailsTheCheck) {
   EXPECT_THAT(r.err, HasSubstr("Did you feel a gentle upward push? [y/n]"));
   (void)test::passesUnlessTheHostStalls([&](std::uint64_t& stalls) {
     const RunResult yes = run(dir, "devices check sim://pen --seconds 0.2", "y\n");
-    stalls = yes.out.find("the loop stalled") == std::string::npos ? 0 : 1;
+    stalls = yes.out.find("WARN  stalls") == std::string::npos ? 0 : 1;
     EXPECT_EQ(yes.exit_code, 0) << yes.out << yes.err;
     EXPECT_THAT(yes.out, HasSubstr("person: felt it"));
   });

@@ -1,7 +1,9 @@
 // Live mentoring: the couplings, the passivity controller, the two-station simulation under
 // delay and loss, and the handshake's refusals.
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -194,6 +196,69 @@ TEST(Mentoring, AGoodbyeEndsTheSessionWithoutALinkFaultASilentLinkCountsOne) {
     EXPECT_FALSE(leader.stats().link_up);
     EXPECT_EQ(leader.stats().link_faults, goodbye ? 0u : 1u) << (goodbye ? "goodbye" : "silence");
     EXPECT_EQ(leader.stats().goodbyes_received, goodbye ? 1u : 0u);
+    EXPECT_EQ(leader.stats().sessions, 1u);
+  }
+}
+
+/// A station's link that, when asked, hands the station its own last datagram back as if the
+/// other station had sent it: a relay without the key reflecting one packet.
+class ReflectingLink final : public wire::DatagramLink {
+ public:
+  ReflectingLink(wire::DatagramLink& inner, int other_index) : inner_(inner), other_index_(other_index) {}
+  bool receive(std::int64_t now_ns, wire::PacketBuffer& buffer, wire::Received& out) noexcept override {
+    if (!reflect_ || last_sent_.empty()) return inner_.receive(now_ns, buffer, out);
+    reflect_ = false;
+    std::copy(last_sent_.begin(), last_sent_.end(), buffer.begin());
+    out.size = last_sent_.size();
+    out.from = EmulatedLinkPair::addressOf(other_index_);
+    out.arrival_ns = now_ns;
+    return true;
+  }
+  bool send(std::int64_t now_ns, std::span<const std::uint8_t> datagram, const wire::UdpEndpoint& to) noexcept override {
+    last_sent_.assign(datagram.begin(), datagram.end());  // test only: allocates
+    return inner_.send(now_ns, datagram, to);
+  }
+  void reflectOnce() { reflect_ = true; }
+
+ private:
+  wire::DatagramLink& inner_;
+  int other_index_;
+  std::vector<std::uint8_t> last_sent_;
+  bool reflect_ = false;
+};
+
+// Issue 40, item 2: a station's own PEER reflected back to it once, by a relay without the key,
+// used to be taken as the other station's pen and end the session ("link lost"). Now it fails
+// the MAC of the other direction's key; neither station's link goes down. Both directions.
+TEST(Mentoring, AStationsOwnPeerReflectedBackToItIsDroppedAndTheLinkStaysUp) {
+  for (const int reflected : {0, 1}) {  // the leader's own packet, then the follower's
+    EmulatedLinkPair link(LinkConditions{}, LinkConditions{});
+    ReflectingLink leader_link(link.end(0), 1);
+    ReflectingLink follower_link(link.end(1), 0);
+    const wire::AuthKey key = wire::randomKey();
+    MentorCoupling leader(MentorConfig{.role = MentorRole::kLeader, .coupling = Coupling::kPosition, .key = key},
+                          leader_link);
+    MentorCoupling follower(MentorConfig{.role = MentorRole::kFollower, .coupling = Coupling::kPosition, .key = key,
+                                         .leader = EmulatedLinkPair::addressOf(0)},
+                            follower_link);
+    const ContactForces contact;
+    int tick = 0;
+    const auto run = [&](int ticks) {
+      for (int i = 0; i < ticks; ++i, ++tick) {
+        const PenState pen{.t_s = tick * 1e-3, .p_WT = Vec3(0.001 * reflected, 0.0, 0.0)};
+        (void)leader.compute(pen, contact, 1e-3);
+        (void)follower.compute(pen, contact, 1e-3);
+      }
+    };
+    run(300);
+    ASSERT_TRUE(leader.stats().link_up && follower.stats().link_up);
+    (reflected == 0 ? leader_link : follower_link).reflectOnce();
+    run(500);
+    const MentorStats victim = reflected == 0 ? leader.stats() : follower.stats();
+    EXPECT_EQ(victim.drops[static_cast<std::size_t>(wire::DropReason::kBadMac)], 1u) << "station " << reflected;
+    EXPECT_EQ(victim.drops[static_cast<std::size_t>(wire::DropReason::kOutOfOrder)], 0u) << "station " << reflected;
+    EXPECT_EQ(leader.stats().link_faults + follower.stats().link_faults, 0u) << "station " << reflected;
+    EXPECT_TRUE(leader.stats().link_up && follower.stats().link_up) << "station " << reflected;
     EXPECT_EQ(leader.stats().sessions, 1u);
   }
 }

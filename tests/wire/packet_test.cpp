@@ -13,6 +13,7 @@
 
 #include "hattr/core/error.hpp"
 #include "hattr/device/udp_device.hpp"
+#include "hattr/wire/udp_socket.hpp"
 #include "support/test_support.hpp"
 
 namespace hattr::wire {
@@ -320,6 +321,23 @@ TEST(DirectionKeys, EachDirectionHasItsOwnKeySoAPacketNeverVerifiesTheOtherWay) 
   EXPECT_TRUE(decodePacket(std::span(buffer.data(), size), responder.receive, out, why));
   EXPECT_FALSE(decodePacket(std::span(buffer.data(), size), initiator.receive, out, why));
   EXPECT_EQ(why, DropReason::kBadMac);
+}
+
+// Issue 40, item 6: arrival times stay on CLOCK_MONOTONIC when the real-time clock (the only
+// clock the kernel stamps datagrams by) steps.
+TEST(UdpSocket, ArrivalTimesStayMonotonicWhenTheRealTimeClockSteps) {
+  constexpr std::int64_t kSecond = 1'000'000'000;
+  std::int64_t offset = 0;
+  // Steady clocks: the arrival is the monotonic time less the datagram's age (300 µs).
+  EXPECT_EQ(monotonicArrival(5 * kSecond, 900 * kSecond, 900 * kSecond - 300'000, offset), 5 * kSecond - 300'000);
+  EXPECT_EQ(monotonicArrival(6 * kSecond, 901 * kSecond, 901 * kSecond - 100'000, offset), 6 * kSecond - 100'000);
+  // The real-time clock steps back 10 s after a datagram was stamped: its age by that clock would
+  // be negative; the arrival is the time of the receive.
+  EXPECT_EQ(monotonicArrival(7 * kSecond, 892 * kSecond, 902 * kSecond - 50'000, offset), 7 * kSecond);
+  // A step forward of 1 h between stamp and receive would make a fresh datagram an hour old.
+  EXPECT_EQ(monotonicArrival(8 * kSecond, 893 * kSecond + 3600 * kSecond, 893 * kSecond, offset), 8 * kSecond);
+  // Once steady again, ages are believed again.
+  EXPECT_EQ(monotonicArrival(9 * kSecond, 4494 * kSecond, 4494 * kSecond - 20'000, offset), 9 * kSecond - 20'000);
 }
 
 TEST(KeyFile, ReadsSixtyFourHexCharactersWithOrWithoutANewline) {

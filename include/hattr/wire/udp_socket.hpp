@@ -31,6 +31,14 @@ struct Received {
   std::int64_t arrival_ns = 0;      ///< arrival time on CLOCK_MONOTONIC [ns] (see UdpSocket::receive)
 };
 
+/// The arrival on CLOCK_MONOTONIC of a datagram the kernel stamped at `stamp_real_ns`
+/// (CLOCK_REALTIME), received when the clocks read `mono_ns` and `real_ns`: `mono_ns` less the
+/// datagram's age, unless the real-time clock stepped since the previous receive (the offset
+/// real − mono moved more than UdpSocket::kMaxClockStep from `offset_ns`) or the age is
+/// negative; then `mono_ns`. `offset_ns` (0: no previous receive) becomes this receive's offset.
+[[nodiscard]] std::int64_t monotonicArrival(std::int64_t mono_ns, std::int64_t real_ns, std::int64_t stamp_real_ns,
+                                            std::int64_t& offset_ns) noexcept;
+
 class UdpSocket {
  public:
   /// The receive buffer asked of the kernel [bytes]: room for a burst of some thousand
