@@ -2,6 +2,8 @@
 
 #include <iostream>
 
+#include <fmt/format.h>
+
 #include "cli_common.hpp"
 #include "hattr/io/profile_csv.hpp"
 
@@ -16,8 +18,23 @@ struct ProfileInfoOptions {
 struct ProfileConvertOptions {
   std::string input;
   std::string output;
+  double scale_force = 1.0;
   bool force = false;
 };
+
+/// The profile with every force scaled by `factor` (positions, times, pressure and tilt kept),
+/// the factor noted in its metadata (force_scaled_by).
+HapticProfile withForcesScaled(const HapticProfile& profile, double factor) {
+  std::vector<Sample> samples = profile.samples();
+  for (Sample& s : samples) {
+    s.f_user_W *= factor;
+    s.f_cmd_W *= factor;
+    s.f_guide_W *= factor;
+  }
+  ProfileMetadata metadata = profile.metadata();
+  metadata.extra["force_scaled_by"] = fmt::format("{}", factor);
+  return HapticProfile::fromSamples(std::move(metadata), profile.rawChannels(), std::move(samples), false);
+}
 
 void runProfileInfo(const ProfileInfoOptions& opt) {
   const HapticProfile profile = io::readProfileCsv(opt.file);
@@ -32,9 +49,11 @@ void runProfileInfo(const ProfileInfoOptions& opt) {
 
 void runProfileConvert(const ProfileConvertOptions& opt) {
   checkOutputFiles({opt.output}, opt.force);
-  const HapticProfile profile = io::readProfileCsv(opt.input);
+  HapticProfile profile = io::readProfileCsv(opt.input);
+  if (opt.scale_force != 1.0) profile = withForcesScaled(profile, opt.scale_force);
   io::writeProfileCsv(profile, opt.output, opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
-  std::cout << "wrote " << opt.output << " (" << profile.size() << " samples, SI units)\n";
+  std::cout << "wrote " << opt.output << " (" << profile.size() << " samples, SI units"
+            << (opt.scale_force != 1.0 ? fmt::format(", forces scaled by {}", opt.scale_force) : std::string()) << ")\n";
 }
 
 }  // namespace
@@ -56,6 +75,11 @@ void registerProfileCommands(CLI::App& app) {
       "convert", "Read a profile (mm/ms columns, missing velocity allowed) and write it in canonical SI form");
   convert->add_option("IN", convert_opt->input, "Input profile CSV")->required();
   convert->add_option("OUT", convert_opt->output, "Output profile CSV")->required();
+  convert->add_option("--scale-force", convert_opt->scale_force,
+                      "Multiply every force by this factor (positions and times kept), e.g. to bring an expert "
+                      "within a device's continuous force (noted in the metadata as force_scaled_by)")
+      ->check(CLI::Range(0.01, 100.0))
+      ->capture_default_str();
   convert->add_flag("--force", convert_opt->force, "Replace OUT if it exists");
   convert->callback([convert_opt] { runProfileConvert(*convert_opt); });
 }

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "cli_common.hpp"
+#include "hattr/session/trial_physics.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/session/trial.hpp"
@@ -98,6 +99,10 @@ void runTrialCommand(const TrialOptions& opt, bool training) {
   HapticProfile expert;
   if (training) {
     expert = io::readProfileCsv(opt.reference);
+    // A reference or a hand script the device cannot render is refused before the trial
+    // (issue 38); `record` keeps any hand script: it records what happens, and marks it.
+    session::checkRenderable(expert, env.limits(), "--reference " + opt.reference);
+    session::checkRenderable(script, env.limits(), "--hand " + opt.hand);
     scripted.expert = &expert;
     scripted.reference_label = opt.reference;
     scripted.mode = guidance::parseMode(opt.mode);

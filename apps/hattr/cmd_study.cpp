@@ -66,6 +66,12 @@ nlohmann::json statusJson(const session::StudyDatabase& db) {
 
 void runInit(const StudyOptions& opt) {
   const session::StudyDefinition study = session::loadStudy(opt.study_file);
+  // An expert the device cannot render is refused before anything is made (issue 38).
+  if (!session::checkExpertsRenderable(study)) {
+    std::cerr << fmt::format("hattr: the experts were not checked against {}: its limits are known once it is opened "
+                             "(`hattr devices check {}`)\n",
+                             study.device, study.device);
+  }
   const session::StudyDatabase db = session::StudyDatabase::create(opt.db, study);
   const auto status = statusJson(db);
   if (opt.json) return printJson(status);

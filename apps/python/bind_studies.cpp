@@ -144,7 +144,11 @@ void bindStudies(py::module_& m) {
   m.def(
       "create_study",
       [](const std::filesystem::path& path, const StudySource& study, const std::filesystem::path& base_dir) {
-        { (void)StudyDatabase::create(path, definitionOf(study, base_dir)); }
+        {
+          const session::StudyDefinition definition = definitionOf(study, base_dir);
+          (void)session::checkExpertsRenderable(definition);  // an expert the device cannot render: refused
+          (void)StudyDatabase::create(path, definition);
+        }
         return OpenStudy(path);
       },
       py::arg("path"), py::arg("study"), py::kw_only(), py::arg("base_dir") = std::filesystem::path("."),

@@ -144,6 +144,11 @@ std::unique_ptr<Device> openDevice(std::string_view uri_text, HandScript* hand) 
   throw InputError(fmt::format("device URI \"{}\": unknown scheme \"{}\"; accepted: {}", uri_text, uri.scheme, kAccepted));
 }
 
+DeviceLimits declaredLimits(std::string_view uri) {
+  const DeviceUri parsed = parseDeviceUri(uri);
+  return parsed.scheme == "sim" ? simulatedPenParams(parsed).limits : openDevice(uri, nullptr)->limits();
+}
+
 std::string deviceUriHelp() {
   std::string text = fmt::format("Device URIs: {}.\nsim://pen keys:\n", kAccepted);
   SimulatedPenParams defaults;

@@ -10,8 +10,12 @@
 #include <sstream>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/device/device_uri.hpp"
+#include "hattr/io/profile_csv.hpp"
+#include "hattr/session/trial_physics.hpp"
 
 namespace hattr::session {
 namespace {
@@ -402,6 +406,20 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
 }
 
 }  // namespace
+
+bool checkExpertsRenderable(const StudyDefinition& study) {
+  const device::DeviceUri uri = device::parseDeviceUri(study.device);
+  if (uri.scheme != "sim") return false;
+  const DeviceLimits limits = device::simulatedPenParams(uri).limits;
+  std::vector<std::string> refused;
+  for (const auto& [skill, path] : study.experts) {
+    for (const std::string& problem : renderabilityProblems(io::readProfileCsv(path), limits)) {
+      refused.push_back(fmt::format("the expert of {} ({}) on {}: {}", skill, path.string(), study.device, problem));
+    }
+  }
+  HATTR_THROW_UNLESS(refused.empty(), "{}", fmt::join(refused, "\n"));
+  return true;
+}
 
 StudyDefinition loadStudy(const std::filesystem::path& file) {
   return parseStudy(readTextFile(file), file.string(), file.parent_path());

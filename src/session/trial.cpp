@@ -121,8 +121,7 @@ TrialEnvironment::TrialEnvironment(std::string device_uri, render::WorldConfig w
     : device_uri_(std::move(device_uri)), world_(std::move(world)), rate_hz_(rate_hz) {
   HATTR_THROW_UNLESS(std::isfinite(rate_hz) && rate_hz >= 1.0 && rate_hz <= 10'000.0,
                      "servo rate: expected 1 to 10000 Hz, got {}", rate_hz);
-  const device::DeviceUri uri = device::parseDeviceUri(device_uri_);
-  limits_ = uri.scheme == "sim" ? device::simulatedPenParams(uri).limits : device::openDevice(device_uri_, nullptr)->limits();
+  limits_ = device::declaredLimits(device_uri_);
   world_clamps_ = render::clampToDevice(world_.paper, limits_, rate_hz_);
   paper_ = std::make_unique<render::PaperRenderer>(world_.paper, render::buildRelief(world_.relief));
 }

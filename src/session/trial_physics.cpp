@@ -1,10 +1,13 @@
 #include "hattr/session/trial_physics.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+
+#include "hattr/core/error.hpp"
 
 namespace hattr::session {
 namespace {
@@ -97,6 +100,48 @@ std::string describePhysicalEvents(const PhysicalEvents& events) {
                                                          events.workspace.worst * 1e3)));
   }
   return fmt::format("{}", fmt::join(parts, " · "));
+}
+
+// The peak force against the continuous force, and the span of each axis against the
+// workspace's; the remedy in each sentence.
+std::vector<std::string> renderabilityProblems(const HapticProfile& profile, const DeviceLimits& limits) {
+  std::vector<std::string> problems;
+  if (profile.empty()) return problems;
+  const Sample* strongest = &profile.samples().front();
+  Vec3 low = strongest->p_WT;
+  Vec3 high = strongest->p_WT;
+  for (const Sample& s : profile.samples()) {
+    if (s.f_user_W.norm() > strongest->f_user_W.norm()) strongest = &s;
+    low = low.cwiseMin(s.p_WT);
+    high = high.cwiseMax(s.p_WT);
+  }
+  const double peak_N = strongest->f_user_W.norm();
+  if (peak_N > limits.continuous_force_N) {
+    // The largest scale that fits, rounded down to a hundredth.
+    const double scale = std::floor(100.0 * limits.continuous_force_N / peak_N) / 100.0;
+    problems.push_back(fmt::format(
+        "it presses up to {:.2f} N (at {:.3f} s), more than the device's continuous force of {:.2f} N: the device "
+        "cannot hold the paper up against it and the pen would sink through; expected at most {:.2f} N: import it again "
+        "with a smaller pressure full scale (--calibration, pressure_max_N: docs/file-formats.md) or scale its forces "
+        "with `hattr profile convert IN OUT --scale-force {:.2f}`",
+        peak_N, strongest->t_s, limits.continuous_force_N, limits.continuous_force_N, scale));
+  }
+  const Vec3 span = high - low;
+  const Vec3 room = limits.workspace_max_m - limits.workspace_min_m;
+  constexpr const char* kAxes[] = {"x", "y", "z"};
+  for (int axis = 0; axis < 3; ++axis) {
+    if (span[axis] <= room[axis]) continue;
+    problems.push_back(fmt::format(
+        "it spans {:.1f} mm along {}, more than the device's workspace of {:.1f} mm: expected a profile that fits; "
+        "write it smaller or use a device with a larger workspace",
+        span[axis] * 1e3, kAxes[axis], room[axis] * 1e3));
+  }
+  return problems;
+}
+
+void checkRenderable(const HapticProfile& profile, const DeviceLimits& limits, std::string_view what) {
+  const std::vector<std::string> problems = renderabilityProblems(profile, limits);
+  if (!problems.empty()) throw InputError(fmt::format("{}: {}", what, fmt::join(problems, "; ")));
 }
 
 void notePhysicalEvents(const PhysicalEvents& events, ProfileMetadata& metadata) {

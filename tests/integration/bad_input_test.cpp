@@ -236,6 +236,15 @@ std::vector<BadInput> corpus() {
     return "study init " + q(dir / "study.json") + " --db " + q(dir / "s.sqlite");
   };
   c.back().names = "expert.csv";
+  // Issue 38: an expert pressing harder than the study's pen renders is refused at init.
+  c.push_back(studyCase("study_expert_past_the_device", study(), "more than the device's continuous force of 1.75 N"));
+  c.back().prepare = [](const fs::path& dir) {
+    test::writeText(dir / "expert.csv",
+                    "t_s,x_m,y_m,z_m,fx_N,fy_N,fz_N,pen_down_bool\n0,0,0,0,0,0,-1,1\n0.01,0.001,0,0,0,0,-3.3,1\n");
+    test::writeText(dir / "study.json", study());
+    return "study init " + q(dir / "study.json") + " --db " + q(dir / "s.sqlite");
+  };
+  c.back().names = "expert.csv";
   c.push_back(studyCase("study_is_array", "[]", "expected a JSON object"));
   // Found by the fuzzer: a subjects object without its count was a study of nobody.
   c.push_back(studyCase("study_subjects_without_count", study("\"count\": 2", "\"coun%\": 2"),

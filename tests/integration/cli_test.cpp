@@ -249,6 +249,31 @@ TEST(Cli, ARecordingThroughThePaperIsKeptMarkedAndFailsUnlessKeepDisturbed) {
   EXPECT_EQ(nlohmann::json::parse(clean.out)["disturbed"], "");
 }
 
+// Issue 38: train refuses a reference (or a hand) the pen cannot render, before the trial, with
+// the numbers and the remedy; `profile convert --scale-force` is that remedy.
+TEST(Cli, TrainRefusesAReferenceThePenCannotRenderAndScalingItsForcesFixesIt) {
+  test::TempDir dir;
+  test::writeText(dir / "heavy.csv", handScript(0.0, 3.5));
+  test::writeText(dir / "light.csv", handScript());
+  const auto path = [&](const char* name) { return (dir / name).string(); };
+  const RunResult refused = runHattr(dir, "train --mode alpha --reference " + path("heavy.csv") + " --hand " +
+                                              path("light.csv") + " -o " + path("out.csv"));
+  EXPECT_EQ(refused.exit_code, 2) << refused.err;
+  EXPECT_THAT(refused.err, HasSubstr("--reference " + path("heavy.csv") + ": it presses up to 3.50 N"));
+  EXPECT_THAT(refused.err, HasSubstr("--scale-force 0.5"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "out.csv"));
+
+  const RunResult scaled = runHattr(dir, "profile convert " + path("heavy.csv") + " " + path("scaled.csv") + " --scale-force 0.5");
+  ASSERT_EQ(scaled.exit_code, 0) << scaled.err;
+  EXPECT_THAT(scaled.out, HasSubstr("forces scaled by 0.5"));
+  const HapticProfile halved = io::readProfileCsv(path("scaled.csv"));
+  EXPECT_NEAR(halved.range(Channel::kFz).min, -1.75, 1e-9);
+  EXPECT_EQ(halved.metadata().extra.at("force_scaled_by"), "0.5");
+  const RunResult trained = runHattr(dir, "train --mode alpha --reference " + path("scaled.csv") + " --hand " +
+                                              path("light.csv") + " -o " + path("out.csv"));
+  EXPECT_EQ(trained.exit_code, 0) << trained.err;
+}
+
 TEST(Cli, RecordThenTrainInEveryModeWritesProfilesWithGuidanceApart) {
   test::TempDir dir;
   test::writeText(dir / "script.csv", handScript());

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "hattr/core/error.hpp"
 #include "hattr/device/hand.hpp"
 #include "hattr/render/world_config.hpp"
 #include "hattr/session/trial.hpp"
@@ -143,6 +144,36 @@ TEST(TrialPhysics, ATrialWhoseHandPressesPastTheDeviceIsDisturbedAndMarked) {
   EXPECT_EQ(extra.at("disturbed"), disturbed);
   EXPECT_EQ(extra.count("physical_penetration"), 1u);
   EXPECT_EQ(extra.count("physical_force_saturation"), 1u);
+}
+
+// Issue 38: a profile to be used as an expert, a reference or a hand script is checked against
+// the device before use: a force past its continuous force, a span past its workspace, each
+// with the numbers and the remedy.
+TEST(TrialPhysics, AProfileThatPressesOrReachesPastTheDeviceIsRefusedBeforeUseWithTheRemedy) {
+  const auto fine = restingProfile([](int, Sample& s) { s.f_user_W = Vec3(0.0, 0.0, -1.2); });
+  EXPECT_TRUE(renderabilityProblems(fine, kLimits).empty());
+  EXPECT_NO_THROW(checkRenderable(fine, kLimits, "expert.csv"));
+
+  const auto heavy = restingProfile([](int i, Sample& s) { s.f_user_W = Vec3(0.0, 0.0, i == 700 ? -3.3 : -1.2); });
+  const auto problems = renderabilityProblems(heavy, kLimits);
+  ASSERT_EQ(problems.size(), 1u);
+  for (const char* part : {"presses up to 3.30 N (at 0.700 s)", "continuous force of 1.75 N", "sink through",
+                           "expected at most 1.75 N", "--scale-force 0.53", "pressure_max_N"}) {
+    EXPECT_NE(problems[0].find(part), std::string::npos) << part << " in: " << problems[0];
+  }
+  try {
+    checkRenderable(heavy, kLimits, "--reference heavy.csv");
+    ADD_FAILURE() << "an expert pressing 3.3 N on a 1.75 N pen was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("--reference heavy.csv: it presses up to 3.30 N", 0), 0u) << e.what();
+  }
+
+  // 200 mm wide on a pen whose workspace is 160 mm wide.
+  const auto wide = restingProfile([](int i, Sample& s) { s.p_WT.x() = -0.1 + 2e-4 * i; });
+  const auto too_wide = renderabilityProblems(wide, kLimits);
+  ASSERT_EQ(too_wide.size(), 1u);
+  EXPECT_NE(too_wide[0].find("spans 200.0 mm along x, more than the device's workspace of 160.0 mm"), std::string::npos)
+      << too_wide[0];
 }
 
 }  // namespace

@@ -29,6 +29,10 @@ SimulatedPenParams simulatedPenParams(const DeviceUri& uri);
 /// InputError for an unknown or malformed URI, listing what is accepted.
 std::unique_ptr<Device> openDevice(std::string_view uri, HandScript* hand);
 
+/// The limits a device declares: a sim:// pen's from its URI, any other device's by opening it
+/// (a plugin loads its SDK, a udp:// device asks its server). Throws as openDevice does.
+DeviceLimits declaredLimits(std::string_view uri);
+
 /// Help text listing the accepted URIs and sim:// keys.
 std::string deviceUriHelp();
 

@@ -129,6 +129,11 @@ std::vector<int> analyzedRecallTrials(const Protocol& protocol);
 StudyDefinition parseStudy(std::string_view json_text, std::string_view source_name,
                            const std::filesystem::path& base_dir, bool check_files = true);
 StudyDefinition loadStudy(const std::filesystem::path& file);
+/// Refuses a study whose experts its device cannot render (checkRenderable: the continuous
+/// force, the workspace), before anything is made: InputError, one line per expert, with the
+/// numbers and the remedy. The limits are a sim:// device's declared ones; any other device's
+/// are known only once it is opened, so nothing is checked and false is returned.
+bool checkExpertsRenderable(const StudyDefinition& study);
 /// The definition as JSON (stored in the study database; parseStudy reads it back).
 nlohmann::json studyToJson(const StudyDefinition& study);
 /// An example study file (`hattr study example`).

@@ -7,6 +7,8 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "hattr/core/device_limits.hpp"
 #include "hattr/core/haptic_profile.hpp"
@@ -54,6 +56,15 @@ PhysicalEvents judgeRecording(const HapticProfile& profile, const DeviceLimits& 
 /// The events for people, one phrase each ("the pen 186.0 mm under the paper at 1.234 s"),
 /// joined by " · "; empty when none.
 std::string describePhysicalEvents(const PhysicalEvents& events);
+
+/// Why `profile` cannot serve as an expert, a reference or a hand script on a device of
+/// `limits`: it presses harder than the device's continuous force (the device cannot hold the
+/// paper up against it: the pen would sink through), or it spans more than the device's
+/// workspace on an axis. One sentence per problem with the numbers and the remedy; empty
+/// when it can.
+std::vector<std::string> renderabilityProblems(const HapticProfile& profile, const DeviceLimits& limits);
+/// Throws InputError "WHAT: PROBLEMS" (joined by "; ") when renderabilityProblems finds any.
+void checkRenderable(const HapticProfile& profile, const DeviceLimits& limits, std::string_view what);
 
 /// Writes the events into a recording's metadata (physical_penetration = "COUNT first FIRST_S
 /// worst WORST" and the like, only those that happened).
