@@ -411,39 +411,44 @@ TEST(DeviceServer, ABurstOfWrongMacDatagramsDoesNotStarveTheCommands) {
       "the drain's budget is wall time and ThreadSanitizer makes each receive many times dearer; the release and "
       "ASan builds measure it");
   Rig rig;
-  for (int run = 0; run < 20; ++run) {
-    DeviceServer server(rig.config());
-    RawClient client{rig, server};
-    client.handshake({static_cast<std::uint8_t>(run)});
-    wire::UdpSocket attacker = wire::UdpSocket::connected(server.endpoint());
-    const auto forged = RawClient::encode({{.sender_time_ns = 1}, wire::HelloPayload{{9}}}, wire::randomKey());
-    const std::uint64_t applied_before = server.stats().commands_applied;
-    long largest_lag = 0;  // ticks between a command's sending and the tick that applied it
-    constexpr int kTicks = 30;
-    for (int tick = 1; tick <= kTicks; ++tick) {
-      if (tick > 5 && tick <= 15) {
-        for (int i = 0; i < 150; ++i) ASSERT_TRUE(attacker.send(forged));
+  // The drain's budget is wall time: a host that holds this process up mid-tick (the watch sees
+  // it) leaves the backlog to the next ticks, which is the budget doing its job, not the flood.
+  (void)test::passesUnlessTheHostStalls([&](std::uint64_t& stalls) {
+    const test::HostStallWatch watch(stalls, std::chrono::milliseconds(2));
+    for (int run = 0; run < 20; ++run) {
+      DeviceServer server(rig.config());
+      RawClient client{rig, server};
+      client.handshake({static_cast<std::uint8_t>(run)});
+      wire::UdpSocket attacker = wire::UdpSocket::connected(server.endpoint());
+      const auto forged = RawClient::encode({{.sender_time_ns = 1}, wire::HelloPayload{{9}}}, wire::randomKey());
+      const std::uint64_t applied_before = server.stats().commands_applied;
+      long largest_lag = 0;  // ticks between a command's sending and the tick that applied it
+      constexpr int kTicks = 30;
+      for (int tick = 1; tick <= kTicks; ++tick) {
+        if (tick > 5 && tick <= 15) {
+          for (int i = 0; i < 150; ++i) ASSERT_TRUE(attacker.send(forged));
+        }
+        const Vec3 force(1e-3 * tick, 0.0, 0.0);
+        client.sendRaw(client.command(static_cast<std::uint64_t>(tick), force, client.session_id));
+        client.tick();
+        largest_lag = std::max(largest_lag, tick - std::lround(server.commandedForce().x() / 1e-3));
       }
-      const Vec3 force(1e-3 * tick, 0.0, 0.0);
-      client.sendRaw(client.command(static_cast<std::uint64_t>(tick), force, client.session_id));
-      client.tick();
-      largest_lag = std::max(largest_lag, tick - std::lround(server.commandedForce().x() / 1e-3));
+      const DeviceServerStats stats = server.stats();
+      EXPECT_EQ(stats.command_timeouts, 0u) << "run " << run;
+      EXPECT_EQ(stats.commands_applied - applied_before, static_cast<std::uint64_t>(kTicks)) << "run " << run;
+      // Each tick verifies a few (wrong MAC) and drops the rest of the flood unverified.
+      EXPECT_EQ(stats.drops[static_cast<std::size_t>(DropReason::kBadMac)] +
+                    stats.drops[static_cast<std::size_t>(DropReason::kRateLimited)],
+                1500u)
+          << "run " << run;
+      EXPECT_LE(stats.drops[static_cast<std::size_t>(DropReason::kBadMac)],
+                static_cast<std::uint64_t>(kTicks * wire::kMaxHandshakesPerPump))
+          << "run " << run;
+      EXPECT_EQ(server.commandedForce(), Vec3(1e-3 * kTicks, 0.0, 0.0)) << "run " << run;
+      EXPECT_LE(largest_lag, 2) << "run " << run;
+      std::printf("run %d: a command was applied at most %ld ticks after it was sent\n", run, largest_lag);
     }
-    const DeviceServerStats stats = server.stats();
-    EXPECT_EQ(stats.command_timeouts, 0u) << "run " << run;
-    EXPECT_EQ(stats.commands_applied - applied_before, static_cast<std::uint64_t>(kTicks)) << "run " << run;
-    // Each tick verifies a few (wrong MAC) and drops the rest of the flood unverified.
-    EXPECT_EQ(stats.drops[static_cast<std::size_t>(DropReason::kBadMac)] +
-                  stats.drops[static_cast<std::size_t>(DropReason::kRateLimited)],
-              1500u)
-        << "run " << run;
-    EXPECT_LE(stats.drops[static_cast<std::size_t>(DropReason::kBadMac)],
-              static_cast<std::uint64_t>(kTicks * wire::kMaxHandshakesPerPump))
-        << "run " << run;
-    EXPECT_EQ(server.commandedForce(), Vec3(1e-3 * kTicks, 0.0, 0.0)) << "run " << run;
-    EXPECT_LE(largest_lag, 2) << "run " << run;
-    std::printf("run %d: a command was applied at most %ld ticks after it was sent\n", run, largest_lag);
-  }
+  });
 }
 
 TEST(DeviceServer, TheClientFaultsWithin20msOfASilentServerAndRecoversWhenItReturns) {

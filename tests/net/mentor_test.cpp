@@ -200,6 +200,41 @@ TEST(Mentoring, AGoodbyeEndsTheSessionWithoutALinkFaultASilentLinkCountsOne) {
   }
 }
 
+// Both stations' ticks (the wire session's handshake and checks, the coupling, the PEERs) never
+// allocate nor lock, also while a session opens, a stranger's garbage arrives and a BYE ends it.
+TEST(Mentoring, BothStationsTicksNeverAllocateNorLock) {
+  EmulatedLinkPair link(LinkConditions{}, LinkConditions{});
+  const wire::AuthKey key = wire::randomKey();
+  MentorCoupling leader(MentorConfig{.role = MentorRole::kLeader, .coupling = Coupling::kBilateral, .key = key},
+                        link.end(0));
+  MentorCoupling follower(MentorConfig{.role = MentorRole::kFollower, .coupling = Coupling::kBilateral, .key = key,
+                                       .leader = EmulatedLinkPair::addressOf(0)},
+                          link.end(1));
+  const ContactForces contact{.f_on_paper_W = Vec3(0.0, 0.0, -1.0), .in_contact = true};
+  const std::vector<std::uint8_t> garbage(100, 7);
+  const auto tick = [&](int i) {
+    const PenState pen{.t_s = i * 1e-3, .p_WT = Vec3(1e-4 * (i % 50), 0.0, 0.0)};
+    (void)leader.compute(pen, contact, 1e-3);
+    (void)follower.compute(pen, contact, 1e-3);
+  };
+  tick(0);  // warm up outside the scope
+  const test::NoAllocationScope scope;
+  for (int i = 1; i < 2000; ++i) {
+    if (i % 100 == 0) (void)link.end(1).send(i * 1'000'000, garbage, EmulatedLinkPair::addressOf(0));
+    tick(i);
+  }
+  follower.close(2000 * 1'000'000);
+  tick(2000);
+  EXPECT_EQ(scope.allocations(), 0u);
+  if (test::lockHookActive()) {
+    EXPECT_EQ(scope.locks(), 0u);
+  }
+  EXPECT_EQ(leader.stats().sessions, 1u);
+  EXPECT_GT(leader.stats().peers_received, 1900u);
+  EXPECT_GE(leader.stats().drops[static_cast<std::size_t>(wire::DropReason::kBadHeader)], 19u);
+  EXPECT_EQ(leader.stats().goodbyes_received, 1u);
+}
+
 /// A station's link that, when asked, hands the station its own last datagram back as if the
 /// other station had sent it: a relay without the key reflecting one packet.
 class ReflectingLink final : public wire::DatagramLink {
