@@ -404,8 +404,8 @@ TEST(DeviceServer, AServerBackWithAnotherDeviceMassIsRefusedAsAFault) {
 
 // Issue 40, item 3: 1 500 datagrams with a wrong MAC in a burst (150 a tick for 10 ticks of a
 // 1 kHz session: the rate of the issue's 6-11 ms burst) queued ahead of the client's COMMANDs
-// leave no command gap above the command timeout, and the server acts on the newest command:
-// 20 runs of 20. The server is ticked by hand, back to back, so only the drain is measured.
+// leave no command waiting longer than the command timeout, and the server acts on the newest
+// command: 20 runs of 20. The server is ticked by hand, back to back, so only the drain is measured.
 TEST(DeviceServer, ABurstOfWrongMacDatagramsDoesNotStarveTheCommands) {
   HATTR_SKIP_UNDER_THREAD_SANITIZER(
       "the drain's budget is wall time and ThreadSanitizer makes each receive many times dearer; the release and "
@@ -445,7 +445,10 @@ TEST(DeviceServer, ABurstOfWrongMacDatagramsDoesNotStarveTheCommands) {
                 static_cast<std::uint64_t>(kTicks * wire::kMaxHandshakesPerPump))
           << "run " << run;
       EXPECT_EQ(server.commandedForce(), Vec3(1e-3 * kTicks, 0.0, 0.0)) << "run " << run;
-      EXPECT_LE(largest_lag, 2) << "run " << run;
+      // The requirement: no command waits longer than the command timeout (10 ticks at 1 kHz).
+      // Measured here in release: 0 or 1 tick; under ASan on a loaded host, up to 4.
+      const long timeout_ticks = rig.config().command_timeout / server.loop().period();
+      EXPECT_LT(largest_lag, timeout_ticks) << "run " << run;
       std::printf("run %d: a command was applied at most %ld ticks after it was sent\n", run, largest_lag);
     }
   });
