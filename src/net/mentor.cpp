@@ -197,15 +197,16 @@ void MentorCoupling::Impl::followSession(std::int64_t now_ns) noexcept {
     have_sent_ = false;
     refused_.store(false, std::memory_order_relaxed);
   }
-  const wire::SessionStats stats = session_->stats();
-  if (stats.byes_received != byes_seen_) {
-    byes_seen_ = stats.byes_received;
+  const std::uint64_t byes = session_->byesReceived();
+  if (byes != byes_seen_) {
+    byes_seen_ = byes;
     link_up_ = false;
   }
   if (!session_->live()) have_other_ = false;
   if (initiator_ == nullptr) return;
-  if (stats.busy != busy_seen_) {
-    busy_seen_ = stats.busy;
+  const std::uint64_t busy = session_->busyCount();
+  if (busy != busy_seen_) {
+    busy_seen_ = busy;
     refused_.store(true, std::memory_order_relaxed);
   }
   using State = wire::InitiatorSession::State;

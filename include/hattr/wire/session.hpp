@@ -84,6 +84,10 @@ class Session {
   /// The other side's address (the responder's, or the live session's initiator).
   [[nodiscard]] const UdpEndpoint& peer() const noexcept { return peer_; }
   [[nodiscard]] SessionStats stats() const noexcept;
+  /// Sessions the other side ended with a BYE (any thread; cheaper than stats() on a tick).
+  [[nodiscard]] std::uint64_t byesReceived() const noexcept { return byes_.load(std::memory_order_relaxed); }
+  /// Responder: HELLOs refused with BUSY; initiator: BUSYs received (any thread).
+  [[nodiscard]] std::uint64_t busyCount() const noexcept { return busy_.load(std::memory_order_relaxed); }
   /// Counts a drop the caller found (a datagram cut by its buffer is counted here already).
   void countDrop(DropReason reason) noexcept { drops_.count(reason); }
 
