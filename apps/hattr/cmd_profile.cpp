@@ -19,20 +19,28 @@ struct ProfileConvertOptions {
   std::string input;
   std::string output;
   double scale_force = 1.0;
+  bool centre = false;
   bool force = false;
 };
 
-/// The profile with every force scaled by `factor` (positions, times, pressure and tilt kept),
-/// the factor noted in its metadata (force_scaled_by).
-HapticProfile withForcesScaled(const HapticProfile& profile, double factor) {
+/// The profile with every force scaled by `factor` (positions, times, pressure and tilt kept)
+/// and, with `centre`, its writing moved to the paper's centre (centreOnPaper); each change
+/// noted in its metadata (force_scaled_by, placed_shift_m).
+HapticProfile converted(const HapticProfile& profile, double factor, bool centre) {
   std::vector<Sample> samples = profile.samples();
-  for (Sample& s : samples) {
-    s.f_user_W *= factor;
-    s.f_cmd_W *= factor;
-    s.f_guide_W *= factor;
-  }
   ProfileMetadata metadata = profile.metadata();
-  metadata.extra["force_scaled_by"] = fmt::format("{}", factor);
+  if (factor != 1.0) {
+    for (Sample& s : samples) {
+      s.f_user_W *= factor;
+      s.f_cmd_W *= factor;
+      s.f_guide_W *= factor;
+    }
+    metadata.extra["force_scaled_by"] = fmt::format("{}", factor);
+  }
+  if (centre) {
+    const Vec3 shift = centreOnPaper(samples);
+    metadata.extra["placed_shift_m"] = fmt::format("{} {}", shift.x(), shift.y());
+  }
   return HapticProfile::fromSamples(std::move(metadata), profile.rawChannels(), std::move(samples), false);
 }
 
@@ -50,10 +58,13 @@ void runProfileInfo(const ProfileInfoOptions& opt) {
 void runProfileConvert(const ProfileConvertOptions& opt) {
   checkOutputFiles({opt.output}, opt.force);
   HapticProfile profile = io::readProfileCsv(opt.input);
-  if (opt.scale_force != 1.0) profile = withForcesScaled(profile, opt.scale_force);
+  if (opt.scale_force != 1.0 || opt.centre) profile = converted(profile, opt.scale_force, opt.centre);
   io::writeProfileCsv(profile, opt.output, opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
   std::cout << "wrote " << opt.output << " (" << profile.size() << " samples, SI units"
-            << (opt.scale_force != 1.0 ? fmt::format(", forces scaled by {}", opt.scale_force) : std::string()) << ")\n";
+            << (opt.scale_force != 1.0 ? fmt::format(", forces scaled by {}", opt.scale_force) : std::string())
+            << (opt.centre ? fmt::format(", centred on the paper: placed_shift_m {}", profile.metadata().extra.at("placed_shift_m"))
+                           : std::string())
+            << ")\n";
 }
 
 }  // namespace
@@ -80,6 +91,9 @@ void registerProfileCommands(CLI::App& app) {
                       "within a device's continuous force (noted in the metadata as force_scaled_by)")
       ->check(CLI::Range(0.01, 100.0))
       ->capture_default_str();
+  convert->add_flag("--centre", convert_opt->centre,
+                    "Move the writing (the centre of its pen-down points' box) to the paper's centre, the origin, "
+                    "e.g. to bring tablet data into a device's workspace (noted in the metadata as placed_shift_m)");
   convert->add_flag("--force", convert_opt->force, "Replace OUT if it exists");
   convert->callback([convert_opt] { runProfileConvert(*convert_opt); });
 }

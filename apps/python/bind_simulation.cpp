@@ -8,6 +8,7 @@
 #include <string>
 #include <variant>
 
+#include <fmt/format.h>
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
@@ -16,6 +17,7 @@
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/report/study_analysis.hpp"
 #include "hattr/session/trial.hpp"
+#include "hattr/session/trial_physics.hpp"
 #include "hattr/sim/in_silico.hpp"
 
 namespace hattr::python {
@@ -76,6 +78,14 @@ void bindSimulation(py::module_& m) {
           py::gil_scoped_release unlocked;
           device::ProfileHandScript hand_script(script);
           session::TrialEnvironment environment(device, std::move(world_config), rate_hz);
+          // As `hattr train`: a reference or a hand the device cannot render is refused first.
+          if (expert) {
+            const auto named = [](const char* what, const std::string& file) {
+              return file.empty() ? std::string(what) : fmt::format("{} {}", what, file);
+            };
+            session::checkRenderable(*expert, environment.limits(), named("reference", options.reference_label));
+            session::checkRenderable(script, environment.limits(), named("hand", options.hand_label));
+          }
           const session::TrialSetup setup = session::scriptedTrialSetup(hand_script, script, options);
           result = session::runTrial(environment, setup, hand_script);
         }
@@ -92,7 +102,9 @@ void bindSimulation(py::module_& m) {
       "script plus tail_s [s], or with pen_up_end_s > 0 [s] ends once the pen has been up that long. world: "
       "None (defaults), a dict or a world file. Returns {profile, clamps, ticks, missed_samples, overruns, "
       "faults, link_faults, stalls, clock, end_reason, failure, disturbed}; disturbed says how the trial was "
-      "disturbed (stalls, missed samples, the pen through the paper, the device at its force limit, ...), \"\" when clean. Releases the GIL.");
+      "disturbed (stalls, missed samples, the pen through the paper, the device at its force limit, ...), \"\" when clean. "
+      "With a reference, a reference or hand the device cannot render (too strong, outside its workspace) raises "
+      "InputError with the numbers and the remedy. Releases the GIL.");
 
   m.def(
       "simulate_study",

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 #include <fmt/chrono.h>
@@ -100,6 +101,21 @@ bool operator==(const HapticProfile& a, const HapticProfile& b) {
 std::string utcNowIso8601() {
   const auto now = std::chrono::floor<std::chrono::seconds>(std::chrono::system_clock::now());
   return fmt::format("{:%Y-%m-%dT%H:%M:%SZ}", fmt::gmtime(std::chrono::system_clock::to_time_t(now)));
+}
+
+Vec3 centreOnPaper(std::vector<Sample>& samples) {
+  const bool any_down = std::any_of(samples.begin(), samples.end(), [](const Sample& s) { return s.pen_down; });
+  Vec3 low = Vec3::Constant(std::numeric_limits<double>::infinity());
+  Vec3 high = -low;
+  for (const Sample& s : samples) {
+    if (any_down && !s.pen_down) continue;
+    low = low.cwiseMin(s.p_WT);
+    high = high.cwiseMax(s.p_WT);
+  }
+  if (!low.allFinite()) return Vec3::Zero();  // no samples
+  const Vec3 shift(-0.5 * (low.x() + high.x()), -0.5 * (low.y() + high.y()), 0.0);
+  for (Sample& s : samples) s.p_WT += shift;
+  return shift;
 }
 
 }  // namespace hattr

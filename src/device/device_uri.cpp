@@ -45,6 +45,12 @@ constexpr SimKey kSimKeys[] = {
      "damping of the simulated hand [N·s/m]"},
     {"hand_press_tau_s", 0.0, 1.0, [](SimulatedPenParams& p) { return &p.hand.press_time_constant_s; },
      "time constant of the hand's pressing force [s]"},
+    {"hand_max_force_N", 0.01, 1000.0, [](SimulatedPenParams& p) { return &p.hand.max_force_N; },
+     "the most the simulated hand pushes with [N]"},
+    {"hand_ease_begin_m", 0.0, 1.0, [](SimulatedPenParams& p) { return &p.hand.press_ease_begin_m; },
+     "depth under the writing plane where the hand's press begins to ease off [m]"},
+    {"hand_ease_end_m", 1e-4, 1.0, [](SimulatedPenParams& p) { return &p.hand.press_ease_end_m; },
+     "depth where the hand's press has eased off to nothing [m]"},
     {"timeout_s", 1e-4, 10.0, [](SimulatedPenParams& p) { return &p.command_timeout_s; },
      "force drops to zero without a new command for this long [s]"},
 };
@@ -129,6 +135,9 @@ SimulatedPenParams simulatedPenParams(const DeviceUri& uri) {
   HATTR_THROW_UNLESS(params.limits.continuous_force_N <= params.limits.peak_force_N,
                      "sim://{}: continuous_force_N ({}) must not exceed peak_force_N ({})", uri.target,
                      params.limits.continuous_force_N, params.limits.peak_force_N);
+  HATTR_THROW_UNLESS(params.hand.press_ease_end_m > params.hand.press_ease_begin_m,
+                     "sim://{}: hand_ease_end_m ({}) must lie beyond hand_ease_begin_m ({})", uri.target,
+                     params.hand.press_ease_end_m, params.hand.press_ease_begin_m);
   return params;
 }
 

@@ -22,8 +22,18 @@ Vec3 handForce(const HandImpedance& hand, const HandCommand& command, const Vec3
     // Writing: the fingers steer the tip in the paper plane and press it into the paper
     // with the normal share F·sin θ of the axial force (the tangential share is carried
     // by the grip). The hand does not hold the height, but the fingers still damp it.
-    force.z() = -std::max(command.press_N, 0.0) * std::sin(command.altitude_rad) - hand.damping_N_s_per_m * v_WT.z();
+    // The fingers reach only so far under the writing plane (the hand rests on the desk):
+    // deeper, the press eases off, and past the reach the fingers hold the pen back.
+    const double depth_m = -p_WT.z();
+    const double reach = std::clamp((hand.press_ease_end_m - depth_m) / (hand.press_ease_end_m - hand.press_ease_begin_m),
+                                    0.0, 1.0);
+    const double held_back_N = hand.stiffness_N_per_m * std::max(depth_m - hand.press_ease_end_m, 0.0);
+    force.z() = -std::max(command.press_N, 0.0) * reach * std::sin(command.altitude_rad) + held_back_N -
+                hand.damping_N_s_per_m * v_WT.z();
   }
+  // No hand pushes harder than a firm grip (a stale or far target does not make it 100 N).
+  const double magnitude = force.norm();
+  if (magnitude > hand.max_force_N) force *= hand.max_force_N / magnitude;
   return force;
 }
 

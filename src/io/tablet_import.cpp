@@ -79,6 +79,10 @@ HapticProfile toProfile(std::vector<RawPoint> points, const TabletCalibration& c
                           : Vec3(0.0, 0.0, -axial * std::sin(altitude));
   }
   fillVelocityByFiniteDifferences(samples);
+  if (cal.centre_on_paper) {
+    const Vec3 shift = centreOnPaper(samples);
+    meta.extra["placed_shift_m"] = fmt::format("{} {}", shift.x(), shift.y());
+  }
 
   // Nominal rate: the median time step of the re-timed stamps.
   std::vector<double> steps;
@@ -127,14 +131,14 @@ constexpr NumberField kNumberFields[] = {
 
 TabletCalibration svc2004Calibration() {
   TabletCalibration cal;
-  cal.name = "svc2004 default (Wacom Intuos: 0.01 mm/unit, y up, 1023 = 4.9 N assumed, tilt 0.1 deg)";
+  cal.name = "svc2004 default (Wacom Intuos: 0.01 mm/unit, y up, 1023 = 1.75 N assumed, tilt 0.1 deg, centred)";
   cal.angle_rad_per_unit = units::degreesToRadians(0.1);
   return cal;
 }
 
 TabletCalibration susigCalibration() {
   TabletCalibration cal;
-  cal.name = "susig default (0.01 mm/unit assumed, y up, pressure 0..255 = 0..4.9 N assumed, no tilt)";
+  cal.name = "susig default (0.01 mm/unit assumed, y up, pressure 0..255 = 0..1.75 N assumed, no tilt, centred)";
   cal.pressure_max_raw = 255.0;
   cal.angle_rad_per_unit = 0.0;
   return cal;
@@ -151,16 +155,16 @@ TabletCalibration parseCalibration(std::string_view json_text, std::string_view 
       cal.name = value.get<std::string>();
       continue;
     }
-    if (key == "y_axis_toward_writer") {
+    if (key == "y_axis_toward_writer" || key == "centre_on_paper") {
       HATTR_THROW_UNLESS(value.is_boolean(), "{}: key {}: expected true or false, got {}", source_name, key,
                          jsonExcerpt(value));
-      cal.y_axis_toward_writer = value.get<bool>();
+      (key == "centre_on_paper" ? cal.centre_on_paper : cal.y_axis_toward_writer) = value.get<bool>();
       continue;
     }
     const auto* field = std::find_if(std::begin(kNumberFields), std::end(kNumberFields),
                                      [&](const NumberField& f) { return f.key == key; });
     if (field == std::end(kNumberFields)) {
-      std::string keys = "name, y_axis_toward_writer";
+      std::string keys = "name, y_axis_toward_writer, centre_on_paper";
       for (const auto& f : kNumberFields) keys += fmt::format(", {}", f.key);
       throw InputError(fmt::format("{}: unknown key \"{}\": expected one of {}", source_name, key, keys));
     }

@@ -110,7 +110,8 @@ HapticProfile MentorStation::takeRecording() {
   extra["peer_packets_received"] = fmt::format("{}", s.peers_received);
   // What the recording did that a good one does not (docs/realtime.md, "Physical events").
   const session::PhysicalEvents events = session::judgeRecording(
-      profile, environment_->limits(), loop_->safety().maxForce_N(), environment_->paper().relief());
+      profile, environment_->limits(), loop_->safety().maxForce_N(), environment_->paper().relief(),
+      environment_->physicalBounds());
   session::notePhysicalEvents(events, profile.metadata());
   if (events.any()) extra["disturbed"] = session::describePhysicalEvents(events);
   return profile;

@@ -96,6 +96,7 @@ WorldConfig parseWorldObject(const json& root, std::string_view source, const st
   paper.number("stiffness_N_per_m", p.contact.stiffness_N_per_m, 1.0, 1e6);
   paper.number("damping_N_s_per_m", p.contact.damping_N_s_per_m, 0.0, 1e4);
   paper.number("tangential_stiffness_N_per_m", p.tangential_stiffness_N_per_m, 1.0, 1e6);
+  paper.number("thickness_m", p.thickness_m, 1e-4, 0.05);
   paper.finish();
 
   Section friction(root, "friction", source);
@@ -160,7 +161,8 @@ std::string defaultWorldConfigJson() {
       {"paper",
        {{"stiffness_N_per_m", p.contact.stiffness_N_per_m},
         {"damping_N_s_per_m", p.contact.damping_N_s_per_m},
-        {"tangential_stiffness_N_per_m", p.tangential_stiffness_N_per_m}}},
+        {"tangential_stiffness_N_per_m", p.tangential_stiffness_N_per_m},
+        {"thickness_m", p.thickness_m}}},
       {"friction", {{"static", p.friction.static_coefficient}, {"dynamic", p.friction.dynamic_coefficient}}},
       {"texture",
        {{"sigma", p.texture.sigma}, {"correlation_length_m", p.texture.correlation_length_m}, {"seed", p.texture.seed}}},

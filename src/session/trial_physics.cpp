@@ -75,7 +75,7 @@ PhysicalEvents judgeRecording(const HapticProfile& profile, const DeviceLimits& 
   const double at_limit_N = bounds.saturation_fraction * force_limit_N;
   for (const Sample& s : profile.samples()) {
     const double depth = relief.heightAt(s.p_WT.x(), s.p_WT.y()) - s.p_WT.z();
-    penetration.add(s.t_s, depth > bounds.penetration_m, depth);
+    penetration.add(s.t_s, depth > bounds.paper_thickness_m, depth);
     // The device at its limit holding up the paper: the paper alone asks for the limit or more.
     const bool at_limit = force_limit_N > 0.0 && s.f_cmd_W.norm() >= at_limit_N && s.f_user_W.norm() >= at_limit_N;
     saturation.add(s.t_s, at_limit, 0.0);
@@ -116,7 +116,8 @@ std::vector<std::string> renderabilityProblems(const HapticProfile& profile, con
     high = high.cwiseMax(s.p_WT);
   }
   const double peak_N = strongest->f_user_W.norm();
-  if (peak_N > limits.continuous_force_N) {
+  // (Rounding aside: a tablet's full scale at the continuous force resolves into the same norm.)
+  if (peak_N > limits.continuous_force_N * (1.0 + 1e-9)) {
     // The largest scale that fits, rounded down to a hundredth.
     const double scale = std::floor(100.0 * limits.continuous_force_N / peak_N) / 100.0;
     problems.push_back(fmt::format(
@@ -130,11 +131,19 @@ std::vector<std::string> renderabilityProblems(const HapticProfile& profile, con
   const Vec3 room = limits.workspace_max_m - limits.workspace_min_m;
   constexpr const char* kAxes[] = {"x", "y", "z"};
   for (int axis = 0; axis < 3; ++axis) {
-    if (span[axis] <= room[axis]) continue;
-    problems.push_back(fmt::format(
-        "it spans {:.1f} mm along {}, more than the device's workspace of {:.1f} mm: expected a profile that fits; "
-        "write it smaller or use a device with a larger workspace",
-        span[axis] * 1e3, kAxes[axis], room[axis] * 1e3));
+    if (span[axis] > room[axis]) {
+      problems.push_back(fmt::format(
+          "it spans {:.1f} mm along {}, more than the device's workspace of {:.1f} mm: expected a profile that fits; "
+          "write it smaller or use a device with a larger workspace",
+          span[axis] * 1e3, kAxes[axis], room[axis] * 1e3));
+    } else if (low[axis] < limits.workspace_min_m[axis] || high[axis] > limits.workspace_max_m[axis]) {
+      // It fits, elsewhere: tablet data keeps the tablet's corner as its origin.
+      problems.push_back(fmt::format(
+          "it reaches {} = {:.1f} to {:.1f} mm, outside the device's workspace of {:.1f} to {:.1f} mm: expected a "
+          "profile on the paper; move it there with `hattr profile convert IN OUT --centre`",
+          kAxes[axis], low[axis] * 1e3, high[axis] * 1e3, limits.workspace_min_m[axis] * 1e3,
+          limits.workspace_max_m[axis] * 1e3));
+    }
   }
   return problems;
 }

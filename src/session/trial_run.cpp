@@ -29,7 +29,7 @@ void checkSetup(const TrialSetup& setup) {
 
 TrialRun::TrialRun(TrialEnvironment& environment, const TrialSetup& setup, device::HandScript& hand,
                    bool follow_during_settle)
-    : environment_(&environment), bounds_(setup.bounds) {
+    : environment_(&environment), bounds_(environment.physicalBounds()) {
   checkSetup(setup);
   // Guidance, with its gains clamped to what the device renders passively with the paper; a
   // mentored mode's comes live from the expert's pen, after a settle long enough for the link.

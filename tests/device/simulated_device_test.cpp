@@ -1,6 +1,7 @@
 #include "hattr/device/simulated_device.hpp"
 
 #include <cmath>
+#include <iostream>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -38,6 +39,10 @@ TEST(SimulatedDevice, PenHeldStillWithNoForceStaysPut) {
 // (100 N / 20 kN/m = 5 mm), not 100 mm or a metre below it (issue 38).
 TEST(SimulatedDevice, EndStopsHoldThePenAtItsWorkspace) {
   SimulatedPenParams params;
+  // A hand stronger than a person's that follows the pen all the way down (the default eases off).
+  params.hand.max_force_N = 1000.0;
+  params.hand.press_ease_begin_m = 1.0;
+  params.hand.press_ease_end_m = 2.0;
   StillHand hand({.p_target_W = Vec3(0.0, 0.0, 0.0), .press_N = 100.0, .altitude_rad = 1.5707963267948966,
                   .pen_down = true});
   SimulatedDevice device(params, &hand);
@@ -52,6 +57,46 @@ TEST(SimulatedDevice, EndStopsHoldThePenAtItsWorkspace) {
   EXPECT_NEAR(device.truePosition().z(), held, 1e-4);
   EXPECT_LT(std::abs(device.trueVelocity().z()), 1e-3);
   EXPECT_GT(deepest, held - 0.002) << "the stop's damper keeps the overshoot small";
+}
+
+// A script asking the hand to press 100 N into a paper that is not there: the hand pushes with
+// at most its grip's force, and as the pen sinks under the writing plane it eases off, so the
+// pen comes to rest where the fingers' reach ends, far above the mechanism's end stop.
+TEST(SimulatedDevice, TheHandPushesNoHarderThanAGripAndEasesOffUnderTheDesk) {
+  SimulatedPenParams params;
+  StillHand hand({.p_target_W = Vec3(0.0, 0.0, 0.0), .press_N = 100.0, .altitude_rad = 1.5707963267948966,
+                  .pen_down = true});
+  SimulatedDevice device(params, &hand);
+  double strongest_N = 0.0;
+  double deepest = 0.0;
+  for (int i = 1; i <= 3000; ++i) {
+    ASSERT_EQ(device.write(Vec3::Zero()), DeviceStatus::kOk);
+    (void)readAt(device, i * 1e-3);
+    strongest_N = std::max(strongest_N, device.lastHandForce().norm());
+    deepest = std::min(deepest, device.truePosition().z());
+  }
+  EXPECT_LE(strongest_N, params.hand.max_force_N * (1.0 + 1e-12));
+  EXPECT_NEAR(device.truePosition().z(), -params.hand.press_ease_end_m, 1e-4);
+  EXPECT_GT(deepest, params.limits.workspace_min_m.z()) << "the fall never reached the mechanism's end stop";
+  std::cout << "[ info ] deepest " << deepest * 1e3 << " mm, strongest push " << strongest_N << " N\n";
+}
+
+// The press eases off linearly over the fingers' reach, the fingers hold the pen back past it,
+// and a far target pulls with the cap.
+TEST(SimulatedDevice, HandForceEasesLinearlyUnderTheWritingPlaneAndIsCapped) {
+  HandImpedance hand;
+  hand.damping_N_s_per_m = 0.0;
+  const HandCommand press{.press_N = 10.0, .altitude_rad = 1.5707963267948966, .pen_down = true};
+  const double mid = 0.5 * (hand.press_ease_begin_m + hand.press_ease_end_m);
+  const auto down = [&](double depth) { return -handForce(hand, press, Vec3(0, 0, -depth), Vec3::Zero()).z(); };
+  EXPECT_NEAR(down(0.001), 10.0, 1e-12);
+  EXPECT_NEAR(down(hand.press_ease_begin_m), 10.0, 1e-12);
+  EXPECT_NEAR(down(mid), 5.0, 1e-9);
+  EXPECT_NEAR(down(hand.press_ease_end_m), 0.0, 1e-12);
+  // Past the reach the fingers hold the pen back with the hand's stiffness.
+  EXPECT_NEAR(down(hand.press_ease_end_m + 0.01), -0.01 * hand.stiffness_N_per_m, 1e-9);
+  const HandCommand far{.p_target_W = Vec3(1.0, 0.0, 0.0)};  // 300 N/m x 1 m
+  EXPECT_NEAR(handForce(hand, far, Vec3::Zero(), Vec3::Zero()).norm(), hand.max_force_N, 1e-9);
 }
 
 TEST(SimulatedDevice, ConstantForceAcceleratesAsTheMassDamperModelSays) {
@@ -171,6 +216,8 @@ TEST(DeviceUri, BadUrisListWhatIsAccepted) {
   EXPECT_THAT(openError("sim://pen?mass_kg"), HasSubstr("expected key=value in the query, got \"mass_kg\""));
   EXPECT_THAT(openError("sim://pen?continuous_force_N=9&peak_force_N=8"),
               HasSubstr("continuous_force_N (9) must not exceed peak_force_N (8)"));
+  EXPECT_THAT(openError("sim://pen?hand_ease_begin_m=0.02"),
+              HasSubstr("hand_ease_end_m (0.012) must lie beyond hand_ease_begin_m (0.02)"));
 }
 
 }  // namespace

@@ -272,6 +272,23 @@ TEST(Cli, TrainRefusesAReferenceThePenCannotRenderAndScalingItsForcesFixesIt) {
   const RunResult trained = runHattr(dir, "train --mode alpha --reference " + path("scaled.csv") + " --hand " +
                                               path("light.csv") + " -o " + path("out.csv"));
   EXPECT_EQ(trained.exit_code, 0) << trained.err;
+
+  // A reference that fits the workspace but lies outside it (drifting 75 mm up in y over its
+  // second): refused with `--centre` as the remedy, which places it on the paper.
+  test::writeText(dir / "far.csv", handScript(75.0));
+  const RunResult far = runHattr(dir, "train --mode alpha --reference " + path("far.csv") + " --hand " +
+                                          path("light.csv") + " -o " + path("far_out.csv"));
+  EXPECT_EQ(far.exit_code, 2) << far.err;
+  EXPECT_THAT(far.err, HasSubstr("outside the device's workspace of -60.0 to 60.0 mm"));
+  EXPECT_THAT(far.err, HasSubstr("hattr profile convert IN OUT --centre"));
+  const RunResult centred = runHattr(dir, "profile convert " + path("far.csv") + " " + path("centred.csv") + " --centre");
+  ASSERT_EQ(centred.exit_code, 0) << centred.err;
+  EXPECT_THAT(centred.out, HasSubstr("centred on the paper: placed_shift_m"));
+  const HapticProfile placed = io::readProfileCsv(path("centred.csv"));
+  EXPECT_NEAR(placed.range(Channel::kY).min + placed.range(Channel::kY).max, 0.0, 1e-9);
+  const RunResult fits = runHattr(dir, "train --mode alpha --reference " + path("centred.csv") + " --hand " +
+                                           path("light.csv") + " -o " + path("far_out.csv"));
+  EXPECT_EQ(fits.exit_code, 0) << fits.err;
 }
 
 TEST(Cli, RecordThenTrainInEveryModeWritesProfilesWithGuidanceApart) {

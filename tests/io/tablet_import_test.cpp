@@ -50,15 +50,29 @@ TEST(Svc2004Import, ConvertsTabletUnitsToSi) {
   ASSERT_EQ(p.size(), 3u);
   EXPECT_DOUBLE_EQ(p[0].t_s, 0.0);
   EXPECT_DOUBLE_EQ(p[2].t_s, 0.020);
-  EXPECT_DOUBLE_EQ(p[0].p_WT.x(), 100 * 1e-5);
-  EXPECT_DOUBLE_EQ(p[2].p_WT.y(), 100 * 1e-5);  // SVC2004's y grows away from the writer
+  // Placed on the paper: the pen-down box (x 100..300, y 100..200 units) centred on the origin.
+  EXPECT_DOUBLE_EQ(p[0].p_WT.x(), (100 - 200) * 1e-5);
+  EXPECT_DOUBLE_EQ(p[2].p_WT.y(), (100 - 150) * 1e-5);  // SVC2004's y grows away from the writer
+  EXPECT_EQ(p.metadata().extra.at("placed_shift_m"), "-0.002 -0.0015");
   EXPECT_DOUBLE_EQ(p[0].tilt_altitude_rad, std::numbers::pi / 2);
   EXPECT_DOUBLE_EQ(p[0].pressure_raw, 1023.0);
-  // Vertical pen at full scale: the whole calibrated force presses the paper down.
-  EXPECT_NEAR(p[0].f_user_W.z(), -4.9, 1e-12);
+  // Vertical pen at full scale: the whole calibrated force presses the paper down, and by
+  // default that is what the default pen renders continuously.
+  EXPECT_NEAR(p[0].f_user_W.z(), -1.75, 1e-12);
   EXPECT_NEAR(p[0].f_user_W.head<2>().norm(), 0.0, 1e-12);
   EXPECT_EQ(p.metadata().nominal_rate_hz, 100.0);
   EXPECT_EQ(p.metadata().extra.at("time_origin_s"), "5");
+}
+
+TEST(Svc2004Import, TabletCoordinatesAreKeptWhenTheCalibrationSaysSo) {
+  TabletCalibration cal = svc2004Calibration();
+  cal.centre_on_paper = false;
+  std::istringstream in("2\n100 200 5000 1 900 900 10\n300 100 5010 1 900 900 10\n");
+  const HapticProfile p = importSvc2004(in, "U0S0.TXT", cal);
+  EXPECT_DOUBLE_EQ(p[0].p_WT.x(), 100 * 1e-5);
+  EXPECT_DOUBLE_EQ(p[1].p_WT.y(), 100 * 1e-5);
+  EXPECT_EQ(p.metadata().extra.count("placed_shift_m"), 0u);
+  EXPECT_FALSE(parseCalibration(R"({"centre_on_paper": false})", "cal.json", svc2004Calibration()).centre_on_paper);
 }
 
 TEST(Svc2004Import, PenDownFollowsPressureOrButtonAndPenUpPointsAreKept) {
@@ -73,7 +87,7 @@ TEST(Svc2004Import, PenDownFollowsPressureOrButtonAndPenUpPointsAreKept) {
 TEST(Svc2004Import, TiltSplitsTheAxialForceAsThePaperSays) {
   // Altitude 30°, azimuth 90° (barrel toward +x): normal part F·sin θ, tangential F·cos θ toward −x.
   const HapticProfile p = svc("1\n0 0 0 1 900 300 1023\n");
-  const double f = 4.9;
+  const double f = svc2004Calibration().pressure_max_N;
   EXPECT_NEAR(p[0].f_user_W.z(), -f * std::sin(units::degreesToRadians(30)), 1e-12);
   EXPECT_NEAR(p[0].f_user_W.x(), -f * std::cos(units::degreesToRadians(30)), 1e-12);
   EXPECT_NEAR(p[0].f_user_W.y(), 0.0, 1e-12);
@@ -111,7 +125,7 @@ TEST(SusigImport, ReadsHeaderDataSizeAndStrokeEnds) {
       "100, 200, 0, 128, 0\n110, 205, 10, 255, 1\n300, 200, 50, 64, 0\n310, 210, 60, 0, 1\n");
   ASSERT_EQ(p.size(), 4u);
   EXPECT_DOUBLE_EQ(p[2].t_s, 0.050);
-  EXPECT_NEAR(p[1].f_user_W.z(), -4.9, 1e-12);
+  EXPECT_NEAR(p[1].f_user_W.z(), -susigCalibration().pressure_max_N, 1e-12);
   EXPECT_FALSE(p[3].pen_down);
   EXPECT_FALSE(p.hasChannel(Channel::kAzimuth));
   EXPECT_TRUE(p.hasChannel(Channel::kPressure));

@@ -156,9 +156,9 @@ def test_an_svc2004_import_equals_the_clis(tmp_path):
 def test_a_calibration_dict_overrides_the_formats_defaults():
     source = svc2004_file()
     default = hattr.import_svc2004(source)
-    halved = hattr.import_svc2004(source, calibration={"pressure_max_N": 2.45})
+    doubled = hattr.import_svc2004(source, calibration={"pressure_max_N": 3.5})  # the default is 1.75 N
     down = default.pen_down
-    np.testing.assert_allclose(halved.f_user_W_N[down], default.f_user_W_N[down] / 2, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(doubled.f_user_W_N[down], default.f_user_W_N[down] * 2, rtol=1e-12, atol=1e-15)
     with pytest.raises(hattr.InputError, match="pressure_max_N"):
         hattr.import_svc2004(source, calibration={"pressure_max_N": -1})
 

@@ -62,3 +62,20 @@ def test_bad_trial_settings_raise_input_error(expert_files):
         hattr.run_trial(str(script), indexing="bogus")
     with pytest.raises(TypeError):
         hattr.run_trial(5)
+
+
+def test_a_reference_or_hand_the_pen_cannot_render_is_refused_with_the_remedy(tmp_path, expert_files):
+    expert, script = expert_files
+    # A loop pressing 3.5 N, twice what the default pen holds up (1.75 N).
+    heavy = tmp_path / "heavy.csv"
+    lines = ["t_s,x_mm,y_mm,z_mm,fx_N,fy_N,fz_N,pen_down_bool"]
+    lines += [f"{i * 0.01},{20 * np.sin(0.06 * i)},{10 * np.sin(0.12 * i)},0,0,0,-3.5,1" for i in range(101)]
+    heavy.write_text("\n".join(lines) + "\n")
+    with pytest.raises(hattr.InputError, match=r"reference .*heavy.csv: it presses up to 3.50 N.*--scale-force 0.5"):
+        hattr.run_trial(str(script), str(heavy), "alpha")
+    with pytest.raises(hattr.InputError, match=r"^hand .*heavy.csv: it presses up to 3.50 N"):
+        hattr.run_trial(str(heavy), str(expert), "pcontrol")
+    with pytest.raises(hattr.InputError, match=r"^reference: it presses"):
+        hattr.run_trial(str(script), hattr.read_profile(heavy), "alpha")
+    # Recording keeps any hand: it records what happens, and marks it.
+    assert "under the paper" in hattr.run_trial(str(heavy))["disturbed"]

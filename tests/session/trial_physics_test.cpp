@@ -174,6 +174,31 @@ TEST(TrialPhysics, AProfileThatPressesOrReachesPastTheDeviceIsRefusedBeforeUseWi
   ASSERT_EQ(too_wide.size(), 1u);
   EXPECT_NE(too_wide[0].find("spans 200.0 mm along x, more than the device's workspace of 160.0 mm"), std::string::npos)
       << too_wide[0];
+
+  // 40 mm wide but at x = 90..130 mm (a tablet's corner as the origin): it fits, elsewhere.
+  const auto off = restingProfile([](int i, Sample& s) { s.p_WT.x() = 0.09 + 4e-5 * i; });
+  const auto off_paper = renderabilityProblems(off, kLimits);
+  ASSERT_EQ(off_paper.size(), 1u);
+  EXPECT_NE(off_paper[0].find("reaches x = 90.0 to 130.0 mm, outside the device's workspace of -80.0 to 80.0 mm"),
+            std::string::npos)
+      << off_paper[0];
+  EXPECT_NE(off_paper[0].find("hattr profile convert IN OUT --centre"), std::string::npos) << off_paper[0];
+  std::vector<Sample> moved = off.samples();
+  const Vec3 shift = centreOnPaper(moved);
+  EXPECT_NEAR(shift.x(), -0.11, 1e-12);
+  EXPECT_TRUE(renderabilityProblems(HapticProfile::fromSamples({}, {}, std::move(moved), false), kLimits).empty());
+}
+
+// The paper's thickness (a world key) is the depth past which the pen has fallen through.
+TEST(TrialPhysics, TheWorldsPaperThicknessIsTheFallThroughDepth) {
+  const auto p = restingProfile([](int i, Sample& s) { s.p_WT.z() = i == 500 ? -0.004 : -0.001; });
+  TrialEnvironment thin("sim://pen", render::parseWorldConfig(R"({"relief": {"kind": "flat"}})", "w.json"));
+  TrialEnvironment thick("sim://pen",
+                         render::parseWorldConfig(R"({"paper": {"thickness_m": 0.005}, "relief": {"kind": "flat"}})", "w.json"));
+  EXPECT_EQ(thin.physicalBounds().paper_thickness_m, 0.003);
+  EXPECT_EQ(judgeRecording(p, kLimits, kForceLimit_N, {}, thin.physicalBounds()).penetration.count, 1u);
+  EXPECT_EQ(judgeRecording(p, kLimits, kForceLimit_N, {}, thick.physicalBounds()).penetration.count, 0u);
+  EXPECT_THROW((void)render::parseWorldConfig(R"({"paper": {"thickness_m": 0}})", "w.json"), InputError);
 }
 
 }  // namespace

@@ -446,6 +446,25 @@ class StudioSmokeTest : public QObject {
     QCOMPARE(w.activity(), MainWindow::Activity::kFree);
   }
 
+  // Issue 38: a reference pressing harder than the pen renders loads (the device may change
+  // before a trial), and the trial is refused at its start with the numbers and the remedy.
+  void aReferenceThePenCannotRenderIsRefusedWhenATrialStarts() {
+    MainWindow& w = *window_;
+    std::vector<Sample> samples = expert_.samples();
+    for (Sample& s : samples) s.f_user_W *= 3.0;  // the expert presses about 1 N: now about 3 N
+    const auto heavy_file = dir_ / "heavy.csv";
+    io::writeProfileCsv(HapticProfile::fromSamples(expert_.metadata(), expert_.rawChannels(), std::move(samples), false),
+                        heavy_file);
+    QVERIFY2(w.loadReference(QString::fromStdString(heavy_file.string())), qPrintable(w.lastError()));
+    w.tabs()->setCurrentIndex(MainWindow::kTabTrain);
+    QVERIFY(!w.startTrial());
+    QCOMPARE(w.activity(), MainWindow::Activity::kFree);
+    for (const char* part : {"the reference: it presses up to", "continuous force of 1.75 N", "--scale-force"}) {
+      QVERIFY2(w.lastError().contains(part), qPrintable(w.lastError()));
+    }
+    QVERIFY2(w.loadReference(QString::fromStdString(expert_file_.string())), qPrintable(w.lastError()));
+  }
+
   void settingsAreRememberedAcrossSessions() {
     const QString ini = QString::fromStdString((dir_ / "studio.ini").string());
     window_->setMode(guidance::TrainingMode::kForceControl);

@@ -18,6 +18,7 @@
 #include "core/tablet_input.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/render/world_config.hpp"
+#include "hattr/session/trial_physics.hpp"
 #include "ui/learning_curve.hpp"
 #include "ui/main_window.hpp"
 #include "ui/mentor_tab.hpp"
@@ -112,6 +113,9 @@ bool MainWindow::startTrial() { return train_tab_->start(); }
 void MainWindow::beginLiveTrial(session::TrialEnvironment& environment, const session::TrialSetup& setup,
                                 Activity kind, const HapticProfile& expert, bool reference_on_paper,
                                 bool expert_on_plot, const QString& title, QLabel* scores) {
+  // A reference the device cannot render (too strong, outside its workspace) is refused with
+  // the numbers and the remedy, as `hattr train` refuses it (issue 38).
+  session::checkRenderable(expert, environment.limits(), "the reference");
   startRun(environment, trialRunSpec(setup, true), kind);
   trial_expert_ = &expert;
   // The paper: the reference (or not), nothing else; the plot: the trial's window.

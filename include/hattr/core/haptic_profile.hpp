@@ -97,4 +97,9 @@ namespace hattr {
 /// For sources that record only positions (tablets, hand-written files).
 void fillVelocityByFiniteDifferences(std::vector<Sample>& samples);
 
+/// Places writing on the paper: moves the centre of the pen-down points' box in the paper
+/// plane (of all points when none is down) to W's origin, the paper's centre. Returns the
+/// shift applied [m] (z = 0). For tablet data, whose origin is a corner of the tablet.
+Vec3 centreOnPaper(std::vector<Sample>& samples);
+
 }  // namespace hattr

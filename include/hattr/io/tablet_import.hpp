@@ -19,12 +19,17 @@ struct TabletCalibration {
   double metres_per_unit_y = 1e-5;      ///< tablet y resolution [m per unit]
   bool y_axis_toward_writer = false;    ///< tablet y grows toward the writer (then flipped into W)
   double pressure_max_raw = 1023.0;     ///< raw value at full scale
-  double pressure_max_N = 4.9;          ///< axial force at full scale [N] (an assumption: see docs)
+  /// Axial force at full scale [N]: an assumption (see docs/file-formats.md), by default what the
+  /// default device renders continuously, so an imported profile can guide and drive it.
+  double pressure_max_N = 1.75;
   double pressure_exponent = 1.0;       ///< F = max_N·(raw / max_raw)^exponent
   double pen_down_pressure_raw = 0.0;   ///< the pen is down when raw pressure exceeds this
   double angle_rad_per_unit = 0.0;      ///< raw tilt units to rad (0: the format has no tilt)
   double default_altitude_rad = 1.5707963267948966;  ///< pen altitude when there is no tilt [rad]
   double time_s_per_unit = 1e-3;        ///< time-stamp unit [s]
+  /// Places the writing on the paper: the centre of the pen-down points' box moves to W's origin
+  /// (the paper's centre; the tablet's origin is a corner). The shift is in metadata `placed_shift_m`.
+  bool centre_on_paper = true;
   friend bool operator==(const TabletCalibration&, const TabletCalibration&) = default;
 };
 

@@ -35,6 +35,10 @@ struct PaperParams {
   FrictionParams friction;
   TextureParams texture;
   double writing_angle_rad = 1.0471975511965976;  ///< θ when the device has no tilt (60°)
+  /// How thick the paper (and its pad) is [m]: a tip deeper than this under the surface has
+  /// fallen through it, a physical event of the trial (docs/realtime.md, "Physical events").
+  /// The paper's spring still pushes back there; the recording is what says it happened.
+  double thickness_m = 0.003;
 };
 
 /// Clamps paper parameters to the device's passive bounds (hattr::clampImpedance). Returns

@@ -3,7 +3,8 @@
 /// its key name and a documented default (docs/rendering.md). Bad values are errors naming
 /// the key, the allowed range and the value found.
 ///
-///   {"paper":    {"stiffness_N_per_m": 600, "damping_N_s_per_m": 0.1, "tangential_stiffness_N_per_m": 500},
+///   {"paper":    {"stiffness_N_per_m": 600, "damping_N_s_per_m": 0.1, "tangential_stiffness_N_per_m": 500,
+///                 "thickness_m": 0.003},
 ///    "friction": {"static": 0.30, "dynamic": 0.20},
 ///    "texture":  {"sigma": 0.03, "correlation_length_m": 0.0005, "seed": 1},
 ///    "relief":   {"kind": "grain", "size_m": 0.16, "vertices": 512, "amplitude_m": 1e-5,

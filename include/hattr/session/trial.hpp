@@ -44,6 +44,10 @@ class TrialEnvironment {
   [[nodiscard]] const std::vector<std::string>& worldClamps() const noexcept { return world_clamps_; }
   /// The world's impedance on the guidance's axes (for clampGains).
   [[nodiscard]] guidance::WorldImpedance impedance() const noexcept;
+  /// What a trial's recording is judged against (TrialResult::physics): the paper's thickness.
+  [[nodiscard]] PhysicalBounds physicalBounds() const noexcept {
+    return PhysicalBounds{.paper_thickness_m = world_.paper.thickness_m};
+  }
 
  private:
   std::string device_uri_;
@@ -127,8 +131,6 @@ struct TrialSetup {
   /// A mentored mode's guidance (required for one, unused otherwise); must outlive the trial.
   LiveGuidance* live_guidance = nullptr;
   std::uint64_t live_seed = 1;   ///< passed to LiveGuidance::beginTrial
-  /// What the recording is judged against when the trial ends (TrialResult::physics).
-  PhysicalBounds bounds;
 };
 
 struct TrialResult {

@@ -18,10 +18,11 @@ namespace hattr::session {
 
 /// The bounds a trial's recording is judged against.
 struct PhysicalBounds {
-  /// Deepest the pen tip may go under the paper's surface [m]. The paper pushes back with its
-  /// stiffness (at most the device's, 1000 N/m by default), so the device's continuous force
-  /// (1.75 N) holds the pen 1.75 mm deep: 3 mm is past what the device can hold.
-  double penetration_m = 0.003;
+  /// Deepest the pen tip may go under the paper's surface [m]: the paper's thickness
+  /// (render::PaperParams::thickness_m; TrialEnvironment::physicalBounds). The paper pushes back
+  /// with its stiffness (at most the device's, 1000 N/m by default), so the device's continuous
+  /// force (1.75 N) holds the pen 1.75 mm deep: the default 3 mm is past what the device can hold.
+  double paper_thickness_m = 0.003;
   /// Longest the device may hold up the paper at its force limit without a break [s]: the paper's
   /// reaction alone asks for the limit or more and the device commands it. Longer, and the hand
   /// pressed harder than the device renders: the paper gave way (guidance that meets the limit
@@ -40,7 +41,7 @@ struct PhysicalEvent {
 
 /// What a recording did that a good trial does not.
 struct PhysicalEvents {
-  PhysicalEvent penetration;  ///< the tip deeper than PhysicalBounds::penetration_m under the surface
+  PhysicalEvent penetration;  ///< the tip deeper than the paper's thickness under its surface: fallen through
   PhysicalEvent saturation;   ///< the paper held up at the force limit longer than PhysicalBounds::saturation_s
   PhysicalEvent workspace;    ///< the tip outside the device's workspace box
   [[nodiscard]] bool any() const noexcept {
@@ -59,9 +60,9 @@ std::string describePhysicalEvents(const PhysicalEvents& events);
 
 /// Why `profile` cannot serve as an expert, a reference or a hand script on a device of
 /// `limits`: it presses harder than the device's continuous force (the device cannot hold the
-/// paper up against it: the pen would sink through), or it spans more than the device's
-/// workspace on an axis. One sentence per problem with the numbers and the remedy; empty
-/// when it can.
+/// paper up against it: the pen would sink through), it spans more than the device's workspace
+/// on an axis, or it fits but lies outside it. One sentence per problem with the numbers and
+/// the remedy; empty when it can.
 std::vector<std::string> renderabilityProblems(const HapticProfile& profile, const DeviceLimits& limits);
 /// Throws InputError "WHAT: PROBLEMS" (joined by "; ") when renderabilityProblems finds any.
 void checkRenderable(const HapticProfile& profile, const DeviceLimits& limits, std::string_view what);
