@@ -45,10 +45,10 @@ void runExpert(const SimOptions& opt) {
   std::vector<std::filesystem::path> outputs{opt.output};
   if (!opt.script_output.empty()) outputs.emplace_back(opt.script_output);
   checkOutputFiles(outputs, opt.force);  // both checked before either is written
-  const sim::Glyph glyph = sim::loadGlyph(sim::defaultDataDir() / "glyphs" / (opt.glyph + ".json"));
+  const sim::Glyph glyph = sim::findGlyph(opt.glyph);
   const HapticProfile script = sim::expertScript(glyph);
   session::TrialEnvironment env("sim://pen", render::WorldConfig{}, 1000.0);
-  const HapticProfile expert = sim::recordExpert(env, script, {.subject = "expert", .skill = opt.glyph, .source = "sim:expert"});
+  const HapticProfile expert = sim::recordExpert(env, script, {.subject = "expert", .skill = glyph.name, .source = "sim:expert"});
   const auto overwrite = opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse;
   io::writeProfileCsv(expert, opt.output, overwrite);
   if (!opt.script_output.empty()) io::writeProfileCsv(script, opt.script_output, overwrite);
@@ -149,7 +149,7 @@ void registerSimCommands(CLI::App& app) {
   auto opt = std::make_shared<SimOptions>();
 
   auto* expert = simc->add_subcommand("expert", "Synthesize the expert writing a glyph and record their haptic profile");
-  expert->add_option("--glyph", opt->glyph, "Glyph in data/glyphs (na, loop, ...)")->capture_default_str();
+  expert->add_option("--glyph", opt->glyph, "The glyph: a glyph file, a built-in name (na, loop) or the character (ந)")->capture_default_str();
   expert->add_option("-o,--output", opt->output, "The expert's haptic profile")->required();
   expert->add_option("--script-out", opt->script_output, "Also write the script the expert meant to write");
   expert->add_flag("--force", opt->force, "Replace existing files");

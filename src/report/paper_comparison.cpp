@@ -252,7 +252,9 @@ int PaperComparison::count(Agreement agreement) const {
 PaperComparison compareWithPaper(const session::StudyDefinition& study, std::size_t subject_count,
                                  const StudyAnalysis& analysis, double alpha) {
   PaperComparison out;
-  // Only a study of the paper's three modes can be set beside it.
+  // Only a study of the paper's skill (the Tamil ந: the built-in glyph "na", or the character)
+  // in the paper's three modes can be set beside it.
+  if (study.skill != "na" && study.skill != "ந") return out;
   for (const char* mode : kModes) {
     const bool present = std::any_of(study.modes.begin(), study.modes.end(),
                                      [mode](guidance::TrainingMode m) { return guidance::modeName(m) == mode; });
@@ -289,7 +291,8 @@ nlohmann::json comparisonToJson(const PaperComparison& comparison) {
 std::vector<std::string> comparisonText(const PaperComparison& comparison) {
   std::vector<std::string> out;
   if (!comparison.applicable) {
-    out.emplace_back("The paper compares BASIC, PCONTROL and ALPHA; this study does not, so it is not set beside the paper.");
+    out.emplace_back("The paper trains the Tamil ந (skill \"na\") in BASIC, PCONTROL and ALPHA; this study does not, so "
+                     "it is not set beside the paper.");
     return out;
   }
   out.push_back(fmt::format("The paper next to this study: {} points agree, {} differ, {} not measured (significance at "

@@ -6,6 +6,7 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -14,6 +15,7 @@
 
 #include "hattr/core/error.hpp"
 #include "hattr/core/units.hpp"
+#include "hattr/sim/data_dir.hpp"
 
 namespace hattr::sim {
 namespace {
@@ -112,6 +114,38 @@ Glyph parseGlyph(std::string_view json_text, std::string_view source) {
 }
 
 Glyph loadGlyph(const std::filesystem::path& file) { return parseGlyph(readTextFile(file), file.string()); }
+
+std::vector<Glyph> builtInGlyphs() {
+  std::vector<std::filesystem::path> files;
+  for (const auto& entry : std::filesystem::directory_iterator(defaultDataDir() / "glyphs")) {
+    if (entry.path().extension() == ".json") files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  std::vector<Glyph> glyphs;
+  for (const auto& file : files) glyphs.push_back(loadGlyph(file));
+  return glyphs;
+}
+
+// A path first (what is clearly one, or a file that is there), then a built-in name, then a
+// built-in character.
+Glyph findGlyph(std::string_view name) {
+  HATTR_THROW_UNLESS(!name.empty(), "glyph: expected a file, a built-in glyph's name or a character, got \"\"");
+  const std::filesystem::path as_path(name);
+  std::error_code ec;
+  if (name.find('/') != std::string_view::npos || as_path.extension() == ".json" ||
+      std::filesystem::is_regular_file(as_path, ec)) {
+    return loadGlyph(as_path);
+  }
+  const std::vector<Glyph> glyphs = builtInGlyphs();
+  for (const Glyph& g : glyphs) {
+    if (g.name == name || (!g.character.empty() && g.character == name)) return g;
+  }
+  std::vector<std::string> known;
+  for (const Glyph& g : glyphs) known.push_back(g.character.empty() ? g.name : fmt::format("{} ({})", g.name, g.character));
+  throw InputError(fmt::format("glyph \"{}\": no such file, and no built-in glyph has that name or character; "
+                               "expected a glyph file or one of: {}",
+                               name, fmt::join(known, ", ")));
+}
 
 double glyphPathLength(const Glyph& glyph) {
   double length = 0.0;

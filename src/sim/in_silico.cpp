@@ -11,7 +11,6 @@
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/report/study_report.hpp"
 #include "hattr/session/study_runner.hpp"
-#include "hattr/sim/data_dir.hpp"
 #include "hattr/sim/expert.hpp"
 #include "hattr/sim/glyph.hpp"
 #include "hattr/sim/participant.hpp"
@@ -85,18 +84,18 @@ session::StudyDefinition writePaperStudy(const std::filesystem::path& dir, const
                      o.recall_trials, o.training_trials);
   std::filesystem::create_directories(dir);
   // The expert: what they mean to write (the script), and what the pen records (the reference).
-  const Glyph glyph = loadGlyph(defaultDataDir() / "glyphs" / (o.glyph + ".json"));
+  const Glyph glyph = findGlyph(o.glyph);
   const HapticProfile script = expertScript(glyph);
   session::TrialEnvironment environment("sim://pen", render::WorldConfig{}, 1000.0);
   const HapticProfile expert = recordExpert(environment, script,
-                                            {.subject = "expert", .skill = o.glyph, .source = "sim:expert"});
+                                            {.subject = "expert", .skill = glyph.name, .source = "sim:expert"});
   io::writeProfileCsv(script, dir / "expert-script.csv", io::Overwrite::kReplace);
   io::writeProfileCsv(expert, dir / "expert.csv", io::Overwrite::kReplace);
   // The study: the paper's protocol, counterbalanced, simulated subjects.
   session::StudyDefinition study;
   study.name = fmt::format("{} in silico: three training modes{}", glyph.name, o.guidance ? "" : " (A/A: no guidance)");
-  study.skill = o.glyph;
-  study.experts[o.glyph] = dir / "expert.csv";
+  study.skill = glyph.name;
+  study.experts[glyph.name] = dir / "expert.csv";
   study.modes = {guidance::TrainingMode::kBasic, guidance::TrainingMode::kPositionControl,
                  guidance::TrainingMode::kForceControl};
   study.protocol.training_trials = o.training_trials;

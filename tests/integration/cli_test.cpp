@@ -377,6 +377,24 @@ TEST(Cli, StudyCommandsReportStatusAndRefuseBadInputWithExitTwo) {
   EXPECT_THAT(not_db.err, HasSubstr("not a hattr study database"));
 }
 
+// Issue 35: `--glyph` takes a glyph file by its path (it looked for data/glyphs/a.json.json), a
+// built-in name or the character; the expert's skill is the glyph's name.
+TEST(Cli, SimExpertTakesAGlyphByItsPathOrItsCharacter) {
+  test::TempDir dir;
+  test::writeText(dir / "a.json", R"({"format": "hattr-glyph", "version": 1, "name": "hook",
+      "strokes": [{"points": [[-5, 0], [0, 5], [5, 0]]}]})");
+  const auto path = [&](const char* name) { return (dir / name).string(); };
+  const RunResult by_path = runHattr(dir, "sim expert --glyph " + path("a.json") + " -o " + path("hook.csv"));
+  ASSERT_EQ(by_path.exit_code, 0) << by_path.err;
+  EXPECT_EQ(io::readProfileCsv(path("hook.csv")).metadata().skill, "hook");
+  const RunResult by_character = runHattr(dir, "sim expert --glyph ந -o " + path("na.csv"));
+  ASSERT_EQ(by_character.exit_code, 0) << by_character.err;
+  EXPECT_EQ(io::readProfileCsv(path("na.csv")).metadata().skill, "na");
+  const RunResult unknown = runHattr(dir, "sim expert --glyph zeta -o " + path("z.csv"));
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_THAT(unknown.err, HasSubstr("expected a glyph file or one of: loop, na (ந)"));
+}
+
 TEST(Cli, StudyInitRefusesABadTrialEndWithExitTwo) {
   test::TempDir dir;
   test::writeText(dir / "expert.csv", handScript());
@@ -391,7 +409,8 @@ TEST(Cli, StudyInitRefusesABadTrialEndWithExitTwo) {
 TEST(Cli, StudyReportSetsThePaperBesideTheStudyAndHattrDtwScoresItsTrialsAlike) {
   test::TempDir dir;
   test::writeText(dir / "expert.csv", handScript());
-  test::writeText(dir / "study.json", R"({"name": "cli", "skill": "loop", "experts": {"loop": "expert.csv"},
+  // The paper's skill (by its name) in the paper's modes: a study set beside the paper.
+  test::writeText(dir / "study.json", R"({"name": "cli", "skill": "na", "experts": {"na": "expert.csv"},
       "protocol": {"training_trials": 1, "recall_trials": 3, "rest_s": 0}, "world": {"relief": {"kind": "flat"}},
       "subjects": {"count": 3, "participant": "script", "options": {"jitter_mm": 2.0}}})");
   const std::string db = (dir / "s.sqlite").string();
@@ -420,7 +439,7 @@ TEST(Cli, StudyReportSetsThePaperBesideTheStudyAndHattrDtwScoresItsTrialsAlike) 
     if (line.starts_with(fmt::format("{},", first["trial_id"].get<std::int64_t>()))) trial_file = line.substr(line.rfind(',') + 1);
   }
   ASSERT_FALSE(trial_file.empty());
-  const RunResult scored = runHattr(dir, "dtw --score --json " + (dir / "export" / "experts" / "loop.csv").string() + " " +
+  const RunResult scored = runHattr(dir, "dtw --score --json " + (dir / "export" / "experts" / "na.csv").string() + " " +
                                              (dir / "export" / trial_file).string());
   ASSERT_EQ(scored.exit_code, 0) << scored.err;
   const auto score = nlohmann::json::parse(scored.out);

@@ -42,6 +42,7 @@ StudyAnalysis asThePaperFound() {
 
 session::StudyDefinition paperStudy() {
   session::StudyDefinition s;
+  s.skill = "na";
   s.modes = {guidance::TrainingMode::kBasic, guidance::TrainingMode::kPositionControl, guidance::TrainingMode::kForceControl};
   return s;
 }
@@ -132,6 +133,15 @@ TEST(PaperComparison, AStudyWithoutThePapersThreeModesIsNotSetBesideIt) {
   EXPECT_FALSE(c.applicable);
   EXPECT_TRUE(c.rows.empty());
   EXPECT_THAT(comparisonText(c).front(), HasSubstr("not set beside the paper"));
+}
+
+// Issue 35: a signature study in the paper's three modes is not the paper's experiment either.
+TEST(PaperComparison, AStudyOfAnotherSkillIsNotSetBesideIt) {
+  session::StudyDefinition study = paperStudy();
+  study.skill = "U1S1";
+  EXPECT_FALSE(compareWithPaper(study, 10, asThePaperFound()).applicable);
+  study.skill = "ந";
+  EXPECT_TRUE(compareWithPaper(study, 10, asThePaperFound()).applicable);
 }
 
 }  // namespace

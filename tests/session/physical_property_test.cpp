@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <iostream>
 #include <random>
-#include <regex>
+#include <string_view>
 #include <string>
 #include <vector>
 
@@ -182,13 +182,10 @@ bool remedied(const HapticProfile& profile, const DeviceLimits& limits, const st
   std::vector<Sample> samples = profile.samples();
   bool wider = false;
   for (const std::string& problem : problems) {
-    const std::smatch scale = [&] {
-      std::smatch m;
-      std::regex_search(problem, m, std::regex("--scale-force ([0-9.]+)"));
-      return m;
-    }();
-    if (!scale.empty()) {
-      for (Sample& s : samples) s.f_user_W *= std::stod(scale[1].str());
+    constexpr std::string_view kScale = "--scale-force ";
+    if (const auto at = problem.find(kScale); at != std::string::npos) {
+      const double factor = std::stod(problem.substr(at + kScale.size()));
+      for (Sample& s : samples) s.f_user_W *= factor;
     } else if (problem.find("--centre") != std::string::npos) {
       (void)centreOnPaper(samples);
     } else {

@@ -146,6 +146,31 @@ TEST(GlyphFile, AMissingFileIsReportedByName) {
   }
 }
 
+// Issue 35: a glyph is named by its file, its built-in name or the character itself.
+TEST(GlyphFile, AGlyphIsFoundByItsPathItsNameOrItsCharacter) {
+  EXPECT_EQ(findGlyph("na").name, "na");
+  EXPECT_EQ(findGlyph("ந").name, "na");
+  EXPECT_EQ(findGlyph("loop").name, "loop");
+  const test::TempDir dir;
+  test::writeText(dir / "a.json", glyphText(R"([{"points": [[0, 0], [5, 5]]}])"));
+  EXPECT_EQ(findGlyph((dir / "a.json").string()).strokes.size(), 1u);
+  EXPECT_THAT([&] {
+    try {
+      (void)findGlyph((dir / "b.json").string());
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  }(), HasSubstr("b.json: cannot open for reading"));
+  try {
+    (void)findGlyph("zeta");
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("glyph \"zeta\": no such file, and no built-in glyph has that name or character"));
+    EXPECT_THAT(e.what(), HasSubstr("loop, na (ந)"));
+  }
+}
+
 TEST(DataDir, TheEnvironmentVariableWinsAndMustNameADirectory) {
   const test::TempDir dir;
   {

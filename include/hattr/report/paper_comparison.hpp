@@ -55,7 +55,8 @@ struct ComparisonRow {
 };
 
 struct PaperComparison {
-  /// False when the study does not compare the paper's three modes (then `rows` is empty).
+  /// False when the study does not train the paper's skill (ந, "na") in the paper's three modes
+  /// (then `rows` is empty).
   bool applicable = false;
   double alpha = 0.05;  ///< significance level the points were judged at
   /// Where the study's protocol differs from the paper's (subjects, trials, what the

@@ -47,6 +47,14 @@ Glyph parseGlyph(std::string_view json_text, std::string_view source_name);
 /// Loads a glyph file (parseGlyph); throws InputError if it cannot be read.
 Glyph loadGlyph(const std::filesystem::path& file);
 
+/// A glyph as people name it: a file path (an existing file, or any name with a '/' or ending
+/// in .json), a built-in glyph's name (data/glyphs/NAME.json: "na", "loop"), or the character
+/// itself ("ந"). Throws InputError naming what was tried and listing the built-in glyphs.
+Glyph findGlyph(std::string_view name);
+
+/// The built-in glyphs (data/glyphs/*.json), sorted by name.
+std::vector<Glyph> builtInGlyphs();
+
 /// Total pen-down path length of a glyph [m] (the sum of its strokes' polyline lengths).
 double glyphPathLength(const Glyph& glyph);
 

@@ -19,7 +19,7 @@ namespace hattr::sim {
 
 struct InSilicoOptions {
   std::filesystem::path out_dir = "demo-out";
-  std::string glyph = "na";                 ///< data/glyphs/<glyph>.json
+  std::string glyph = "na";                 ///< a glyph file, a built-in name or the character (findGlyph)
   int subjects = 10;
   std::uint64_t seed = 1;                   ///< subject i gets seed·1000 + i
   int training_trials = 11;
