@@ -202,15 +202,6 @@ std::function<void(std::string_view, int, int)> stageProgress(Progress& progress
 }
 
 
-nlohmann::json verdictsJson(const servo::LoopJudgement& judgement) {
-  nlohmann::json figures = nlohmann::json::array();
-  for (const auto& f : judgement.figures) {
-    figures.push_back({{"figure", f.name}, {"value", f.value}, {"unit", f.unit},
-                       {"verdict", std::string(servo::verdictName(f.verdict))}, {"rule", f.rule}});
-  }
-  return figures;
-}
-
 std::string verdictsText(const servo::LoopJudgement& judgement) {
   std::string text;
   for (const auto& f : judgement.figures) {

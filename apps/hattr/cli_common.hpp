@@ -35,9 +35,8 @@ std::string profileSummaryText(const HapticProfile& profile);
 /// Prints JSON (indented) to stdout.
 void printJson(const nlohmann::json& json);
 
-/// A loop run's verdicts (servo::judgeLoop): JSON [{figure, value, unit, verdict, rule}], and one
+/// A loop run's verdicts (servo::judgeLoop; their JSON: ops::verdictsJson) for people: one
 /// text line a figure ("PASS  faults  0  (PASS 0, else FAIL ...)") ending with the overall verdict.
-nlohmann::json verdictsJson(const servo::LoopJudgement& judgement);
 std::string verdictsText(const servo::LoopJudgement& judgement);
 
 void registerProfileCommands(CLI::App& app);
@@ -109,8 +108,5 @@ std::function<void(std::string_view, int, int)> stageProgress(Progress& progress
 
 /// The world configuration in `file`, or the defaults when `file` is empty.
 render::WorldConfig worldConfigOrDefault(const std::string& file);
-/// Clamps the paper to the passive bounds of the device `device_uri` at `rate_hz`; returns
-/// one line per change.
-std::vector<std::string> clampWorldToDevice(render::WorldConfig& world, const std::string& device_uri, double rate_hz);
 
 }  // namespace hattr::cli

@@ -8,8 +8,9 @@
 #include <fmt/format.h>
 
 #include "cli_common.hpp"
-#include "hattr/wire/packet.hpp"
 #include "hattr/net/device_server.hpp"
+#include "hattr/ops/json.hpp"
+#include "hattr/wire/packet.hpp"
 
 namespace hattr::cli {
 namespace {
@@ -35,17 +36,8 @@ struct KeygenOptions {
 volatile std::sig_atomic_t g_stop_signal = 0;
 extern "C" void onStopSignal(int signal_number) { g_stop_signal = signal_number; }
 
-servo::RealtimePolicy parsePolicy(const std::string& text) {
-  if (text == "require") return servo::RealtimePolicy::kRequire;
-  if (text == "try") return servo::RealtimePolicy::kTry;
-  return servo::RealtimePolicy::kSkip;
-}
-
 nlohmann::json statsJson(const net::DeviceServerStats& s) {
-  nlohmann::json drops = nlohmann::json::object();
-  for (std::size_t r = 0; r < wire::kDropReasonCount; ++r) {
-    drops[std::string(wire::dropReasonName(static_cast<wire::DropReason>(r)))] = s.drops[r];
-  }
+  const nlohmann::json drops = ops::dropsJson(s.drops);
   return {{"sessions", s.sessions},         {"session_timeouts", s.session_timeouts},
           {"byes", s.byes},                 {"busy_refusals", s.busy_refusals},
           {"commands_applied", s.commands_applied}, {"command_timeouts", s.command_timeouts},
@@ -63,7 +55,7 @@ void runServe(const ServeOptions& opt) {
   config.rate_hz = opt.rate_hz;
   config.command_timeout = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.command_timeout_ms * 1e6));
   config.session_timeout = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.session_timeout_ms * 1e6));
-  config.realtime = {.policy = parsePolicy(opt.realtime), .cpu = opt.cpu};
+  config.realtime = {.policy = servo::parseRealtimePolicy(opt.realtime), .cpu = opt.cpu};
   net::DeviceServer server(config);
 
   struct sigaction action {};

@@ -13,8 +13,8 @@
 #include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/net/mentor_station.hpp"
+#include "hattr/ops/json.hpp"
 #include "hattr/sim/expert.hpp"
-#include "hattr/sim/data_dir.hpp"
 #include "hattr/sim/glyph.hpp"
 
 namespace hattr::cli {
@@ -110,10 +110,7 @@ std::string recordPath(const MentorOptions& opt, int number) {
 
 nlohmann::json summaryJson(const SessionSummary& summary) {
   const net::MentorStats& s = summary.stats;
-  nlohmann::json drops = nlohmann::json::object();
-  for (std::size_t i = 0; i < s.drops.size(); ++i) {
-    if (s.drops[i]) drops[std::string(wire::dropReasonName(static_cast<wire::DropReason>(i)))] = s.drops[i];
-  }
+  const nlohmann::json drops = ops::dropsJson(s.drops);
   return {{"samples", summary.samples},
           {"peers_received", s.peers_received},
           {"peers_sent", s.peers_sent}, {"peers_withheld", s.peers_withheld},
@@ -282,7 +279,7 @@ std::vector<double> numberList(const std::string& text, const char* option) {
 
 // The table of docs/mentoring.md: coupling × round trip × loss, with the passivity method on and off.
 void runSimulate(const SimulateOptions& opt) {
-  const sim::Glyph glyph = sim::loadGlyph(sim::defaultDataDir() / "glyphs" / (opt.glyph + ".json"));
+  const sim::Glyph glyph = sim::findGlyph(opt.glyph);
   const HapticProfile plan = sim::expertScript(glyph);
   std::vector<bool> passivity_settings;
   if (opt.passivity != "off") passivity_settings.push_back(true);
@@ -393,7 +390,7 @@ void registerMentorCommands(CLI::App& app) {
       ->capture_default_str();
   simulate->add_option("--seconds", sim_opt->seconds, "Recorded time per run (default: the glyph's length + 0.3 s)")
       ->check(CLI::Range(0.1, 600.0));
-  simulate->add_option("--glyph", sim_opt->glyph, "The glyph the expert writes")->capture_default_str();
+  simulate->add_option("--glyph", sim_opt->glyph, "The glyph the expert writes: a file, a built-in name or the character")->capture_default_str();
   simulate->add_option("--seed", sim_opt->seed, "Link emulator seed")->capture_default_str();
   simulate->add_option("--expert-device", sim_opt->expert_device, "The expert's simulated pen and hand (sim:// keys)")
       ->capture_default_str();

@@ -1,22 +1,14 @@
 // hattr servo-check: runs the real-time loop with the full pipeline on a (simulated) device
 // next to a bare sleep loop measured in the same run, and reports both.
 
-#include <algorithm>
-#include <atomic>
 #include <chrono>
-#include <exception>
-#include <functional>
 #include <iostream>
-#include <thread>
 
 #include <fmt/format.h>
 
 #include "cli_common.hpp"
 #include "hattr/core/error.hpp"
-#include "hattr/device/device_uri.hpp"
-#include "hattr/device/udp_device.hpp"
-#include "hattr/render/paper_renderer.hpp"
-#include "hattr/servo/servo_loop.hpp"
+#include "hattr/ops/servo_check.hpp"
 
 namespace hattr::cli {
 namespace {
@@ -32,179 +24,32 @@ struct ServoCheckOptions {
   bool json = false;
 };
 
-nlohmann::json percentilesUs(const DurationHistogram& h) {
-  const auto us = [](std::int64_t ns) { return static_cast<double>(ns) * 1e-3; };
-  return {{"p50", us(h.percentile_ns(0.50))}, {"p99", us(h.percentile_ns(0.99))},
-          {"p99_9", us(h.percentile_ns(0.999))}, {"max", us(h.max_ns())}, {"count", h.count()}};
-}
-
-// The network link of a udp:// device: round trip, state age, loss, late packets, drops.
-nlohmann::json linkJson(const device::LinkStats& s) {
-  nlohmann::json drops = nlohmann::json::object();
-  for (std::size_t r = 0; r < wire::kDropReasonCount; ++r) {
-    drops[std::string(wire::dropReasonName(static_cast<wire::DropReason>(r)))] = s.drops[r];
-  }
-  const double expected = static_cast<double>(s.states_received + s.states_lost);
-  return {{"rtt_us", percentilesUs(s.rtt)},
-          {"state_age_us", percentilesUs(s.state_age)},
-          {"clock_offset_us", static_cast<double>(s.clock_offset_ns) * 1e-3},
-          {"commands_sent", s.commands_sent},
-          {"states_received", s.states_received},
-          {"states_lost", s.states_lost},
-          {"loss", expected > 0.0 ? static_cast<double>(s.states_lost) / expected : 0.0},
-          {"states_late", s.states_late},
-          {"held_reads", s.held_reads},
-          {"disconnected_reads", s.disconnected_reads},
-          {"reconnects", s.reconnects},
-          {"drops", drops}};
-}
-
-servo::RealtimePolicy parsePolicy(const std::string& text) {
-  if (text == "require") return servo::RealtimePolicy::kRequire;
-  if (text == "try") return servo::RealtimePolicy::kTry;
-  return servo::RealtimePolicy::kSkip;
-}
-
-nlohmann::json reportJson(const servo::RealtimeReport& r) {
-  return {{"fifo", r.fifo}, {"memory_locked", r.memory_locked}, {"pinned", r.pinned},
-          {"timer_slack_minimal", r.timer_slack_minimal}, {"notes", r.notes}};
-}
-
-/// Draws `progress` (the seconds passed, at most `seconds`) every 0.1 s until `done()` or
-/// `deadline`.
-void waitShowingProgress(Progress& progress, double seconds, const std::function<bool()>& done,
-                         std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max()) {
-  const auto begin = std::chrono::steady_clock::now();
-  for (auto now = begin; !done() && now < deadline; now = std::chrono::steady_clock::now()) {
-    std::this_thread::sleep_until(std::min(deadline, now + std::chrono::milliseconds(100)));
-    const double passed = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
-    progress.update(std::min(passed, seconds));
-  }
-}
-
-/// Runs the check; returns its overall verdict (the figures' worst).
-servo::Verdict runServoCheck(const ServoCheckOptions& opt) {
-  servo::RealtimeSettings realtime{.policy = parsePolicy(opt.realtime),
-                                   .cpu = opt.cpu,
-                                   .final_spin = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.spin_us * 1e3))};
-  const auto duration = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.seconds * 1e9));
-
-  // The platform's floor first: the same sleeps with nothing to do. On a terminal it is
-  // measured on its own thread while this one draws the progress line; otherwise here.
-  Progress progress("", 0, "s");
-  servo::RealtimeReport floor_report;
-  DurationHistogram floor;
-  if (Progress::onTerminal()) {
-    progress.stage("servo-check 1/2: the bare sleep loop (floor)", opt.seconds);
-    std::exception_ptr floor_error;
-    std::atomic<bool> floor_done{false};
-    {
-      std::jthread floor_thread([&] {  // joined at the end of the block, whatever happens
-        try {
-          floor = servo::measureSleepFloor(opt.rate_hz, duration, realtime, &floor_report);
-        } catch (...) {
-          floor_error = std::current_exception();
-        }
-        floor_done.store(true, std::memory_order_release);
-      });
-      waitShowingProgress(progress, opt.seconds, [&] { return floor_done.load(std::memory_order_acquire); });
-    }
-    if (floor_error) std::rethrow_exception(floor_error);
-  } else {
-    floor = servo::measureSleepFloor(opt.rate_hz, duration, realtime, &floor_report);
-  }
-
-  // Then the full pipeline: a hand writing circles on the paper through the device.
-  render::WorldConfig world = worldConfigOrDefault(opt.world);
-  const std::vector<std::string> clamps = clampWorldToDevice(world, opt.device, opt.rate_hz);
-  for (const auto& c : clamps) std::cerr << "hattr: world clamped: " << c << '\n';
-  render::PaperRenderer paper(world.paper, render::buildRelief(world.relief));
-  device::CircleHand hand(Vec3::Zero(), 0.015, 1.0, 1.0);
-  const auto device = device::openDevice(opt.device, &hand);
-  servo::ServoLoop loop(*device, servo::ServoConfig{.rate_hz = opt.rate_hz, .realtime = realtime});
-  loop.setWorld(&paper);
-  std::atomic<bool> done{false};
-  std::uint64_t consumed = 0;
-  std::thread consumer([&] {  // drains samples like the recorder does
-    TickSample s;
-    while (!done.load(std::memory_order_acquire)) {
-      while (loop.samples().tryPop(s)) ++consumed;
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    }
-    while (loop.samples().tryPop(s)) ++consumed;
-  });
-  loop.start();
-  if (Progress::onTerminal()) {
-    progress.stage("servo-check 2/2: the servo loop", opt.seconds);
-    waitShowingProgress(progress, opt.seconds, [] { return false; }, std::chrono::steady_clock::now() + duration);
-  } else {
-    std::this_thread::sleep_for(duration);
-  }
-  loop.stop();
-  progress.finish();
-  done = true;
-  consumer.join();
-
-  const auto& c = loop.counters();
-  const double floor_p99 = static_cast<double>(floor.percentile_ns(0.99));
-  const double loop_p99 = static_cast<double>(loop.periodError().percentile_ns(0.99));
-  nlohmann::json json = {
-      {"rate_hz", opt.rate_hz},
-      {"seconds", opt.seconds},
-      {"device", opt.device},
-      {"world", opt.world.empty() ? "defaults" : opt.world},
-      {"world_clamps", clamps},
-      {"realtime", reportJson(loop.realtimeReport())},
-      {"floor", {{"period_error_us", percentilesUs(floor)}}},
-      {"loop",
-       {{"period_error_us", percentilesUs(loop.periodError())},
-        {"tick_compute_us", percentilesUs(loop.tickCompute())},
-        {"ticks", c.ticks.load()},
-        {"samples_consumed", consumed},
-        {"overruns", c.overruns.load()},
-        {"dropped_samples", c.dropped_samples.load()},
-        {"faults", c.faults.load()},
-        {"stalls", c.stalls.load()},
-        {"link_faults", c.link_faults.load()},
-        {"disconnected_ticks", c.disconnected_ticks.load()}}},
-      {"ratio_p99", floor_p99 > 0.0 ? loop_p99 / floor_p99 : 0.0},
-  };
-  const auto* udp = dynamic_cast<const device::UdpDevice*>(device.get());
-  servo::LoopJudgement judgement = servo::judgeLoop(loop);
-  if (udp != nullptr) {
-    json["link"] = linkJson(udp->linkStats());
-    json["link"]["server_rate_hz"] = udp->serverRate_hz();
-    json["link"]["fault"] = udp->faultReason();
-    servo::judgeLink(udp->linkStats(), judgement);
-  }
-  json["verdicts"] = verdictsJson(judgement);
-  json["verdict"] = std::string(servo::verdictName(judgement.overall));
-  if (opt.json) {
-    printJson(json);
-    return judgement.overall;
-  }
+/// Prints the check for people: the real time got, the three timing rows, the counters, the
+/// link's figures for a device behind one, the verdicts.
+void printServoCheck(const ops::ServoCheckResult& r) {
+  const nlohmann::json json = r.toJson();
   const auto row = [](const char* name, const nlohmann::json& p) {
     return fmt::format("{:<22} {:>9.2f} {:>9.2f} {:>9.2f} {:>9.2f}\n", name, p["p50"].get<double>(),
                        p["p99"].get<double>(), p["p99_9"].get<double>(), p["max"].get<double>());
   };
-  std::cout << fmt::format("servo-check: {} Hz for {} s on {}\n", opt.rate_hz, opt.seconds, opt.device)
-            << fmt::format("real time: SCHED_FIFO {}, mlockall {}, pinned {}{}\n\n", loop.realtimeReport().fifo ? "yes" : "no",
-                           loop.realtimeReport().memory_locked ? "yes" : "no", loop.realtimeReport().pinned ? "yes" : "no",
-                           loop.realtimeReport().notes.empty() ? "" : " (" + loop.realtimeReport().notes + ")")
+  const servo::LoopFigures& f = r.figures;
+  std::cout << fmt::format("servo-check: {} Hz for {} s on {}\n", r.options.rate_hz, r.options.seconds, r.options.device)
+            << fmt::format("real time: SCHED_FIFO {}, mlockall {}, pinned {}{}\n\n", r.realtime.fifo ? "yes" : "no",
+                           r.realtime.memory_locked ? "yes" : "no", r.realtime.pinned ? "yes" : "no",
+                           r.realtime.notes.empty() ? "" : " (" + r.realtime.notes + ")")
             << fmt::format("{:<22} {:>9} {:>9} {:>9} {:>9}\n", "[µs]", "p50", "p99", "p99.9", "max")
             << row("floor period error", json["floor"]["period_error_us"])
             << row("loop period error", json["loop"]["period_error_us"])
             << row("loop tick compute", json["loop"]["tick_compute_us"])
             << fmt::format("\nticks {}, overruns {}, dropped samples {}, faults {}, stalls {}\nratio p99 (loop/floor) {:.2f}\n",
-                           c.ticks.load(), c.overruns.load(), c.dropped_samples.load(), c.faults.load(), c.stalls.load(),
-                           json["ratio_p99"].get<double>());
-  if (udp != nullptr) {
+                           f.ticks, f.overruns, f.dropped_samples, f.faults, f.stalls, r.ratioP99());
+  if (r.link) {
     const nlohmann::json& link = json["link"];
     std::string drops;
     for (const auto& [reason, count] : link["drops"].items()) {
       if (count.get<std::uint64_t>() > 0) drops += fmt::format("{}{} {}", drops.empty() ? "" : ", ", reason, count.get<std::uint64_t>());
     }
-    std::cout << fmt::format("\nlink to {} (server at {} Hz)\n", opt.device, link["server_rate_hz"].get<double>())
+    std::cout << fmt::format("\nlink to {} (server at {} Hz)\n", r.options.device, r.link->server_rate_hz)
               << fmt::format("{:<22} {:>9} {:>9} {:>9} {:>9}\n", "[µs]", "p50", "p99", "p99.9", "max")
               << row("round trip", link["rtt_us"]) << row("state age", link["state_age_us"])
               << fmt::format("commands sent {}, states received {}, lost {} ({:.3f} %), late {} (dropped, none applied)\n",
@@ -215,11 +60,43 @@ servo::Verdict runServoCheck(const ServoCheckOptions& opt) {
                              link["held_reads"].get<std::uint64_t>(), link["disconnected_reads"].get<std::uint64_t>(),
                              link["reconnects"].get<std::uint64_t>(), link["clock_offset_us"].get<double>())
               << fmt::format("drops: {}\nloop: link faults {}, disconnected ticks {}\n", drops.empty() ? "none" : drops,
-                             c.link_faults.load(), c.disconnected_ticks.load());
-    if (!link["fault"].get<std::string>().empty()) std::cout << "last link fault: " << link["fault"].get<std::string>() << '\n';
+                             f.link_faults, r.disconnected_ticks);
+    if (!r.link_fault.empty()) std::cout << "last link fault: " << r.link_fault << '\n';
   }
-  std::cout << "\n" << verdictsText(judgement);
-  return judgement.overall;
+  std::cout << "\n" << verdictsText(r.judgement);
+}
+
+/// Runs the check (the library's), showing progress on a terminal; returns the overall verdict.
+servo::Verdict runServoCheck(const ServoCheckOptions& opt) {
+  ops::ServoCheckOptions options{
+      .rate_hz = opt.rate_hz,
+      .seconds = opt.seconds,
+      .device = opt.device,
+      .world = opt.world,
+      .realtime = {.policy = servo::parseRealtimePolicy(opt.realtime),
+                   .cpu = opt.cpu,
+                   .final_spin = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.spin_us * 1e3))}};
+  Progress progress("", 0, "s");
+  if (Progress::onTerminal()) {
+    int shown = 0;
+    options.progress = [&](int run, double seconds) {
+      if (run != shown) {
+        progress.stage(run == 1 ? "servo-check 1/2: the bare sleep loop (floor)" : "servo-check 2/2: the servo loop",
+                       opt.seconds);
+        shown = run;
+      }
+      progress.update(seconds);
+    };
+  }
+  const ops::ServoCheckResult result = ops::runServoCheck(options);
+  progress.finish();
+  for (const auto& c : result.world_clamps) std::cerr << "hattr: world clamped: " << c << '\n';
+  if (opt.json) {
+    printJson(result.toJson());
+  } else {
+    printServoCheck(result);
+  }
+  return result.judgement.overall;
 }
 
 }  // namespace

@@ -14,14 +14,13 @@ render::WorldConfig worldConfigOrDefault(const std::string& file) {
   return file.empty() ? render::WorldConfig{} : render::loadWorldConfig(file);
 }
 
-std::vector<std::string> clampWorldToDevice(render::WorldConfig& world, const std::string& device_uri, double rate_hz) {
-  const device::DeviceUri uri = device::parseDeviceUri(device_uri);
-  const DeviceLimits limits =
-      uri.scheme == "sim" ? device::simulatedPenParams(uri).limits : device::openDevice(device_uri, nullptr)->limits();
-  return render::clampToDevice(world.paper, limits, rate_hz);
-}
-
 namespace {
+
+/// Clamps the paper to the passive bounds of the device `device_uri` at `rate_hz` (a sim://
+/// pen's declared limits, any other device's once opened); one line per change.
+std::vector<std::string> clampWorldToDevice(render::WorldConfig& world, const std::string& device_uri, double rate_hz) {
+  return render::clampToDevice(world.paper, device::declaredLimits(device_uri), rate_hz);
+}
 
 struct WorldCheckOptions {
   std::string file;

@@ -16,6 +16,13 @@
 
 namespace hattr::servo {
 
+RealtimePolicy parseRealtimePolicy(std::string_view name) {
+  if (name == "require") return RealtimePolicy::kRequire;
+  if (name == "try") return RealtimePolicy::kTry;
+  if (name == "skip") return RealtimePolicy::kSkip;
+  throw InputError(fmt::format("real-time policy: expected require, try or skip, got \"{}\"", name));
+}
+
 RealtimeReport applyRealtime(const RealtimeSettings& settings) {
   RealtimeReport report;
   if (settings.policy == RealtimePolicy::kSkip) return report;

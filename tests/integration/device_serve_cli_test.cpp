@@ -35,7 +35,8 @@ class ServeProcess : public test::BackgroundProcess {
   ServeProcess(const test::TempDir& dir, const std::string& key, const std::vector<std::string>& extra = {})
       : BackgroundProcess(arguments(key, extra), dir / "serve.err") {}
   /// Waits (up to `timeout`) until the server says on stderr that the client's `n`-th session
-  /// opened (a client command first opens the device once to read its limits: session 1).
+  /// opened (`hattr record` and `train` first open the device once to read its limits: session 1;
+  /// servo-check opens it once).
   bool waitForSession(const test::TempDir& dir, int n, std::chrono::milliseconds timeout) const {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     const std::string line = "session " + std::to_string(n) + " opened";
@@ -190,12 +191,13 @@ TEST(DeviceServeCli, KillingTheServerWithSigkillFaultsTheClientWithTheLinkReason
     ServeProcess server(dir, key);
     ASSERT_THAT(server.firstLine(), HasSubstr("listening on 127.0.0.1:"));
     const std::string uri = "udp://" + server.address() + "?key=" + key;
-    // servo-check measures the floor for 1 s, then opens the device and runs the loop over the
-    // link for 3 s; the server dies 0.5 s after the client's session opened.
+    // servo-check measures the floor for 3 s, then opens the device (once: its limits come from
+    // the open device) and runs the loop over the link for 3 s; the server dies 0.5 s after the
+    // client's session opened.
     bool session_opened = false;
     std::chrono::steady_clock::time_point killed_at{};
     std::thread killer([&] {
-      session_opened = server.waitForSession(dir, 2, std::chrono::seconds(20));
+      session_opened = server.waitForSession(dir, 1, std::chrono::seconds(20));
       if (session_opened) std::this_thread::sleep_for(std::chrono::milliseconds(500));
       killed_at = std::chrono::steady_clock::now();
       server.signal(SIGKILL);

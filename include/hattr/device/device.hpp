@@ -4,11 +4,13 @@
 /// locks, no I/O beyond the device's own transport.
 
 #include <chrono>
+#include <optional>
 #include <string>
 #include <string_view>
 
 #include "hattr/core/device_limits.hpp"
 #include "hattr/core/pen_state.hpp"
+#include "hattr/device/link_stats.hpp"
 
 namespace hattr::device {
 
@@ -51,6 +53,9 @@ class Device {
   /// Why the device last reported kFault or kDisconnected, for messages ("" if it has not).
   /// Not on the servo thread; safe to call while the loop runs.
   [[nodiscard]] virtual std::string faultReason() const { return {}; }
+  /// A device behind a network link: what the link did so far and the far end's rate; none for
+  /// a device that is not. Not on the servo thread; its histograms only while the loop is stopped.
+  [[nodiscard]] virtual std::optional<DeviceLink> link() const { return std::nullopt; }
 };
 
 /// Checks the limits a device reports about itself (a driver plugin, a device server) as input:

@@ -10,7 +10,8 @@
 ///
 /// Threads: the constructor (handshake) blocks up to timeout_s and throws; read() and
 /// write() run on the servo thread (non-blocking socket calls, no allocation, no locks);
-/// faultReason() and the counters of linkStats() may be read from any thread.
+/// faultReason() and the counters of linkStats() (and link(), the Device interface's view of
+/// them) may be read from any thread.
 
 #include <atomic>
 #include <cstdint>
@@ -19,7 +20,6 @@
 #include <string>
 #include <string_view>
 
-#include "hattr/core/histogram.hpp"
 #include "hattr/device/device.hpp"
 #include "hattr/device/device_uri.hpp"
 #include "hattr/device/hand.hpp"
@@ -40,21 +40,6 @@ struct UdpDeviceParams {
 /// throw InputError naming the key, what is accepted and what was given.
 UdpDeviceParams udpDeviceParams(const DeviceUri& uri);
 
-/// What the link did, for servo-check and reports.
-struct LinkStats {
-  DurationHistogram rtt;         ///< network round trip: COMMAND sent → STATE received, minus the server's hold [ns]
-  DurationHistogram state_age;   ///< age of the state read() returned: server sampling → client use [ns]
-  std::int64_t clock_offset_ns = 0;  ///< server clock − client clock, from the lowest-RTT exchange (NTP-style)
-  std::uint64_t commands_sent = 0;
-  std::uint64_t states_received = 0;  ///< accepted STATE packets
-  std::uint64_t states_lost = 0;      ///< gaps in the STATE sequence
-  std::uint64_t states_late = 0;      ///< arrived after a newer one: dropped, never used
-  std::uint64_t held_reads = 0;       ///< reads that bridged with the previous state (no new one)
-  std::uint64_t disconnected_reads = 0;
-  std::uint64_t reconnects = 0;       ///< new sessions after the first
-  std::uint64_t cookies = 0;          ///< COOKIEs the server asked for (one per HELLO attempt)
-  std::array<std::uint64_t, wire::kDropReasonCount> drops{};  ///< by wire::DropReason
-};
 
 class UdpDevice final : public Device {
  public:
@@ -85,6 +70,8 @@ class UdpDevice final : public Device {
   [[nodiscard]] double serverRate_hz() const noexcept;
   /// A snapshot. Counters: any thread; histograms: only while the loop is stopped.
   [[nodiscard]] LinkStats linkStats() const;
+  /// The link's statistics and the server's rate (Device::link).
+  [[nodiscard]] std::optional<DeviceLink> link() const override { return DeviceLink{linkStats(), serverRate_hz()}; }
 
   class Impl;
 

@@ -13,7 +13,7 @@
 #include <string_view>
 #include <vector>
 
-#include "hattr/device/udp_device.hpp"
+#include "hattr/device/link_stats.hpp"
 #include "hattr/servo/servo_loop.hpp"
 
 namespace hattr::servo {

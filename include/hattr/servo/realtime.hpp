@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdint>
 #include <string>
+#include <string_view>
 
 #include "hattr/core/histogram.hpp"
 
@@ -13,6 +14,8 @@ namespace hattr::servo {
 /// Whether real-time privileges must be had (kRequire: failing is an error), are tried
 /// (kTry: the loop runs without them and says so) or are not asked for (kSkip).
 enum class RealtimePolicy { kRequire, kTry, kSkip };
+/// The policy named "require", "try" or "skip" (as the CLI spells it); InputError otherwise.
+RealtimePolicy parseRealtimePolicy(std::string_view name);
 
 struct RealtimeSettings {
   RealtimePolicy policy = RealtimePolicy::kTry;

@@ -1,0 +1,35 @@
+#pragma once
+/// The JSON every front end shows the same way: timing percentiles, drop counts by reason, a
+/// network link's figures, what real time the loop got, the verdicts. One writer each, so the
+/// CLI, the studio and Python print one schema.
+
+#include <array>
+#include <cstdint>
+
+#include <nlohmann/json.hpp>
+
+#include "hattr/core/histogram.hpp"
+#include "hattr/device/link_stats.hpp"
+#include "hattr/servo/loop_verdict.hpp"
+#include "hattr/servo/realtime.hpp"
+#include "hattr/wire/packet.hpp"
+
+namespace hattr::ops {
+
+/// {p50, p99, p99_9, max, count} of a histogram, in µs (count: samples).
+nlohmann::json percentilesUsJson(const DurationHistogram& histogram);
+
+/// {reason: count} for every wire::DropReason, zeros included (a fixed schema).
+nlohmann::json dropsJson(const std::array<std::uint64_t, wire::kDropReasonCount>& drops);
+
+/// A udp:// device's link: round trip, state age, clock offset, packets, loss, late, held and
+/// disconnected reads, reconnects, drops.
+nlohmann::json linkJson(const device::LinkStats& link);
+
+/// {fifo, memory_locked, pinned, timer_slack_minimal, notes}.
+nlohmann::json realtimeReportJson(const servo::RealtimeReport& report);
+
+/// [{figure, value, unit, verdict, rule}].
+nlohmann::json verdictsJson(const servo::LoopJudgement& judgement);
+
+}  // namespace hattr::ops

@@ -1,0 +1,60 @@
+#include "hattr/ops/json.hpp"
+
+#include <string>
+
+namespace hattr::ops {
+
+nlohmann::json percentilesUsJson(const DurationHistogram& histogram) {
+  const auto us = [](std::int64_t ns) { return static_cast<double>(ns) * 1e-3; };
+  return {{"p50", us(histogram.percentile_ns(0.50))},
+          {"p99", us(histogram.percentile_ns(0.99))},
+          {"p99_9", us(histogram.percentile_ns(0.999))},
+          {"max", us(histogram.max_ns())},
+          {"count", histogram.count()}};
+}
+
+nlohmann::json dropsJson(const std::array<std::uint64_t, wire::kDropReasonCount>& drops) {
+  nlohmann::json json = nlohmann::json::object();
+  for (std::size_t r = 0; r < drops.size(); ++r) {
+    json[std::string(wire::dropReasonName(static_cast<wire::DropReason>(r)))] = drops[r];
+  }
+  return json;
+}
+
+nlohmann::json linkJson(const device::LinkStats& link) {
+  const double expected = static_cast<double>(link.states_received + link.states_lost);
+  return {{"rtt_us", percentilesUsJson(link.rtt)},
+          {"state_age_us", percentilesUsJson(link.state_age)},
+          {"clock_offset_us", static_cast<double>(link.clock_offset_ns) * 1e-3},
+          {"commands_sent", link.commands_sent},
+          {"states_received", link.states_received},
+          {"states_lost", link.states_lost},
+          {"loss", expected > 0.0 ? static_cast<double>(link.states_lost) / expected : 0.0},
+          {"states_late", link.states_late},
+          {"held_reads", link.held_reads},
+          {"disconnected_reads", link.disconnected_reads},
+          {"reconnects", link.reconnects},
+          {"drops", dropsJson(link.drops)}};
+}
+
+nlohmann::json realtimeReportJson(const servo::RealtimeReport& report) {
+  return {{"fifo", report.fifo},
+          {"memory_locked", report.memory_locked},
+          {"pinned", report.pinned},
+          {"timer_slack_minimal", report.timer_slack_minimal},
+          {"notes", report.notes}};
+}
+
+nlohmann::json verdictsJson(const servo::LoopJudgement& judgement) {
+  nlohmann::json figures = nlohmann::json::array();
+  for (const auto& f : judgement.figures) {
+    figures.push_back({{"figure", f.name},
+                       {"value", f.value},
+                       {"unit", f.unit},
+                       {"verdict", std::string(servo::verdictName(f.verdict))},
+                       {"rule", f.rule}});
+  }
+  return figures;
+}
+
+}  // namespace hattr::ops
