@@ -12,6 +12,7 @@
 #include "cli_common.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
+#include "hattr/net/link_watch.hpp"
 #include "hattr/net/mentor_station.hpp"
 #include "hattr/ops/json.hpp"
 #include "hattr/sim/expert.hpp"
@@ -22,10 +23,6 @@ namespace {
 
 volatile std::sig_atomic_t g_mentor_stop = 0;
 extern "C" void onMentorStop(int) { g_mentor_stop = 1; }
-
-/// How long the link may stay down before the session is given up (the force is zero from
-/// the first missing hold already).
-constexpr double kGiveUpAfter_s = 0.25;
 
 struct MentorOptions {
   std::string address;       // lead: --listen; follow: --connect
@@ -59,46 +56,26 @@ double loopTime(net::MentorStation& station) {
   return s.t_s;
 }
 
-// Waits for the other station; returns why it did not come ("" once linked). A lead serving
-// many sessions waits until interrupted.
-std::string waitForLink(net::MentorStation& station, const MentorOptions& opt, bool without_limit) {
-  using Clock = std::chrono::steady_clock;
-  const auto wait_until = Clock::now() + std::chrono::duration<double>(opt.wait_s);
-  while (!station.coupling().stats().link_up && !g_mentor_stop) {
-    if (station.coupling().stats().refused_busy) {
-      return fmt::format("the leader at {} already mentors another follower", opt.address);
-    }
-    if (!without_limit && Clock::now() > wait_until) {
-      return fmt::format("no other station within {} s (a wrong key looks like this too: packets are dropped "
-                         "unanswered)", opt.wait_s);
-    }
+// Waits for the other station (net::LinkWatch, as the studio's Mentor tab); true once linked,
+// false when it refused, nobody came in time or we were interrupted.
+bool waitForLink(net::MentorStation& station, net::LinkWatch& watch) {
+  while (watch.phase() == net::LinkPhase::kWaiting && !g_mentor_stop) {
+    if (watch.observe(station.coupling().stats(), net::LinkWatch::Clock::now())) return true;
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
-  return "";
+  return false;
 }
 
-// A linked session: until the time is up, the other station says goodbye (BYE), the link stays
-// down too long, or we are interrupted. Returns the failure ("" for a normal end).
-std::string runLinkedSession(net::MentorStation& station, double duration_s, double hold_s) {
-  using Clock = std::chrono::steady_clock;
-  const auto end = Clock::now() + std::chrono::duration<double>(duration_s);
-  bool down = false;
-  Clock::time_point down_since{};
-  while (Clock::now() < end && !g_mentor_stop) {
+// A linked session: until the time is up, the other station says goodbye, the link stays down
+// too long (lost), or we are interrupted. Returns the failure ("" for a normal end).
+std::string runLinkedSession(net::MentorStation& station, net::LinkWatch& watch, double duration_s) {
+  const auto end = net::LinkWatch::Clock::now() + std::chrono::duration<double>(duration_s);
+  while (net::LinkWatch::Clock::now() < end && !g_mentor_stop && watch.phase() != net::LinkPhase::kEnded) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
-    const net::MentorStats s = station.coupling().stats();
-    if (!s.session) return "";  // the other station said BYE: its session is over
-    if (s.link_up) {
-      down = false;
-    } else if (!down) {
-      down = true;
-      down_since = Clock::now();
-    } else if (Clock::now() - down_since > std::chrono::duration<double>(kGiveUpAfter_s)) {
-      return fmt::format("link lost: nothing from the other station for {:.0f} ms (its force went to zero after "
-                         "{:.0f} ms)", kGiveUpAfter_s * 1e3, hold_s * 1e3);
-    }
+    (void)watch.observe(station.coupling().stats(), net::LinkWatch::Clock::now());
   }
-  return "";
+  watch.end();
+  return watch.failure();
 }
 
 /// Where session `number` (from 1) is written: --record for one session, else
@@ -177,10 +154,15 @@ void runStation(const MentorOptions& opt, net::MentorRole role) {
   std::vector<SessionSummary> summaries;
   std::string first_failure;
   net::MentorStats before_session{};  // each session's figures are its own
+  // The link watch the studio uses too: a lead serving sessions waits for each without limit.
+  net::LinkWatch watch({.wait_s = serving ? -1.0 : opt.wait_s, .leader_address = opt.address}, mentor,
+                       net::LinkWatch::Clock::now());
   for (int number = 1; !g_mentor_stop && (opt.sessions == 0 || number <= opt.sessions); ++number) {
-    std::string failure = waitForLink(station, opt, serving);
-    if (failure.empty() && g_mentor_stop) break;
-    if (failure.empty()) {
+    watch.restart(net::LinkWatch::Clock::now(), station.coupling().stats());
+    const bool linked = waitForLink(station, watch);
+    if (!linked && g_mentor_stop) break;
+    std::string failure = watch.failure();
+    if (linked) {
       std::cout << "linked: coupling "
                 << (role == net::MentorRole::kFollower ? opt.coupling : std::string("as the follower asks"))
                 << (serving ? fmt::format(" (session {})", number) : "") << std::endl;
@@ -188,7 +170,7 @@ void runStation(const MentorOptions& opt, net::MentorRole role) {
       station.recorder().start();
       const double duration_s =
           opt.seconds > 0.0 ? opt.seconds : (script && !serving ? script->duration_s() + mentor.ramp_s + 0.5 : 1e9);
-      failure = runLinkedSession(station, duration_s, mentor.hold_s);
+      failure = runLinkedSession(station, watch, duration_s);
     }
     // The session ends here: everything the loop published before now is the session's, however
     // far behind the recorder's thread is (the loop runs on for the next follower).

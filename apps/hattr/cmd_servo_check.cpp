@@ -77,8 +77,8 @@ servo::Verdict runServoCheck(const ServoCheckOptions& opt) {
                    .cpu = opt.cpu,
                    .final_spin = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.spin_us * 1e3))}};
   Progress progress("", 0, "s");
+  int shown = 0;  // the run the progress line shows
   if (Progress::onTerminal()) {
-    int shown = 0;
     options.progress = [&](int run, double seconds) {
       if (run != shown) {
         progress.stage(run == 1 ? "servo-check 1/2: the bare sleep loop (floor)" : "servo-check 2/2: the servo loop",

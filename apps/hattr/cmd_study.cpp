@@ -6,12 +6,10 @@
 
 #include "cli_common.hpp"
 #include "hattr/core/error.hpp"
-#include "hattr/net/study_mentor.hpp"
-#include "hattr/session/study_export.hpp"
+#include "hattr/ops/study_run.hpp"
 #include "hattr/report/paper_comparison.hpp"
 #include "hattr/report/study_report.hpp"
-#include "hattr/session/study_runner.hpp"
-#include "hattr/sim/participant.hpp"
+#include "hattr/session/study_export.hpp"
 
 namespace hattr::cli {
 namespace {
@@ -79,49 +77,30 @@ void runInit(const StudyOptions& opt) {
                            status["trials_total"].get<int>());
 }
 
-/// The trials a run will do: those not completed (of --subject), at most --max-trials.
-int trialsToRun(const session::StudyDatabase& db, const StudyOptions& opt) {
-  int left = 0;
-  for (const session::TrialRecord& t : db.trials()) {
-    const bool selected = opt.subject.empty() || t.plan.subject == opt.subject;
-    left += selected && t.status != session::TrialStatus::kCompleted ? 1 : 0;
-  }
-  return opt.max_trials >= 0 ? std::min(left, opt.max_trials) : left;
-}
-
+// The library's run, with a progress line on a terminal: the subject's trial just done.
 void runRun(const StudyOptions& opt) {
-  session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kRunner,
-                                                           {.lease_timeout_s = opt.lease_timeout_s});
-  const std::string device_uri = db.study().device;
-  session::StudyRunner runner(db, [&device_uri](const session::SubjectRecord& s, const HapticProfile& expert) {
-    return sim::makeUnattendedParticipant(s, expert, device_uri);
-  });
-  session::RunOptions run{.only_subject = opt.subject,
-                          .clock = session::parseClock(opt.clock),
-                          .max_trials = opt.max_trials,
-                          .subjects_at_once = opt.subjects_at_once};
-  // The expert's station for the mentored modes' training trials (the study file's mentor).
-  const session::StudyDefinition& study = db.study();
-  std::unique_ptr<session::LiveGuidance> mentor;
-  if (study.hasMentoredModes()) {
-    mentor = net::makeStudyMentor(study.mentor, db.expert(study.skill),
-                                  render::parseWorldConfig(study.world.dump(), "study world"), study.rate_hz);
-    run.mentor = mentor.get();
-  }
-  // Progress over the trials this run has to do (a terminal only): the subject's trial just done.
-  Progress progress("study run", trialsToRun(db, opt), "trials");
+  ops::StudyRunOptions run{.db = opt.db,
+                           .subject = opt.subject,
+                           .clock = session::parseClock(opt.clock),
+                           .max_trials = opt.max_trials,
+                           .subjects_at_once = opt.subjects_at_once,
+                           .lease_timeout_s = opt.lease_timeout_s};
+  Progress progress("study run", 0, "trials");
   int done = 0;
   if (!opt.quiet) {
+    run.started = [&progress](int trials_to_run) { progress.stage("study run", trials_to_run); };
     run.progress = [&progress, &done](const session::RunProgress& p) {
       progress.update(++done, fmt::format("study run: {} {:>2}/{} {} {} {:>2}", p.subject, p.completed, p.total,
                                           guidance::modeName(p.trial->plan.mode),
                                           session::phaseName(p.trial->plan.phase), p.trial->plan.index));
     };
   }
-  const int ran = runner.run(run);
+  const ops::StudyRunResult result = ops::runStudy(run);
   progress.finish();
-  if (opt.json) return printJson(statusJson(db));
-  std::cout << fmt::format("ran {} trial{}\n", ran, ran == 1 ? "" : "s");
+  if (opt.json) {
+    return printJson(statusJson(session::StudyDatabase::open(opt.db, session::OpenMode::kReadOnly)));
+  }
+  std::cout << fmt::format("ran {} trial{}\n", result.trials_run, result.trials_run == 1 ? "" : "s");
 }
 
 void runStatus(const StudyOptions& opt) {

@@ -13,11 +13,10 @@
 
 #include "bindings.hpp"
 #include "hattr/core/error.hpp"
+#include "hattr/ops/study_run.hpp"
 #include "hattr/report/study_analysis.hpp"
 #include "hattr/session/study.hpp"
 #include "hattr/session/study_database.hpp"
-#include "hattr/session/study_runner.hpp"
-#include "hattr/sim/participant.hpp"
 
 namespace hattr::python {
 namespace {
@@ -159,17 +158,13 @@ void bindStudies(py::module_& m) {
       "run_study",
       [](const std::filesystem::path& path, const std::optional<std::string>& subject, std::optional<int> max_trials) {
         py::gil_scoped_release unlocked;
-        StudyDatabase db = StudyDatabase::open(path, session::OpenMode::kRunner);
-        const std::string device_uri = db.study().device;
-        session::StudyRunner runner(db, [&device_uri](const session::SubjectRecord& s, const HapticProfile& expert) {
-          return sim::makeUnattendedParticipant(s, expert, device_uri);
-        });
-        return runner.run({.only_subject = subject.value_or(""), .max_trials = max_trials.value_or(-1)});
+        return ops::runStudy({.db = path, .subject = subject.value_or(""), .max_trials = max_trials.value_or(-1)})
+            .trials_run;
       },
       py::arg("path"), py::kw_only(), py::arg("subject") = py::none(), py::arg("max_trials") = py::none(),
       "Runs a study's unfinished trials of simulated and scripted subjects in simulated time, resuming where it "
-      "stopped, as `hattr study run`; returns the number of trials run. People run from the studio; a study with "
-      "mentored modes runs from the CLI (it needs the expert's station). Releases the GIL.");
+      "stopped, as `hattr study run` (mentored modes too: the study file's mentor block is the expert's station); "
+      "returns the number of trials run. People run from the studio. Releases the GIL.");
 }
 
 }  // namespace hattr::python

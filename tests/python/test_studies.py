@@ -116,3 +116,26 @@ def test_a_study_on_postgresql_reads_and_analyzes_as_on_sqlite(tmp_path, small_s
         for name in theirs.channel_names:
             np.testing.assert_array_equal(mine.channel(name), theirs.channel(name), err_msg=name)
         assert on_server.analyze() == on_file.analyze()
+
+
+def test_a_study_with_a_mentored_mode_runs_from_python_as_from_the_cli(tmp_path, expert_files):
+    # Issue 41: run_study builds the expert's station from the study file's mentor block, as
+    # `hattr study run` does (it could not before).
+    expert, _ = expert_files
+    definition = json.loads(run_cli("study", "example")[0])
+    definition["experts"] = {definition["skill"]: str(expert)}
+    definition["modes"] = ["mentor-position"]
+    definition["subjects"]["count"] = 1
+    definition["protocol"].update(training_trials=1, recall_trials=1, analyzed_recall_trials=[1])
+    (tmp_path / "study.json").write_text(json.dumps(definition))
+    run_cli("study", "init", tmp_path / "study.json", "--db", tmp_path / "cli.sqlite")
+    run_cli("study", "run", "--db", tmp_path / "cli.sqlite", "--quiet")
+    hattr.create_study(tmp_path / "py.sqlite", definition).close()
+    assert hattr.run_study(tmp_path / "py.sqlite") == 2
+
+    mine, theirs = hattr.Study.open(tmp_path / "py.sqlite"), hattr.Study.open(tmp_path / "cli.sqlite")
+    assert [t["mode"] for t in mine.trials()] == ["MENTOR-POSITION"] * 2
+    for a, b in zip(mine.trials(), theirs.trials()):
+        pa, pb = mine.trial_profile(a["trial_id"]), theirs.trial_profile(b["trial_id"])
+        for name in pb.channel_names:
+            np.testing.assert_array_equal(pa.channel(name), pb.channel(name), err_msg=name)

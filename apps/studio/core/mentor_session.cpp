@@ -9,8 +9,6 @@
 namespace hattr::studio {
 namespace {
 
-using Seconds = std::chrono::duration<double>;
-
 /// The pen is held lifted (following the hand) this long while the loop's forces ramp in, as in
 /// the live rig's free writing: a pen pressed down from the first tick would sink into a paper
 /// whose force is still ramping in.
@@ -24,8 +22,6 @@ bool isLeader(const MentorSettings& settings) { return settings.role == net::Men
 MentorSetup mentorSetupFor(const MentorSettings& settings) {
   HATTR_THROW_UNLESS(std::isfinite(settings.wait_s) && settings.wait_s >= 0.1 && settings.wait_s <= 3600.0,
                      "wait for the other station: expected [0.1, 3600] s, got {}", settings.wait_s);
-  HATTR_THROW_UNLESS(std::isfinite(settings.give_up_s) && settings.give_up_s >= 0.01 && settings.give_up_s <= 60.0,
-                     "give up after the link is down: expected [0.01, 60] s, got {}", settings.give_up_s);
   MentorSetup setup;
   net::MentorConfig& mentor = setup.mentor;
   mentor.role = settings.role;
@@ -70,6 +66,9 @@ void MentorSession::start(const MentorSettings& settings, device::HandScript& ha
   stop();
   // Everything that can be refused is checked before anything runs.
   const MentorSetup setup = mentorSetupFor(settings);
+  net::LinkWatch watch({.wait_s = settings.wait_s, .give_up_s = settings.give_up_s,
+                        .leader_address = settings.address},
+                       setup.mentor, Clock::now());
   // A follower's socket is connected to its leader: the kernel delivers only the leader's datagrams.
   auto link = std::make_unique<wire::UdpDatagramLink>(isLeader(settings) ? wire::UdpSocket::bound(setup.bind)
                                                                          : wire::UdpSocket::connected(setup.mentor.leader),
@@ -94,8 +93,6 @@ void MentorSession::start(const MentorSettings& settings, device::HandScript& ha
   where_ = isLeader(settings) ? "listening on " + link->localEndpoint().text()
                               : "connecting to " + setup.mentor.leader.text();
   clamps_ = station->clamps();
-  hold_s_ = setup.mentor.hold_s;
-  session_timeout_s_ = setup.mentor.session_timeout_s;
   link_ = std::move(link);
   settling_ = std::move(settling);
   station_ = std::move(station);
@@ -104,8 +101,8 @@ void MentorSession::start(const MentorSettings& settings, device::HandScript& ha
   ended_by_other_ = false;
   last_stats_ = {};
   final_counters_ = {};
-  started_at_ = Clock::now();
-  down_ = false;
+  watch.restart(Clock::now(), {});  // the wait begins now that everything runs, on a new station
+  watch_ = std::move(watch);
   own_.reset();
   own_fresh_ = false;
   peer_ = {};
@@ -138,57 +135,18 @@ bool MentorSession::poll() {
   return station_ == nullptr;
 }
 
-// Waiting: linked, refused or no answer in time. Linked: the other station's goodbye ends it
-// normally; a link down for give_up_s ends it as lost (a link that came back and went down
-// again in between starts the count again).
+// The watch (net::LinkWatch, as `hattr mentor`): linked, refused, nobody in time, a goodbye or
+// a lost link; a stopped loop ends the session too.
 void MentorSession::watchLink(const net::MentorStats& stats, Clock::time_point now) {
   if (!station_->loop().running()) {
     end("the servo loop stopped");
     return;
   }
-  if (phase_ == MentorPhase::kWaiting) {
-    if (stats.link_up || stats.link_faults > 0) {
-      phase_ = MentorPhase::kLinked;
-      linked_at_ = now;
-      last_up_at_ = now;
-      down_ = false;
-      station_->recorder().start();
-    } else if (stats.refused_busy) {
-      end(fmt::format("refused: the leader at {} already mentors another follower", settings_.address));
-    } else if (Seconds(now - started_at_).count() > settings_.wait_s) {
-      end(fmt::format("no other station within {:g} s (a wrong key looks like this too: its packets are dropped "
-                      "unanswered)",
-                      settings_.wait_s));
-    }
-    return;
+  if (watch_->observe(stats, now)) {
+    phase_ = MentorPhase::kLinked;
+    station_->recorder().start();
   }
-  // No session any more: a goodbye (as `hattr mentor`), unless the link has been down long
-  // enough for the session to have timed out, which is a lost link.
-  if (!stats.session) {
-    if (Seconds(now - last_up_at_).count() < session_timeout_s_ - hold_s_) {
-      end({}, true);
-    } else {
-      end(linkLost());
-    }
-    return;
-  }
-  if (stats.link_up) {
-    down_ = false;
-    last_up_at_ = now;
-    return;
-  }
-  if (!down_ || stats.link_faults != faults_when_down_) {
-    down_ = true;
-    down_since_ = now;
-    faults_when_down_ = stats.link_faults;
-    return;
-  }
-  if (Seconds(now - down_since_).count() > settings_.give_up_s) end(linkLost());
-}
-
-std::string MentorSession::linkLost() const {
-  return fmt::format("link lost: nothing from the other station for {:.0f} ms (its force went to zero after {:.0f} ms)",
-                     settings_.give_up_s * 1e3, hold_s_ * 1e3);
+  if (watch_->phase() == net::LinkPhase::kEnded) end(watch_->failure(), watch_->endedByOther());
 }
 
 void MentorSession::stop() { end({}); }
@@ -212,7 +170,6 @@ void MentorSession::end(const std::string& failure, bool by_other) {
   phase_ = MentorPhase::kEnded;
   failure_ = failure;
   ended_by_other_ = by_other;
-  down_ = false;
   if (!recorded.empty()) {
     if (!failure.empty()) recorded.metadata().extra["failed"] = failure;
     recording_ = std::move(recorded);
@@ -246,9 +203,9 @@ MentorSnapshot MentorSession::snapshot() const {
   copyCounters(s);
   const auto now = Clock::now();
   if (phase_ == MentorPhase::kLinked) {
-    s.linked_s = Seconds(now - linked_at_).count();
-    s.link_down_now = down_;
-    s.link_down_s = down_ ? Seconds(now - down_since_).count() : 0.0;
+    s.linked_s = watch_->linkedFor_s(now);
+    s.link_down_now = watch_->linkDown();
+    s.link_down_s = watch_->downFor_s(now);
   }
   return s;
 }

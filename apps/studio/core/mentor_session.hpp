@@ -27,6 +27,7 @@
 #include "core/series.hpp"
 #include "hattr/core/haptic_profile.hpp"
 #include "hattr/device/hand.hpp"
+#include "hattr/net/link_watch.hpp"
 #include "hattr/net/mentor_station.hpp"
 #include "hattr/render/world_config.hpp"
 #include "hattr/session/trial.hpp"
@@ -50,7 +51,7 @@ struct MentorSettings {
   double rate_hz = 1000.0;
   std::string subject;       ///< recorded as the subject; empty: "expert" (leader) or "trainee"
   double wait_s = 30.0;      ///< give up when the other station has not linked within this [s]
-  double give_up_s = 0.25;   ///< end the session when the link stays down this long [s] (as cmd_mentor)
+  double give_up_s = 0.25;   ///< end the session when the link stays down this long [s] (net::LinkWatch)
 };
 
 /// The coupling's configuration and the socket's address, checked.
@@ -148,7 +149,6 @@ class MentorSession {
   void watchLink(const net::MentorStats& stats, Clock::time_point now);
   void end(const std::string& failure, bool by_other = false);
   void copyCounters(MentorSnapshot& out) const;
-  [[nodiscard]] std::string linkLost() const;
 
   MentorSettings settings_;
   std::unique_ptr<wire::UdpDatagramLink> link_;
@@ -161,16 +161,9 @@ class MentorSession {
   net::MentorStats last_stats_;
   MentorSnapshot final_counters_;  // the loop's counters when the session ended
 
-  // The link watch (GUI thread).
-  Clock::time_point started_at_{};
-  Clock::time_point linked_at_{};
-  Clock::time_point down_since_{};
-  Clock::time_point last_up_at_{};   // the last poll that saw the link up
-  double hold_s_ = 0.0;              // the coupling's, for the messages
-  double session_timeout_s_ = 0.0;
+  // The link watch (GUI thread): the one `hattr mentor` uses too.
+  std::optional<net::LinkWatch> watch_;
   bool ended_by_other_ = false;
-  bool down_ = false;
-  std::uint64_t faults_when_down_ = 0;
 
   // What the display shows.
   std::optional<Sample> own_;
