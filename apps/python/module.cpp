@@ -73,4 +73,5 @@ PYBIND11_MODULE(_hattr, m) {
   hp::bindAnalysis(m);
   hp::bindStudies(m);
   hp::bindSimulation(m);
+  hp::bindDevices(m);
 }

@@ -723,9 +723,10 @@ void StudyDatabase::completeTrial(std::int64_t trial_id, const HapticProfile& pr
   t.commit();
 }
 
+// The attempt is kept and the trial is pending again, at once: a process that dies before the
+// repeat begins left no attempt running, so none is counted as an interruption besides.
 void StudyDatabase::keepDisturbedAttempt(std::int64_t trial_id, const HapticProfile& profile, const std::string& reason) {
-  std::optional<Transaction> t;
-  if (leases_) t.emplace(*db_);
+  Transaction t(*db_);
   holdLease(trial_id);
   Statement s(*db_,
               "INSERT INTO disturbed_attempts (trial, reason, ended_utc, metadata, raw_pressure, raw_tilt, sample_count, "
@@ -734,7 +735,9 @@ void StudyDatabase::keepDisturbedAttempt(std::int64_t trial_id, const HapticProf
       .bind(5, profile.rawChannels().pressure ? 1 : 0).bind(6, profile.rawChannels().tilt ? 1 : 0)
       .bind(7, static_cast<std::int64_t>(profile.size())).bindBlob(8, encodeTrialSamples(profile, study_.resolution))
       .bind(9, std::string(kCompactSamples)).run();
-  if (t) t->commit();
+  Statement pending(*db_, "UPDATE trials SET status = 'pending' WHERE id = ? AND status = 'running'");
+  pending.bind(1, trial_id).run();
+  t.commit();
 }
 
 void StudyDatabase::failTrial(std::int64_t trial_id, const std::string& reason) {

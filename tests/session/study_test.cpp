@@ -252,6 +252,29 @@ TEST(StudyRunner, StopsAndResumesAtTheFirstUnfinishedTrial) {
   EXPECT_EQ(runner.run({}), 13);
 }
 
+// A process that dies after keeping a disturbed attempt and before its repeat begins left no
+// attempt running: the attempts stay 1 + interruptions + disturbed attempts (a station killed
+// there had counted an interruption besides: clean-clone run 17).
+TEST(StudyDatabase, ADisturbedAttemptKeptLeavesTheTrialPendingNotRunning) {
+  StudyFolder folder;
+  { (void)StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json")); }
+  {
+    StudyDatabase db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);
+    const TrialRecord trial = *db.nextTrial("S01");
+    db.markRunning(trial.id, db.beginSession("S01"));
+    HapticProfile attempt;
+    Sample s;
+    attempt.append(s);
+    db.keepDisturbedAttempt(trial.id, attempt, "1 stall");
+    EXPECT_EQ(db.nextTrial("S01")->status, TrialStatus::kPending);
+  }  // the process "dies" before the repeat
+  StudyDatabase db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);
+  const TrialRecord again = *db.nextTrial("S01");
+  EXPECT_EQ(again.interruptions, 0);
+  EXPECT_EQ(again.disturbed_attempts, 1);
+  EXPECT_EQ(again.attempts, again.interruptions + again.disturbed_attempts) << "each attempt so far is one or the other";
+}
+
 /// A script participant that counts what the runner asks of it (in `log`).
 struct RunnerLog {
   int participants = 0;

@@ -21,4 +21,5 @@ __all__ = [
     "TrialScorer", "AnovaTable", "TukeyResult", "two_way_anova", "tukey_hsd", "describe_groups",
     "Study", "create_study", "run_study",
     "run_trial", "simulate_study",
+    "servo_check", "check_device",
 ]

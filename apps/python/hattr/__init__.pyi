@@ -1,7 +1,7 @@
 # Type stubs of the hattr package (the extension hattr._hattr). Units are in the names and
 # docstrings: seconds, metres, newtons.
 import os
-from typing import Any, Iterable, Sequence, TypedDict
+from typing import Any, Callable, Iterable, Sequence, TypedDict
 
 import numpy as np
 import numpy.typing as npt
@@ -233,3 +233,9 @@ class _SimulatedStudy(TypedDict):
 def simulate_study(out_dir: _Path, *, subjects: int = ..., seed: int = ..., training_trials: int = ...,
                    recall_trials: int = ..., guidance: bool = ..., glyph: str = ...,
                    write_report: bool = ...) -> _SimulatedStudy: ...
+
+def servo_check(device: str = ..., *, rate_hz: float = ..., seconds: float = ..., world: _Path | None = ...,
+                realtime: str = ..., cpu: int = ..., spin_us: float = ...) -> dict[str, Any]: ...
+
+def check_device(uri: str, *, seconds: float = ..., force_N: float = ..., rate_hz: float = ...,
+                 confirm: Callable[[], bool | None] | None = ...) -> dict[str, Any]: ...
