@@ -1,6 +1,7 @@
 #include "hattr/net/link_watch.hpp"
 
 #include <cmath>
+#include <utility>
 
 #include <fmt/format.h>
 

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <exception>
+#include <memory>
 #include <thread>
 
 #include "hattr/core/error.hpp"
@@ -98,18 +99,21 @@ ServoCheckResult runServoCheck(const ServoCheckOptions& options) {
   ServoCheckResult result;
   result.options = options;
   result.options.progress = nullptr;  // a result does not call back
+  // The paper first (its relief and texture take a while, under a sanitizer seconds): a network
+  // device's session, opened below, then waits for nothing before the loop runs.
   render::WorldConfig world = options.world.empty() ? render::WorldConfig{} : render::loadWorldConfig(options.world);
+  auto paper = std::make_unique<render::PaperRenderer>(world.paper, render::buildRelief(world.relief));
   const auto duration = std::chrono::nanoseconds(static_cast<std::int64_t>(options.seconds * 1e9));
   result.floor = measureFloor(options, duration);
 
-  // Then the full pipeline: a hand writing circles on the paper through the device, the world
-  // clamped to what this device renders passively.
+  // Then the full pipeline: a hand writing circles on the paper through the device, the paper
+  // clamped to what this device renders passively (made again only if that changed it).
   device::CircleHand hand(Vec3::Zero(), 0.015, 1.0, 1.0);
   const auto device = device::openDevice(options.device, &hand);
   result.world_clamps = render::clampToDevice(world.paper, device->limits(), options.rate_hz);
-  render::PaperRenderer paper(world.paper, render::buildRelief(world.relief));
+  if (!result.world_clamps.empty()) paper = std::make_unique<render::PaperRenderer>(world.paper, paper->relief());
   servo::ServoLoop loop(*device, servo::ServoConfig{.rate_hz = options.rate_hz, .realtime = options.realtime});
-  loop.setWorld(&paper);
+  loop.setWorld(paper.get());
   std::atomic<bool> done{false};
   std::jthread consumer([&] {  // drains the samples as the recorder does
     TickSample s;
