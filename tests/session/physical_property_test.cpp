@@ -30,13 +30,6 @@ namespace {
 constexpr int kShards = 10;
 constexpr int kTrialsPerShard = 1000;
 
-/// The profile with velocities from its positions.
-void fillVelocity(HapticProfile& profile) {
-  std::vector<Sample> samples = profile.samples();
-  fillVelocityByFiniteDifferences(samples);
-  profile = HapticProfile::fromSamples(profile.metadata(), profile.rawChannels(), std::move(samples), false);
-}
-
 /// A random hand script at 100 Hz (a tablet's rate): 0.15-0.35 s of a smooth path (two
 /// sinusoids per axis, up to 30 mm from a centre within ±40 × ±30 mm), pressing a level drawn up
 /// to 20 N (half of them up to 3 N, around what the pen holds up) that swells and fades, at a random tilt; sometimes lifted for a while in the middle.
@@ -61,7 +54,7 @@ HapticProfile randomHandScript(std::mt19937_64& rng) {
   const double lift_begin_s = between(0.3, 0.5) * duration_s;
   const double lift_end_s = lift_begin_s + between(0.05, 0.2) * duration_s;
 
-  HapticProfile script(ProfileMetadata{}, RawChannels{.tilt = true});
+  std::vector<Sample> samples;
   const int steps = static_cast<int>(std::ceil(duration_s / 0.01));
   for (int i = 0; i <= steps; ++i) {
     Sample s;
@@ -78,10 +71,9 @@ HapticProfile randomHandScript(std::mt19937_64& rng) {
     s.f_user_W = s.pen_down ? Vec3(0.0, 0.0, -press_N * std::sqrt(swell)) : Vec3(Vec3::Zero());
     s.tilt_altitude_rad = altitude_rad;
     s.tilt_azimuth_rad = azimuth_rad;
-    script.append(s);
+    samples.push_back(s);
   }
-  fillVelocity(script);
-  return script;
+  return HapticProfile::fromSamples({}, RawChannels{.tilt = true}, std::move(samples), true);
 }
 
 /// What a recording did, judged here from its samples alone.
