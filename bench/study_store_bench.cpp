@@ -53,6 +53,7 @@ session::StudyDatabase freshStudy(const std::filesystem::path& dir, const std::s
   study.protocol.training_trials = 1000;
   study.protocol.recall_trials = 2;  // the smallest protocol the study file allows (recall 1 is a warm-up)
   study.subjects = {{"S01", "script", 1, nlohmann::json::object()}};
+  session::applyPaperForm(study);
   const std::filesystem::path where = postgres.empty() ? dir / "s.sqlite" : std::filesystem::path(postgres);
   { (void)session::StudyDatabase::create(where, study); }
   session::StudyDatabase db = session::StudyDatabase::open(where, session::OpenMode::kRunner);

@@ -7,9 +7,11 @@
 #include "cli_common.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/ops/study_run.hpp"
+#include "hattr/report/design_analysis.hpp"
 #include "hattr/report/paper_comparison.hpp"
 #include "hattr/report/study_report.hpp"
 #include "hattr/session/study_export.hpp"
+#include "hattr/session/study_schedule.hpp"
 
 namespace hattr::cli {
 namespace {
@@ -25,6 +27,9 @@ struct StudyOptions {
   int subjects_at_once = 1;
   double lease_timeout_s = 30.0;
   double band = -1.0;
+  std::string days = "sim";
+  std::string design;
+  bool list = false;
   bool json = false;
   bool quiet = false;
   bool force = false;
@@ -35,6 +40,7 @@ nlohmann::json statusJson(const session::StudyDatabase& db) {
   int total = 0, completed = 0, interrupted = 0, running = 0;
   // A trial marked running is being run while a runner holds the study; otherwise its runner died.
   const bool runner_active = db.runnerActive();
+  const session::LocalDate today = session::localToday();
   for (const auto& s : db.subjects()) {
     const auto trials = db.trials(s.id);
     int done = 0;
@@ -49,16 +55,21 @@ nlohmann::json statusJson(const session::StudyDatabase& db) {
     nlohmann::json next = nullptr;
     if (const auto n = db.nextTrial(s.id)) {
       next = {{"sequence", n->plan.sequence}, {"mode", std::string(guidance::modeName(n->plan.mode))},
-              {"phase", std::string(session::phaseName(n->plan.phase))}, {"trial", n->plan.index},
+              {"phase", n->plan.phase}, {"trial", n->plan.index}, {"skill", n->plan.skill},
+              {"session", n->plan.session + 1}, {"block", n->plan.block + 1},
               {"status", std::string(session::trialStatusName(n->status))}};
     }
-    subjects.push_back({{"id", s.id}, {"participant", s.spec.participant}, {"mode_order", order},
-                        {"trials", trials.size()}, {"completed", done}, {"next", next}});
+    subjects.push_back({{"id", s.id}, {"participant", s.spec.participant}, {"group", s.spec.group},
+                        {"mode_order", order}, {"trials", trials.size()}, {"completed", done}, {"next", next},
+                        {"schedule", ops::scheduleJson(session::subjectSchedule(db.study(), trials, today))}});
     total += static_cast<int>(trials.size());
     completed += done;
   }
+  nlohmann::json groups = nlohmann::json::array();
+  for (const auto& g : db.study().groups) groups.push_back(g.name);
   return {{"study", db.study().name}, {"file", db.file().string()}, {"schema_version", db.schemaVersion()},
-          {"subjects", subjects}, {"trials_total", total}, {"trials_completed", completed},
+          {"paper_design", session::isPaperDesign(db.study())}, {"groups", groups},
+          {"sessions", db.study().schedule.size()}, {"today", today.iso()}, {"subjects", subjects}, {"trials_total", total}, {"trials_completed", completed},
           {"trials_interrupted", interrupted}, {"trials_running", running}, {"runner_active", runner_active}};
 }
 
@@ -84,15 +95,16 @@ void runRun(const StudyOptions& opt) {
                            .clock = session::parseClock(opt.clock),
                            .max_trials = opt.max_trials,
                            .subjects_at_once = opt.subjects_at_once,
-                           .lease_timeout_s = opt.lease_timeout_s};
+                           .lease_timeout_s = opt.lease_timeout_s,
+                           .follow_calendar = opt.days == "calendar"};
   Progress progress("study run", 0, "trials");
   int done = 0;
   if (!opt.quiet) {
     run.started = [&progress](int trials_to_run) { progress.stage("study run", trials_to_run); };
     run.progress = [&progress, &done](const session::RunProgress& p) {
       progress.update(++done, fmt::format("study run: {} {:>2}/{} {} {} {:>2}", p.subject, p.completed, p.total,
-                                          guidance::modeName(p.trial->plan.mode),
-                                          session::phaseName(p.trial->plan.phase), p.trial->plan.index));
+                                          guidance::modeName(p.trial->plan.mode), p.trial->plan.phase,
+                                          p.trial->plan.index));
     };
   }
   const ops::StudyRunResult result = ops::runStudy(run);
@@ -101,6 +113,9 @@ void runRun(const StudyOptions& opt) {
     return printJson(statusJson(session::StudyDatabase::open(opt.db, session::OpenMode::kReadOnly)));
   }
   std::cout << fmt::format("ran {} trial{}\n", result.trials_run, result.trials_run == 1 ? "" : "s");
+  for (const auto& w : result.waiting) {
+    std::cout << fmt::format("  {} waits: {}\n", w.subject, session::scheduleText(w.schedule));
+  }
 }
 
 void runStatus(const StudyOptions& opt) {
@@ -113,14 +128,19 @@ void runStatus(const StudyOptions& opt) {
                            status["runner_active"].get<bool>()
                                ? fmt::format(", {} running now (a runner holds the study)", status["trials_running"].get<int>())
                                : "");
+  const bool design = !status["paper_design"].get<bool>();
   for (const auto& s : status["subjects"]) {
     std::string next = "done";
     if (!s["next"].is_null()) {
       next = fmt::format("next: {} {} {}", s["next"]["mode"].get<std::string>(), s["next"]["phase"].get<std::string>(),
                          s["next"]["trial"].get<int>());
     }
-    std::cout << fmt::format("  {:<8} {:>3}/{:<3} order {}  {}\n", s["id"].get<std::string>(), s["completed"].get<int>(),
-                             s["trials"].get<int>(), s["mode_order"].dump(), next);
+    // A design says each subject's group and where it stands in the schedule.
+    const std::string where = design ? fmt::format("group {}  {}", s["group"].get<std::string>(),
+                                                   s["schedule"]["text"].get<std::string>())
+                                     : fmt::format("order {}  {}", s["mode_order"].dump(), next);
+    std::cout << fmt::format("  {:<8} {:>3}/{:<3} {}\n", s["id"].get<std::string>(), s["completed"].get<int>(),
+                             s["trials"].get<int>(), where);
   }
 }
 
@@ -141,9 +161,34 @@ report::AnalysisOptions analysisOptions(const StudyOptions& opt, Progress& progr
   return a;
 }
 
+/// A study of groups and sessions (not the paper's design): its own analysis and report.
+void runDesignAnalysis(const StudyOptions& opt, session::StudyDatabase& db, bool report) {
+  std::vector<std::string> outputs = report::kDesignCsvFiles;
+  if (report) outputs.insert(outputs.end(), report::kStudyReportFiles.begin(), report::kStudyReportFiles.end());
+  if (!opt.out.empty()) checkOutputFolder(opt.out, outputs, opt.force);  // before anything is written
+  Progress progress(report ? "study report: scoring trials" : "scoring trials", 0, "trials");
+  const report::DesignAnalysis analysis = report::analyzeDesign(db, analysisOptions(opt, progress));
+  progress.finish();
+  const nlohmann::json json = report::designAnalysisToJson(analysis);
+  db.putResult("design_analysis", json.dump());
+  if (!opt.out.empty()) report::writeDesignCsv(analysis, opt.out);
+  if (report) {
+    const auto html = report::writeDesignReport(db, analysis, opt.out);
+    std::cout << fmt::format("report: {} (and report.md, figures/, CSV tables beside it)\n", html.string());
+  } else if (opt.json) {
+    return printJson(json);
+  } else {
+    std::cout << fmt::format("analyzed {} completed trials of {} ({} planned); results stored in the database{}\n",
+                             analysis.scores.size(), opt.db, analysis.trials_planned,
+                             opt.out.empty() ? "" : fmt::format(" and written to {}/", opt.out));
+  }
+  for (const auto& line : report::designConclusions(analysis)) std::cout << "  " << line << '\n';
+}
+
 void runAnalyze(const StudyOptions& opt) {
-  if (!opt.out.empty()) checkOutputFolder(opt.out, report::kAnalysisCsvFiles, opt.force);  // before anything is written
   session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kReadWrite);
+  if (!session::isPaperDesign(db.study())) return runDesignAnalysis(opt, db, false);
+  if (!opt.out.empty()) checkOutputFolder(opt.out, report::kAnalysisCsvFiles, opt.force);  // before anything is written
   Progress progress("scoring recall trials", 0, "trials");
   const report::StudyAnalysis analysis = report::analyzeStudy(db, analysisOptions(opt, progress));
   progress.finish();
@@ -156,11 +201,12 @@ void runAnalyze(const StudyOptions& opt) {
 }
 
 void runReport(const StudyOptions& opt) {
+  session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kReadWrite);
+  if (!session::isPaperDesign(db.study())) return runDesignAnalysis(opt, db, true);
   // Every output checked before anything is written (the database's stored analysis included).
   std::vector<std::string> outputs = report::kAnalysisCsvFiles;
   outputs.insert(outputs.end(), report::kStudyReportFiles.begin(), report::kStudyReportFiles.end());
   checkOutputFolder(opt.out, outputs, opt.force);
-  session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kReadWrite);
   Progress progress("study report: scoring recall trials", 0, "trials");
   const report::StudyAnalysis analysis = report::analyzeStudy(db, analysisOptions(opt, progress));
   report::storeAnalysis(db, analysis);
@@ -222,6 +268,11 @@ void registerStudyCommands(CLI::App& app) {
                   "loses them to another station")
       ->check(CLI::Range(1.0, 3600.0))
       ->capture_default_str();
+  run->add_option("--days", opt->days,
+                  "sim: a session on a later day follows at once (the simulated trainee is told the days passed); "
+                  "calendar: it waits for its date, and the subjects left are listed")
+      ->check(CLI::IsMember({"sim", "calendar"}))
+      ->capture_default_str();
   run->add_flag("--quiet", opt->quiet, "No progress line");
   run->add_flag("--json", opt->json, "Print the status as JSON when done");
   run->callback([opt] { runRun(*opt); });
@@ -229,8 +280,8 @@ void registerStudyCommands(CLI::App& app) {
   auto* status = study->add_subcommand("status", "Trials completed and interrupted, and each subject's next trial");
   status->add_option("--db", opt->db, "Study database")->required();
   status->add_flag("--json", opt->json,
-                   "Print JSON: subjects [{id, mode_order, trials, completed, next}], trials_total, trials_completed, "
-                   "trials_interrupted");
+                   "Print JSON: subjects [{id, group, mode_order, trials, completed, next, schedule}], trials_total, "
+                   "trials_completed, trials_interrupted");
   status->callback([opt] { runStatus(*opt); });
 
   auto* exp = study->add_subcommand("export", "Write the study as files: definition, experts, trials table, one CSV per trial");
@@ -252,9 +303,12 @@ void registerStudyCommands(CLI::App& app) {
   push->callback([opt] { runPush(*opt); });
 
   auto* analyze = study->add_subcommand(
-      "analyze", "DTW costs of every recall trial against the expert, ANOVAs, Tukey HSD and Table 1; stored in the database");
+      "analyze", "The paper's design: DTW costs of every recall trial against the expert, ANOVAs, Tukey HSD and Table 1. "
+                 "Any other design: every completed trial's costs, learning curves, retention and transfer. Stored in "
+                 "the database");
   analyze->add_option("--db", opt->db, "Study database")->required();
-  analyze->add_option("--out", opt->out, "Also write recall_costs.csv, anova.csv, table1.csv here");
+  analyze->add_option("--out", opt->out, "Also write the tables here (the paper's design: recall_costs.csv, anova.csv, "
+                      "table1.csv; any other: trial_scores.csv, curves.csv, phases.csv, retention.csv, transfer.csv)");
   analyze->add_flag("--force", opt->force, "Replace earlier tables in --out");
   analyze->add_option("--band", opt->band, "Sakoe–Chiba band fraction for DTW (default: none, the paper's)")
       ->check(CLI::Range(0.0, 1.0));
@@ -268,8 +322,16 @@ void registerStudyCommands(CLI::App& app) {
   rep->add_option("--band", opt->band, "Sakoe–Chiba band fraction for DTW (default: none)")->check(CLI::Range(0.0, 1.0));
   rep->callback([opt] { runReport(*opt); });
 
-  auto* example = study->add_subcommand("example", "Print an example study file");
-  example->callback([] { std::cout << session::exampleStudyJson(); });
+  auto* example = study->add_subcommand("example", "Print a shipped study design (default: the paper's)");
+  example->add_flag("--list", opt->list, "List the shipped designs, one a line: name, then the question it answers");
+  example->add_option("--design", opt->design, "Print the design called NAME (see --list)");
+  example->callback([opt] {
+    if (opt->list) {
+      for (const auto& d : session::exampleDesigns()) std::cout << fmt::format("{:<18} {}\n", d.name, d.answers);
+      return;
+    }
+    std::cout << (opt->design.empty() ? session::exampleStudyJson() : std::string(session::exampleDesign(opt->design).json));
+  });
 }
 
 }  // namespace hattr::cli

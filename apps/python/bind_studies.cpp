@@ -27,14 +27,17 @@ py::dict subjectRecord(const session::SubjectRecord& s) {
   std::vector<std::string> order;
   for (const guidance::TrainingMode mode : s.mode_order) order.emplace_back(guidance::modeName(mode));
   return py::dict(py::arg("id") = s.id, py::arg("position") = s.position, py::arg("participant") = s.spec.participant,
-                  py::arg("seed") = s.spec.seed, py::arg("mode_order") = order,
+                  py::arg("seed") = s.spec.seed, py::arg("mode_order") = order, py::arg("group") = s.spec.group,
                   py::arg("options") = toPython(s.spec.options));
 }
 
 py::dict trialRecord(const session::TrialRecord& t) {
   return py::dict(py::arg("trial_id") = t.id, py::arg("subject") = t.plan.subject,
                   py::arg("sequence") = t.plan.sequence, py::arg("mode") = std::string(guidance::modeName(t.plan.mode)),
-                  py::arg("phase") = std::string(session::phaseName(t.plan.phase)), py::arg("trial") = t.plan.index,
+                  py::arg("phase") = t.plan.phase, py::arg("trial") = t.plan.index,
+                  py::arg("skill") = t.plan.skill, py::arg("group") = t.plan.group,
+                  py::arg("session") = t.plan.session + 1, py::arg("day") = t.plan.day,
+                  py::arg("block") = t.plan.block + 1,
                   py::arg("status") = std::string(session::trialStatusName(t.status)),
                   py::arg("attempts") = t.attempts, py::arg("interruptions") = t.interruptions,
                   py::arg("started_utc") = t.started_utc, py::arg("ended_utc") = t.ended_utc,

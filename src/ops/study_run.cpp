@@ -23,8 +23,20 @@ int trialsToRun(const session::StudyDatabase& db, const StudyRunOptions& o) {
 
 }  // namespace
 
+nlohmann::json scheduleJson(const session::SubjectSchedule& s) {
+  return {{"timing", std::string(session::timingName(s.timing))},
+          {"session", s.session + 1},
+          {"sessions", s.sessions},
+          {"day", s.day},
+          {"due", s.due ? nlohmann::json(s.due->iso()) : nlohmann::json(nullptr)},
+          {"days_off", s.days_off},
+          {"text", session::scheduleText(s)}};
+}
+
 nlohmann::json StudyRunResult::toJson() const {
-  return {{"trials_to_run", trials_to_run}, {"trials_run", trials_run}};
+  nlohmann::json left = nlohmann::json::array();
+  for (const auto& w : waiting) left.push_back({{"subject", w.subject}, {"schedule", scheduleJson(w.schedule)}});
+  return {{"trials_to_run", trials_to_run}, {"trials_run", trials_run}, {"waiting", left}};
 }
 
 StudyRunResult runStudy(const StudyRunOptions& options) {
@@ -39,7 +51,8 @@ StudyRunResult runStudy(const StudyRunOptions& options) {
                           .clock = options.clock,
                           .progress = options.progress,
                           .max_trials = options.max_trials,
-                          .subjects_at_once = options.subjects_at_once};
+                          .subjects_at_once = options.subjects_at_once,
+                          .follow_calendar = options.follow_calendar};
   // The expert's station for the mentored modes' training trials (the study file's mentor).
   std::unique_ptr<session::LiveGuidance> mentor;
   if (study.hasMentoredModes()) {
@@ -51,6 +64,7 @@ StudyRunResult runStudy(const StudyRunOptions& options) {
   result.trials_to_run = trialsToRun(db, options);
   if (options.started) options.started(result.trials_to_run);
   result.trials_run = runner.run(run);
+  result.waiting = runner.waiting();
   return result;
 }
 

@@ -67,6 +67,11 @@ MetricResult analyzeMetric(const std::string& name, const std::vector<TrialCost>
 
 StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptions& options) {
   const session::StudyDefinition& study = db.study();
+  HATTR_THROW_UNLESS(session::isPaperDesign(study),
+                     "{}: the paper's analysis (recall trials per mode, the balanced ANOVA) is for the paper's design; "
+                     "this study has groups and sessions: `hattr study analyze` analyzes it as its design says "
+                     "(report::analyzeDesign)",
+                     db.file().string());
   StudyAnalysis out;
   out.options = options;
   out.options.progress = nullptr;  // the caller's callback does not outlive the call
@@ -85,7 +90,7 @@ StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptio
   const std::vector<session::TrialRecord> records = db.trials();
   std::vector<std::string> missing;
   for (const session::TrialRecord& t : records) {
-    if (t.plan.phase != session::Phase::kRecall) continue;
+    if (t.plan.phase != session::kPhaseRecall) continue;
     const std::string mode(guidance::modeName(t.plan.mode));
     const bool done = t.status == session::TrialStatus::kCompleted;
     if (!analyzed.contains(t.plan.index)) {

@@ -16,44 +16,15 @@
 #include "hattr/device/device_uri.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/session/trial_physics.hpp"
+#include "study_problems.hpp"
 
 namespace hattr::session {
 namespace {
 
+using detail::Problems;
+using detail::readBool;
+using detail::readNumber;
 using nlohmann::json;
-
-/// Collects every problem of a study file before reporting them together.
-class Problems {
- public:
-  explicit Problems(std::string_view source) : source_(source) {}
-  void add(std::string text) { lines_.push_back(std::move(text)); }
-  void throwIfAny() const {
-    if (lines_.empty()) return;
-    std::string message = fmt::format("{}: {} problem{} in the study definition:", source_, lines_.size(),
-                                      lines_.size() == 1 ? "" : "s");
-    for (const auto& l : lines_) message += "\n  - " + l;
-    throw InputError(message);
-  }
-
- private:
-  std::string source_;
-  std::vector<std::string> lines_;
-};
-
-/// Reads a number key within a range, noting a problem instead of throwing.
-template <typename T>
-void readNumber(const json& object, const char* key, T& value, double lo, double hi, const std::string& where,
-                Problems& problems) {
-  const auto it = object.find(key);
-  if (it == object.end()) return;
-  const bool integral = std::is_integral_v<T>;
-  if (!it->is_number() || (integral && !it->is_number_integer()) || it->get<double>() < lo || it->get<double>() > hi) {
-    problems.add(fmt::format("{}{}: expected {} in [{}, {}], got {}", where, key, integral ? "an integer" : "a number",
-                             lo, hi, jsonExcerpt(*it)));
-    return;
-  }
-  value = it->get<T>();
-}
 
 /// protocol.analyzed_recall_trials: distinct trial numbers within recall_trials (checked
 /// after recall_trials is read).
@@ -187,8 +158,6 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
 
 }  // namespace
 
-std::string_view phaseName(Phase phase) { return phase == Phase::kTraining ? "training" : "recall"; }
-
 StudyDefinition parseStudy(std::string_view json_text, std::string_view source, const std::filesystem::path& base_dir,
                            bool check_files) {
   return readingJson(source, [&] { return parseStudyObject(parseJsonObject(json_text, source), source, base_dir, check_files); });
@@ -201,9 +170,10 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
   Problems problems(source);
   StudyDefinition study;
 
-  static const std::set<std::string> kKeys{"format", "name",  "skill",   "experts",  "modes",    "protocol", "order",
-                                           "device", "world", "rate_hz", "indexing", "subjects", "mentor",
-                                           "storage"};
+  static const std::set<std::string> kKeys{"format",   "name",    "skill",    "experts",  "modes",
+                                           "protocol", "order",   "device",   "world",    "rate_hz",
+                                           "indexing", "subjects", "mentor",  "storage",  "groups",
+                                           "sessions"};
   for (const auto& item : root.items()) {
     if (!kKeys.contains(item.key())) problems.add(fmt::format("unknown key \"{}\"", item.key()));
   }
@@ -245,26 +215,6 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
     }
   }
 
-  // Modes.
-  if (const auto it = root.find("modes"); it != root.end()) {
-    if (!it->is_array() || it->empty()) {
-      problems.add("modes: expected a non-empty list such as [\"basic\", \"pcontrol\", \"alpha\", \"mentor-position\"]");
-    }
-    std::set<guidance::TrainingMode> seen;
-    for (const auto& m : it->is_array() ? *it : json::array()) {
-      try {
-        const auto mode = guidance::parseMode(m.is_string() ? m.get<std::string>() : jsonExcerpt(m));
-        if (!seen.insert(mode).second) problems.add(fmt::format("modes: {} listed twice", jsonExcerpt(m)));
-        study.modes.push_back(mode);
-      } catch (const InputError& e) {
-        problems.add(fmt::format("modes: {}", e.what()));
-      }
-    }
-  } else {
-    study.modes = {guidance::TrainingMode::kBasic, guidance::TrainingMode::kPositionControl,
-                   guidance::TrainingMode::kForceControl};
-  }
-
   // Protocol.
   if (const auto it = root.find("protocol"); it != root.end()) {
     if (!it->is_object()) {
@@ -294,11 +244,7 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
         else if (policy == "exclude") p.disturbed = DisturbedPolicy::kExclude;
         else problems.add(fmt::format("protocol.disturbed_trials: expected \"repeat\", \"flag\" or \"exclude\", got {}", jsonExcerpt(*d)));
       }
-      if (const auto v = it->find("show_scores"); v != it->end()) {
-        if (v->is_boolean()) p.show_scores = v->get<bool>();
-        else problems.add(fmt::format("protocol.show_scores: expected true or false, got {}", jsonExcerpt(*v)));
-      }
-      if (p.training_trials + p.recall_trials == 0) problems.add("protocol: zero trials per mode (training_trials + recall_trials)");
+      readBool(*it, "show_scores", p.show_scores, "protocol.", problems);
     }
   }
 
@@ -345,44 +291,9 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
     }
   }
 
-  // Subjects: a list, or {"count": N, "prefix": "S", "participant": "simulated"}.
-  const auto subjects = root.find("subjects");
-  if (subjects == root.end()) {
-    problems.add("subjects: missing (a list of {\"id\": ...} or {\"count\": N})");
-  } else if (subjects->is_object()) {
-    for (const auto& item : subjects->items()) {
-      static const std::set<std::string> kSubjectKeys{"count", "prefix", "participant", "options"};
-      if (!kSubjectKeys.contains(item.key())) {
-        problems.add(fmt::format("subjects: unknown key \"{}\": expected count, prefix, participant or options",
-                                 textExcerpt(item.key())));
-      }
-    }
-    if (!subjects->contains("count")) problems.add("subjects.count: missing (how many subjects)");
-    int count = 0;
-    std::string prefix = subjects->value("prefix", std::string("S"));
-    readNumber(*subjects, "count", count, 1, 10'000, "subjects.", problems);
-    const std::string participant = subjects->value("participant", std::string("simulated"));
-    for (int i = 1; i <= count; ++i) {
-      study.subjects.push_back({fmt::format("{}{:02}", prefix, i), participant, static_cast<std::uint64_t>(i),
-                                subjects->value("options", json::object())});
-    }
-  } else if (subjects->is_array() && !subjects->empty()) {
-    std::set<std::string> ids;
-    for (std::size_t i = 0; i < subjects->size(); ++i) {
-      const json& s = (*subjects)[i];
-      if (!s.is_object() || !s.contains("id") || !s["id"].is_string() || s["id"].get<std::string>().empty()) {
-        problems.add(fmt::format("subjects[{}]: expected an object with a non-empty \"id\"", i));
-        continue;
-      }
-      SubjectSpec spec{s["id"].get<std::string>(), s.value("participant", std::string("simulated")),
-                       static_cast<std::uint64_t>(i + 1), s.value("options", json::object())};
-      readNumber(s, "seed", spec.seed, 0, 9.0e15, fmt::format("subjects[{}].", i), problems);
-      if (!ids.insert(spec.id).second) problems.add(fmt::format("subjects[{}]: id \"{}\" used twice", i, spec.id));
-      study.subjects.push_back(std::move(spec));
-    }
-  } else {
-    problems.add("subjects: expected a non-empty list or {\"count\": N}");
-  }
+  // Groups, subjects and the schedule (or the paper's modes, protocol and subjects).
+  detail::readDesign(root, study, problems);
+
   // Subject ids and skills become file names (an export's trials/<id>/, experts/<skill>.csv):
   // a new study file's must be safe ones; a stored study keeps what it was created with (the
   // export's writer refuses only what would leave its folder).
@@ -436,7 +347,7 @@ nlohmann::json studyToJson(const StudyDefinition& s) {
     subjects.push_back({{"id", sub.id}, {"participant", sub.participant}, {"seed", sub.seed}, {"options", sub.options}});
   }
   const char* order = s.order == OrderKind::kLatinSquare ? "latin-square" : s.order == OrderKind::kFixed ? "fixed" : "random";
-  return {{"format", "hattr-study/1"},
+  json root = {{"format", "hattr-study/1"},
           {"name", s.name},
           {"skill", s.skill},
           {"experts", experts},
@@ -472,6 +383,10 @@ nlohmann::json studyToJson(const StudyDefinition& s) {
             {"expert_device", s.mentor.expert_device},
             {"passivity", s.mentor.passivity},
             {"deadband", s.mentor.deadband}}}};
+  // A design is written as one; the paper's form stays as it was read (a stored definition
+  // is compared byte for byte by `study push`).
+  if (!s.paper_form) detail::writeDesign(s, root);
+  return root;
 }
 
 std::string_view disturbedPolicyName(DisturbedPolicy policy) {
@@ -490,83 +405,5 @@ std::vector<int> analyzedRecallTrials(const Protocol& protocol) {
   return trials;
 }
 
-std::string exampleStudyJson() {
-  return R"({
-  "format": "hattr-study/1",
-  "name": "Na: three training modes",
-  "skill": "na",
-  "experts": {"na": "expert.csv"},
-  "modes": ["basic", "pcontrol", "alpha"],
-  "protocol": {
-    "training_trials": 11,
-    "recall_trials": 11,
-    "rest_s": 10,
-    "trial_end": {"pen_up_s": 1.0, "max_s": 0},
-    "training": {"show_reference": true, "guidance": true},
-    "recall": {"show_reference": false, "guidance": false},
-    "analyzed_recall_trials": [2, 3, 4, 5, 6, 7, 8, 9, 10, 11],
-    "disturbed_trials": "repeat",
-    "max_repeats": 2,
-    "show_scores": false
-  },
-  "order": {"kind": "latin-square"},
-  "device": "sim://pen",
-  "world": {"relief": {"kind": "grain"}},
-  "rate_hz": 1000,
-  "indexing": "time",
-  "subjects": {"count": 10, "prefix": "S", "participant": "simulated"}
-}
-)";
-}
-
-std::vector<std::vector<guidance::TrainingMode>> modeOrders(const StudyDefinition& study) {
-  const std::size_t n = study.modes.size();
-  std::vector<std::vector<guidance::TrainingMode>> sequences;
-  if (study.order == OrderKind::kLatinSquare) {
-    // Williams design: first row 0, 1, n-1, 2, n-2, ...; row r adds r (mod n). For odd n
-    // the mirrored square follows, so every mode precedes every other equally often.
-    std::vector<std::size_t> first;
-    for (std::size_t k = 0, lo = 1, hi = n - 1; k < n; ++k) {
-      first.push_back(k == 0 ? 0 : (k % 2 == 1 ? lo++ : hi--));
-    }
-    for (std::size_t r = 0; r < n; ++r) {
-      std::vector<guidance::TrainingMode> row;
-      for (const std::size_t c : first) row.push_back(study.modes[(c + r) % n]);
-      sequences.push_back(row);
-    }
-    if (n % 2 == 1) {
-      for (std::size_t r = 0; r < n; ++r) sequences.emplace_back(sequences[r].rbegin(), sequences[r].rend());
-    }
-  }
-  std::vector<std::vector<guidance::TrainingMode>> orders;
-  std::mt19937_64 rng(study.order_seed);
-  for (std::size_t s = 0; s < study.subjects.size(); ++s) {
-    switch (study.order) {
-      case OrderKind::kLatinSquare: orders.push_back(sequences[s % sequences.size()]); break;
-      case OrderKind::kFixed: orders.push_back(study.modes); break;
-      case OrderKind::kRandom: {
-        auto order = study.modes;
-        for (std::size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[rng() % i]);  // portable shuffle
-        orders.push_back(order);
-        break;
-      }
-    }
-  }
-  return orders;
-}
-
-std::vector<TrialPlan> planTrials(const StudyDefinition& study, const std::string& subject,
-                                  const std::vector<guidance::TrainingMode>& order) {
-  std::vector<TrialPlan> plan;
-  for (const auto mode : order) {
-    for (int i = 1; i <= study.protocol.training_trials; ++i) {
-      plan.push_back({subject, static_cast<int>(plan.size()), mode, Phase::kTraining, i, study.protocol.training});
-    }
-    for (int i = 1; i <= study.protocol.recall_trials; ++i) {
-      plan.push_back({subject, static_cast<int>(plan.size()), mode, Phase::kRecall, i, study.protocol.recall});
-    }
-  }
-  return plan;
-}
 
 }  // namespace hattr::session

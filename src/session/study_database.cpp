@@ -5,6 +5,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <bit>
 #include <cerrno>
 #include <cstring>
@@ -73,6 +74,17 @@ ALTER TABLE samples ADD COLUMN encoding TEXT NOT NULL DEFAULT 'f64-rows';
 ALTER TABLE disturbed_attempts ADD COLUMN encoding TEXT NOT NULL DEFAULT 'f64-rows';
 )";
 
+/// Migration 4 -> 5: each trial says its place in the design (skill, session of the schedule,
+/// its day, block) and each subject its group; filled in for the studies before designs by
+/// fillDesignColumns.
+constexpr std::string_view kMigrationV4ToV5 = R"(
+ALTER TABLE trials ADD COLUMN skill TEXT;
+ALTER TABLE trials ADD COLUMN schedule_session INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE trials ADD COLUMN day INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE trials ADD COLUMN block INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE subjects ADD COLUMN group_name TEXT NOT NULL DEFAULT 'all';
+)";
+
 constexpr std::string_view kMigrations[] = {kMigrationV1ToV2, kMigrationV2ToV3, kMigrationV3ToV4};
 
 void compactStoredSamples(SqlConnection& db);
@@ -83,7 +95,11 @@ void migrate(SqlConnection& db, int from_version) {
     Transaction t(db);
     // Another writer may have taken this step while we waited for the lock.
     if (scalar(db, "PRAGMA user_version") > v) continue;
-    db.exec(kMigrations[v - 1]);
+    if (v + 1 == 5) {
+      detail::migrateToDesigns(db);
+    } else {
+      db.exec(kMigrations[v - 1]);
+    }
     if (v + 1 == 4) compactStoredSamples(db);
     db.exec(fmt::format("PRAGMA user_version = {}", v + 1));
     t.commit();
@@ -319,6 +335,34 @@ void compactStoredSamples(SqlConnection& db) {
 
 }  // namespace
 
+void detail::migrateToDesigns(SqlConnection& db) {
+  db.exec(kMigrationV4ToV5);
+  // Every study before designs is of the paper's form: its plan, from the stored definition
+  // and each subject's stored order, says each trial's place (one session, day 0).
+  Statement definition(db, "SELECT definition FROM study WHERE id = 1");
+  if (!definition.step()) return;  // a new study: its trials are written with their places
+  const StudyDefinition study = parseStudy(definition.text(0), db.location() + ":study", "", false);
+  std::vector<std::pair<std::string, std::string>> subjects;  // id, mode order
+  {
+    Statement list(db, "SELECT id, mode_order FROM subjects ORDER BY position");
+    while (list.step()) subjects.emplace_back(list.text(0), list.text(1));
+  }
+  for (const auto& [id, order_json] : subjects) {
+    const auto spec = std::find_if(study.subjects.begin(), study.subjects.end(), [&](const auto& s) { return s.id == id; });
+    HATTR_THROW_UNLESS(spec != study.subjects.end(), "{}: subject {} is not in the study's definition", db.location(),
+                       textExcerpt(id));
+    std::vector<guidance::TrainingMode> order;
+    for (const auto& m : json::parse(order_json)) order.push_back(guidance::parseMode(m.get<std::string>()));
+    for (const TrialPlan& p : planTrials(study, *spec, order)) {
+      Statement u(db, "UPDATE trials SET skill = ?, schedule_session = ?, day = ?, block = ? WHERE subject = ? AND "
+                      "sequence = ?");
+      u.bind(1, p.skill).bind(2, p.session).bind(3, p.day).bind(4, p.block).bind(5, id).bind(6, p.sequence).run();
+    }
+    Statement g(db, "UPDATE subjects SET group_name = ? WHERE id = ?");
+    g.bind(1, spec->group).bind(2, id).run();
+  }
+}
+
 // ---- Opening -------------------------------------------------------------------------------
 
 bool isPostgresStudy(std::string_view location) { return detail::isPostgresLocation(location); }
@@ -443,6 +487,8 @@ StudyDatabase StudyDatabase::createSqlite(const std::filesystem::path& file, con
 }
 
 void StudyDatabase::writeNewStudy(const StudyDefinition& study, const std::map<std::string, std::string>& expert_csv) {
+  HATTR_DEMAND(!study.groups.empty() && !study.schedule.empty(),
+               "study \"{}\" has no groups or no schedule: a definition built in code needs applyPaperForm", study.name);
   SqlConnection& db = *db_;
   Statement insert(db, "INSERT INTO study (id, name, definition, created_utc) VALUES (1, ?, ?, ?)");
   insert.bind(1, study.name).bind(2, studyToJson(study).dump()).bind(3, utcNowIso8601()).run();
@@ -455,16 +501,18 @@ void StudyDatabase::writeNewStudy(const StudyDefinition& study, const std::map<s
     const SubjectSpec& spec = study.subjects[i];
     json order = json::array();
     for (const auto m : orders[i]) order.push_back(std::string(guidance::modeName(m)));
-    Statement s(db, "INSERT INTO subjects (id, position, mode_order, spec) VALUES (?, ?, ?, ?)");
+    Statement s(db, "INSERT INTO subjects (id, position, mode_order, spec, group_name) VALUES (?, ?, ?, ?, ?)");
     s.bind(1, spec.id).bind(2, static_cast<int>(i)).bind(3, order.dump())
         .bind(4, json{{"participant", spec.participant}, {"seed", spec.seed}, {"options", spec.options}}.dump())
+        .bind(5, spec.group)
         .run();
-    for (const TrialPlan& p : planTrials(study, spec.id, orders[i])) {
+    for (const TrialPlan& p : planTrials(study, spec, orders[i])) {
       Statement tr(db,
-                   "INSERT INTO trials (subject, sequence, mode, phase, trial_index, show_reference, guidance) "
-                   "VALUES (?, ?, ?, ?, ?, ?, ?)");
-      tr.bind(1, p.subject).bind(2, p.sequence).bind(3, guidance::modeName(p.mode)).bind(4, phaseName(p.phase))
-          .bind(5, p.index).bind(6, p.view.show_reference ? 1 : 0).bind(7, p.view.guidance ? 1 : 0).run();
+                   "INSERT INTO trials (subject, sequence, mode, phase, trial_index, show_reference, guidance, skill, "
+                   "schedule_session, day, block) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+      tr.bind(1, p.subject).bind(2, p.sequence).bind(3, guidance::modeName(p.mode)).bind(4, p.phase)
+          .bind(5, p.index).bind(6, p.view.show_reference ? 1 : 0).bind(7, p.view.guidance ? 1 : 0).bind(8, p.skill)
+          .bind(9, p.session).bind(10, p.day).bind(11, p.block).run();
     }
   }
   loadDefinition();
@@ -545,7 +593,7 @@ HapticProfile StudyDatabase::expert(const std::string& skill) const {
 
 std::vector<SubjectRecord> StudyDatabase::subjects() const {
   std::vector<SubjectRecord> out;
-  Statement s(*db_, "SELECT id, position, mode_order, spec FROM subjects ORDER BY position");
+  Statement s(*db_, "SELECT id, position, mode_order, spec, group_name FROM subjects ORDER BY position");
   while (s.step()) {
     SubjectRecord r;
     r.id = s.text(0);
@@ -553,7 +601,8 @@ std::vector<SubjectRecord> StudyDatabase::subjects() const {
     try {
       for (const auto& m : json::parse(s.text(2))) r.mode_order.push_back(guidance::parseMode(m.get<std::string>()));
       const json spec = json::parse(s.text(3));
-      r.spec = {r.id, spec.at("participant").get<std::string>(), spec.at("seed").get<std::uint64_t>(), spec.at("options")};
+      r.spec = {r.id, spec.at("participant").get<std::string>(), spec.at("seed").get<std::uint64_t>(), spec.at("options"),
+                s.text(4)};
     } catch (const std::exception& e) {
       const auto* j = dynamic_cast<const json::exception*>(&e);
       throw InputError(fmt::format("{}: subject {} is damaged: {}", file_.string(), textExcerpt(r.id),
@@ -570,16 +619,19 @@ std::vector<TrialRecord> StudyDatabase::trials(const std::string& subject) const
               "SELECT t.id, t.subject, t.sequence, t.mode, t.phase, t.trial_index, t.show_reference, t.guidance, "
               "t.status, t.attempts, t.interruptions, t.started_utc, t.ended_utc, t.outcome, "
               "COALESCE(s.sample_count, 0), COALESCE(t.disturbed, ''), "
-              "(SELECT COUNT(*) FROM disturbed_attempts d WHERE d.trial = t.id) "
-              "FROM trials t LEFT JOIN samples s ON s.trial = t.id "
+              "(SELECT COUNT(*) FROM disturbed_attempts d WHERE d.trial = t.id), COALESCE(t.skill, ''), "
+              "t.schedule_session, t.day, t.block, u.group_name "
+              "FROM trials t LEFT JOIN samples s ON s.trial = t.id JOIN subjects u ON u.id = t.subject "
               "WHERE ? = '' OR t.subject = ? ORDER BY t.subject, t.sequence");
   s.bind(1, subject).bind(2, subject);
   while (s.step()) {
     TrialRecord r;
     r.id = s.integer(0);
-    r.plan = {s.text(1), static_cast<int>(s.integer(2)), guidance::parseMode(s.text(3)),
-              s.text(4) == "training" ? Phase::kTraining : Phase::kRecall, static_cast<int>(s.integer(5)),
-              PhaseView{s.integer(6) != 0, s.integer(7) != 0}};
+    r.plan = {s.text(1), static_cast<int>(s.integer(2)), guidance::parseMode(s.text(3)), s.text(4),
+              static_cast<int>(s.integer(5)), PhaseView{s.integer(6) != 0, s.integer(7) != 0}, s.text(17),
+              s.text(21), static_cast<int>(s.integer(18)), static_cast<int>(s.integer(19)),
+              static_cast<int>(s.integer(20))};
+    if (r.plan.skill.empty()) r.plan.skill = study_.skill;
     r.status = parseStatus(s.text(8));
     r.attempts = static_cast<int>(s.integer(9));
     r.interruptions = static_cast<int>(s.integer(10));

@@ -15,9 +15,13 @@
 namespace hattr::session {
 namespace {
 
-constexpr std::string_view kTrialsHeader =
+/// trials.csv: each trial's plan and status, then (since designs) its place in the design.
+constexpr std::string_view kTrialsHeaderV1 =
     "id,subject,sequence,mode,phase,trial,show_reference,guidance,status,attempts,interruptions,started_utc,ended_utc,"
     "samples,file";
+constexpr std::string_view kTrialsHeader =
+    "id,subject,sequence,mode,phase,trial,show_reference,guidance,status,attempts,interruptions,started_utc,ended_utc,"
+    "samples,file,skill,group,session,day,block";
 
 /// A name that becomes a path component of the export. A study stored before names were
 /// checked can hold any ("P 01" is fine); the writer refuses what would leave its folder.
@@ -33,8 +37,8 @@ const std::string& checkedName(const std::string& name, std::string_view what) {
 
 std::string trialFileName(const TrialPlan& p) {
   (void)checkedName(p.subject, "subject id");
-  return fmt::format("trials/{}/{:03}_{}_{}_{:02}.csv", p.subject, p.sequence, guidance::modeName(p.mode),
-                     phaseName(p.phase), p.index);
+  return fmt::format("trials/{}/{:03}_{}_{}_{:02}.csv", p.subject, p.sequence, guidance::modeName(p.mode), p.phase,
+                     p.index);
 }
 
 namespace {
@@ -61,10 +65,11 @@ std::size_t writeExport(const StudyDatabase& db, StudyDefinition study, const st
       io::writeProfileCsv(db.trialProfile(t.id), out / file);
       ++written;
     }
-    table += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", t.id, t.plan.subject, t.plan.sequence,
-                         guidance::modeName(t.plan.mode), phaseName(t.plan.phase), t.plan.index,
+    table += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", t.id, t.plan.subject,
+                         t.plan.sequence, guidance::modeName(t.plan.mode), t.plan.phase, t.plan.index,
                          t.plan.view.show_reference ? 1 : 0, t.plan.view.guidance ? 1 : 0, trialStatusName(t.status),
-                         t.attempts, t.interruptions, t.started_utc, t.ended_utc, t.sample_count, file);
+                         t.attempts, t.interruptions, t.started_utc, t.ended_utc, t.sample_count, file, t.plan.skill,
+                         t.plan.group, t.plan.session + 1, t.plan.day, t.plan.block + 1);
   }
   io::writeFileAtomically(out / "trials.csv", table);
   return written;
@@ -118,15 +123,17 @@ std::size_t importStudy(const std::filesystem::path& dir, const std::filesystem:
     HATTR_THROW_UNLESS(in.good(), "{}: cannot open for reading", table_file.string());
     std::string line;
     std::getline(in, line);
-    HATTR_THROW_UNLESS(line == kTrialsHeader, "{}:1: expected the header \"{}\", got \"{}\"", table_file.string(),
-                       kTrialsHeader, textExcerpt(line));
+    // An export written before designs has the first 15 columns only; the plan comes from study.json.
+    HATTR_THROW_UNLESS(line == kTrialsHeader || line == kTrialsHeaderV1, "{}:1: expected the header \"{}\", got \"{}\"",
+                       table_file.string(), kTrialsHeader, textExcerpt(line));
+    const std::size_t columns = line == kTrialsHeader ? 20 : 15;
     for (int number = 2; std::getline(in, line); ++number) {
       std::vector<std::string> fields;
       std::stringstream split(line);
       for (std::string f; std::getline(split, f, ',');) fields.push_back(f);
       if (line.ends_with(',')) fields.emplace_back();
-      HATTR_THROW_UNLESS(fields.size() == 15, "{}:{}: expected 15 fields, got {}", table_file.string(), number,
-                         fields.size());
+      HATTR_THROW_UNLESS(fields.size() == columns, "{}:{}: expected {} fields, got {}", table_file.string(), number,
+                         columns, fields.size());
       if (fields[8] != "completed") continue;
       int sequence = 0;
       try {

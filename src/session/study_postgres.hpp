@@ -17,8 +17,12 @@ namespace hattr::session::detail {
 void createPostgresSchema(SqlConnection& db);
 
 /// Checks that the database holds a hattr study this build reads; throws InputError saying
-/// what it holds instead.
-void checkPostgresStudy(SqlConnection& db);
+/// what it holds instead. An older schema is migrated when `writable`, refused otherwise.
+void checkPostgresStudy(SqlConnection& db, bool writable);
+
+/// Migration 4 -> 5 on either store (study_database.cpp): the trials' places in the design
+/// and the subjects' groups, filled in from the stored definition; in the caller's transaction.
+void migrateToDesigns(SqlConnection& db);
 
 /// This machine's name (sessions and leases record it for people).
 std::string hostName();

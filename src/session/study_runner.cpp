@@ -46,11 +46,39 @@ std::unique_ptr<Participant> makeScriptParticipant(const SubjectRecord& subject,
   return std::make_unique<ScriptParticipant>(std::move(script), jitter_mm / 1000.0, subject.spec.seed);
 }
 
+/// One subject's participants, one per skill, each made when its skill's first trial comes;
+/// the days between sessions reach every one made so far.
+class StudyRunner::SubjectParticipants {
+ public:
+  SubjectParticipants(const StudyRunner& runner, const SubjectRecord& subject) : runner_(runner), subject_(subject) {}
+  Participant& of(const std::string& skill) {
+    auto& participant = by_skill_[skill];
+    if (!participant) participant = runner_.factory_(subject_, runner_.experts_.at(skill));
+    return *participant;
+  }
+  /// The schedule's day of the next trial: the days since the last trial's pass for every
+  /// participant made so far (the first trial passes none).
+  void moveToDay(int day) {
+    if (day_ && day > *day_) {
+      for (auto& [skill, participant] : by_skill_) participant->daysPassed(day - *day_);
+    }
+    day_ = day;
+  }
+
+ private:
+  std::optional<int> day_;
+  const StudyRunner& runner_;
+  const SubjectRecord& subject_;
+  std::map<std::string, std::unique_ptr<Participant>> by_skill_;
+};
+
 StudyRunner::StudyRunner(StudyDatabase& db, ParticipantFactory factory) : db_(db), factory_(std::move(factory)) {
   const StudyDefinition& study = db_.study();
-  expert_ = db_.expert(study.skill);
+  for (const auto& [skill, file] : study.experts) experts_.emplace(skill, db_.expert(skill));
   world_ = render::parseWorldConfig(study.world.dump(), "study world");
-  reference_ = std::make_shared<guidance::ReferenceTrajectory>(expert_, study.rate_hz);
+  for (const auto& [skill, expert] : experts_) {
+    references_[skill] = std::make_shared<guidance::ReferenceTrajectory>(expert, study.rate_hz);
+  }
 }
 
 int StudyRunner::run(const RunOptions& options) {
@@ -60,6 +88,7 @@ int StudyRunner::run(const RunOptions& options) {
   HATTR_THROW_UNLESS(options.subjects_at_once >= 1, "subjects at once: expected at least 1, got {}",
                      options.subjects_at_once);
   stopping_ = false;
+  waiting_.clear();
   int ran = 0;
   for (;;) {
     held_elsewhere_ = false;
@@ -165,15 +194,16 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
   if (std::all_of(trials.begin(), trials.end(), [](const TrialRecord& t) { return t.status == TrialStatus::kCompleted; })) {
     return 0;  // another station finished it meanwhile
   }
-  const auto participant = factory_(subject, expert_);
-  SubjectTrials steps(db_.study(), subject, std::move(trials), reference_);
+  SubjectParticipants participants(*this, subject);
+  SubjectTrials steps(db_.study(), subject, std::move(trials), references_);
 
-  // Resume: the participant relives the trials already done, in order.
-  relivePassed(steps, *participant);
+  // Resume: the participants relive the trials already done, in order.
+  relivePassed(steps, participants);
+  if (!dueNow(subject, steps, options)) return 0;
   const std::int64_t session = withDatabase([&](StudyDatabase& db) { return db.beginSession(subject.id); });
   int ran = 0;
   try {
-    runTrialsLeft(subject, options, budget, environment, steps, *participant, session, ran);
+    runTrialsLeft(subject, options, budget, environment, steps, participants, session, ran);
   } catch (const SubjectTakenOver&) {
     // Another station took the subject over (this one's lease lapsed): it runs the rest.
     held_elsewhere_ = true;
@@ -184,14 +214,27 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
   return ran;
 }
 
-void StudyRunner::relivePassed(SubjectTrials& steps, Participant& participant) {
+void StudyRunner::relivePassed(SubjectTrials& steps, SubjectParticipants& participants) {
   for (const TrialRecord& done : steps.passCompleted()) {
-    participant.trialCompleted(done.plan, storedProfile(done.id));
+    participants.moveToDay(done.plan.day);
+    participants.of(done.plan.skill).trialCompleted(done.plan, storedProfile(done.id));
   }
 }
 
+bool StudyRunner::dueNow(const SubjectRecord& subject, const SubjectTrials& steps, const RunOptions& options) {
+  if (!options.follow_calendar || steps.current() == nullptr) return true;
+  const std::vector<TrialRecord> trials = withDatabase([&](StudyDatabase& db) { return db.trials(subject.id); });
+  const SubjectSchedule schedule = subjectSchedule(db_.study(), trials, options.today.value_or(localToday()));
+  if (schedule.runnable()) return true;
+  withDatabase([&](StudyDatabase&) {
+    waiting_.push_back({subject.id, schedule});
+    return 0;
+  });
+  return false;
+}
+
 void StudyRunner::runTrialsLeft(const SubjectRecord& subject, const RunOptions& options, int budget,
-                                EnvironmentSlot& environment, SubjectTrials& steps, Participant& participant,
+                                EnvironmentSlot& environment, SubjectTrials& steps, SubjectParticipants& participants,
                                 std::int64_t session, int& ran) {
   const StudyDefinition& study = db_.study();
   const std::filesystem::path rescue_folder =
@@ -200,11 +243,15 @@ void StudyRunner::runTrialsLeft(const SubjectRecord& subject, const RunOptions& 
     if ((budget >= 0 && ran >= budget) || stopping_) break;
     // A trial completed after a gap (an earlier one left pending) is never run again: the
     // participant relives it in its place, as on resume.
-    relivePassed(steps, participant);
+    relivePassed(steps, participants);
     if (steps.current() == nullptr) break;
+    // A session on a later day: the days pass (simulated), or the run waits for its date.
+    if (steps.daysBefore() > 0 && !dueNow(subject, steps, options)) break;
+    participants.moveToDay(steps.current()->plan.day);
     const TrialRecord record = *steps.current();
     const TrialPlan& plan = record.plan;
-    if (steps.restBefore()) participant.rest(study.protocol.rest_s);
+    Participant& participant = participants.of(plan.skill);
+    if (steps.restBefore()) participant.rest(steps.restSeconds());
     participant.prompt(steps.prompt());
 
     // The trial, set up as every app sets up a study trial, on the runner's clock; a disturbed
@@ -226,7 +273,7 @@ void StudyRunner::runTrialsLeft(const SubjectRecord& subject, const RunOptions& 
         withDatabase([&](StudyDatabase& db) { db.endSession(session); });
         throw Error(fmt::format("subject {}: {} trial {} with {} failed: {}; completed trials are kept, and `study "
                                 "run` repeats this one",
-                                subject.id, phaseName(plan.phase), plan.index, guidance::modeName(plan.mode),
+                                subject.id, plan.phase, plan.index, guidance::modeName(plan.mode),
                                 result.failure));
       }
       if (outcome.ending == SubjectTrials::Ending::kRepeat) {

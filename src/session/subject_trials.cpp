@@ -33,14 +33,28 @@ TrialSetup studyTrialSetup(const StudyDefinition& study, const TrialPlan& plan,
   }
   setup.reference = std::move(reference);
   setup.metadata.subject = plan.subject;
-  setup.metadata.skill = study.skill;
+  setup.metadata.skill = plan.skill;
   setup.metadata.source = fmt::format("study:{}", study.name);
   setup.metadata.extra["study_mode"] = std::string(guidance::modeName(plan.mode));
-  setup.metadata.extra["phase"] = std::string(phaseName(plan.phase));
+  setup.metadata.extra["phase"] = plan.phase;
   setup.metadata.extra["trial"] = fmt::format("{}", plan.index);
   setup.metadata.extra["sequence"] = fmt::format("{}", plan.sequence);
   setup.metadata.extra["reference_shown"] = plan.view.show_reference ? "yes" : "no";
+  if (!study.paper_form) {  // the paper's trials keep their metadata as it always was
+    setup.metadata.extra["group"] = plan.group;
+    setup.metadata.extra["session"] = fmt::format("{}", plan.session + 1);
+    setup.metadata.extra["day"] = fmt::format("{}", plan.day);
+    setup.metadata.extra["block"] = fmt::format("{}", plan.block + 1);
+  }
   return setup;
+}
+
+StudyReferences studyReferences(const StudyDatabase& db) {
+  StudyReferences references;
+  for (const auto& [skill, file] : db.study().experts) {
+    references[skill] = std::make_shared<guidance::ReferenceTrajectory>(db.expert(skill), db.study().rate_hz);
+  }
+  return references;
 }
 
 
@@ -72,8 +86,8 @@ std::filesystem::path defaultRescueFolder(const StudyDatabase& db) {
 }
 
 SubjectTrials::SubjectTrials(const StudyDefinition& study, SubjectRecord subject, std::vector<TrialRecord> trials,
-                             std::shared_ptr<const guidance::ReferenceTrajectory> reference)
-    : study_(study), subject_(std::move(subject)), trials_(std::move(trials)), reference_(std::move(reference)) {
+                             StudyReferences references)
+    : study_(study), subject_(std::move(subject)), trials_(std::move(trials)), references_(std::move(references)) {
   completed_ = static_cast<int>(std::count_if(trials_.begin(), trials_.end(), [](const TrialRecord& t) {
     return t.status == TrialStatus::kCompleted;
   }));
@@ -91,17 +105,37 @@ const TrialRecord* SubjectTrials::current() const noexcept {
   return next_ < trials_.size() ? &trials_[next_] : nullptr;
 }
 
+bool SubjectTrials::restBefore() const noexcept {
+  return next_ > 0 && next_ < trials_.size() && trials_[next_].plan.session == trials_[next_ - 1].plan.session;
+}
+
+double SubjectTrials::restSeconds() const {
+  HATTR_DEMAND(current() != nullptr, "subject {}: no trial left to rest before", subject_.id);
+  return blockOf(study_, current()->plan).rest_s;
+}
+
+int SubjectTrials::daysBefore() const noexcept {
+  if (next_ == 0 || next_ >= trials_.size()) return 0;
+  return trials_[next_].plan.day - trials_[next_ - 1].plan.day;
+}
+
 std::string SubjectTrials::prompt() const {
   HATTR_DEMAND(current() != nullptr, "subject {}: no trial left to prompt for", subject_.id);
   const TrialPlan& plan = current()->plan;
-  const bool training = plan.phase == Phase::kTraining;
-  return fmt::format("{} with {}: trial {} of {}", training ? "Training" : "Recall", guidance::modeName(plan.mode),
-                     plan.index, training ? study_.protocol.training_trials : study_.protocol.recall_trials);
+  std::string phase = plan.phase;
+  if (!phase.empty() && phase[0] >= 'a' && phase[0] <= 'z') phase[0] = static_cast<char>(phase[0] - 'a' + 'A');
+  // The strategy is named where its force acts, and in the paper's recall (the mode's block).
+  const bool named = plan.view.guidance || study_.paper_form;
+  return fmt::format("{}{}: trial {} of {}", phase, named ? fmt::format(" with {}", guidance::modeName(plan.mode)) : "",
+                     plan.index, blockOf(study_, plan).trials);
 }
 
 TrialSetup SubjectTrials::setup(Clock clock, LiveGuidance* mentor) const {
   HATTR_DEMAND(current() != nullptr, "subject {}: no trial left to set up", subject_.id);
-  TrialSetup setup = studyTrialSetup(study_, current()->plan, reference_);
+  const auto reference = references_.find(current()->plan.skill);
+  HATTR_DEMAND(reference != references_.end(), "subject {}: no expert reference for skill {}", subject_.id,
+               current()->plan.skill);
+  TrialSetup setup = studyTrialSetup(study_, current()->plan, reference->second);
   setup.clock = clock;
   setup.live_guidance = mentor;
   setup.live_seed = studyLiveSeed(subject_.spec, current()->plan, attempt_);
@@ -168,7 +202,7 @@ void SubjectTrials::storeOrRescue(StudyDatabase& db, const TrialRecord& record, 
     const TrialPlan& plan = record.plan;
     throw Error(fmt::format("{}; subject {}'s {} {} trial {} (sequence {}) was not stored: its recording is kept in {} "
                             "(a profile CSV), and the trial runs again when the study resumes",
-                            e.what(), plan.subject, guidance::modeName(plan.mode), phaseName(plan.phase), plan.index,
+                            e.what(), plan.subject, guidance::modeName(plan.mode), plan.phase, plan.index,
                             plan.sequence, file.string()));
   }
 }

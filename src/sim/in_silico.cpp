@@ -105,6 +105,7 @@ session::StudyDefinition writePaperStudy(const std::filesystem::path& dir, const
   nlohmann::json options = {{"template", (dir / "expert-script.csv").string()}};
   if (o.hypothesis) options["hypothesis"] = std::string(hypothesisName(*o.hypothesis));
   study.subjects = simulatedSubjects(o.subjects, o.seed, options);
+  session::applyPaperForm(study);
   return study;
 }
 

@@ -27,11 +27,29 @@ class SimulatedParticipant final : public session::Participant {
     trainee_.learn(recorded, plan.view.show_reference, trainee_.paceFactor(trialSeed(plan)));
   }
 
+  void daysPassed(int days) override { trainee_.restDays(days); }
+
  private:
-  /// Common random numbers: the same noise and pace for the same trial number in every mode.
+  /// Common random numbers: the same noise and pace for the same trial number in every mode
+  /// of a phase. Each session and each phase other than training and recall draws its own
+  /// (the paper's one session draws as it always did).
   [[nodiscard]] std::uint64_t trialSeed(const session::TrialPlan& plan) const {
-    return seed_ * 1'000'003ULL + (plan.phase == session::Phase::kTraining ? 0ULL : 500ULL) +
-           static_cast<std::uint64_t>(plan.index);
+    return seed_ * 1'000'003ULL + (plan.phase == session::kPhaseTraining ? 0ULL : 500ULL) +
+           static_cast<std::uint64_t>(plan.index) + 1'000ULL * phaseStream(plan.phase) +
+           100'000ULL * static_cast<std::uint64_t>(plan.session);
+  }
+
+  /// 0 for training and recall, 1 to 4 for hattr's other phases, 5 to 93 for a free label.
+  static std::uint64_t phaseStream(std::string_view phase) {
+    constexpr std::string_view kNamed[] = {session::kPhaseBaseline, session::kPhasePostTest, session::kPhaseRetention,
+                                           session::kPhaseTransfer};
+    if (phase == session::kPhaseTraining || phase == session::kPhaseRecall) return 0;
+    for (std::uint64_t i = 0; i < 4; ++i) {
+      if (phase == kNamed[i]) return i + 1;
+    }
+    std::uint64_t hash = 14695981039346656037ULL;  // FNV-1a: the same label, the same stream everywhere
+    for (const char c : phase) hash = (hash ^ static_cast<unsigned char>(c)) * 1099511628211ULL;
+    return 5 + hash % 89;
   }
 
   std::uint64_t seed_;

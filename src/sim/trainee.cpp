@@ -189,6 +189,10 @@ HapticProfile SimulatedTrainee::profileOf(const Series& s, const std::string& so
   return profile;
 }
 
+void SimulatedTrainee::restDays(int days) {
+  if (days > 0) fast_.setZero();
+}
+
 HapticProfile SimulatedTrainee::plan() const { return profileOf(series(planWeights()), "sim:trainee-plan"); }
 
 std::unique_ptr<device::HandScript> SimulatedTrainee::handForTrial(std::uint64_t trial_seed) const {

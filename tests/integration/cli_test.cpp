@@ -435,8 +435,14 @@ TEST(Cli, StudyReportSetsThePaperBesideTheStudyAndHattrDtwScoresItsTrialsAlike) 
   ASSERT_EQ(runHattr(dir, "study export --db " + db + " --out " + (dir / "export").string()).exit_code, 0);
   std::string trial_file;
   std::istringstream trials(test::readText(dir / "export" / "trials.csv"));
+  const auto field = [](const std::string& line, std::size_t n) {  // the n-th comma-separated field, from 0
+    std::istringstream split(line);
+    std::string f;
+    for (std::size_t i = 0; i <= n; ++i) std::getline(split, f, ',');
+    return f;
+  };
   for (std::string line; std::getline(trials, line);) {
-    if (line.starts_with(fmt::format("{},", first["trial_id"].get<std::int64_t>()))) trial_file = line.substr(line.rfind(',') + 1);
+    if (line.starts_with(fmt::format("{},", first["trial_id"].get<std::int64_t>()))) trial_file = field(line, 14);
   }
   ASSERT_FALSE(trial_file.empty());
   const RunResult scored = runHattr(dir, "dtw --score --json " + (dir / "export" / "experts" / "na.csv").string() + " " +

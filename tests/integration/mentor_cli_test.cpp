@@ -119,7 +119,7 @@ TEST(MentorCli, ALeadServesEachMentoredTrialOfAStudyAsItsOwnSession) {
   for (const auto& t : study.trials()) {
     ASSERT_EQ(t.status, session::TrialStatus::kCompleted);
     const auto extra = study.trialProfile(t.id).metadata().extra;
-    if (t.plan.phase == session::Phase::kTraining) {
+    if (t.plan.phase == session::kPhaseTraining) {
       ++mentored;
       EXPECT_EQ(extra.at("mentor"), "live expert at " + lead.address());
       EXPECT_EQ(extra.at("coupling"), "position");

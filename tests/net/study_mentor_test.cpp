@@ -82,7 +82,7 @@ TEST(StudyMentor, MentoredModesAreStudyTrialsThatGuideTheTraineeStablyAt100MsAnd
     EXPECT_EQ(extra.at("safety_faults"), "0") << mode;
     EXPECT_FALSE(extra.contains("disturbed")) << mode << ": " << extra.at("disturbed");
     EXPECT_EQ(extra.at("end_reason"), "pen lifted") << mode;
-    if (t.plan.phase == session::Phase::kRecall || !guidance::isMentored(t.plan.mode)) {
+    if (t.plan.phase == session::kPhaseRecall || !guidance::isMentored(t.plan.mode)) {
       // Recall is unassisted (BASIC), as in every mode; no coupling acted.
       EXPECT_FALSE(extra.contains("coupling")) << mode;
       EXPECT_EQ(extra.at("mode"), "BASIC");
@@ -99,7 +99,7 @@ TEST(StudyMentor, MentoredModesAreStudyTrialsThatGuideTheTraineeStablyAt100MsAnd
         EXPECT_LE(generated, 1e-9);
       }
     }
-    if (t.plan.phase == session::Phase::kTraining && t.plan.index == 2) training_dtw[mode] = trajectoryDtw(trial, expert);
+    if (t.plan.phase == session::kPhaseTraining && t.plan.index == 2) training_dtw[mode] = trajectoryDtw(trial, expert);
   }
   for (const auto& [mode, dtw] : training_dtw) std::printf("%-17s training DTW to the expert %.3f mm\n", mode.c_str(), dtw * 1e3);
   // The live expert's pen guides: position and bilateral bring the trainee's shape to it.

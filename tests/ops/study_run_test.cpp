@@ -42,7 +42,7 @@ TEST(StudyRun, RunsWhatIsLeftSayingHowMuchFirstAndEachTrialAfter) {
   const StudyRunResult rest = runStudy({.db = db});
   EXPECT_EQ(rest.trials_to_run, 1) << "resumed where it stopped";
   EXPECT_EQ(rest.trials_run, 1);
-  EXPECT_EQ(rest.toJson(), nlohmann::json({{"trials_to_run", 1}, {"trials_run", 1}}));
+  EXPECT_EQ(rest.toJson(), nlohmann::json({{"trials_to_run", 1}, {"trials_run", 1}, {"waiting", nlohmann::json::array()}}));
   EXPECT_EQ(runStudy({.db = db}).trials_run, 0);
 }
 

@@ -297,7 +297,7 @@ TEST(StudyAnalysis, RefusesAnUnfinishedStudyNamingWhatIsMissing) {
 session::RunOptions stallInS01Recall2() {
   session::RunOptions options;
   options.inject_stall_at_s = [](const session::TrialPlan& plan, int attempt) {
-    return plan.subject == "S01" && plan.phase == session::Phase::kRecall && plan.index == 2 && attempt == 0 ? 0.2 : -1.0;
+    return plan.subject == "S01" && plan.phase == session::kPhaseRecall && plan.index == 2 && attempt == 0 ? 0.2 : -1.0;
   };
   return options;
 }
@@ -305,7 +305,7 @@ session::RunOptions stallInS01Recall2() {
 std::vector<session::TrialRecord> s01Recall2(const session::StudyDatabase& db) {
   std::vector<session::TrialRecord> out;
   for (const auto& t : db.trials("S01")) {
-    if (t.plan.phase == session::Phase::kRecall && t.plan.index == 2) out.push_back(t);
+    if (t.plan.phase == session::kPhaseRecall && t.plan.index == 2) out.push_back(t);
   }
   return out;
 }
@@ -412,7 +412,7 @@ TEST(DisturbedTrials, ExcludeReplacesThemWithTheSpareRecallTrial) {
   ASSERT_EQ(a.spares_used.size(), 3u);
   for (const auto& t : db.trials("S01")) {
     const bool spare = std::find(a.spares_used.begin(), a.spares_used.end(), t.id) != a.spares_used.end();
-    EXPECT_EQ(spare, t.plan.phase == session::Phase::kRecall && t.plan.index == 1) << t.id;
+    EXPECT_EQ(spare, t.plan.phase == session::kPhaseRecall && t.plan.index == 1) << t.id;
   }
   EXPECT_EQ(a.trajectory.overall.replicates, 2u);
 }

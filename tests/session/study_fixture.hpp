@@ -22,4 +22,11 @@ inline void writeExpert(const std::filesystem::path& file) {
   io::writeProfileCsv(p, file, io::Overwrite::kReplace);
 }
 
+/// SQL that turns a study file of this build back into schema 4's tables (what migration 4 -> 5
+/// added goes away; it only added columns), before a test sets an older user_version.
+inline constexpr const char* kBackToSchema4 =
+    "ALTER TABLE trials DROP COLUMN skill; ALTER TABLE trials DROP COLUMN schedule_session; "
+    "ALTER TABLE trials DROP COLUMN day; ALTER TABLE trials DROP COLUMN block; "
+    "ALTER TABLE subjects DROP COLUMN group_name; ";
+
 }  // namespace hattr::session

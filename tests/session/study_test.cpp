@@ -74,7 +74,7 @@ TEST(StudyDefinition, DefaultsAreThePapersProtocol) {
   EXPECT_EQ(s.protocol.rest_s, 10.0);
   EXPECT_FALSE(s.protocol.recall.show_reference);
   EXPECT_FALSE(s.protocol.recall.guidance);
-  EXPECT_EQ(planTrials(s, "S01", s.modes).size(), 66u);
+  EXPECT_EQ(planTrials(s, s.subjects.front(), s.modes).size(), 66u);
 }
 
 TEST(StudyDefinition, AMentorBlockSaysWhoMentorsAndSurvivesTheDatabase) {
@@ -158,7 +158,7 @@ TEST(StudyDatabase, RefusesFilesThatAreNotStudiesOrAreNewer) {
     (void)StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kReadWrite);
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("study schema version 99 is newer than this build of hattr reads (1 to 4)"));
+    EXPECT_THAT(e.what(), HasSubstr("study schema version 99 is newer than this build of hattr reads (1 to 5)"));
   }
 }
 
@@ -169,9 +169,10 @@ TEST(StudyDatabase, MigratesTheFirstReleasedSchema) {
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open((folder.dir / "s.sqlite").c_str(), &db), SQLITE_OK);
   ASSERT_EQ(sqlite3_exec(db,
-                         "DROP TABLE disturbed_attempts; ALTER TABLE trials DROP COLUMN disturbed; DROP TABLE results; "
+                         (std::string(kBackToSchema4) +
+                          "DROP TABLE disturbed_attempts; ALTER TABLE trials DROP COLUMN disturbed; DROP TABLE results; "
                          "ALTER TABLE samples DROP COLUMN encoding; "
-                         "ALTER TABLE trials DROP COLUMN interruptions; PRAGMA user_version = 1;",
+                          "ALTER TABLE trials DROP COLUMN interruptions; PRAGMA user_version = 1;").c_str(),
                          nullptr, nullptr, nullptr),
             SQLITE_OK);
   sqlite3_close(db);
@@ -213,7 +214,7 @@ TEST(StudyRunner, RunsTheWholeProtocolAndExportImportIsExact) {
   }
   // Recall trials ran without guidance; training trials in guided modes with it.
   const auto& recall = *std::find_if(trials.begin(), trials.end(), [](const TrialRecord& t) {
-    return t.plan.phase == Phase::kRecall && t.plan.mode != guidance::TrainingMode::kBasic;
+    return t.plan.phase == kPhaseRecall && t.plan.mode != guidance::TrainingMode::kBasic;
   });
   EXPECT_EQ(db.trialProfile(recall.id).metadata().extra.at("mode"), "BASIC");
 
@@ -583,8 +584,8 @@ TEST(StudyDatabase, AnOlderSchemaOpenedForReadingSaysHowToUpdateIt) {
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open((folder.dir / "s.sqlite").c_str(), &db), SQLITE_OK);
   ASSERT_EQ(sqlite3_exec(db,
-                         "DROP TABLE disturbed_attempts; ALTER TABLE trials DROP COLUMN disturbed; "
-                         "ALTER TABLE samples DROP COLUMN encoding; PRAGMA user_version = 2;",
+                         (std::string(kBackToSchema4) + "DROP TABLE disturbed_attempts; ALTER TABLE trials DROP COLUMN "
+                          "disturbed; ALTER TABLE samples DROP COLUMN encoding; PRAGMA user_version = 2;").c_str(),
                          nullptr, nullptr, nullptr),
             SQLITE_OK);
   sqlite3_close(db);
@@ -673,15 +674,15 @@ TEST(StudyDatabase, MigratesSchema3InPlaceRewritingEveryStoredTrialCompactlyAndL
     }
   }
   ASSERT_EQ(sqlite3_exec(db,
-                         "ALTER TABLE samples DROP COLUMN encoding; ALTER TABLE disturbed_attempts DROP COLUMN encoding; "
-                         "PRAGMA user_version = 3;",
+                         (std::string(kBackToSchema4) + "ALTER TABLE samples DROP COLUMN encoding; ALTER TABLE "
+                          "disturbed_attempts DROP COLUMN encoding; PRAGMA user_version = 3;").c_str(),
                          nullptr, nullptr, nullptr),
             SQLITE_OK);
   sqlite3_close(db);
 
-  // Opened for writing, it is brought to schema 4: every block rewritten, nothing lost.
+  // Opened for writing, it is brought up to date: every block rewritten, nothing lost.
   StudyDatabase migrated = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kReadWrite);
-  EXPECT_EQ(migrated.schemaVersion(), 4);
+  EXPECT_EQ(migrated.schemaVersion(), kStudySchemaVersion);
   const auto trials = migrated.trials("S01");
   for (std::size_t i = 0; i < 3; ++i) {
     const HapticProfile back = migrated.trialProfile(trials[i].id);
@@ -737,14 +738,14 @@ TEST(StudyDatabase, AMigrationLeavesADamagedSchema3BlockAsItWasAndMigratesTheRes
     sqlite3_finalize(st);
   }
   ASSERT_EQ(sqlite3_exec(db,
-                         "ALTER TABLE samples DROP COLUMN encoding; ALTER TABLE disturbed_attempts DROP COLUMN encoding; "
-                         "PRAGMA user_version = 3;",
+                         (std::string(kBackToSchema4) + "ALTER TABLE samples DROP COLUMN encoding; ALTER TABLE "
+                          "disturbed_attempts DROP COLUMN encoding; PRAGMA user_version = 3;").c_str(),
                          nullptr, nullptr, nullptr),
             SQLITE_OK);
   sqlite3_close(db);
 
   StudyDatabase migrated = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kReadWrite);
-  EXPECT_EQ(migrated.schemaVersion(), 4);
+  EXPECT_EQ(migrated.schemaVersion(), kStudySchemaVersion);
   EXPECT_EQ(migrated.trialProfile(ids[0]).samples(), kept[0].samples());
   try {
     (void)migrated.trialProfile(ids[1]);

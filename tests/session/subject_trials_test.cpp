@@ -45,10 +45,9 @@ struct OneSubjectStudy {
   test::TempDir dir;
 };
 
-/// The steps of S01 in `db`, with the study's reference.
+/// The steps of S01 in `db`, with the study's references.
 SubjectTrials stepsOf(StudyDatabase& db) {
-  const auto reference = std::make_shared<guidance::ReferenceTrajectory>(db.expert("dash"), db.study().rate_hz);
-  return SubjectTrials(db.study(), db.subjects().front(), db.trials("S01"), reference);
+  return SubjectTrials(db.study(), db.subjects().front(), db.trials("S01"), studyReferences(db));
 }
 
 /// A clean trial's result: the expert's own samples.

@@ -194,6 +194,23 @@ TEST(SimulatedTrainee, WithTheTemplateHiddenAndNoGuidanceEachStateDecaysByItsRet
   EXPECT_LT((trainee.slowState() - traits.slow_retention * slow).cwiseAbs().maxCoeff(), 1e-18);
 }
 
+// Between sessions on different days the fast state is forgotten and the slow state kept
+// (Joiner & Smith 2008); within a day nothing changes.
+TEST(SimulatedTrainee, DaysBetweenSessionsForgetTheFastStateAndKeepTheSlow) {
+  const HapticProfile tmpl = penDownTemplate();
+  SimulatedTrainee trainee(shippedModel(), drawSubject(shippedModel(), 13), tmpl, 13);
+  for (int n = 0; n < 3; ++n) trainee.learn(standIn(trainee), true);
+  const PlanWeights fast = trainee.fastState();
+  const PlanWeights slow = trainee.slowState();
+  ASSERT_GT(fast.norm(), 0.0);
+  trainee.restDays(0);
+  EXPECT_EQ(trainee.fastState(), fast);
+  trainee.restDays(1);
+  EXPECT_EQ(trainee.fastState().norm(), 0.0);
+  EXPECT_EQ(trainee.slowState(), slow);
+  EXPECT_EQ(trainee.trialsLearned(), 3);
+}
+
 TEST(SimulatedTrainee, FeltInPlaneGuidanceShiftsThePlanTheWayItPushed) {
   const HapticProfile tmpl = penDownTemplate();
   const SubjectTraits traits = drawSubject(shippedModel(), 21);

@@ -12,12 +12,24 @@ StudySession::StudySession(const std::filesystem::path& file)
     : db_(session::StudyDatabase::open(file, session::OpenMode::kRunner)) {
   // The expert, the environment and the reference, as StudyRunner builds them.
   const session::StudyDefinition& study = db_.study();
-  expert_ = db_.expert(study.skill);
+  for (const auto& [skill, path] : study.experts) experts_.emplace(skill, db_.expert(skill));
   const render::WorldConfig world = render::parseWorldConfig(study.world.dump(), "study world");
   environment_ = std::make_unique<session::TrialEnvironment>(study.device, world, study.rate_hz);
-  reference_ = std::make_shared<guidance::ReferenceTrajectory>(expert_, study.rate_hz);
+  references_ = session::studyReferences(db_);
   // The expert's station for the mentored modes' training trials, as `hattr study run`'s.
-  if (study.hasMentoredModes()) mentor_ = net::makeStudyMentor(study.mentor, expert_, world, study.rate_hz);
+  if (study.hasMentoredModes()) {
+    mentor_ = net::makeStudyMentor(study.mentor, experts_.at(study.skill), world, study.rate_hz);
+  }
+}
+
+const HapticProfile& StudySession::expert() const {
+  const session::TrialRecord* trial = currentTrial();
+  return experts_.at(trial != nullptr ? trial->plan.skill : db_.study().skill);
+}
+
+const std::shared_ptr<const guidance::ReferenceTrajectory>& StudySession::reference() const {
+  const session::TrialRecord* trial = currentTrial();
+  return references_.at(trial != nullptr ? trial->plan.skill : db_.study().skill);
 }
 
 StudySession::~StudySession() {
@@ -45,7 +57,7 @@ void StudySession::selectSubject(const std::string& subject_id, double now_s) {
     session_id_.reset();
   }
   subject_ = subject_id;
-  trials_.emplace(db_.study(), *record, db_.trials(subject_id), reference_);
+  trials_.emplace(db_.study(), *record, db_.trials(subject_id), references_);
   // Resume at the first trial not completed; trials completed after a gap are passed when
   // their turn comes (never run again). A rest comes first unless this is the first trial.
   (void)trials_->passCompleted();
@@ -53,7 +65,7 @@ void StudySession::selectSubject(const std::string& subject_id, double now_s) {
     state_ = State::kFinished;
   } else if (trials_->restBefore()) {
     state_ = State::kResting;
-    rest_until_s_ = now_s + db_.study().protocol.rest_s;
+    rest_until_s_ = now_s + trials_->restSeconds();
   } else {
     state_ = State::kReady;
   }
@@ -121,9 +133,14 @@ std::string StudySession::completeTrial(session::TrialResult result, double now_
     state_ = State::kFinished;
     db_.endSession(*session_id_);
     session_id_.reset();
-  } else {
+  } else if (trials_->restBefore()) {
     state_ = State::kResting;
-    rest_until_s_ = now_s + db_.study().protocol.rest_s;
+    rest_until_s_ = now_s + trials_->restSeconds();
+  } else {
+    // A session ended: the next one is another time (the station may go on when it is due).
+    state_ = State::kReady;
+    db_.endSession(*session_id_);
+    session_id_.reset();
   }
   return outcome.disturbed;
 }

@@ -17,6 +17,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -50,10 +51,10 @@ class StudySession {
   [[nodiscard]] const session::StudyDefinition& study() const noexcept { return db_.study(); }
   [[nodiscard]] const std::filesystem::path& file() const noexcept { return db_.file(); }
   [[nodiscard]] std::vector<session::SubjectRecord> subjects() const { return db_.subjects(); }
-  [[nodiscard]] const HapticProfile& expert() const noexcept { return expert_; }
-  [[nodiscard]] const std::shared_ptr<const guidance::ReferenceTrajectory>& reference() const noexcept {
-    return reference_;
-  }
+  /// The expert of the current trial's skill (the study's skill when there is none).
+  [[nodiscard]] const HapticProfile& expert() const;
+  /// The reference of the current trial's skill (the study's skill when there is none).
+  [[nodiscard]] const std::shared_ptr<const guidance::ReferenceTrajectory>& reference() const;
   /// The study's device, paper and rate, built as the runner builds them.
   [[nodiscard]] session::TrialEnvironment& environment() noexcept { return *environment_; }
 
@@ -104,9 +105,9 @@ class StudySession {
 
  private:
   session::StudyDatabase db_;
-  HapticProfile expert_;
+  std::map<std::string, HapticProfile> experts_;  // skill -> expert
   std::unique_ptr<session::TrialEnvironment> environment_;
-  std::shared_ptr<const guidance::ReferenceTrajectory> reference_;
+  session::StudyReferences references_;
   std::unique_ptr<session::LiveGuidance> mentor_;  ///< the mentored modes' expert station
   std::string subject_;
   std::optional<session::SubjectTrials> trials_;  // the subject's, once picked

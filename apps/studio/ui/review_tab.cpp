@@ -166,7 +166,7 @@ void ReviewTab::fillTree() {
         const bool completed = t.status == session::TrialStatus::kCompleted;
         auto* item = new QTreeWidgetItem(
             top, {tr("#%1 (%2)").arg(t.plan.sequence + 1).arg(t.plan.index), qs(guidance::modeName(t.plan.mode)),
-                  qs(session::phaseName(t.plan.phase))});
+                  qs(t.plan.phase)});
         item->setText(kStatus, completed ? QStringLiteral("✓") : qs(session::trialStatusName(t.status)));
         item->setToolTip(kStatus, qs(session::trialStatusName(t.status)));
         if (completed) item->setData(kTrial, Qt::UserRole, QVariant::fromValue<qint64>(t.id));

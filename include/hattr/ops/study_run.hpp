@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -24,6 +25,9 @@ struct StudyRunOptions {
   int max_trials = -1;                 ///< stop after this many trials (-1: all)
   int subjects_at_once = 1;            ///< session::RunOptions::subjects_at_once
   double lease_timeout_s = 30.0;       ///< a PostgreSQL study's subject leases
+  /// Sessions on later days wait for their date (session::RunOptions::follow_calendar); false:
+  /// the days are simulated and every session follows at once.
+  bool follow_calendar = false;
   /// Before the first trial: how many this run has to do (the unfinished trials of the
   /// subjects it runs, at most max_trials).
   std::function<void(int trials_to_run)> started;
@@ -34,9 +38,14 @@ struct StudyRunOptions {
 struct StudyRunResult {
   int trials_to_run = 0;               ///< what the run had to do when it began
   int trials_run = 0;                  ///< what it did
-  /// {trials_to_run, trials_run}.
+  std::vector<session::WaitingSubject> waiting;  ///< left until their next session is due
+  /// {trials_to_run, trials_run, waiting: [{subject, schedule}]}.
   [[nodiscard]] nlohmann::json toJson() const;
 };
+
+/// A subject's place in the schedule as JSON: {timing, session, sessions, day, due, days_off,
+/// text} (session from 1; due null when there is none).
+nlohmann::json scheduleJson(const session::SubjectSchedule& schedule);
 
 /// Runs the study. Throws InputError for a database that is no study or a subject it does not
 /// have, hattr::Error when another runner holds the study (SQLite) or a trial cannot be stored.

@@ -1,9 +1,9 @@
 #pragma once
-/// A training study (the paper's section 5) as data: which expert references, which modes
-/// in which order for which subjects, how many training and recall trials, the rests, what
-/// the trainee sees in each phase, the device and the paper. Read from a JSON study file
-/// (docs/studies.md gives the format and an example); validation names every problem at
-/// once.
+/// A training study as data: which expert references, which groups of subjects with which
+/// strategies in which order, the schedule of sessions and blocks (study_design.hpp), the rests,
+/// what the trainee gets in each block, the device and the paper. The paper's protocol (section
+/// 5) is one design. Read from a JSON study file (docs/studies.md gives the format and the
+/// shipped designs); validation names every problem at once.
 
 #include <algorithm>
 #include <cstdint>
@@ -17,18 +17,9 @@
 
 #include "hattr/guidance/training_guidance.hpp"
 #include "hattr/io/sample_codec.hpp"
+#include "hattr/session/study_design.hpp"
 
 namespace hattr::session {
-
-/// The two phases of each mode's block.
-enum class Phase { kTraining, kRecall };
-std::string_view phaseName(Phase phase);  ///< "training", "recall"
-
-/// What the trainee gets in a phase.
-struct PhaseView {
-  bool show_reference = true;  ///< the expert's trajectory is drawn
-  bool guidance = true;        ///< the mode's assistance force acts (false: BASIC)
-};
 
 /// How mode orders are assigned to subjects.
 enum class OrderKind { kLatinSquare, kFixed, kRandom };
@@ -51,6 +42,8 @@ struct TrialEndRule {
   }
 };
 
+/// The study-wide rules, and in a study file of the paper's form its protocol: per mode,
+/// training_trials then recall_trials (a design with sessions says its trials per block).
 struct Protocol {
   int training_trials = 11;
   int recall_trials = 11;
@@ -61,7 +54,7 @@ struct Protocol {
   DisturbedPolicy disturbed = DisturbedPolicy::kRepeat;
   int max_repeats = 2;        ///< a disturbed trial is run at most this many extra times, then kept flagged
   bool show_scores = false;   ///< show the subject a score after each trial (the paper showed none)
-  double rest_s = 10.0;       ///< between trials
+  double rest_s = 10.0;       ///< between trials (a block's default)
   double tail_s = 0.5;        ///< only with fixed_window: each trial lasts the expert's duration plus this
   TrialEndRule trial_end;     ///< when a trial ends (the subject is done)
   /// An old study file (tail_s and no trial_end): every trial lasts the expert's duration plus
@@ -77,6 +70,7 @@ struct SubjectSpec {
   std::string participant = "simulated";  ///< "simulated", "script", "person"
   std::uint64_t seed = 0;
   nlohmann::json options;                  ///< participant-specific settings (e.g. a hand script)
+  std::string group{kWithinSubjectsGroup}; ///< the group's name (StudyDefinition::groups)
 };
 
 /// Who mentors a mentored mode's training trials (the MENTOR-... modes, docs/mentoring.md):
@@ -97,10 +91,17 @@ struct StudyMentor {
 
 struct StudyDefinition {
   std::string name;
-  std::string skill;                                        ///< the character / skill trained
+  std::string skill;                                        ///< the skill trained (a block's default)
   std::map<std::string, std::filesystem::path> experts;     ///< skill -> expert profile file
-  std::vector<guidance::TrainingMode> modes;                ///< compared modes
+  std::vector<guidance::TrainingMode> modes;                ///< every strategy the study uses, first use first
   Protocol protocol;
+  /// The between-subjects groups (one, kWithinSubjectsGroup, in the paper's form) and the
+  /// schedule; study_design.hpp. Always at least one of each once parsed.
+  std::vector<Group> groups;
+  std::vector<ScheduledSession> schedule;
+  /// Read from a study file of the paper's form (modes + protocol): studyToJson writes it back
+  /// in that form, so a stored definition stays what it was.
+  bool paper_form = true;
   OrderKind order = OrderKind::kLatinSquare;
   std::uint64_t order_seed = 1;                             ///< kRandom
   std::string device = "sim://pen";
@@ -121,6 +122,17 @@ struct StudyDefinition {
 /// The recall trials the analysis uses: protocol.analyzed_recall_trials, or all but the first.
 std::vector<int> analyzedRecallTrials(const Protocol& protocol);
 
+/// Makes `study` the paper's design from its modes, protocol and skill: one group of every
+/// subject with the modes, one session of, per mode of the order, a training block then a
+/// recall block (blocks of no trials left out). For a definition built in code, after those
+/// are set; parseStudy does it for a study file of the paper's form.
+void applyPaperForm(StudyDefinition& study);
+
+/// Whether the study is the paper's design: one group, one session, and per strategy of the
+/// counterbalanced order a training block then a recall block (the form of a study file
+/// with modes + protocol).
+[[nodiscard]] bool isPaperDesign(const StudyDefinition& study);
+
 /// Parses and validates a study file's text. Relative expert paths resolve against
 /// `base_dir`; with `check_files` (a new study file, not one stored in a database), each must
 /// exist and subject ids and skills must be safe file names (isSafeFileName), so a study
@@ -136,27 +148,47 @@ StudyDefinition loadStudy(const std::filesystem::path& file);
 bool checkExpertsRenderable(const StudyDefinition& study);
 /// The definition as JSON (stored in the study database; parseStudy reads it back).
 nlohmann::json studyToJson(const StudyDefinition& study);
-/// An example study file (`hattr study example`).
+/// A shipped design (`hattr study example --design NAME`): its name, the question it answers
+/// in one line, and its study file.
+struct ExampleDesign {
+  std::string_view name;
+  std::string_view answers;
+  std::string_view json;
+};
+/// The shipped designs, `paper` first.
+const std::vector<ExampleDesign>& exampleDesigns();
+/// The design called `name`; InputError naming the shipped ones otherwise.
+const ExampleDesign& exampleDesign(std::string_view name);
+/// The paper's design (`hattr study example`).
 std::string exampleStudyJson();
 
-/// The mode order of each subject, by position in the subject list: a Williams design
-/// (a Latin square balanced for first-order carry-over; two squares for an odd number of
-/// modes), the listed order for everyone, or a seeded shuffle per subject.
+/// The strategy order of each subject, by position in the subject list: within each group, by
+/// the subject's position in it, a Williams design (a Latin square balanced for first-order
+/// carry-over; two squares for an odd number of strategies), the listed order for everyone,
+/// or a seeded shuffle per subject.
 std::vector<std::vector<guidance::TrainingMode>> modeOrders(const StudyDefinition& study);
 
 /// One planned trial of one subject.
 struct TrialPlan {
   std::string subject;
-  int sequence = 0;             ///< position in the subject's whole session, from 0
-  guidance::TrainingMode mode = guidance::TrainingMode::kBasic;
-  Phase phase = Phase::kTraining;
-  int index = 0;                ///< trial number within the mode's phase, from 1
+  int sequence = 0;             ///< position in the subject's whole plan, from 0
+  guidance::TrainingMode mode = guidance::TrainingMode::kBasic;  ///< the block's strategy (kBasic: none)
+  std::string phase{kPhaseTraining};  ///< the block's phase label
+  int index = 0;                ///< trial number within the block, from 1
   PhaseView view;
+  std::string skill;            ///< the block's skill
+  std::string group{kWithinSubjectsGroup};
+  int session = 0;              ///< the schedule's session, from 0
+  int day = 0;                  ///< that session's day offset
+  int block = 0;                ///< the block within the session, from 0
 };
 
-/// Every trial of a subject in order: for each mode in `order`, the training trials then
-/// the recall trials.
-std::vector<TrialPlan> planTrials(const StudyDefinition& study, const std::string& subject,
+/// Every trial of a subject in order: each session's blocks in turn, each block's trials, the
+/// block's strategy taken from `order` where it names a position. In the paper's form: for
+/// each mode in `order`, the training trials then the recall trials.
+std::vector<TrialPlan> planTrials(const StudyDefinition& study, const SubjectSpec& subject,
                                   const std::vector<guidance::TrainingMode>& order);
+/// The block a planned trial belongs to.
+const Block& blockOf(const StudyDefinition& study, const TrialPlan& plan);
 
 }  // namespace hattr::session

@@ -37,7 +37,7 @@ class LeaseKeeper;
 }  // namespace detail
 
 /// The schema this build writes; it reads every version from 1 up to this one.
-inline constexpr int kStudySchemaVersion = 4;
+inline constexpr int kStudySchemaVersion = 5;
 /// SQLite application_id of hattr study files ("hatt").
 inline constexpr std::int32_t kStudyApplicationId = 0x68617474;
 

@@ -1,17 +1,23 @@
 #pragma once
-/// Runs a study's protocol: subject → mode (in the subject's counterbalanced order) →
-/// training trials → recall trials, with rests, each trial through runTrial and stored the
-/// moment it ends. The same code runs a simulated trainee, a person at the studio or a
-/// person on a real device: what differs is the Participant.
+/// Runs a study's design: subject → session → block (its strategy from the subject's
+/// counterbalanced order where it says so) → trials, with rests, each trial through runTrial
+/// and stored the moment it ends. The same code runs a simulated trainee, a person at the
+/// studio or a person on a real device: what differs is the Participant. Sessions on later
+/// days wait for their date when the run follows the calendar; in simulated days they follow
+/// at once, and the participant is told how many days passed.
 
 #include <atomic>
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <map>
 #include <mutex>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "hattr/session/study_database.hpp"
+#include "hattr/session/study_schedule.hpp"
 #include "hattr/session/subject_trials.hpp"
 #include "hattr/session/trial.hpp"
 
@@ -31,9 +37,14 @@ class Participant {
   virtual void rest(double /*seconds*/) {}
   /// A prompt for the person ("Training with ALPHA: trial 3 of 11").
   virtual void prompt(const std::string& /*text*/) {}
+  /// The schedule moved on `days` days (> 0) since the last trial: the next session is on a
+  /// later day (a simulated trainee forgets, docs/simulation.md). Also on resume, in order.
+  virtual void daysPassed(int /*days*/) {}
 };
 
-/// Makes the participant for a subject (the app decides which kinds exist).
+/// Makes the participant for a subject learning one skill, from that skill's expert (the app
+/// decides which kinds exist). A study of several skills makes one per skill the subject
+/// writes, each when its first trial comes.
 using ParticipantFactory =
     std::function<std::unique_ptr<Participant>(const SubjectRecord& subject, const HapticProfile& expert)>;
 
@@ -74,6 +85,18 @@ struct RunOptions {
   /// that nothing recorded is lost: "" = beside a study file (FILE.unstored/), or for a
   /// PostgreSQL study ./hattr-unstored/. The trial runs again when the study resumes.
   std::filesystem::path rescue_folder;
+  /// Sessions on later days wait for their date (subjectSchedule): a subject whose next session
+  /// is early is left, and listed in StudyRunner::waiting(). False: the days are simulated, and
+  /// every session follows at once.
+  bool follow_calendar = false;
+  /// Today, for follow_calendar (none: the station's local date).
+  std::optional<LocalDate> today;
+};
+
+/// A subject left because its next session is not due yet (RunOptions::follow_calendar).
+struct WaitingSubject {
+  std::string subject;
+  SubjectSchedule schedule;
 };
 
 class StudyRunner {
@@ -89,6 +112,8 @@ class StudyRunner {
   /// timeout) until no subject with trials left is held elsewhere, so a lapsed station's
   /// subjects are taken over; `--subject` held elsewhere is an Error naming the holder.
   int run(const RunOptions& options);
+  /// The subjects the last run left because their next session is not due yet.
+  [[nodiscard]] const std::vector<WaitingSubject>& waiting() const noexcept { return waiting_; }
 
  private:
   /// The paper and the device of one thread, made at its first trial (the paper's texture
@@ -97,12 +122,17 @@ class StudyRunner {
   /// One pass over the subjects (of options.only_subject): each with trials left that this
   /// runner can claim runs to its end; those other stations hold set held_elsewhere_.
   int runEverySubjectOnce(const RunOptions& options, int ran_before);
+  class SubjectParticipants;
   int runSubject(const SubjectRecord& subject, const RunOptions& options, int budget, EnvironmentSlot& environment);
   /// The subject's trials left, in its session; counts them in `ran`.
   void runTrialsLeft(const SubjectRecord& subject, const RunOptions& options, int budget, EnvironmentSlot& environment,
-                     SubjectTrials& trials, Participant& participant, std::int64_t session, int& ran);
-  /// The participant relives the completed trials at the current position, in order.
-  void relivePassed(SubjectTrials& trials, Participant& participant);
+                     SubjectTrials& trials, SubjectParticipants& participants, std::int64_t session, int& ran);
+  /// The participants relive the completed trials at the current position, in order, and the
+  /// days between their sessions.
+  void relivePassed(SubjectTrials& trials, SubjectParticipants& participants);
+  /// Whether the current trial may run now: always, unless the run follows the calendar and it
+  /// begins a session that is not due yet (then the subject is noted in waiting_).
+  bool dueNow(const SubjectRecord& subject, const SubjectTrials& trials, const RunOptions& options);
   /// A completed trial's profile as stored (through withDatabase).
   HapticProfile storedProfile(std::int64_t trial_id);
   int runSubjectsAtOnce(const std::vector<SubjectRecord>& subjects, const RunOptions& options);
@@ -120,8 +150,9 @@ class StudyRunner {
   ParticipantFactory factory_;
   render::WorldConfig world_;
   EnvironmentSlot environment_;
-  std::shared_ptr<const guidance::ReferenceTrajectory> reference_;
-  HapticProfile expert_;
+  StudyReferences references_;
+  std::map<std::string, HapticProfile> experts_;  ///< skill -> expert profile
+  std::vector<WaitingSubject> waiting_;
 };
 
 }  // namespace hattr::session

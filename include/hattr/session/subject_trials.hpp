@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -18,13 +19,19 @@
 
 namespace hattr::session {
 
+/// Each skill's expert reference at the study's rate.
+using StudyReferences = std::map<std::string, std::shared_ptr<const guidance::ReferenceTrajectory>>;
+/// Every expert of the study database as a reference at the study's rate.
+StudyReferences studyReferences(const StudyDatabase& db);
+
 /// The set-up of one study trial, as every app runs it (through SubjectTrials::setup): the
 /// mode's guidance in training, none (BASIC) in recall, the study's indexing, `reference` (the
-/// study's expert at the study's rate); the end: protocol.trial_end (the pen lifted for pen_up_s
+/// expert of the trial's skill at the study's rate); the end: protocol.trial_end (the pen lifted for pen_up_s
 /// after writing began, at most maxDuration_s of the expert's duration), or for an old study
 /// file with protocol.fixed_window the expert's duration plus tail_s and no end rule; the study
 /// metadata (subject = plan.subject, skill, source "study:<name>", study_mode, phase, trial,
-/// sequence, reference_shown). Throws InputError when `reference` is null.
+/// sequence, reference_shown; for a design not of the paper's form also group, session, day
+/// and block). Throws InputError when `reference` is null.
 TrialSetup studyTrialSetup(const StudyDefinition& study, const TrialPlan& plan,
                            std::shared_ptr<const guidance::ReferenceTrajectory> reference);
 
@@ -45,8 +52,9 @@ class SubjectTrials {
   /// `trials`: the subject's trials as StudyDatabase::trials lists them; `study` (the
   /// database's) must outlive this. Positioned at the first trial; passCompleted() moves past
   /// those already done.
+  /// `references` must hold every skill of the subject's trials.
   SubjectTrials(const StudyDefinition& study, SubjectRecord subject, std::vector<TrialRecord> trials,
-                std::shared_ptr<const guidance::ReferenceTrajectory> reference);
+                StudyReferences references);
 
   /// Moves past the completed trials at the current position (on resume, or a trial completed
   /// after a gap, which is never run again) and returns them in order: a simulated trainee
@@ -58,12 +66,17 @@ class SubjectTrials {
   [[nodiscard]] std::size_t position() const noexcept { return next_; }
   [[nodiscard]] int completedCount() const noexcept { return completed_; }
   [[nodiscard]] int totalCount() const noexcept { return static_cast<int>(trials_.size()); }
-  /// A rest comes before the current trial's first attempt: before every trial but the
-  /// subject's first, resumed or not.
-  [[nodiscard]] bool restBefore() const noexcept { return next_ > 0; }
+  /// A rest comes before the current trial's first attempt: before every trial but the first
+  /// of each session, resumed or not.
+  [[nodiscard]] bool restBefore() const noexcept;
+  /// The rest before the current trial [s]: its block's.
+  [[nodiscard]] double restSeconds() const;
+  /// Days of the schedule between the previous trial's session and the current one's (0 within
+  /// a session, and before the first trial).
+  [[nodiscard]] int daysBefore() const noexcept;
   /// The current trial's attempt: 0, then one more for each disturbed attempt run again.
   [[nodiscard]] int attempt() const noexcept { return attempt_; }
-  /// "Training with ALPHA: trial 3 of 11". Needs a current trial.
+  /// "Training with ALPHA: trial 3 of 11", "Retention: trial 2 of 5". Needs a current trial.
   [[nodiscard]] std::string prompt() const;
   /// The current attempt's set-up (studyTrialSetup) on `clock`, with the mentored modes' expert
   /// station and its link's seed. The caller sets the settle time, the stop request and any
@@ -103,7 +116,7 @@ class SubjectTrials {
   const StudyDefinition& study_;
   SubjectRecord subject_;
   std::vector<TrialRecord> trials_;
-  std::shared_ptr<const guidance::ReferenceTrajectory> reference_;
+  StudyReferences references_;
   std::size_t next_ = 0;  // index of the current trial in trials_
   int completed_ = 0;
   int attempt_ = 0;

@@ -91,6 +91,16 @@ class SimulatedTrainee {
   /// trace at the same point of the movement (recorded time / pace_factor), not of the clock.
   void learn(const HapticProfile& recorded_trial, bool template_shown, double pace_factor = 1.0);
 
+  /// Days pass between sessions (days > 0; nothing for 0): the fast state is forgotten and
+  /// the slow state kept, whatever the hypothesis. The fast process forgets within minutes
+  /// (its retention A_f per trial, Smith, Ghazizadeh & Shadmehr 2006), and what is retained a
+  /// day later is predicted by the slow process alone (Joiner & Smith 2008, Long-term
+  /// retention explained by a model of short-term learning in the adaptive control of
+  /// reaching, J Neurophysiol 100:2948-2955). No offline gain (consolidation adds nothing
+  /// here), and no further forgetting over longer delays: hattr's reading, fixed before any
+  /// comparison was run (docs/simulation.md "Between sessions").
+  void restDays(int days);
+
   /// What the trainee sees as the template in training trials (default: the template script
   /// itself), e.g. the expert's recording the study displays. Its path and pen-down flags are
   /// used, on the template's clock. Throws InputError for fewer than two samples.

@@ -1,0 +1,130 @@
+#pragma once
+/// The analysis of a study that is not the paper's design (docs/analysis.md "Designs"): every
+/// completed trial scored against the expert of its skill (analysis::TrialScorer, the paper's
+/// DTW costs of shape and force), then per condition (the group, or the strategy when one
+/// group compares strategies within subjects):
+/// - learning curves: per phase, the mean cost at each trial of the phase (its sessions in
+///   turn) with a 95 % confidence interval over the subjects;
+/// - a table per session and phase: each subject's mean, then their mean with its interval;
+/// - retention: each subject's retention mean minus the mean of the last post-test before it
+///   (of the same skill; else the last training block), paired over the subjects;
+/// - transfer: the mean cost on each transfer block's skill.
+/// It analyzes what is completed so far (a study over weeks is reported while it runs) and
+/// says what is not. Disturbed trials follow the study's policy: "exclude" leaves them out.
+/// Offline code.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "hattr/report/study_analysis.hpp"
+
+namespace hattr::report {
+
+/// One completed trial's costs and its place in the design.
+struct DesignTrialScore {
+  std::int64_t trial_id = 0;
+  std::string subject;
+  std::string condition;  ///< the group, or the strategy (DesignAnalysis::condition_kind)
+  std::string group;
+  std::string strategy;   ///< the block's strategy ("none" where its force is off and it names none)
+  int session = 1;        ///< from 1
+  int day = 0;
+  int block = 1;          ///< within the session, from 1
+  std::string phase;
+  std::string skill;
+  int trial = 1;          ///< within the block, from 1
+  int trial_in_phase = 1; ///< within the phase over the sessions, from 1 (the curves' x)
+  analysis::TrialScore score;
+  std::string disturbed;
+  [[nodiscard]] double shape() const { return score.shape(); }
+  [[nodiscard]] double force() const { return score.force(); }
+};
+
+/// A mean over subjects with the half-width of its 95 % confidence interval (Student's t; NaN
+/// below two subjects).
+struct SubjectMean {
+  int subjects = 0;
+  double mean = 0.0;
+  double ci = 0.0;
+};
+
+/// One session and phase of one condition: each subject's mean cost, then their mean.
+struct PhaseCell {
+  std::string condition;
+  int session = 1;
+  std::string phase;
+  std::string skill;
+  SubjectMean shape;
+  SubjectMean force;
+};
+
+/// Retention of one condition: retention − before, per subject, then their mean (positive:
+/// the cost rose, what was learned was partly lost).
+struct RetentionRow {
+  std::string condition;
+  std::string skill;
+  std::string before;  ///< "post-test" or "training": what retention is compared with
+  SubjectMean shape_before, shape_retention, shape_change;
+  SubjectMean force_before, force_retention, force_change;
+};
+
+/// Transfer of one condition to one skill.
+struct TransferRow {
+  std::string condition;
+  std::string skill;
+  SubjectMean shape;
+  SubjectMean force;
+};
+
+/// One point of a learning curve: a condition's mean cost at one trial of a phase.
+struct CurvePoint {
+  std::string condition;
+  std::string phase;
+  int trial_in_phase = 1;
+  SubjectMean shape;
+  SubjectMean force;
+};
+
+struct DesignAnalysis {
+  AnalysisOptions options;
+  std::string condition_kind;           ///< "group" or "strategy"
+  std::vector<std::string> conditions;  ///< in the study's order
+  std::vector<std::string> phases;      ///< in the order they first come
+  std::vector<DesignTrialScore> scores; ///< the analyzed trials, in the study's order
+  std::vector<CurvePoint> curves;
+  std::vector<PhaseCell> cells;
+  std::vector<RetentionRow> retention;
+  std::vector<TransferRow> transfer;
+  int trials_planned = 0;
+  int trials_pending = 0;               ///< not completed yet (left out)
+  int trials_excluded = 0;              ///< disturbed, left out by the "exclude" policy
+  int trials_flagged = 0;               ///< disturbed, analyzed and flagged
+  std::string disturbed_policy;
+};
+
+/// Scores and tabulates a study's completed trials. Throws InputError when none is completed.
+DesignAnalysis analyzeDesign(const session::StudyDatabase& db, const AnalysisOptions& options = {});
+
+/// The analysis as JSON (`hattr study analyze --json` for a design).
+nlohmann::json designAnalysisToJson(const DesignAnalysis& analysis);
+
+/// What writeDesignCsv writes.
+inline const std::vector<std::string> kDesignCsvFiles{"trial_scores.csv", "curves.csv", "phases.csv",
+                                                      "retention.csv", "transfer.csv"};
+/// Writes the tables as CSV into `out_dir` (created; earlier ones replaced).
+void writeDesignCsv(const DesignAnalysis& analysis, const std::filesystem::path& out_dir);
+
+/// One line per finding, stating only what the numbers show (the report's conclusions).
+std::vector<std::string> designConclusions(const DesignAnalysis& analysis);
+
+/// Writes OUT/report.html, OUT/report.md and OUT/figures/*.svg for a design: the design
+/// (groups, sessions, blocks), learning curves per phase, the session and phase table,
+/// retention and transfer. Returns the path of report.html.
+std::filesystem::path writeDesignReport(const session::StudyDatabase& db, const DesignAnalysis& analysis,
+                                        const std::filesystem::path& out_dir);
+
+}  // namespace hattr::report

@@ -1,0 +1,394 @@
+#include "hattr/report/design_analysis.hpp"
+
+#include <algorithm>
+#include <map>
+#include <set>
+#include <tuple>
+
+#include <fmt/format.h>
+
+#include "hattr/core/error.hpp"
+#include "hattr/io/table_csv.hpp"
+#include "report_document.hpp"
+
+namespace hattr::report {
+namespace {
+
+using session::StrategyRef;
+
+/// Conditions: the groups when there are several; else, when the one group compares
+/// strategies, each block's strategy ("none" for a block that names none); else the group.
+std::string conditionKind(const session::StudyDefinition& study) {
+  return study.groups.size() == 1 && study.groups.front().strategies.size() > 1 ? "strategy" : "group";
+}
+
+std::string strategyOf(const session::StudyDefinition& study, const session::TrialPlan& plan) {
+  const bool named = session::blockOf(study, plan).strategy.kind != StrategyRef::Kind::kNone;
+  return named ? std::string(guidance::modeName(plan.mode)) : "none";
+}
+
+std::vector<std::string> conditionsOf(const session::StudyDefinition& study, const std::string& kind) {
+  std::vector<std::string> out;
+  if (kind == "group") {
+    for (const auto& g : study.groups) out.push_back(g.name);
+    return out;
+  }
+  for (const auto m : study.groups.front().strategies) out.emplace_back(guidance::modeName(m));
+  out.emplace_back("none");
+  return out;
+}
+
+/// Each subject's mean of `values` (subject -> values), then the mean over subjects.
+SubjectMean overSubjects(const std::map<std::string, std::vector<double>>& values) {
+  std::vector<double> means;
+  for (const auto& [subject, v] : values) {
+    if (!v.empty()) means.push_back(detail::meanWithCi(v).first);
+  }
+  if (means.empty()) return {0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
+  const auto [mean, ci] = detail::meanWithCi(means);
+  return {static_cast<int>(means.size()), mean, ci};
+}
+
+/// Per subject: shape and force values of the scores that `select` takes.
+template <class Select>
+std::pair<SubjectMean, SubjectMean> shapeAndForce(const std::vector<DesignTrialScore>& scores, Select select) {
+  std::map<std::string, std::vector<double>> shape, force;
+  for (const DesignTrialScore& s : scores) {
+    if (!select(s)) continue;
+    shape[s.subject].push_back(s.shape());
+    force[s.subject].push_back(s.force());
+  }
+  return {overSubjects(shape), overSubjects(force)};
+}
+
+/// The completed trials to analyze, with their places; counts what is left out.
+std::vector<DesignTrialScore> analyzedTrials(const session::StudyDatabase& db, DesignAnalysis& out) {
+  const session::StudyDefinition& study = db.study();
+  const bool exclude = study.protocol.disturbed == session::DisturbedPolicy::kExclude;
+  std::vector<DesignTrialScore> scores;
+  std::map<std::tuple<std::string, std::string, std::string, std::string>, int> in_phase;
+  for (const session::TrialRecord& t : db.trials()) {
+    ++out.trials_planned;
+    if (t.status != session::TrialStatus::kCompleted) {
+      ++out.trials_pending;
+      continue;
+    }
+    if (!t.disturbed.empty() && exclude) {
+      ++out.trials_excluded;
+      continue;
+    }
+    out.trials_flagged += t.disturbed.empty() ? 0 : 1;
+    DesignTrialScore s;
+    s.trial_id = t.id;
+    s.subject = t.plan.subject;
+    s.group = t.plan.group;
+    s.strategy = strategyOf(study, t.plan);
+    s.condition = out.condition_kind == "group" ? s.group : s.strategy;
+    s.session = t.plan.session + 1;
+    s.day = t.plan.day;
+    s.block = t.plan.block + 1;
+    s.phase = t.plan.phase;
+    s.skill = t.plan.skill;
+    s.trial = t.plan.index;
+    s.trial_in_phase = ++in_phase[{s.subject, s.phase, s.condition, s.skill}];
+    s.disturbed = t.disturbed;
+    scores.push_back(std::move(s));
+  }
+  return scores;
+}
+
+/// Scores every analyzed trial against its skill's expert, a chunk at a time.
+void scoreTrials(const session::StudyDatabase& db, const AnalysisOptions& options, std::vector<DesignTrialScore>& scores) {
+  std::map<std::string, analysis::TrialScorer> scorers;
+  for (const auto& [skill, file] : db.study().experts) {
+    scorers.emplace(skill, analysis::TrialScorer(db.expert(skill), {.normalization = options.normalization,
+                                                                     .cost = options.cost,
+                                                                     .band_fraction = options.band_fraction}));
+  }
+  const std::size_t chunk = std::max<std::size_t>(32, analysis::dtwBatchWidth());
+  const int total = static_cast<int>(scores.size());
+  if (options.progress) options.progress(0, total);
+  for (std::size_t first = 0; first < scores.size(); first += chunk) {
+    const std::size_t last = std::min(scores.size(), first + chunk);
+    // The chunk's trials by skill: each scorer takes its own at once.
+    std::map<std::string, std::vector<std::size_t>> by_skill;
+    for (std::size_t i = first; i < last; ++i) by_skill[scores[i].skill].push_back(i);
+    for (const auto& [skill, indices] : by_skill) {
+      std::vector<HapticProfile> profiles;
+      for (const std::size_t i : indices) profiles.push_back(db.trialProfile(scores[i].trial_id));
+      std::vector<const HapticProfile*> pointers;
+      for (const auto& p : profiles) pointers.push_back(&p);
+      const auto result = scorers.at(skill).scoreAll(pointers, options.threads);
+      for (std::size_t k = 0; k < indices.size(); ++k) scores[indices[k]].score = result[k];
+    }
+    if (options.progress) options.progress(static_cast<int>(last), total);
+  }
+}
+
+void tabulateCurvesAndCells(DesignAnalysis& a) {
+  std::set<std::tuple<std::string, std::string, int>> points;
+  std::set<std::tuple<std::string, int, std::string, std::string>> cells;
+  for (const DesignTrialScore& s : a.scores) {
+    points.insert({s.condition, s.phase, s.trial_in_phase});
+    cells.insert({s.condition, s.session, s.phase, s.skill});
+    if (std::find(a.phases.begin(), a.phases.end(), s.phase) == a.phases.end()) a.phases.push_back(s.phase);
+  }
+  for (const auto& [condition, phase, trial] : points) {
+    const auto [shape, force] = shapeAndForce(a.scores, [&](const DesignTrialScore& s) {
+      return s.condition == condition && s.phase == phase && s.trial_in_phase == trial;
+    });
+    a.curves.push_back({condition, phase, trial, shape, force});
+  }
+  for (const auto& [condition, session, phase, skill] : cells) {
+    const auto [shape, force] = shapeAndForce(a.scores, [&](const DesignTrialScore& s) {
+      return s.condition == condition && s.session == session && s.phase == phase && s.skill == skill;
+    });
+    a.cells.push_back({condition, session, phase, skill, shape, force});
+  }
+  // Cells in the study's order: session, then where the phase first comes, then condition.
+  const auto rank = [&a](const std::string& phase) { return std::find(a.phases.begin(), a.phases.end(), phase) - a.phases.begin(); };
+  const auto condition_rank = [&a](const std::string& c) {
+    return std::find(a.conditions.begin(), a.conditions.end(), c) - a.conditions.begin();
+  };
+  std::stable_sort(a.cells.begin(), a.cells.end(), [&](const PhaseCell& x, const PhaseCell& y) {
+    return std::tuple(x.session, rank(x.phase), condition_rank(x.condition)) <
+           std::tuple(y.session, rank(y.phase), condition_rank(y.condition));
+  });
+}
+
+/// Retention against the last post-test before it (else the last training block), per subject.
+void tabulateRetention(DesignAnalysis& a) {
+  std::set<std::pair<std::string, std::string>> conditions_and_skills;
+  for (const DesignTrialScore& s : a.scores) {
+    if (s.phase == session::kPhaseRetention) conditions_and_skills.insert({s.condition, s.skill});
+  }
+  for (const auto& [condition, skill] : conditions_and_skills) {
+    RetentionRow row{condition, skill, std::string(session::kPhasePostTest), {}, {}, {}, {}, {}, {}};
+    std::map<std::string, std::vector<double>> before_shape, before_force, after_shape, after_force, change_shape,
+        change_force;
+    // The subjects of this condition, each on its own.
+    std::set<std::string> subjects;
+    for (const DesignTrialScore& s : a.scores) {
+      if (s.condition == condition && s.skill == skill && s.phase == session::kPhaseRetention) subjects.insert(s.subject);
+    }
+    bool any_post_test = false;
+    for (const std::string& subject : subjects) {
+      std::vector<const DesignTrialScore*> mine;
+      for (const DesignTrialScore& s : a.scores) {
+        if (s.subject == subject && s.skill == skill) mine.push_back(&s);
+      }
+      const auto first_retention = std::find_if(mine.begin(), mine.end(), [](const auto* s) {
+        return s->phase == session::kPhaseRetention;
+      });
+      // The block before retention to compare with: the last post-test, else the last training.
+      std::pair<int, int> chosen{-1, -1};  // session, block
+      for (const char* phase : {session::kPhasePostTest.data(), session::kPhaseTraining.data()}) {
+        for (auto it = mine.begin(); it != first_retention; ++it) {
+          if ((*it)->phase == phase) chosen = {(*it)->session, (*it)->block};
+        }
+        if (chosen.first >= 0) {
+          any_post_test = any_post_test || phase == session::kPhasePostTest;
+          break;
+        }
+      }
+      if (chosen.first < 0) continue;
+      std::vector<double> bs, bf, rs, rf;
+      for (const auto* s : mine) {
+        if (s->session == chosen.first && s->block == chosen.second) {
+          bs.push_back(s->shape());
+          bf.push_back(s->force());
+        } else if (s->phase == session::kPhaseRetention) {
+          rs.push_back(s->shape());
+          rf.push_back(s->force());
+        }
+      }
+      if (bs.empty() || rs.empty()) continue;
+      const double b_shape = detail::meanWithCi(bs).first, b_force = detail::meanWithCi(bf).first;
+      const double r_shape = detail::meanWithCi(rs).first, r_force = detail::meanWithCi(rf).first;
+      before_shape[subject] = {b_shape};
+      before_force[subject] = {b_force};
+      after_shape[subject] = {r_shape};
+      after_force[subject] = {r_force};
+      change_shape[subject] = {r_shape - b_shape};
+      change_force[subject] = {r_force - b_force};
+    }
+    if (!any_post_test) row.before = session::kPhaseTraining;
+    row.shape_before = overSubjects(before_shape);
+    row.shape_retention = overSubjects(after_shape);
+    row.shape_change = overSubjects(change_shape);
+    row.force_before = overSubjects(before_force);
+    row.force_retention = overSubjects(after_force);
+    row.force_change = overSubjects(change_force);
+    a.retention.push_back(row);
+  }
+}
+
+void tabulateTransfer(DesignAnalysis& a) {
+  std::set<std::pair<std::string, std::string>> conditions_and_skills;
+  for (const DesignTrialScore& s : a.scores) {
+    if (s.phase == session::kPhaseTransfer) conditions_and_skills.insert({s.condition, s.skill});
+  }
+  for (const auto& [condition, skill] : conditions_and_skills) {
+    const auto [shape, force] = shapeAndForce(a.scores, [&](const DesignTrialScore& s) {
+      return s.condition == condition && s.skill == skill && s.phase == session::kPhaseTransfer;
+    });
+    a.transfer.push_back({condition, skill, shape, force});
+  }
+}
+
+nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+nlohmann::json meanJson(const SubjectMean& m) {
+  return {{"subjects", m.subjects}, {"mean", number(m.mean)}, {"ci95", number(m.ci)}};
+}
+
+std::string cell(double v) { return std::isfinite(v) ? fmt::format("{}", v) : ""; }
+
+}  // namespace
+
+DesignAnalysis analyzeDesign(const session::StudyDatabase& db, const AnalysisOptions& options) {
+  const session::StudyDefinition& study = db.study();
+  DesignAnalysis a;
+  a.options = options;
+  a.options.progress = nullptr;  // the caller's callback does not outlive the call
+  a.condition_kind = conditionKind(study);
+  a.conditions = conditionsOf(study, a.condition_kind);
+  a.disturbed_policy = std::string(session::disturbedPolicyName(study.protocol.disturbed));
+  a.scores = analyzedTrials(db, a);
+  HATTR_THROW_UNLESS(!a.scores.empty(), "{}: no trial of the study is completed yet ({} planned); run the study first",
+                     db.file().string(), a.trials_planned);
+  scoreTrials(db, options, a.scores);
+  tabulateCurvesAndCells(a);
+  tabulateRetention(a);
+  tabulateTransfer(a);
+  // Rows in the study's order of conditions.
+  const auto rank = [&a](const std::string& c) { return std::find(a.conditions.begin(), a.conditions.end(), c) - a.conditions.begin(); };
+  std::stable_sort(a.retention.begin(), a.retention.end(),
+                   [&](const RetentionRow& x, const RetentionRow& y) { return rank(x.condition) < rank(y.condition); });
+  std::stable_sort(a.transfer.begin(), a.transfer.end(),
+                   [&](const TransferRow& x, const TransferRow& y) { return rank(x.condition) < rank(y.condition); });
+  return a;
+}
+
+nlohmann::json designAnalysisToJson(const DesignAnalysis& a) {
+  nlohmann::json scores = nlohmann::json::array(), curves = nlohmann::json::array(), cells = nlohmann::json::array(),
+                 retention = nlohmann::json::array(), transfer = nlohmann::json::array();
+  for (const auto& s : a.scores) {
+    scores.push_back({{"trial_id", s.trial_id}, {"subject", s.subject}, {"condition", s.condition}, {"group", s.group},
+                      {"strategy", s.strategy}, {"session", s.session}, {"day", s.day}, {"block", s.block},
+                      {"phase", s.phase}, {"skill", s.skill}, {"trial", s.trial}, {"trial_in_phase", s.trial_in_phase},
+                      {"shape", s.shape()}, {"force", s.force()}, {"z", s.score.z}, {"disturbed", s.disturbed}});
+  }
+  for (const auto& c : a.curves) {
+    curves.push_back({{"condition", c.condition}, {"phase", c.phase}, {"trial_in_phase", c.trial_in_phase},
+                      {"shape", meanJson(c.shape)}, {"force", meanJson(c.force)}});
+  }
+  for (const auto& c : a.cells) {
+    cells.push_back({{"condition", c.condition}, {"session", c.session}, {"phase", c.phase}, {"skill", c.skill},
+                     {"shape", meanJson(c.shape)}, {"force", meanJson(c.force)}});
+  }
+  for (const auto& r : a.retention) {
+    retention.push_back({{"condition", r.condition}, {"skill", r.skill}, {"before", r.before},
+                         {"shape", {{"before", meanJson(r.shape_before)}, {"retention", meanJson(r.shape_retention)},
+                                    {"change", meanJson(r.shape_change)}}},
+                         {"force", {{"before", meanJson(r.force_before)}, {"retention", meanJson(r.force_retention)},
+                                    {"change", meanJson(r.force_change)}}}});
+  }
+  for (const auto& t : a.transfer) {
+    transfer.push_back({{"condition", t.condition}, {"skill", t.skill}, {"shape", meanJson(t.shape)},
+                        {"force", meanJson(t.force)}});
+  }
+  return {{"design", "groups-and-sessions"}, {"condition_kind", a.condition_kind}, {"conditions", a.conditions},
+          {"phases", a.phases}, {"trials_planned", a.trials_planned}, {"trials_pending", a.trials_pending},
+          {"trials_excluded", a.trials_excluded}, {"trials_flagged", a.trials_flagged},
+          {"disturbed_policy", a.disturbed_policy}, {"trial_scores", scores}, {"curves", curves}, {"phase_cells", cells},
+          {"retention", retention}, {"transfer", transfer}, {"conclusions", designConclusions(a)}};
+}
+
+void writeDesignCsv(const DesignAnalysis& a, const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  io::Table scores{{"trial_id", "subject", "condition", "group", "strategy", "session", "day", "block", "phase", "skill",
+                    "trial", "trial_in_phase", "x", "y", "z", "fx", "fy", "fz", "shape", "force", "disturbed"},
+                   {}, ""};
+  for (const auto& s : a.scores) {
+    const analysis::TrialScore& c = s.score;
+    scores.rows.push_back({fmt::format("{}", s.trial_id), s.subject, s.condition, s.group, s.strategy,
+                           fmt::format("{}", s.session), fmt::format("{}", s.day), fmt::format("{}", s.block), s.phase,
+                           s.skill, fmt::format("{}", s.trial), fmt::format("{}", s.trial_in_phase), cell(c.x), cell(c.y),
+                           cell(c.z), cell(c.fx), cell(c.fy), cell(c.fz), cell(s.shape()), cell(s.force()), s.disturbed});
+  }
+  io::writeTable(scores, dir / "trial_scores.csv", true);
+  const auto means = [](const SubjectMean& m) {
+    return std::vector<std::string>{fmt::format("{}", m.subjects), cell(m.mean), cell(m.ci)};
+  };
+  const auto join = [](std::vector<std::string> row, const std::vector<std::string>& more) {
+    row.insert(row.end(), more.begin(), more.end());
+    return row;
+  };
+  io::Table curves{{"condition", "phase", "trial_in_phase", "subjects", "shape_mean", "shape_ci95", "force_subjects",
+                    "force_mean", "force_ci95"},
+                   {}, ""};
+  for (const auto& c : a.curves) {
+    curves.rows.push_back(join(join({c.condition, c.phase, fmt::format("{}", c.trial_in_phase)}, means(c.shape)),
+                               means(c.force)));
+  }
+  io::writeTable(curves, dir / "curves.csv", true);
+  io::Table cells{{"condition", "session", "phase", "skill", "subjects", "shape_mean", "shape_ci95", "force_subjects",
+                   "force_mean", "force_ci95"},
+                  {}, ""};
+  for (const auto& c : a.cells) {
+    cells.rows.push_back(join(join({c.condition, fmt::format("{}", c.session), c.phase, c.skill}, means(c.shape)),
+                              means(c.force)));
+  }
+  io::writeTable(cells, dir / "phases.csv", true);
+  io::Table retention{{"condition", "skill", "before", "subjects", "shape_before", "shape_before_ci95", "shape_subjects",
+                       "shape_retention", "shape_retention_ci95", "shape_change_subjects", "shape_change",
+                       "shape_change_ci95", "force_subjects", "force_change", "force_change_ci95"},
+                      {}, ""};
+  for (const auto& r : a.retention) {
+    retention.rows.push_back(join(join(join(join({r.condition, r.skill, r.before}, means(r.shape_before)),
+                                            means(r.shape_retention)),
+                                       means(r.shape_change)),
+                                  means(r.force_change)));
+  }
+  io::writeTable(retention, dir / "retention.csv", true);
+  io::Table transfer{{"condition", "skill", "subjects", "shape_mean", "shape_ci95", "force_subjects", "force_mean",
+                      "force_ci95"},
+                     {}, ""};
+  for (const auto& t : a.transfer) transfer.rows.push_back(join(join({t.condition, t.skill}, means(t.shape)), means(t.force)));
+  io::writeTable(transfer, dir / "transfer.csv", true);
+}
+
+std::vector<std::string> designConclusions(const DesignAnalysis& a) {
+  std::vector<std::string> out;
+  if (a.trials_pending > 0) {
+    out.push_back(fmt::format("The study is not finished: {} of {} trials are completed; what follows is what they show.",
+                              a.trials_planned - a.trials_pending, a.trials_planned));
+  }
+  const auto interval = [](const SubjectMean& m) {
+    return std::isfinite(m.ci) ? fmt::format("{:.4g} (95 % CI {:.4g} to {:.4g}, {} subjects)", m.mean, m.mean - m.ci,
+                                             m.mean + m.ci, m.subjects)
+                               : fmt::format("{:.4g} ({} subject{})", m.mean, m.subjects, m.subjects == 1 ? "" : "s");
+  };
+  // Retention: did the cost rise from the last test before it? Only an interval that excludes 0 says so.
+  for (const RetentionRow& r : a.retention) {
+    const SubjectMean& c = r.shape_change;
+    const bool known = std::isfinite(c.ci);
+    const std::string verdict = !known ? "too few subjects to tell"
+                                : c.mean - c.ci > 0.0 ? "the shape cost rose: part of what was learned was lost"
+                                : c.mean + c.ci < 0.0 ? "the shape cost fell further"
+                                                      : "no change the interval can tell from none";
+    out.push_back(fmt::format("Retention of {} ({}): retention − {} shape cost {}: {}.", r.condition, r.skill, r.before,
+                              interval(c), verdict));
+  }
+  for (const TransferRow& t : a.transfer) {
+    out.push_back(fmt::format("Transfer of {} to {}: mean shape cost {}.", t.condition, t.skill, interval(t.shape)));
+  }
+  if (a.trials_excluded > 0 || a.trials_flagged > 0) {
+    out.push_back(fmt::format("Disturbed trials (policy \"{}\"): {} left out, {} analyzed and flagged.", a.disturbed_policy,
+                              a.trials_excluded, a.trials_flagged));
+  }
+  return out;
+}
+
+}  // namespace hattr::report
