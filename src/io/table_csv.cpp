@@ -115,4 +115,13 @@ void writeTable(const Table& table, const std::filesystem::path& file, bool repl
   writeFileAtomically(file, text, replace ? Overwrite::kReplace : Overwrite::kRefuse);
 }
 
+std::string plainCell(std::string_view text) {
+  std::string cell(text);
+  for (char& c : cell) {
+    if (c == ',') c = ';';
+    if (c == '\n' || c == '\r') c = ' ';
+  }
+  return cell;
+}
+
 }  // namespace hattr::io

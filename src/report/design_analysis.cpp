@@ -315,7 +315,8 @@ void writeDesignCsv(const DesignAnalysis& a, const std::filesystem::path& dir) {
     scores.rows.push_back({fmt::format("{}", s.trial_id), s.subject, s.condition, s.group, s.strategy,
                            fmt::format("{}", s.session), fmt::format("{}", s.day), fmt::format("{}", s.block), s.phase,
                            s.skill, fmt::format("{}", s.trial), fmt::format("{}", s.trial_in_phase), cell(c.x), cell(c.y),
-                           cell(c.z), cell(c.fx), cell(c.fy), cell(c.fz), cell(s.shape()), cell(s.force()), s.disturbed});
+                           cell(c.z), cell(c.fx), cell(c.fy), cell(c.fz), cell(s.shape()), cell(s.force()),
+                           io::plainCell(s.disturbed)});
   }
   io::writeTable(scores, dir / "trial_scores.csv", true);
   const auto means = [](const SubjectMean& m) {

@@ -276,7 +276,8 @@ void writeAnalysisCsv(const StudyAnalysis& a, const std::filesystem::path& dir) 
     costs.rows.push_back({fmt::format("{}", c.trial_id), c.subject, c.mode, fmt::format("{}", c.trial),
                           fmt::format("{}", s.x), fmt::format("{}", s.y), fmt::format("{}", s.z),
                           fmt::format("{}", s.fx), fmt::format("{}", s.fy), fmt::format("{}", s.fz),
-                          fmt::format("{}", c.trajectory()), fmt::format("{}", c.forceProfile()), c.disturbed});
+                          fmt::format("{}", c.trajectory()), fmt::format("{}", c.forceProfile()),
+                          io::plainCell(c.disturbed)});
   }
   io::writeTable(costs, dir / "recall_costs.csv", true);
 

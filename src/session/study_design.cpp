@@ -236,6 +236,17 @@ void checkDesign(StudyDefinition& study, Problems& problems) {
         problems.add(fmt::format("{}.strategy: position {} of the subject's order, but a group has only {} "
                                  "strateg{}", where, block.strategy.position, fewest, fewest == 1 ? "y" : "ies"));
       }
+      // The expert's station mentors with the study's expert: a mentored strategy on another skill cannot be.
+      const bool mentored =
+          (block.strategy.kind == StrategyRef::Kind::kNamed && guidance::isMentored(block.strategy.mode)) ||
+          (block.strategy.kind == StrategyRef::Kind::kOrderPosition &&
+           std::any_of(study.groups.begin(), study.groups.end(), [](const Group& g) {
+             return std::any_of(g.strategies.begin(), g.strategies.end(), guidance::isMentored);
+           }));
+      if (mentored && block.view.guidance && block.skill != study.skill) {
+        problems.add(fmt::format("{}.skill: \"{}\" with a mentored strategy: the expert's station mentors the "
+                                 "study's skill \"{}\" only", where, block.skill, study.skill));
+      }
       if (isTestPhase(block.phase) && !trained) {
         problems.add(fmt::format("{}.phase: a {} block before any training block", where, block.phase));
       }

@@ -50,6 +50,32 @@ std::string errorOf(const std::function<void()>& f) {
   return "(no error)";
 }
 
+// A PostgreSQL study of schema 4 (before designs) is refused for reading and brought up to
+// date by a writer: each trial's place in the design filled in, its trials kept.
+TEST(StudyPostgres, ASchema4StudyIsMigratedByAWriter) {
+  test::TempDir dir;
+  writeStudy(dir, 2);
+  const std::string address = test::PostgresCluster::shared().createDatabase("schema4");
+  {
+    StudyDatabase db = StudyDatabase::create(address, loadStudy(dir / "study.json"));
+    db = StudyDatabase::open(address, OpenMode::kRunner);
+    EXPECT_EQ(StudyRunner(db, makeScriptParticipant).run({.max_trials = 4}), 4);
+  }
+  test::PostgresCluster::shared().sql(databaseName(address),
+                                      std::string(kBackToSchema4) + "UPDATE hattr_meta SET schema_version = 4;");
+  EXPECT_THAT(errorOf([&] { (void)StudyDatabase::open(address, OpenMode::kReadOnly); }),
+              HasSubstr("study schema version 4 is older than this build's 5"));
+  StudyDatabase db = StudyDatabase::open(address, OpenMode::kReadWrite);
+  EXPECT_EQ(db.schemaVersion(), kStudySchemaVersion);
+  const auto trials = db.trials("S02");
+  ASSERT_EQ(trials.size(), 6u);
+  EXPECT_EQ(trials[3].plan.block, 3) << "the second mode's recall block";
+  EXPECT_EQ(trials[3].plan.skill, "dash");
+  EXPECT_EQ(db.subjects()[0].spec.group, "all");
+  EXPECT_EQ(db.trials("S01")[3].status, TrialStatus::kCompleted);
+  EXPECT_NO_THROW((void)StudyDatabase::open(address, OpenMode::kReadOnly).trials());
+}
+
 TEST(StudyPostgres, RunsAStudyAsSqliteDoesToTheBit) {
   test::TempDir dir;
   writeStudy(dir, 2);

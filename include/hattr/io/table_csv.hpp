@@ -26,6 +26,8 @@ struct Table {
 
 Table readTable(const std::filesystem::path& file);
 Table readTable(std::istream& in, std::string_view source_name);
+/// Free text as a cell writeTable takes: each comma becomes a semicolon, each line break a space.
+std::string plainCell(std::string_view text);
 /// Writes a table atomically (refuses to replace an existing file unless `replace`).
 void writeTable(const Table& table, const std::filesystem::path& file, bool replace = false);
 
