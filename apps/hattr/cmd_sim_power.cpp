@@ -26,6 +26,7 @@ namespace {
 struct PowerCliOptions {
   std::string study;
   std::string subjects = "6,10,20,40";
+  std::string phase;
   int replicates = 200;
   std::uint64_t seed = 1;
   double alpha = 0.05;
@@ -186,7 +187,7 @@ void runPower(const PowerCliOptions& opt) {
     study.emplace(sim::PowerOptions{
         .study = opt.study, .glyph = opt.glyph, .training_trials = opt.trials, .recall_trials = opt.trials,
         .subject_counts = subjectCounts(opt.subjects), .replicates = opt.replicates, .seed = opt.seed,
-        .alpha = opt.alpha, .threads = threads, .hypothesis = opt.hypothesis,
+        .alpha = opt.alpha, .threads = threads, .phase = opt.phase, .hypothesis = opt.hypothesis,
         .scratch = opt.scratch.empty() ? std::filesystem::path() : std::filesystem::path(opt.scratch) / scratch_part});
   } catch (...) {
     failure = std::current_exception();
@@ -261,7 +262,10 @@ void registerPowerCommands(CLI::App& sim) {
                "(run it under mpirun -n N to use N processes)");
   auto* study = power->add_option("--study", opt->study,
                                   "A study file with simulated subjects (default: the paper's study in silico)");
-  power->add_option("--subjects", opt->subjects, "The designs: numbers of subjects, comma-separated")->capture_default_str();
+  power->add_option("--subjects", opt->subjects, "The designs: numbers of subjects (per group in a study of groups), "
+                    "comma-separated")->capture_default_str();
+  power->add_option("--phase", opt->phase, "A study of groups and sessions: the phase compared (default: its retention, "
+                    "else post-test, else recall, else its last phase)");
   power->add_option("--replicates", opt->replicates, "Simulated studies per design")->capture_default_str();
   power->add_option("--seed", opt->seed, "Replicate r is the study with seed + r")->capture_default_str();
   power->add_option("--alpha", opt->alpha, "Significance level")->capture_default_str();

@@ -14,6 +14,7 @@
 #include "bindings.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/ops/study_run.hpp"
+#include "hattr/report/design_analysis.hpp"
 #include "hattr/report/study_analysis.hpp"
 #include "hattr/session/study.hpp"
 #include "hattr/session/study_database.hpp"
@@ -127,15 +128,19 @@ void bindStudies(py::module_& m) {
             nlohmann::json json;
             {
               py::gil_scoped_release unlocked;
-              json = report::analysisToJson(report::analyzeStudy(db, options));
+              // As `hattr study analyze` chooses: the paper's analysis for its design, else the design's.
+              json = session::isPaperDesign(db.study()) ? report::analysisToJson(report::analyzeStudy(db, options))
+                                                        : report::designAnalysisToJson(report::analyzeDesign(db, options));
             }
             return toPython(json);
           },
           py::kw_only(), py::arg("normalization") = "paper", py::arg("cost") = "abs",
           py::arg("band_fraction") = py::none(), py::arg("threads") = 2,
-          "The paper's analysis of the recall trials, as `hattr study analyze --json` prints it (a dict): "
+          "The study's analysis, as `hattr study analyze --json` prints it (a dict). The paper's design: "
           "recall_costs (records), and per metric ('trajectory', 'force') the ANOVAs, Tukey HSD, per-mode "
-          "statistics and each subject's best mode. Nothing is written. Releases the GIL.")
+          "statistics and each subject's best mode. Any other design: trial_scores (records), curves, "
+          "phase_cells, retention, transfer and conclusions (docs/analysis.md, 'Designs'). Nothing is "
+          "written. Releases the GIL.")
       .def("close", &OpenStudy::close, "Closes the database; the study can no longer be read through this object.")
       .def("__enter__", [](OpenStudy& s) -> OpenStudy& { return s; }, py::return_value_policy::reference)
       .def("__exit__", [](OpenStudy& s, const py::args&) {

@@ -359,4 +359,98 @@ std::vector<LevelVariance> interSubjectVariance(const TwoWayData& data) {
   return result;
 }
 
+namespace {
+
+/// One-way fit: the levels, each group's count and mean, and the sums of squares.
+struct OneWayFit {
+  LevelIndex levels;
+  std::vector<double> count, mean;
+  double ss_between = 0.0, ss_within = 0.0;
+  std::size_t df_between = 0, df_within = 0;
+};
+
+OneWayFit fitOneWay(std::string_view function, const OneWayData& data) {
+  HATTR_THROW_UNLESS(data.group.size() == data.y.size(),
+                     "{}: columns differ in length: expected equal lengths, got {} ({}) and {} (response)", function,
+                     data.group.size(), data.factor, data.y.size());
+  for (std::size_t r = 0; r < data.y.size(); ++r) {
+    HATTR_THROW_UNLESS(std::isfinite(data.y[r]), "{}: row {}: response: expected a finite number, got {}", function, r,
+                       data.y[r]);
+    HATTR_THROW_UNLESS(!data.group[r].empty(), "{}: row {}: {}: expected a level name, got \"\"", function, r,
+                       data.factor);
+  }
+  OneWayFit fit;
+  fit.levels = indexLevels(data.group);
+  const std::size_t k = fit.levels.levels.size();
+  HATTR_THROW_UNLESS(k >= 2, "{}: {}: expected at least 2 levels, got {}", function, data.factor, k);
+  HATTR_THROW_UNLESS(data.y.size() > k, "{}: expected more observations than the {} levels of {}, got {}", function, k,
+                     data.factor, data.y.size());
+  fit.count.assign(k, 0.0);
+  fit.mean.assign(k, 0.0);
+  double grand = 0.0;
+  for (std::size_t r = 0; r < data.y.size(); ++r) {
+    fit.count[fit.levels.of_row[r]] += 1.0;
+    fit.mean[fit.levels.of_row[r]] += data.y[r];
+    grand += data.y[r];
+  }
+  grand /= static_cast<double>(data.y.size());
+  for (std::size_t g = 0; g < k; ++g) {
+    fit.mean[g] /= fit.count[g];
+    fit.ss_between += fit.count[g] * (fit.mean[g] - grand) * (fit.mean[g] - grand);
+  }
+  for (std::size_t r = 0; r < data.y.size(); ++r) {
+    const double e = data.y[r] - fit.mean[fit.levels.of_row[r]];
+    fit.ss_within += e * e;
+  }
+  fit.df_between = k - 1;
+  fit.df_within = data.y.size() - k;
+  return fit;
+}
+
+}  // namespace
+
+AnovaTable oneWayAnova(const OneWayData& data) {
+  const OneWayFit fit = fitOneWay("oneWayAnova", data);
+  AnovaRow residuals{std::string(kResiduals), fit.df_within, fit.ss_within,
+                     fit.ss_within / static_cast<double>(fit.df_within), kNaN, kNaN, kNaN, ""};
+  AnovaTable table;
+  table.rows = {effectRow(data.factor, fit.df_between, fit.ss_between, residuals), residuals};
+  table.replicates = 0;
+  table.a_levels = fit.levels.levels;
+  return table;
+}
+
+TukeyResult tukeyHsdOneWay(const OneWayData& data, double confidence) {
+  HATTR_THROW_UNLESS(confidence > 0.0 && confidence < 1.0,
+                     "tukeyHsdOneWay: confidence: expected a level in (0, 1), got {}", confidence);
+  const OneWayFit fit = fitOneWay("tukeyHsdOneWay", data);
+  HATTR_THROW_UNLESS(fit.df_within >= 2, "tukeyHsdOneWay: Residuals has {} degree(s) of freedom: expected at least 2",
+                     fit.df_within);
+  TukeyResult result;
+  result.factor = data.factor;
+  result.confidence = confidence;
+  result.error_term = std::string(kResiduals);
+  result.error_mean_sq = fit.ss_within / static_cast<double>(fit.df_within);
+  result.error_df = fit.df_within;
+  const auto& levels = fit.levels.levels;
+  const int groups = static_cast<int>(levels.size());
+  const auto df = static_cast<double>(fit.df_within);
+  const double q = studentizedRangeQuantile(confidence, groups, df);
+  for (std::size_t i = 0; i < levels.size(); ++i) {
+    for (std::size_t j = i + 1; j < levels.size(); ++j) {
+      TukeyComparison c;
+      c.level = levels[j];
+      c.other_level = levels[i];
+      c.comparison = c.level + "-" + c.other_level;
+      c.diff = fit.mean[j] - fit.mean[i];
+      const double se = std::sqrt((result.error_mean_sq / 2.0) * (1.0 / fit.count[i] + 1.0 / fit.count[j]));
+      c.lower = c.diff - q * se;
+      c.upper = c.diff + q * se;
+      c.p_adjusted = studentizedRangeUpperTail(std::abs(c.diff) / se, groups, df);
+      result.comparisons.push_back(std::move(c));
+    }
+  }
+  return result;
+}
+
 }  // namespace hattr::analysis

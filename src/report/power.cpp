@@ -62,16 +62,20 @@ std::vector<std::string> PowerPlan::pairs() const {
 }
 
 MetricOutcome metricOutcome(const MetricResult& metric, const PowerPlan& plan) {
+  return metricOutcome(metric.overall.row("mode"), metric.tukey, plan);
+}
+
+MetricOutcome metricOutcome(const analysis::AnovaRow& effect, const std::optional<analysis::TukeyResult>& tukey,
+                            const PowerPlan& plan) {
   MetricOutcome out;
-  const analysis::AnovaRow& mode = metric.overall.row("mode");
-  out.p_mode = mode.p;
-  out.partial_eta_sq = mode.partial_eta_sq;
+  out.p_mode = effect.p;
+  out.partial_eta_sq = effect.partial_eta_sq;
   // Tukey names a pair either way round: look each plan pair up as a set of two modes.
   for (std::size_t i = 0; i < plan.modes.size(); ++i) {
     for (std::size_t j = i + 1; j < plan.modes.size(); ++j) {
       double p = kNaN;
-      if (metric.tukey) {
-        for (const auto& c : metric.tukey->comparisons) {
+      if (tukey) {
+        for (const auto& c : tukey->comparisons) {
           const bool same = (c.level == plan.modes[i] && c.other_level == plan.modes[j]) ||
                             (c.level == plan.modes[j] && c.other_level == plan.modes[i]);
           if (same) p = c.p_adjusted;

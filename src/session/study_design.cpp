@@ -184,7 +184,8 @@ void readGroups(const json& root, StudyDefinition& study, Problems& problems) {
       group.strategies = {guidance::TrainingMode::kBasic};  // a control group: no strategy of its own
     }
     if (const auto s = object.find("subjects"); s != object.end()) {
-      auto subjects = readSubjects(*s, where + "subjects", group.name, study.subjects.size(), problems);
+      auto subjects = readSubjects(*s, where + "subjects", group.name, study.subjects.size(), problems,
+                                   group.name.empty() ? std::string("S") : group.name);
       study.subjects.insert(study.subjects.end(), subjects.begin(), subjects.end());
     } else {
       problems.add(fmt::format("{}subjects: missing: a group without subjects", where));
@@ -286,7 +287,7 @@ json subjectJson(const SubjectSpec& s) {
 }  // namespace
 
 std::vector<SubjectSpec> readSubjects(const json& subjects, const std::string& where, const std::string& group,
-                                      std::uint64_t first_seed, Problems& problems) {
+                                      std::uint64_t first_seed, Problems& problems, const std::string& default_prefix) {
   std::vector<SubjectSpec> out;
   if (subjects.is_object()) {
     static const std::set<std::string> kSubjectKeys{"count", "prefix", "participant", "options"};
@@ -299,7 +300,7 @@ std::vector<SubjectSpec> readSubjects(const json& subjects, const std::string& w
     if (!subjects.contains("count")) problems.add(fmt::format("{}.count: missing (how many subjects)", where));
     int count = 0;
     readNumber(subjects, "count", count, 1, 10'000, where + ".", problems);
-    const std::string prefix = subjects.value("prefix", std::string("S"));
+    const std::string prefix = subjects.value("prefix", default_prefix);
     const std::string participant = subjects.value("participant", std::string("simulated"));
     for (int i = 1; i <= count; ++i) {
       out.push_back({fmt::format("{}{:02}", prefix, i), participant, first_seed + static_cast<std::uint64_t>(i),

@@ -60,10 +60,12 @@ inline void readBool(const nlohmann::json& object, const char* key, bool& value,
 }
 
 /// Subjects as a study file lists them: a list of {"id", "participant", "seed", "options"}, or
-/// {"count": N, "prefix": "S", "participant", "options"} (ids PREFIX01...; seeds first_seed + 1...).
-/// `where` prefixes the key in messages ("subjects", "groups[1].subjects").
+/// {"count": N, "prefix": P, "participant", "options"} (ids P01...; P by default "S" in the paper's
+/// form, the group's name in a group; seeds first_seed + 1...). `where` prefixes the key in
+/// messages ("subjects", "groups[1].subjects").
 std::vector<SubjectSpec> readSubjects(const nlohmann::json& subjects, const std::string& where,
-                                      const std::string& group, std::uint64_t first_seed, Problems& problems);
+                                      const std::string& group, std::uint64_t first_seed, Problems& problems,
+                                      const std::string& default_prefix = "S");
 
 /// The design keys of a study file (groups, sessions) into `study`, or the paper's form
 /// (modes, protocol, subjects) turned into its one group and one session; then every check

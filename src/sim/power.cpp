@@ -4,12 +4,15 @@
 
 #include <algorithm>
 #include <iterator>
+#include <optional>
 #include <set>
 
 #include <fmt/format.h>
 
+#include "hattr/analysis/anova.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/guidance/training_guidance.hpp"
+#include "hattr/report/design_analysis.hpp"
 #include "hattr/session/study_database.hpp"
 #include "hattr/session/study_runner.hpp"
 #include "hattr/sim/in_silico.hpp"
@@ -63,6 +66,43 @@ std::filesystem::path makeScratch(const std::filesystem::path& given, bool& own)
   return pattern;
 }
 
+/// The phase a design's power analysis compares: `asked`, or its retention, post-test,
+/// recall or last phase.
+std::string testedPhase(const session::StudyDefinition& study, const std::string& asked) {
+  std::vector<std::string> phases;
+  for (const auto& session : study.schedule) {
+    for (const auto& block : session.blocks) phases.push_back(block.phase);
+  }
+  const auto has = [&phases](std::string_view p) { return std::find(phases.begin(), phases.end(), p) != phases.end(); };
+  if (!asked.empty()) {
+    HATTR_THROW_UNLESS(has(asked), "--phase {}: the design has no such phase: expected one of {}", asked,
+                       fmt::join(std::set<std::string>(phases.begin(), phases.end()), ", "));
+    return asked;
+  }
+  for (const std::string_view p : {session::kPhaseRetention, session::kPhasePostTest, session::kPhaseRecall}) {
+    if (has(p)) return std::string(p);
+  }
+  return phases.back();
+}
+
+/// Each subject's mean of one metric over `scores`, and their group: the one-way data.
+analysis::OneWayData subjectMeans(const std::vector<const report::DesignTrialScore*>& scores, bool shape) {
+  std::map<std::string, std::pair<std::string, std::vector<double>>> by_subject;
+  for (const auto* s : scores) {
+    auto& [group, values] = by_subject[s->subject];
+    group = s->group;
+    values.push_back(shape ? s->shape() : s->force());
+  }
+  analysis::OneWayData data;
+  for (const auto& [subject, entry] : by_subject) {
+    double sum = 0.0;
+    for (const double v : entry.second) sum += v;
+    data.group.push_back(entry.first);
+    data.y.push_back(sum / static_cast<double>(entry.second.size()));
+  }
+  return data;
+}
+
 }  // namespace
 
 PowerStudy::ScratchFolder::~ScratchFolder() {
@@ -88,10 +128,31 @@ PowerStudy::PowerStudy(const PowerOptions& options) : options_(options) {
                                              .recall_trials = options_.recall_trials});
   }
   subject_options_ = study_.subjects.front().options;
-  study_.subjects.clear();
+  for (const auto& s : study_.subjects) group_options_.try_emplace(s.group, s.options);
   if (!options_.hypothesis.empty()) {
-    subject_options_.erase("model");
-    subject_options_["hypothesis"] = options_.hypothesis;
+    for (nlohmann::json* o : {&subject_options_, &group_options_[study_.subjects.front().group]}) {
+      o->erase("model");
+      (*o)["hypothesis"] = options_.hypothesis;
+    }
+    for (auto& [group, o] : group_options_) {
+      o.erase("model");
+      o["hypothesis"] = options_.hypothesis;
+    }
+  }
+  study_.subjects.clear();
+  // A design: the phase compared, and between groups or strategies within subjects.
+  if (!study_.paper_form) {
+    tested_phase_ = testedPhase(study_, options_.phase);
+    between_groups_ = study_.groups.size() > 1;
+    HATTR_THROW_UNLESS(between_groups_ || study_.groups.front().strategies.size() > 1,
+                       "{}: one group with one strategy: a power analysis needs something to compare (groups, or "
+                       "strategies within subjects)", options_.study.string());
+    const std::size_t most = study_.groups.size() * static_cast<std::size_t>(options_.subject_counts.back());
+    HATTR_THROW_UNLESS(most <= 999, "subjects: {} per group in {} groups: expected at most 999 subjects in all, got {}",
+                       options_.subject_counts.back(), study_.groups.size(), most);
+  } else {
+    HATTR_THROW_UNLESS(options_.phase.empty(), "--phase: only for a design of groups and sessions; the paper's "
+                       "analysis compares the recall trials");
   }
 
   // The plan: what makes replicates the same, so not where the expert's file is.
@@ -106,8 +167,15 @@ PowerStudy::PowerStudy(const PowerOptions& options) : options_(options) {
   definition["trainee"] = subject_options_.contains("model")         ? "model " + named("model")
                           : subject_options_.contains("hypothesis") ? named("hypothesis")
                                                                      : std::string("position-plan");
+  if (!tested_phase_.empty()) definition["tested_phase"] = tested_phase_;
   plan_.study = definition;
-  for (const auto mode : study_.modes) plan_.modes.emplace_back(guidance::modeName(mode));
+  if (between_groups_) {
+    for (const auto& g : study_.groups) plan_.modes.push_back(g.name);
+  } else if (!study_.paper_form) {
+    for (const auto mode : study_.groups.front().strategies) plan_.modes.emplace_back(guidance::modeName(mode));
+  } else {
+    for (const auto mode : study_.modes) plan_.modes.emplace_back(guidance::modeName(mode));
+  }
   plan_.subject_counts = options_.subject_counts;
   plan_.replicates = options_.replicates;
   plan_.seed = options_.seed;
@@ -119,13 +187,13 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const std::func
                      plan_.replicates - 1);
   // The largest design's subjects, seeded as the in-silico study with seed + r.
   session::StudyDefinition study = study_;
-  study.subjects = simulatedSubjects(plan_.subject_counts.back(), plan_.seed + static_cast<std::uint64_t>(replicate),
-                                     subject_options_);
+  study.subjects = replicateSubjects(replicate);
   const std::filesystem::path folder = scratch_.path / fmt::format("replicate-{}", replicate);
   std::filesystem::remove_all(folder);
   std::filesystem::create_directories(folder);
   const std::filesystem::path file = folder / "study.sqlite";
   report::StudyAnalysis analysis;
+  std::optional<report::ReplicateOutcome> design;
   {
     (void)session::StudyDatabase::create(file, study);
     session::StudyDatabase db = session::StudyDatabase::open(file, session::OpenMode::kRunner);
@@ -140,9 +208,14 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const std::func
       if (progress) progress(++done / total);
     };
     (void)runner.run(run);
-    analysis = report::analyzeStudy(db, {.threads = static_cast<unsigned>(options_.threads)});
+    if (study.paper_form) {
+      analysis = report::analyzeStudy(db, {.threads = static_cast<unsigned>(options_.threads)});
+    } else {
+      design = designOutcome(replicate, db);
+    }
   }
   std::filesystem::remove_all(folder);
+  if (design) return *design;
 
   // Each design: the replicate's first N subjects (S01 .. SN).
   report::ReplicateOutcome outcome{replicate, {}};
@@ -154,6 +227,55 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const std::func
                  [&ids](const report::TrialCost& c) { return ids.contains(c.subject); });
     outcome.designs.push_back({report::metricOutcome(report::analyzeMetric("trajectory", costs, true), plan_),
                                report::metricOutcome(report::analyzeMetric("force", costs, false), plan_)});
+  }
+  return outcome;
+}
+
+std::vector<session::SubjectSpec> PowerStudy::replicateSubjects(int replicate) const {
+  const std::uint64_t seed = plan_.seed + static_cast<std::uint64_t>(replicate);
+  const int per_group = plan_.subject_counts.back();
+  if (study_.paper_form) return simulatedSubjects(per_group, seed, subject_options_);
+  // Per group, GROUP01 ...; seeds as the in-silico study's, numbered across the groups.
+  std::vector<session::SubjectSpec> subjects;
+  for (const auto& group : study_.groups) {
+    for (int i = 1; i <= per_group; ++i) {
+      const auto position = static_cast<std::uint64_t>(subjects.size() + 1);
+      subjects.push_back({fmt::format("{}{:02}", group.name, i), "simulated", seed * 1000 + position,
+                          group_options_.at(group.name), group.name});
+    }
+  }
+  return subjects;
+}
+
+report::ReplicateOutcome PowerStudy::designOutcome(int replicate, const session::StudyDatabase& db) const {
+  const report::DesignAnalysis analysis = report::analyzeDesign(db, {.threads = static_cast<unsigned>(options_.threads)});
+  // Each subject's number within its group, from its id (GROUP01 ...).
+  const auto number = [](const std::string& id) { return std::stoi(id.substr(id.size() - 2)); };
+  report::ReplicateOutcome outcome{replicate, {}};
+  for (const int n : plan_.subject_counts) {
+    std::vector<const report::DesignTrialScore*> tested;
+    for (const auto& s : analysis.scores) {
+      if (s.phase == tested_phase_ && number(s.subject) <= n) tested.push_back(&s);
+    }
+    std::array<report::MetricOutcome, 2> metrics;
+    for (const bool shape : {true, false}) {
+      if (between_groups_) {
+        // Between groups: each subject's mean, one-way ANOVA and Tukey HSD.
+        analysis::OneWayData data = subjectMeans(tested, shape);
+        data.factor = "group";
+        metrics[shape ? 0 : 1] = report::metricOutcome(analysis::oneWayAnova(data).row("group"),
+                                                       analysis::tukeyHsdOneWay(data), plan_);
+      } else {
+        // Strategies within subjects: the paper's mode × subject analysis of the phase's trials.
+        std::vector<report::TrialCost> costs;
+        for (const auto* s : tested) {
+          if (s->strategy != "none") costs.push_back({s->trial_id, s->subject, s->strategy, s->trial_in_phase, s->score, ""});
+        }
+        metrics[shape ? 0 : 1] =
+            report::metricOutcome(report::analyzeMetric(shape ? "trajectory" : "force", costs, shape), plan_);
+      }
+    }
+    outcome.designs.push_back(metrics);
   }
   return outcome;
 }

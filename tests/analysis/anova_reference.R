@@ -109,3 +109,13 @@ for (p in c(0.5, 0.9, 0.95, 0.99)) for (k in c(2, 3, 6, 10)) for (df in c(2, 7, 
   cat(sprintf("  {%s, %d, %s, %s, %s},\n", f(p), k, f(df), f(qtukey_accurate(p, k, df)),
               f(qtukey(p, k, df))))
 }
+
+# One-way ANOVA and Tukey HSD (oneWayAnova, tukeyHsdOneWay): PlantGrowth, whole and with
+# rows 1, 2 and 11 left out (unequal groups: the Tukey–Kramer standard error).
+for (d in list(PlantGrowth, PlantGrowth[-c(1, 2, 11), ])) {
+  fit <- aov(weight ~ group, data = d)
+  s <- summary(fit)[[1]]
+  cat("oneway: SS", f(s[["Sum Sq"]]), "F", f(s[["F value"]][1]), "p", f(s[["Pr(>F)"]][1]), "\n")
+  t <- TukeyHSD(fit)$group
+  cat("tukey:", rownames(t), "\n diff", f(t[, 1]), "\n lwr", f(t[, 2]), "\n upr", f(t[, 3]), "\n p", f(t[, 4]), "\n")
+}

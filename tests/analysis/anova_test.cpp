@@ -787,5 +787,68 @@ TEST(InterSubjectVariance, IsTheVarianceOfSubjectMeansWithReplicates) {
   }
 }
 
+// R's PlantGrowth (anova_reference.R): aov(weight ~ group) and TukeyHSD, whole and with rows
+// 1, 2 and 11 left out (groups of 8, 9 and 10: the Tukey–Kramer standard error).
+OneWayData plantGrowth(bool unequal) {
+  const std::vector<double> weight{4.17, 5.58, 5.18, 6.11, 4.50, 4.61, 5.17, 4.53, 5.33, 5.14,
+                                   4.81, 4.17, 4.41, 3.59, 5.87, 3.83, 6.03, 4.89, 4.32, 4.69,
+                                   6.31, 5.12, 5.54, 5.50, 5.37, 5.29, 4.92, 6.15, 5.80, 5.26};
+  OneWayData data;
+  for (std::size_t i = 0; i < weight.size(); ++i) {
+    if (unequal && (i == 0 || i == 1 || i == 10)) continue;
+    data.group.push_back(i < 10 ? "ctrl" : i < 20 ? "trt1" : "trt2");
+    data.y.push_back(weight[i]);
+  }
+  return data;
+}
+
+TEST(OneWayAnova, MatchesRsAovAndTukeyHsdOnPlantGrowth) {
+  const AnovaTable table = oneWayAnova(plantGrowth(false));
+  const AnovaRow& group = table.row("group");
+  EXPECT_EQ(group.df, 2u);
+  EXPECT_EQ(table.row("Residuals").df, 27u);
+  EXPECT_NEAR(group.sum_sq, 3.7663399999999987, 1e-12);
+  EXPECT_NEAR(table.row("Residuals").sum_sq, 10.492089999999997, 1e-12);
+  EXPECT_NEAR(group.f, 4.8460878623801351, 1e-12);
+  EXPECT_NEAR(group.p, 0.015909958325622937, 1e-12);
+  EXPECT_NEAR(group.partial_eta_sq, 3.7663399999999987 / (3.7663399999999987 + 10.492089999999997), 1e-14);
+  const TukeyResult tukey = tukeyHsdOneWay(plantGrowth(false));
+  ASSERT_EQ(tukey.comparisons.size(), 3u);
+  const std::array<const char*, 3> names{"trt1-ctrl", "trt2-ctrl", "trt2-trt1"};
+  const std::array<double, 3> diff{-0.37100000000000044, 0.49399999999999977, 0.86500000000000021};
+  const std::array<double, 3> lower{-1.0622160514104588, -0.19721605141045861, 0.17378394858954183};
+  const std::array<double, 3> p{0.39087114420212465, 0.19799599129970824, 0.012006423979452729};
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(tukey.comparisons[i].comparison, names[i]);
+    EXPECT_NEAR(tukey.comparisons[i].diff, diff[i], 1e-12);
+    EXPECT_NEAR(tukey.comparisons[i].lower, lower[i], 1e-6) << "R's qtukey stops near 1e-8 relative";
+    EXPECT_NEAR(tukey.comparisons[i].p_adjusted, p[i], 1e-9);
+  }
+}
+
+TEST(OneWayAnova, MatchesRWithUnequalGroups) {
+  const AnovaRow& group = oneWayAnova(plantGrowth(true)).row("group");
+  EXPECT_NEAR(group.f, 4.7034427032238879, 1e-12);
+  EXPECT_NEAR(group.p, 0.018901795160526171, 1e-12);
+  const TukeyResult tukey = tukeyHsdOneWay(plantGrowth(true));
+  const std::array<double, 3> diff{-0.4268055555555561, 0.45474999999999977, 0.88155555555555587};
+  const std::array<double, 3> p{0.35543677877146884, 0.29472035384364115, 0.014214261295000696};
+  const std::array<double, 3> lower{-1.1867052218052381, -0.28705422123104407, 0.16301119194710945};
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_NEAR(tukey.comparisons[i].diff, diff[i], 1e-12);
+    EXPECT_NEAR(tukey.comparisons[i].p_adjusted, p[i], 1e-9);
+    EXPECT_NEAR(tukey.comparisons[i].lower, lower[i], 1e-6);
+  }
+}
+
+TEST(OneWayAnova, RefusesOneGroupAndNonFiniteData) {
+  OneWayData one{"group", {"a", "a", "a"}, {1.0, 2.0, 3.0}};
+  EXPECT_THROW((void)oneWayAnova(one), InputError);
+  OneWayData bad{"group", {"a", "b", "b"}, {1.0, std::nan(""), 3.0}};
+  EXPECT_THROW((void)oneWayAnova(bad), InputError);
+  OneWayData too_few{"group", {"a", "b"}, {1.0, 2.0}};
+  EXPECT_THROW((void)oneWayAnova(too_few), InputError);
+}
+
 }  // namespace
 }  // namespace hattr::analysis

@@ -119,6 +119,62 @@ TEST(PowerCli, OneProcessTwoMpiRanksAndTwoShardsGiveTheSameTableToTheBit) {
   EXPECT_THAT(again.err, HasSubstr("s0.json"));
 }
 
+// Issue 35: the power of a design of groups (groups-retention, made small): N subjects per
+// group, the groups compared at retention by a one-way ANOVA; the same table on one process,
+// two MPI ranks and two shards.
+TEST(PowerCli, AGroupDesignsPowerIsTheSameOnOneProcessTwoRanksAndTwoShards) {
+  HATTR_SKIP_UNDER_THREAD_SANITIZER("the replicates simulated three ways; the paper's power test covers the runs");
+  test::TempDir dir;
+  const RunResult example = test::runCommand(dir, hattrCli(), "study example --design groups-retention", "example");
+  ASSERT_EQ(example.exit_code, 0) << example.err;
+  nlohmann::json design = nlohmann::json::parse(example.out);
+  design["world"] = {{"relief", {{"kind", "flat"}}}};
+  for (auto& session : design["sessions"]) {
+    for (auto& block : session["blocks"]) block["trials"] = 1;
+  }
+  test::writeText(dir / "groups.json", design.dump(2));
+  for (const char* glyph : {"na", "loop"}) {
+    const std::string file = std::string(glyph) == "na" ? "expert.csv" : "loop.csv";
+    ASSERT_EQ(test::runCommand(dir, hattrCli(), fmt::format("sim expert --glyph {} -o {}", glyph, (dir / file).string()),
+                               "expert").exit_code, 0);
+  }
+  const std::string study = "sim power --study " + (dir / "groups.json").string() + " --subjects 3 --seed 3 --threads 1";
+  const std::string power = study + " --replicates 2";
+  const RunResult one = test::runCommand(dir, hattrCli(), power + " --json", "one");
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  const nlohmann::json table = tableOf(one);
+  EXPECT_EQ(table["plan"]["modes"], nlohmann::json({"free", "path", "force"}));
+  EXPECT_EQ(table["plan"]["study"]["tested_phase"], "retention");
+  ASSERT_EQ(table["rows"].size(), 2u);
+  for (const auto& row : table["rows"]) {
+    EXPECT_EQ(row["subjects"], 3);
+    EXPECT_EQ(row["tukey"].size(), 3u) << row.dump();
+  }
+  if (kRunMpirun) {
+    const RunResult ranks =
+        test::runCommand(dir, kMpiEnvironment + mpirun(), "-n 2 " + hattrCli() + " " + power + " --json", "mpi");
+    ASSERT_EQ(ranks.exit_code, 0) << ranks.err << ranks.out;
+    EXPECT_EQ(tableOf(ranks), table);
+  }
+  for (int shard : {0, 1}) {
+    const RunResult s = test::runCommand(
+        dir, hattrCli(), fmt::format("{} --shard {}/2 --out {}", power, shard, (dir / fmt::format("g{}.json", shard)).string()),
+        fmt::format("gshard{}", shard));
+    ASSERT_EQ(s.exit_code, 0) << s.err;
+  }
+  const RunResult merged = test::runCommand(
+      dir, hattrCli(), "sim power merge --json " + (dir / "g0.json").string() + " " + (dir / "g1.json").string(), "gmerge");
+  ASSERT_EQ(merged.exit_code, 0) << merged.err;
+  EXPECT_EQ(tableOf(merged), table);
+  // Another phase, named; one that is not the design's is refused.
+  const RunResult post = test::runCommand(dir, hattrCli(), study + " --replicates 1 --phase post-test --json", "post");
+  ASSERT_EQ(post.exit_code, 0) << post.err;
+  EXPECT_EQ(tableOf(post)["plan"]["study"]["tested_phase"], "post-test");
+  const RunResult bad = test::runCommand(dir, hattrCli(), power + " --phase nap", "bad");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_THAT(bad.err, HasSubstr("--phase nap: the design has no such phase"));
+}
+
 TEST(PowerCli, BadArgumentsAreRefusedWithExitTwoAndTheReason) {
   test::TempDir dir;
   const auto refused = [&](const std::string& args, const std::string& reason) {

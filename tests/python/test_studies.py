@@ -139,3 +139,30 @@ def test_a_study_with_a_mentored_mode_runs_from_python_as_from_the_cli(tmp_path,
         pa, pb = mine.trial_profile(a["trial_id"]), theirs.trial_profile(b["trial_id"])
         for name in pb.channel_names:
             np.testing.assert_array_equal(pa.channel(name), pb.channel(name), err_msg=name)
+
+
+def test_a_design_of_groups_and_sessions_runs_and_analyzes_as_the_cli_does(tmp_path, expert_files):
+    # Issue 35: a design beyond the paper's from Python: created, run, its trials' places, and
+    # its own analysis equal to `hattr study analyze --json`.
+    expert, _ = expert_files
+    design = json.loads(run_cli("study", "example", "--design", "groups-retention")[0])
+    design["experts"] = {"na": str(expert), "loop": str(expert)}
+    design["world"] = {"relief": {"kind": "flat"}}
+    for group in design["groups"]:
+        group["subjects"]["count"] = 2
+    for session in design["sessions"]:
+        for block in session["blocks"]:
+            block["trials"] = 1
+    hattr.create_study(tmp_path / "design.sqlite", design).close()
+    assert hattr.run_study(tmp_path / "design.sqlite") == 6 * 6
+    with hattr.Study.open(tmp_path / "design.sqlite") as study:
+        trials = pd.DataFrame(study.trials())
+        assert list(trials[trials["subject"] == "A01"]["phase"]) == [
+            "baseline", "training", "training", "post-test", "retention", "transfer"]
+        assert list(trials[trials["subject"] == "A01"]["day"]) == [0, 0, 1, 1, 2, 2]
+        assert set(trials["group"]) == {"free", "path", "force"}
+        assert {s["group"] for s in study.subjects()} == {"free", "path", "force"}
+        mine = study.analyze()
+    assert mine == cli_json("study", "analyze", "--db", tmp_path / "design.sqlite")
+    assert [r["condition"] for r in mine["retention"]] == ["free", "path", "force"]
+    assert len(mine["trial_scores"]) == 36

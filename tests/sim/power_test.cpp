@@ -10,7 +10,11 @@
 #include "hattr/analysis/proportion.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
+#include "hattr/analysis/anova.hpp"
+#include "hattr/report/design_analysis.hpp"
+#include "hattr/session/study_runner.hpp"
 #include "hattr/sim/in_silico.hpp"
+#include "hattr/sim/participant.hpp"
 #include "support/test_support.hpp"
 #include "support/thread_sanitizer.hpp"
 
@@ -94,6 +98,75 @@ TEST(PowerStudy, UnderAHypothesisAReplicateIsTheInSilicoStudyUnderIt) {
   // And it is not the position-plan learner's study: guided, this learner learns less.
   const InSilicoResult plain = inSilico(std::nullopt, "plain");
   EXPECT_NE(outcome.designs[0][0].p_mode, plain.analysis.trajectory.overall.row("mode").p);
+}
+
+// A design of groups: replicate r is the design with N simulated subjects per group, seeded as
+// the in-silico study with seed + r, its groups compared at retention by a one-way ANOVA of
+// each subject's mean cost and Tukey HSD; a design of N analyzes each group's first N.
+TEST(PowerStudy, AGroupDesignsReplicateIsTheDesignRunWithItsSubjectsAndCompared) {
+  HATTR_SKIP_UNDER_THREAD_SANITIZER("a replicate compared with the same study run on its own");
+  test::TempDir dir;
+  const InSilicoResult expert = runInSilicoStudy({.out_dir = dir / "expert", .subjects = 2, .seed = 1,
+                                                  .training_trials = 0, .recall_trials = 2, .write_report = false});
+  const std::string groups = R"({"name": "g", "skill": "na", "experts": {"na": "EXPERT"},
+    "protocol": {"rest_s": 0}, "order": {"kind": "fixed"}, "world": {"relief": {"kind": "flat"}},
+    "groups": [{"name": "one", "strategies": ["basic"], "subjects": SUBJECTS_ONE},
+               {"name": "two", "strategies": ["alpha"], "subjects": SUBJECTS_TWO}],
+    "sessions": [{"day": 0, "blocks": [{"phase": "training", "strategy": "group", "trials": 2},
+                                       {"phase": "post-test", "trials": 1}]},
+                 {"day": 1, "blocks": [{"phase": "retention", "trials": 2}]}]})";
+  const auto write = [&](const std::filesystem::path& file, const std::string& one, const std::string& two) {
+    std::string text = groups;
+    text.replace(text.find("EXPERT"), 6, (dir / "expert" / "expert.csv").string());
+    text.replace(text.find("SUBJECTS_ONE"), 12, one);
+    text.replace(text.find("SUBJECTS_TWO"), 12, two);
+    test::writeText(file, text);
+  };
+  write(dir / "design.json", R"({"count": 3})", R"({"count": 3})");
+  const PowerStudy power({.study = dir / "design.json", .subject_counts = {4, 3}, .replicates = 2, .seed = 5,
+                          .threads = 1, .scratch = dir / "scratch"});
+  EXPECT_EQ(power.plan().modes, (std::vector<std::string>{"one", "two"}));
+  EXPECT_EQ(power.plan().study.at("tested_phase"), "retention");
+  const report::ReplicateOutcome outcome = power.runReplicate(1);
+  ASSERT_EQ(outcome.designs.size(), 2u);
+
+  // The same replicate as a study of its own: subjects one01..04 and two01..04, seeds 6·1000 + place.
+  const auto subjects = [](const std::string& group, int first_place) {
+    std::string list = "[";
+    for (int i = 1; i <= 4; ++i) {
+      list += fmt::format(R"({}{{"id": "{}{:02}", "seed": {}}})", i == 1 ? "" : ", ", group, i, 6000 + first_place + i - 1);
+    }
+    return list + "]";
+  };
+  write(dir / "alone.json", subjects("one", 1), subjects("two", 5));
+  { (void)session::StudyDatabase::create(dir / "alone.sqlite", session::loadStudy(dir / "alone.json")); }
+  session::StudyDatabase db = session::StudyDatabase::open(dir / "alone.sqlite", session::OpenMode::kRunner);
+  (void)session::StudyRunner(db, [](const session::SubjectRecord& s, const HapticProfile& e) {
+    return makeSimulatedParticipant(s, e);
+  }).run({});
+  const report::DesignAnalysis alone = report::analyzeDesign(db);
+  for (const int n : {3, 4}) {
+    analysis::OneWayData data;
+    for (const std::string group : {"one", "two"}) {
+      for (int i = 1; i <= n; ++i) {
+        const std::string id = fmt::format("{}{:02}", group, i);
+        double sum = 0.0;
+        int count = 0;
+        for (const auto& t : alone.scores) {
+          if (t.subject == id && t.phase == "retention") {
+            sum += t.shape();
+            ++count;
+          }
+        }
+        data.group.push_back(group);
+        data.y.push_back(sum / count);
+      }
+    }
+    const double p = analysis::oneWayAnova(data).row("group").p;
+    EXPECT_EQ(outcome.designs[n == 3 ? 0 : 1][0].p_mode, p) << n << " per group";
+    EXPECT_EQ(outcome.designs[n == 3 ? 0 : 1][0].p_pairs.front(), analysis::tukeyHsdOneWay(data).comparisons.front().p_adjusted);
+  }
+  EXPECT_NE(outcome.designs[0][0].p_mode, outcome.designs[1][0].p_mode);
 }
 
 TEST(PowerStudy, RefusesDesignsItCannotAnalyzeNamingTheOption) {

@@ -564,6 +564,44 @@ class StudioRigTest : public QObject {
     std::filesystem::remove_all(dir);
   }
 
+  // A design's sessions on other days: at a session's end the next waits to be begun, early
+  // here (it is due tomorrow), and a reopened study offers it again; begun, it runs.
+  void studySessionOffersTheNextSessionWithItsDueDate() {
+    const auto dir = makeStudyFolder("sessions");
+    std::ofstream(dir / "study.json") << test::designStudyJson(1.0);
+    { (void)session::StudyDatabase::create(dir / "s.sqlite", session::loadStudy(dir / "study.json")); }
+    const std::string tomorrow = session::addDays(session::localToday(), 1).iso();
+    {
+      StudySession session(dir / "s.sqlite");
+      session.selectSubject("P01", 0.0);
+      QCOMPARE(session.state(), StudySession::State::kReady);
+      QCOMPARE(session.prompt(), std::string("Training with PCONTROL: trial 1 of 1"));
+      QCOMPARE(session.currentSetup().guidance.mode, guidance::TrainingMode::kPositionControl);
+      runOneTrial(session, 0.0);
+      QCOMPARE(session.state(), StudySession::State::kResting);
+      session.skipRest();
+      QCOMPARE(session.prompt(), std::string("Post-test: trial 1 of 1"));
+      QCOMPARE(session.currentSetup().guidance.mode, guidance::TrainingMode::kBasic);
+      runOneTrial(session, 10.0);
+      QCOMPARE(session.state(), StudySession::State::kNextSession);
+      QCOMPARE(session.schedule().timing, session::SubjectSchedule::Timing::kEarly);
+      QCOMPARE(session.prompt(), "Next session for P01: session 2 of 2 (day 1), due on " + tomorrow + " (in 1 day): early");
+    }
+    {
+      StudySession session(dir / "s.sqlite");
+      session.selectSubject("P01", 0.0);
+      QCOMPARE(session.state(), StudySession::State::kNextSession);  // reopened between sessions
+      session.beginNextSession();
+      QCOMPARE(session.state(), StudySession::State::kReady);
+      QCOMPARE(session.prompt(), std::string("Retention: trial 1 of 1"));
+      QVERIFY(!session.currentTrial()->plan.view.show_reference);
+      runOneTrial(session, 0.0);
+      QCOMPARE(session.state(), StudySession::State::kFinished);
+      QCOMPARE(session.schedule().timing, session::SubjectSchedule::Timing::kDone);
+    }
+    std::filesystem::remove_all(dir);
+  }
+
   void studySessionAbandonedTrialIsRunAgainAndCountsAttempts() {
     const auto dir = makeStudyFolder("abandon");
     { (void)session::StudyDatabase::create(dir / "s.sqlite", session::loadStudy(dir / "study.json")); }

@@ -4,6 +4,7 @@
 // checked for the paper's grain, the expert's reference and the pen's trail. Then a take is
 // recorded and saved, a study trial is run and stored, and the study is reviewed.
 #include <QComboBox>
+#include <QPushButton>
 #include <QLabel>
 #include <QStatusBar>
 #include <QTabWidget>
@@ -375,6 +376,51 @@ class StudioSmokeTest : public QObject {
     QVERIFY(w.paperView()->overlay().empty());
     w.togglePlayback();  // nothing to play: the old trial is gone
     QCOMPARE(w.activity(), MainWindow::Activity::kFree);
+  }
+
+  // A person's study over two days (issue 35): after the first day's session the studio offers
+  // the next session with its date, asks before beginning it early, and runs it.
+  void aPersonsStudyOverTwoDaysOffersTheNextSession() {
+    MainWindow& w = *window_;
+    std::ofstream(dir_ / "design.json") << test::designStudyJson(0.5);
+    const auto db_file = dir_ / "design.sqlite";
+    { (void)session::StudyDatabase::create(db_file, session::loadStudy(dir_ / "design.json")); }
+    QVERIFY2(w.openStudy(QString::fromStdString(db_file.string())), qPrintable(w.lastError()));
+    auto* subjects = w.findChild<QComboBox*>("study_subject");
+    QVERIFY(subjects != nullptr);
+    QVERIFY2(subjects->itemText(0).contains("next: session 1 of 2 (day 0), any time"), qPrintable(subjects->itemText(0)));
+    QVERIFY2(w.selectStudySubject("P01"), qPrintable(w.lastError()));
+    for (int trial = 0; trial < 2; ++trial) {  // day 0: training, then the post-test
+      QVERIFY(w.studyNext());
+      driveAlongExpert(w, Vec3(0.003, 0.002, 0.0), MainWindow::Activity::kStudyTrial, nullptr, nullptr);
+    }
+    QCOMPARE(w.study()->completedCount(), 2);
+    QCOMPARE(w.study()->state(), StudySession::State::kNextSession);
+    const QString tomorrow = QString::fromStdString(session::addDays(session::localToday(), 1).iso());
+    auto* next = w.findChild<QPushButton*>("study_next");
+    auto* prompt = w.findChild<QLabel*>("study_prompt");
+    QVERIFY(next != nullptr && prompt != nullptr);
+    QCOMPARE(next->text(), "Begin session 2 early (due " + tomorrow + ")");
+    QVERIFY(next->isEnabled());
+    QVERIFY2(prompt->text().contains("Next session for P01: session 2 of 2 (day 1), due on " + tomorrow + " (in 1 day): early"),
+             qPrintable(prompt->text()));
+    w.grab().save(QStringLiteral(HATTR_STUDIO_SCREENSHOT_DIR "/studio_next_session.png"));
+    QVERIFY(!w.studyNext());  // "begin it early?" no
+    QCOMPARE(w.study()->state(), StudySession::State::kNextSession);
+    w.setInteractive(false, true);
+    QVERIFY(w.studyNext());  // yes
+    w.setInteractive(false);
+    QCOMPARE(w.study()->state(), StudySession::State::kReady);
+    QVERIFY(prompt->text().contains("Retention: trial 1 of 1"));
+    QVERIFY(w.studyNext());
+    driveAlongExpert(w, Vec3(0.003, 0.002, 0.0), MainWindow::Activity::kStudyTrial, nullptr, nullptr);
+    QCOMPARE(w.study()->state(), StudySession::State::kFinished);
+    w.closeStudy();
+    const auto db = session::StudyDatabase::open(db_file, session::OpenMode::kReadOnly);
+    const auto trials = db.trials("P01");
+    QCOMPARE(trials.size(), std::size_t{3});
+    for (const auto& t : trials) QCOMPARE(t.status, session::TrialStatus::kCompleted);
+    QCOMPARE(db.trialProfile(trials[2].id).metadata().extra.at("session"), std::string("2"));
   }
 
   // Ctrl+. ends a trial now and keeps it: a training trial is scored, a study trial stored,

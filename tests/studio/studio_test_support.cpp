@@ -65,6 +65,16 @@ std::string smallStudyJson(const std::string& modes, double rest_s, const std::s
          subjects + (mentor.empty() ? "" : R"(, "mentor": )" + mentor) + "}";
 }
 
+std::string designStudyJson(double rest_s) {
+  return R"({"format": "hattr-study/1", "name": "studio design", "skill": "eight", "experts": {"eight": "expert.csv"},)"
+         R"("protocol": {"rest_s": )" + std::to_string(rest_s) +
+         R"(, "trial_end": {"pen_up_s": 0.5}, "disturbed_trials": "flag"}, "device": "sim://pen",)"
+         R"("world": {"relief": {"kind": "flat"}}, "rate_hz": 1000,)"
+         R"("groups": [{"name": "path", "strategies": ["pcontrol"], "subjects": [{"id": "P01", "participant": "person"}]}],)"
+         R"("sessions": [{"day": 0, "blocks": [{"phase": "training", "strategy": "group", "trials": 1},)"
+         R"({"phase": "post-test", "trials": 1}]}, {"day": 1, "blocks": [{"phase": "retention", "trials": 1}]}]})";
+}
+
 HapticProfile writeThenLift(const HapticProfile& writing, double lift_s) {
   HapticProfile script = writing;
   const Sample last = writing.samples().back();

@@ -28,6 +28,11 @@ HapticProfile recordExpert(session::TrialEnvironment& environment, double durati
 /// JSON arrays; `relief` a relief kind ("flat", "grain"); `trial_end` the protocol's keys for
 /// the end of a trial: an old file's fixed window (`"tail_s": 0.2`, the default) or an end
 /// rule (`"trial_end": {"pen_up_s": 0.4}`).
+/// A design for the studio (skill "eight", expert.csv): person P01 in one group trained with
+/// PCONTROL; session 1 on day 0 (a training trial, a post-test trial), session 2 on day 1 (a
+/// retention trial); rests of `rest_s`; trials end 0.5 s after the pen lifts.
+std::string designStudyJson(double rest_s);
+
 /// `mentor`: the study's mentor block (a JSON object), none when empty.
 std::string smallStudyJson(const std::string& modes, double rest_s, const std::string& subjects,
                            const std::string& relief, const std::string& trial_end = "\"tail_s\": 0.2",

@@ -5,6 +5,7 @@
 #include "hattr/core/error.hpp"
 #include "hattr/net/study_mentor.hpp"
 #include "hattr/render/world_config.hpp"
+#include "hattr/session/study_schedule.hpp"
 
 namespace hattr::studio {
 
@@ -67,8 +68,24 @@ void StudySession::selectSubject(const std::string& subject_id, double now_s) {
     state_ = State::kResting;
     rest_until_s_ = now_s + trials_->restSeconds();
   } else {
-    state_ = State::kReady;
+    state_ = stateBeforeSession();
   }
+}
+
+StudySession::State StudySession::stateBeforeSession() const {
+  // The subject's first trial, or a session already begun (resumed): ready.
+  if (trials_->position() == 0) return State::kReady;
+  return schedule().timing == session::SubjectSchedule::Timing::kInProgress ? State::kReady : State::kNextSession;
+}
+
+session::SubjectSchedule StudySession::schedule(const std::string& subject_id) const {
+  const std::string& who = subject_id.empty() ? subject_ : subject_id;
+  return session::subjectSchedule(db_.study(), db_.trials(who), session::localToday());
+}
+
+void StudySession::beginNextSession() {
+  HATTR_DEMAND(state_ == State::kNextSession, "study: beginNextSession() in state {}", stateName(state_));
+  state_ = State::kReady;
 }
 
 std::string StudySession::participantKind() const {
@@ -96,6 +113,11 @@ const session::TrialRecord* StudySession::currentTrial() const noexcept {
 
 std::string StudySession::prompt() const {
   if (currentTrial() == nullptr) return state_ == State::kFinished ? "Every trial is done. Thank you!" : "";
+  if (state_ == State::kNextSession) {
+    std::string next = session::scheduleText(schedule());
+    if (next.starts_with("next: ")) next.erase(0, 6);
+    return fmt::format("Next session for {}: {}", subject_, next);
+  }
   return trials_->prompt();
 }
 
@@ -137,8 +159,8 @@ std::string StudySession::completeTrial(session::TrialResult result, double now_
     state_ = State::kResting;
     rest_until_s_ = now_s + trials_->restSeconds();
   } else {
-    // A session ended: the next one is another time (the station may go on when it is due).
-    state_ = State::kReady;
+    // A session of the schedule ended: the next is begun when the person is there for it.
+    state_ = State::kNextSession;
     db_.endSession(*session_id_);
     session_id_.reset();
   }
@@ -161,6 +183,7 @@ std::string_view stateName(StudySession::State state) {
     case StudySession::State::kResting: return "resting";
     case StudySession::State::kReady: return "ready";
     case StudySession::State::kRunning: return "running";
+    case StudySession::State::kNextSession: return "between sessions";
     case StudySession::State::kFinished: return "finished";
   }
   return "?";

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "hattr/session/study_database.hpp"
+#include "hattr/session/study_schedule.hpp"
 #include "hattr/session/subject_trials.hpp"
 #include "hattr/session/trial.hpp"
 
@@ -36,6 +37,7 @@ class StudySession {
     kResting,    ///< the rest before the next trial is counting down
     kReady,      ///< the next trial waits for the person (prompt shown)
     kRunning,    ///< a trial is running (marked running in the database)
+    kNextSession,  ///< a session of the schedule is over: the next waits to be begun (schedule())
     kFinished,   ///< every trial of the subject is completed
   };
 
@@ -59,12 +61,20 @@ class StudySession {
   [[nodiscard]] session::TrialEnvironment& environment() noexcept { return *environment_; }
 
   /// Picks the subject and resumes at its first trial not completed. The runner's rule:
-  /// a rest comes before every trial but a new subject's first. Throws InputError for an
+  /// a rest comes before every trial but the first of a session. A session not begun yet
+  /// after an earlier one waits to be begun (kNextSession). Throws InputError for an
   /// unknown subject; not while a trial runs.
   void selectSubject(const std::string& subject_id, double now_s);
   [[nodiscard]] const std::string& subject() const noexcept { return subject_; }
   /// The subject's participant kind ("person" is the one meant for the studio).
   [[nodiscard]] std::string participantKind() const;
+
+  /// Where a subject stands in the schedule today (session::subjectSchedule): its next
+  /// session, due, early or overdue. The current subject when `subject_id` is empty.
+  [[nodiscard]] session::SubjectSchedule schedule(const std::string& subject_id = "") const;
+  /// Begins the next session (from kNextSession): ready for its first trial, whatever its due
+  /// date (the caller asks the person first when schedule() says it is early).
+  void beginNextSession();
 
   /// Moves from resting to ready when the rest is over.
   void tick(double now_s);
@@ -75,7 +85,8 @@ class StudySession {
 
   /// The trial the subject does next (also while it runs), if any.
   [[nodiscard]] const session::TrialRecord* currentTrial() const noexcept;
-  /// The runner's prompt for the current trial ("Training with ALPHA: trial 3 of 11").
+  /// The runner's prompt for the current trial ("Training with ALPHA: trial 3 of 11"); between
+  /// sessions, the next one ("Next session for S07: session 2 of 3 (day 1), due today").
   [[nodiscard]] std::string prompt() const;
   /// The runner's set-up of the current trial (session::studyTrialSetup: guidance on in
   /// training, BASIC in recall, the study's end rule and maximum — or an old file's fixed
@@ -89,7 +100,7 @@ class StudySession {
   /// Only when ready (or resting: the rest is cut short).
   void beginTrial();
   /// The trial ended (session::SubjectTrials::end): stored, and on to a rest before the next
-  /// trial or to finished (the session ends); or, disturbed with the "repeat" policy, kept as
+  /// trial, to the next session (the session ends) or to finished; or, disturbed with the "repeat" policy, kept as
   /// an attempt and back to ready for the same trial. Throws hattr::Error for an empty
   /// recording or when the database refuses the write (the recording is then kept in the
   /// study's rescue folder, and the error says where); either way the state goes back to ready
@@ -112,6 +123,9 @@ class StudySession {
   std::string subject_;
   std::optional<session::SubjectTrials> trials_;  // the subject's, once picked
   std::optional<std::int64_t> session_id_;
+  /// The state for the current trial once the trials before it are done: ready, or the next
+  /// session when it begins one that has not begun.
+  [[nodiscard]] State stateBeforeSession() const;
   State state_ = State::kNoSubject;
   double rest_until_s_ = 0.0;
 };

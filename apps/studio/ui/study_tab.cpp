@@ -9,6 +9,7 @@
 #include <QVBoxLayout>
 #include <cmath>
 
+#include "hattr/session/study_schedule.hpp"
 #include "ui/ui_text.hpp"
 
 namespace hattr::studio {
@@ -41,6 +42,7 @@ void StudyTab::buildUi() {
   // The subject picker.
   auto* row = new QHBoxLayout;
   w_.subject = new QComboBox;
+  w_.subject->setObjectName(QStringLiteral("study_subject"));
   w_.begin = new QPushButton(tr("Begin"));
   connect(w_.begin, &QPushButton::clicked, this, [this] { selectSubject(w_.subject->currentData().toString()); });
   row->addWidget(new QLabel(tr("Subject")));
@@ -56,10 +58,12 @@ void StudyTab::buildUi() {
   big.setPointSizeF(big.pointSizeF() * 1.3);
   big.setBold(true);
   w_.prompt->setFont(big);
+  w_.prompt->setObjectName(QStringLiteral("study_prompt"));
   layout->addWidget(w_.prompt);
 
   // One button starts the next trial or stops the running one.
   w_.next = new QPushButton(tr("Start trial (Space) / skip rest (N)"));
+  w_.next->setObjectName(QStringLiteral("study_next"));
   connect(w_.next, &QPushButton::clicked, this, [this] {
     if (host_.trial_running()) {
       host_.stop_trial();
@@ -94,12 +98,20 @@ bool StudyTab::open(const QString& file) {
   study_ = std::move(session);
   settings_.setValue("study/file", file);
   const session::StudyDefinition& study = study_->study();
-  w_.study->setText(tr("<b>%1</b> (%2): skill %3, %4 training + %5 recall trials per mode, rest %6 s")
-                        .arg(qs(study.name).toHtmlEscaped(), QFileInfo(file).fileName().toHtmlEscaped(),
-                             qs(study.skill).toHtmlEscaped())
-                        .arg(study.protocol.training_trials)
-                        .arg(study.protocol.recall_trials)
-                        .arg(study.protocol.rest_s));
+  if (session::isPaperDesign(study)) {
+    w_.study->setText(tr("<b>%1</b> (%2): skill %3, %4 training + %5 recall trials per mode, rest %6 s")
+                          .arg(qs(study.name).toHtmlEscaped(), QFileInfo(file).fileName().toHtmlEscaped(),
+                               qs(study.skill).toHtmlEscaped())
+                          .arg(study.protocol.training_trials)
+                          .arg(study.protocol.recall_trials)
+                          .arg(study.protocol.rest_s));
+  } else {
+    w_.study->setText(tr("<b>%1</b> (%2): %n session(s) over %3 day(s), ", nullptr,
+                         static_cast<int>(study.schedule.size()))
+                          .arg(qs(study.name).toHtmlEscaped(), QFileInfo(file).fileName().toHtmlEscaped())
+                          .arg(study.schedule.back().day + 1) +
+                      tr("%n group(s)", nullptr, static_cast<int>(study.groups.size())));
+  }
   fillSubjects();
   // Nothing of the tab used before stays on show: a reviewed trial (orange), a take, a playback.
   host_.clear_views();
@@ -113,8 +125,11 @@ bool StudyTab::open(const QString& file) {
 void StudyTab::fillSubjects() {
   w_.subject->clear();
   if (!study_) return;
+  // Each subject with where they stand: the next session for S07, due today, early or overdue.
   for (const session::SubjectRecord& s : study_->subjects()) {
-    w_.subject->addItem(tr("%1 (%2)").arg(qs(s.id), qs(s.spec.participant)), qs(s.id));
+    w_.subject->addItem(tr("%1 (%2): %3").arg(qs(s.id), qs(s.spec.participant),
+                                               qs(session::scheduleText(study_->schedule(s.id)))),
+                        qs(s.id));
   }
 }
 
@@ -142,9 +157,25 @@ bool StudyTab::selectSubject(const QString& subject) {
   return true;
 }
 
+bool StudyTab::beginNextSession() {
+  const session::SubjectSchedule schedule = study_->schedule();
+  if (schedule.timing == session::SubjectSchedule::Timing::kEarly &&
+      !host_.confirm(tr("Session %1 of %2 is due on %3, in %n day(s). Begin it early?", nullptr, schedule.days_off)
+                         .arg(schedule.session + 1)
+                         .arg(schedule.sessions)
+                         .arg(qs(schedule.due->iso())))) {
+    return false;
+  }
+  study_->beginNextSession();
+  refreshPanel();
+  host_.changed();
+  return true;
+}
+
 bool StudyTab::next() {
   if (!study_ || !host_.idle()) return false;
   const auto state = study_->state();
+  if (state == StudySession::State::kNextSession) return beginNextSession();
   if (state != StudySession::State::kReady && state != StudySession::State::kResting) return false;
   try {
     const bool shows_reference = study_->currentTrial()->plan.view.show_reference;
@@ -232,6 +263,7 @@ QString StudyTab::idleBanner() {
       banner = tr("Rest: %1 s").arg(std::ceil(study_->restRemaining_s(now)), 0, 'f', 0);
       break;
     case StudySession::State::kReady: banner = qs(study_->prompt()) + tr(" — Space to start"); break;
+    case StudySession::State::kNextSession: banner = qs(study_->prompt()); break;
     case StudySession::State::kFinished: banner = tr("Every trial is done. Thank you!"); break;
     default: break;
   }
@@ -257,7 +289,8 @@ void StudyTab::refreshPanel() {
   if (state == StudySession::State::kResting) {
     prompt = tr("Rest %1 s, then: %2").arg(std::ceil(study_->restRemaining_s(host_.now_s())), 0, 'f', 0).arg(prompt);
   }
-  if (const session::TrialRecord* t = study_->currentTrial(); t != nullptr && state != StudySession::State::kFinished) {
+  if (const session::TrialRecord* t = study_->currentTrial();
+      t != nullptr && state != StudySession::State::kFinished && state != StudySession::State::kNextSession) {
     prompt += t->plan.view.show_reference ? tr("<br><small>the reference is shown</small>")
                                           : tr("<br><small>from memory: the reference is hidden</small>");
     // Recall is recall: the reference is gone from the moment its trial is announced, rest included.
@@ -273,9 +306,17 @@ void StudyTab::refresh() {
   w_.subject->setEnabled(open && !running);
   w_.begin->setEnabled(open && !running);
   w_.close->setEnabled(open && !host_.device_busy());
-  w_.next->setText(running ? tr("Stop trial (Ctrl+.)") : tr("Start trial (Space) / skip rest (N)"));
+  const bool between = open && study_->state() == StudySession::State::kNextSession;
+  QString next_text = running ? tr("Stop trial (Ctrl+.)") : tr("Start trial (Space) / skip rest (N)");
+  if (between) {
+    const session::SubjectSchedule schedule = study_->schedule();
+    next_text = schedule.timing == session::SubjectSchedule::Timing::kEarly
+                    ? tr("Begin session %1 early (due %2)").arg(schedule.session + 1).arg(qs(schedule.due->iso()))
+                    : tr("Begin session %1").arg(schedule.session + 1);
+  }
+  w_.next->setText(next_text);
   const bool next_step = open && (study_->state() == StudySession::State::kReady ||
-                                  study_->state() == StudySession::State::kResting);
+                                  study_->state() == StudySession::State::kResting || between);
   w_.next->setEnabled(open && (running || (host_.idle() && next_step)));
 }
 

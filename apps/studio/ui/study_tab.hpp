@@ -74,7 +74,8 @@ class StudyTab final : public QWidget {
   bool open(const QString& file);
   /// Picks the subject whose trials run next (a non-person participant only when confirmed).
   bool selectSubject(const QString& subject);
-  /// Cuts the rest short and starts the next trial.
+  /// Cuts the rest short and starts the next trial; between sessions, begins the next session
+  /// (asking first when it is early).
   bool next();
   /// Closes the study; the rig goes back to the window's own paper and device.
   void closeStudy();
@@ -118,6 +119,8 @@ class StudyTab final : public QWidget {
   [[nodiscard]] const Widgets& widgets() const { return w_; }
 
  private:
+  /// Begins the subject's next session (asking first when it is early).
+  bool beginNextSession();
   void buildUi();
   void fillSubjects();
   /// The progress and the prompt; a recall trial's reference hidden from its announcement on.

@@ -148,4 +148,24 @@ struct LevelVariance {
 /// than 2 subjects. Needs no balance. Throws as describeGroups().
 [[nodiscard]] std::vector<LevelVariance> interSubjectVariance(const TwoWayData& data);
 
+/// One-way data: a group level and a response per observation (e.g. each subject's mean cost
+/// and their group, in a between-subjects design).
+struct OneWayData {
+  std::string factor = "group";  ///< the factor's name, used in the output
+  std::vector<std::string> group;
+  std::vector<double> y;
+};
+
+/// One-way ANOVA, like R's anova(lm(y ~ group)) (groups may differ in size): rows the factor
+/// and Residuals, levels in order of first appearance. Throws InputError on columns of
+/// different lengths, an empty level name, a non-finite response, fewer than 2 levels, or
+/// fewer than one residual degree of freedom.
+[[nodiscard]] AnovaTable oneWayAnova(const OneWayData& data);
+
+/// Tukey's HSD between the groups of a one-way design, like R's TukeyHSD(aov(y ~ group)):
+/// the Tukey–Kramer standard error sqrt(MSE / 2 (1/n_i + 1/n_j)) for unequal groups. Throws
+/// as oneWayAnova(), and InputError unless 0 < confidence < 1 or the residual has at least 2
+/// degrees of freedom.
+[[nodiscard]] TukeyResult tukeyHsdOneWay(const OneWayData& data, double confidence = 0.95);
+
 }  // namespace hattr::analysis

@@ -8,6 +8,7 @@
 /// and HTML page. Offline code.
 
 #include <array>
+#include <optional>
 #include <cstdint>
 #include <filesystem>
 #include <span>
@@ -53,6 +54,10 @@ struct ReplicateOutcome {
 
 /// Reads a metric's outcome from its analysis, pairs in the plan's order.
 [[nodiscard]] MetricOutcome metricOutcome(const MetricResult& metric, const PowerPlan& plan);
+/// The same from an effect's ANOVA row and its Tukey HSD (a between-groups design's one-way
+/// analysis), pairs in the plan's order (NaN for a pair Tukey does not name).
+[[nodiscard]] MetricOutcome metricOutcome(const analysis::AnovaRow& effect,
+                                          const std::optional<analysis::TukeyResult>& tukey, const PowerPlan& plan);
 
 /// A replicate as doubles (replicate index first), exact: MPI gathers these.
 [[nodiscard]] std::size_t encodedOutcomeSize(const PowerPlan& plan);

@@ -2,7 +2,10 @@
 /// Study design by simulation: a power analysis (docs/simulation.md, "Power analysis").
 /// Replicate r runs the study with simulated subjects through the real pipeline (the study
 /// runner into a scratch database, the paper's analysis), the subjects seeded as the in-silico
-/// study with seed + r. Designs share their subjects (common random numbers): a design of N
+/// study with seed + r. A design of groups and sessions is analyzed on one phase (its
+/// retention by default): between groups, a one-way ANOVA of each subject's mean cost with
+/// Tukey HSD between the groups, a design of N having N subjects per group; one group with
+/// several strategies, the paper's mode × subject analysis of that phase's trials. Designs share their subjects (common random numbers): a design of N
 /// subjects analyzes the replicate's first N, so the replicate runs only the largest design.
 /// Replicates depend on (plan, r) alone: any split across threads, processes or machines
 /// gives the same outcomes to the bit (report::summarizePower merges them).
@@ -10,6 +13,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -31,6 +35,9 @@ struct PowerOptions {
   std::uint64_t seed = 1;
   double alpha = 0.05;
   int threads = 1;                  ///< subjects simulated at once, and scoring threads
+  /// A design of groups and sessions only: the phase whose costs are compared. Empty: the
+  /// design's retention, else its post-test, else its recall, else its last phase.
+  std::string phase;
   /// A learning hypothesis ("force-plan", ...) for every subject, in place of the study's
   /// trainee model; empty: the study's (the paper's study: position-plan).
   std::string hypothesis;
@@ -53,9 +60,17 @@ class PowerStudy {
                                                       const std::function<void(double)>& progress = {}) const;
 
  private:
+  /// A design's outcome for each number of subjects per group, from its replicate's study.
+  [[nodiscard]] report::ReplicateOutcome designOutcome(int replicate, const session::StudyDatabase& db) const;
+  /// The replicate's subjects: the paper's (S01 ...), or per group of a design (GROUP01 ...).
+  [[nodiscard]] std::vector<session::SubjectSpec> replicateSubjects(int replicate) const;
+
   PowerOptions options_;
   session::StudyDefinition study_;  ///< without subjects
-  nlohmann::json subject_options_;  ///< every simulated subject's options
+  nlohmann::json subject_options_;  ///< every simulated subject's options (a design: the first group's)
+  std::map<std::string, nlohmann::json> group_options_;  ///< a design: each group's subjects' options
+  std::string tested_phase_;        ///< a design: the phase compared
+  bool between_groups_ = false;     ///< a design of several groups (else strategies within subjects)
   report::PowerPlan plan_;
   /// The scratch folder, removed when made here (also when the constructor throws).
   struct ScratchFolder {
