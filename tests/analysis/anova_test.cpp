@@ -827,7 +827,8 @@ TEST(OneWayAnova, MatchesRsAovAndTukeyHsdOnPlantGrowth) {
 }
 
 TEST(OneWayAnova, MatchesRWithUnequalGroups) {
-  const AnovaRow& group = oneWayAnova(plantGrowth(true)).row("group");
+  const AnovaTable table = oneWayAnova(plantGrowth(true));
+  const AnovaRow& group = table.row("group");
   EXPECT_NEAR(group.f, 4.7034427032238879, 1e-12);
   EXPECT_NEAR(group.p, 0.018901795160526171, 1e-12);
   const TukeyResult tukey = tukeyHsdOneWay(plantGrowth(true));
