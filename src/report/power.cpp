@@ -239,10 +239,19 @@ nlohmann::json powerTableToJson(const PowerTable& table) {
 
 std::string powerTableText(const PowerTable& table) {
   const PowerPlan& plan = table.plan;
-  std::string out = fmt::format("Power of the paper's analysis (α = {}, {} replicates, seed {}): the probability "
-                                "that it finds the mode effect,\nwith its exact 95 % interval, the mean partial η² of "
-                                "mode, and each Tukey pair's power.\n",
-                                plan.alpha, plan.replicates, plan.seed);
+  // A design of groups and sessions compares one phase (sim::PowerStudy); the paper's, the modes.
+  const auto phase = plan.study.find("tested_phase");
+  std::string out =
+      phase == plan.study.end()
+          ? fmt::format("Power of the paper's analysis (α = {}, {} replicates, seed {}): the probability "
+                        "that it finds the mode effect,\nwith its exact 95 % interval, the mean partial η² of "
+                        "mode, and each Tukey pair's power.\n",
+                        plan.alpha, plan.replicates, plan.seed)
+          : fmt::format("Power of the design's analysis of its {} trials (α = {}, {} replicates, seed {}): the "
+                        "probability that it finds\nthe effect of {}, with its exact 95 % interval, the mean partial "
+                        "η², and each Tukey pair's power; subjects per group.\n",
+                        phase->get<std::string>(), plan.alpha, plan.replicates, plan.seed,
+                        fmt::join(plan.modes, " / "));
   out += fmt::format("{:>8}  {:<10}  {:>6}  {:<15}  {:>6}", "subjects", "metric", "power", "95 % CI", "η²");
   for (const auto& p : plan.pairs()) out += fmt::format("  {:>15}", p);
   out += "\n";

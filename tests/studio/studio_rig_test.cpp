@@ -9,6 +9,7 @@
 
 #include "core/live_rig.hpp"
 #include "core/mouse_hand.hpp"
+#include "core/study_report_export.hpp"
 #include "core/study_session.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/wire/packet.hpp"
@@ -598,6 +599,16 @@ class StudioRigTest : public QObject {
       runOneTrial(session, 0.0);
       QCOMPARE(session.state(), StudySession::State::kFinished);
       QCOMPARE(session.schedule().timing, session::SubjectSchedule::Timing::kDone);
+    }
+    // Review's report of a design is the design's.
+    {
+      const auto db = session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kReadOnly);
+      const ReviewReport report = writeReviewReport(db, dir / "s.sqlite");
+      QCOMPARE(report.costs.size(), std::size_t{3});
+      std::ifstream page(report.html);
+      const std::string html((std::istreambuf_iterator<char>(page)), std::istreambuf_iterator<char>());
+      QVERIFY(html.find("Learning curves") != std::string::npos);
+      QVERIFY(html.find("The paper next to this study") == std::string::npos);
     }
     std::filesystem::remove_all(dir);
   }
