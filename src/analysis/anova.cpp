@@ -259,6 +259,37 @@ AnovaTable twoWayAnova(const TwoWayData& data, const AnovaOptions& options) {
   return tableOf(data, fitBalanced("twoWayAnova", data), options);
 }
 
+namespace {
+
+/// Every pair of levels i < j, as R's TukeyHSD lists them: mean difference, the family-wise
+/// interval and adjusted p, with the Tukey–Kramer standard error sqrt(MSE / 2 (1/n_i + 1/n_j))
+/// (equal n: Tukey's own). `error` carries the error mean square and degrees of freedom.
+std::vector<TukeyComparison> tukeyComparisons(const std::vector<std::string>& levels, const std::vector<double>& means,
+                                              const std::vector<double>& counts, const TukeyResult& error,
+                                              double confidence) {
+  const int groups = static_cast<int>(levels.size());
+  const auto df = static_cast<double>(error.error_df);
+  const double q = studentizedRangeQuantile(confidence, groups, df);
+  std::vector<TukeyComparison> out;
+  for (std::size_t i = 0; i < levels.size(); ++i) {
+    for (std::size_t j = i + 1; j < levels.size(); ++j) {
+      TukeyComparison c;
+      c.level = levels[j];
+      c.other_level = levels[i];
+      c.comparison = c.level + "-" + c.other_level;
+      c.diff = means[j] - means[i];
+      const double se = std::sqrt((error.error_mean_sq / 2.0) * (1.0 / counts[i] + 1.0 / counts[j]));
+      c.lower = c.diff - q * se;
+      c.upper = c.diff + q * se;
+      c.p_adjusted = studentizedRangeUpperTail(std::abs(c.diff) / se, groups, df);
+      out.push_back(std::move(c));
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 TukeyResult tukeyHsd(const TwoWayData& data, Factor factor, const AnovaOptions& options,
                      double confidence) {
   HATTR_THROW_UNLESS(confidence > 0.0 && confidence < 1.0,
@@ -281,27 +312,10 @@ TukeyResult tukeyHsd(const TwoWayData& data, Factor factor, const AnovaOptions& 
 
   // Level means, each over (other factor's levels x replicates) observations.
   const std::vector<std::string>& levels = by_a ? fit.a.levels : fit.b.levels;
-  const std::vector<double>& means = by_a ? fit.a_mean : fit.b_mean;
   const double per_level =
       static_cast<double>((by_a ? fit.b.levels.size() : fit.a.levels.size()) * fit.replicates);
-  const int groups = static_cast<int>(levels.size());
-  const auto df = static_cast<double>(error.df);
-  // R's TukeyHSD: sqrt((MSE / 2) * (1/n_i + 1/n_j)).
-  const double se = std::sqrt((error.mean_sq / 2.0) * (1.0 / per_level + 1.0 / per_level));
-  const double q = studentizedRangeQuantile(confidence, groups, df);
-  for (std::size_t i = 0; i < levels.size(); ++i) {
-    for (std::size_t j = i + 1; j < levels.size(); ++j) {
-      TukeyComparison c;
-      c.level = levels[j];
-      c.other_level = levels[i];
-      c.comparison = c.level + "-" + c.other_level;
-      c.diff = means[j] - means[i];
-      c.lower = c.diff - q * se;
-      c.upper = c.diff + q * se;
-      c.p_adjusted = studentizedRangeUpperTail(std::abs(c.diff) / se, groups, df);
-      result.comparisons.push_back(std::move(c));
-    }
-  }
+  result.comparisons = tukeyComparisons(levels, by_a ? fit.a_mean : fit.b_mean,
+                                        std::vector<double>(levels.size(), per_level), result, confidence);
   return result;
 }
 
@@ -432,24 +446,7 @@ TukeyResult tukeyHsdOneWay(const OneWayData& data, double confidence) {
   result.error_term = std::string(kResiduals);
   result.error_mean_sq = fit.ss_within / static_cast<double>(fit.df_within);
   result.error_df = fit.df_within;
-  const auto& levels = fit.levels.levels;
-  const int groups = static_cast<int>(levels.size());
-  const auto df = static_cast<double>(fit.df_within);
-  const double q = studentizedRangeQuantile(confidence, groups, df);
-  for (std::size_t i = 0; i < levels.size(); ++i) {
-    for (std::size_t j = i + 1; j < levels.size(); ++j) {
-      TukeyComparison c;
-      c.level = levels[j];
-      c.other_level = levels[i];
-      c.comparison = c.level + "-" + c.other_level;
-      c.diff = fit.mean[j] - fit.mean[i];
-      const double se = std::sqrt((result.error_mean_sq / 2.0) * (1.0 / fit.count[i] + 1.0 / fit.count[j]));
-      c.lower = c.diff - q * se;
-      c.upper = c.diff + q * se;
-      c.p_adjusted = studentizedRangeUpperTail(std::abs(c.diff) / se, groups, df);
-      result.comparisons.push_back(std::move(c));
-    }
-  }
+  result.comparisons = tukeyComparisons(fit.levels.levels, fit.mean, fit.count, result, confidence);
   return result;
 }
 
