@@ -105,18 +105,14 @@ void printTable(const report::PowerTable& table, const PowerCliOptions& opt, con
   if (!opt.html.empty()) std::cout << "page: " << opt.html << "\n";
 }
 
-/// This process's replicates, run one after the other.
+/// This process's replicates, its threads' worth at once.
 std::vector<report::ReplicateOutcome> runMine(const sim::PowerStudy& study, int part, int parts, bool draw) {
   std::vector<int> mine;
   for (int r = part; r < study.plan().replicates; r += parts) mine.push_back(r);
   Progress progress("power", draw ? static_cast<double>(mine.size()) : 0.0, "studies");
-  std::vector<report::ReplicateOutcome> outcomes;
-  for (std::size_t k = 0; k < mine.size(); ++k) {
-    const auto label = fmt::format("power: study {} of {}", k + 1, mine.size());
-    outcomes.push_back(study.runReplicate(mine[k], [&](double fraction) {
-      if (draw) progress.update(static_cast<double>(k) + fraction, label);
-    }));
-  }
+  std::vector<report::ReplicateOutcome> outcomes = study.runReplicates(mine, [&](double done) {
+    if (draw) progress.update(done, fmt::format("power: {} studies", mine.size()));
+  });
   progress.finish();
   return outcomes;
 }

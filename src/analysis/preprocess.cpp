@@ -98,14 +98,20 @@ std::vector<double> interpolateAt(std::span<const double> t_s, std::span<const d
                      t_s.size(), values.size());
   std::vector<double> out;
   out.reserve(at_t_s.size());
+  std::size_t k = 0;
   for (std::size_t q = 0; q < at_t_s.size(); ++q) {
     const double t = at_t_s[q];
     HATTR_THROW_UNLESS(std::isfinite(t) && t >= t_s.front() && t <= t_s.back(),
                        "interpolateAt: query time [{}]: expected a time within [{}, {}] s, got {}",
                        q, t_s.front(), t_s.back(), t);
-    // The segment [t_s[k-1], t_s[k]] holding t (k = 1 .. n-1; a one-point series is exact).
-    const auto k =
-        static_cast<std::size_t>(std::upper_bound(t_s.begin(), t_s.end(), t) - t_s.begin());
+    // The segment [t_s[k-1], t_s[k]] holding t (k = 1 .. n-1; a one-point series is exact):
+    // the first time after t. Queries in order (a trial at the expert's steps) walk on from the
+    // last one's segment; others search.
+    if (q > 0 && t >= at_t_s[q - 1]) {
+      while (k < t_s.size() && t_s[k] <= t) ++k;
+    } else {
+      k = static_cast<std::size_t>(std::upper_bound(t_s.begin(), t_s.end(), t) - t_s.begin());
+    }
     if (k >= t_s.size()) {
       out.push_back(values.back());
       continue;

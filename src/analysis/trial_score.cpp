@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "hattr/core/error.hpp"
@@ -75,22 +76,35 @@ TrialScore TrialScorer::score(const HapticProfile& trial) const {
 
 std::vector<TrialScore> TrialScorer::scoreAll(std::span<const HapticProfile* const> trials, unsigned threads) const {
   // Each trial's span preprocessed onto the expert's time steps, the trials shared by the threads.
-  const unsigned workers = std::max(1u, threads);
-  std::array<std::vector<std::vector<double>>, 6> prepared;
-  for (auto& channel : prepared) channel.resize(trials.size());
-  detail::forEachChunk(trials.size(), 1, workers, [&](std::size_t i, std::size_t) {
-    const Cropped c = crop(*trials[i], "trial");
-    for (std::size_t k = 0; k < kScoredChannels.size(); ++k) {
-      prepared[k][i] = preprocessTrial(c.t_s, c.series[k], expert_t_, options_.normalization);
-    }
-  });
+  std::vector<PreparedTrial> prepared(trials.size());
+  detail::forEachChunk(trials.size(), 1, std::max(1u, threads),
+                       [&](std::size_t i, std::size_t) { prepared[i] = prepare(*trials[i]); });
+  return scorePrepared(prepared, threads);
+}
 
-  // DTW per channel, each channel's trials as one batch, the channels shared by the threads.
+PreparedTrial TrialScorer::prepare(const HapticProfile& trial) const {
+  const Cropped c = crop(trial, "trial");
+  PreparedTrial p;
+  for (std::size_t k = 0; k < kScoredChannels.size(); ++k) {
+    p.series[k] = preprocessTrial(c.t_s, c.series[k], expert_t_, options_.normalization);
+  }
+  return p;
+}
+
+std::vector<TrialScore> TrialScorer::scorePrepared(std::span<const PreparedTrial> trials, unsigned threads) const {
+  // DTW per channel, each channel's trials as one batch read in place, the channels shared by
+  // the threads; z only when asked.
   const DtwOptions dtw{.cost = options_.cost, .band_fraction = options_.band_fraction};
   std::array<std::vector<double>, 6> costs;
-  detail::forEachChunk(costs.size(), 1, workers, [&](std::size_t k, std::size_t) {
-    const std::vector<std::vector<double>> expert(trials.size(), expert_series_[k]);
-    costs[k] = dtwBatch(expert, prepared[k], dtw);
+  detail::forEachChunk(costs.size(), 1, std::max(1u, threads), [&](std::size_t k, std::size_t) {
+    if (kScoredChannels[k] == Channel::kZ && !options_.score_z) {
+      costs[k].assign(trials.size(), std::numeric_limits<double>::quiet_NaN());
+      return;
+    }
+    const std::vector<std::span<const double>> expert(trials.size(), expert_series_[k]);
+    std::vector<std::span<const double>> trial(trials.size());
+    for (std::size_t i = 0; i < trials.size(); ++i) trial[i] = trials[i].series[k];
+    costs[k] = dtwBatch(expert, trial, dtw);
   });
 
   std::vector<TrialScore> scores(trials.size());

@@ -110,9 +110,15 @@ void scoreTrials(const session::StudyDatabase& db, const AnalysisOptions& option
   if (options.progress) options.progress(0, total);
   for (std::size_t first = 0; first < scores.size(); first += chunk) {
     const std::size_t last = std::min(scores.size(), first + chunk);
-    // The chunk's trials by skill: each scorer takes its own at once.
+    // The chunk's trials not scored already, by skill: each scorer takes its own at once.
     std::map<std::string, std::vector<std::size_t>> by_skill;
-    for (std::size_t i = first; i < last; ++i) by_skill[scores[i].skill].push_back(i);
+    for (std::size_t i = first; i < last; ++i) {
+      if (const auto* known = options.scoredAlready(scores[i].trial_id)) {
+        scores[i].score = *known;
+      } else {
+        by_skill[scores[i].skill].push_back(i);
+      }
+    }
     for (const auto& [skill, indices] : by_skill) {
       std::vector<HapticProfile> profiles;
       for (const std::size_t i : indices) profiles.push_back(db.trialProfile(scores[i].trial_id));

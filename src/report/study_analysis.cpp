@@ -143,12 +143,20 @@ StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptio
   if (options.progress) options.progress(0, total);
   for (std::size_t first = 0; first < out.costs.size(); first += chunk) {
     const std::size_t last = std::min(out.costs.size(), first + chunk);
+    std::vector<std::size_t> unscored;
+    for (std::size_t i = first; i < last; ++i) {
+      if (const auto* known = options.scoredAlready(out.costs[i].trial_id)) {
+        out.costs[i].score = *known;
+      } else {
+        unscored.push_back(i);
+      }
+    }
     std::vector<HapticProfile> profiles;
-    for (std::size_t i = first; i < last; ++i) profiles.push_back(db.trialProfile(out.costs[i].trial_id));
+    for (const std::size_t i : unscored) profiles.push_back(db.trialProfile(out.costs[i].trial_id));
     std::vector<const HapticProfile*> pointers;
     for (const auto& p : profiles) pointers.push_back(&p);
     const std::vector<analysis::TrialScore> scores = scorer.scoreAll(pointers, options.threads);
-    for (std::size_t i = first; i < last; ++i) out.costs[i].score = scores[i - first];
+    for (std::size_t k = 0; k < unscored.size(); ++k) out.costs[unscored[k]].score = scores[k];
     if (options.progress) options.progress(static_cast<int>(last), total);
   }
   out.trajectory = analyzeMetric("trajectory", out.costs, true);

@@ -59,7 +59,10 @@ void ServoLoop::drainCommands() noexcept {
 }
 
 TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
-  const auto compute_start = monotonicNow();
+  // The tick's compute time, on a real clock only: simulated time runs as fast as it can, the
+  // figure would say nothing, and reading the clock is a twentieth of a simulated tick.
+  const bool timed = clock_.load(std::memory_order_relaxed) != LoopClock::kSimulated;
+  const auto compute_start = timed ? monotonicNow() : std::chrono::nanoseconds{};
   TickStatus status = TickStatus::kRunning;
 
   // Measured period; a gap beyond the threshold is a stall: zero force, ramp in again.
@@ -139,7 +142,7 @@ TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
   // A fault is published after its tick is counted and its sample is in the ring: whoever
   // sees the fault (acquire) and ends the recording at the tick count keeps the faulting tick.
   counters_.faults.store(safety_.faultCount(), std::memory_order_release);
-  tick_compute_.record((monotonicNow() - compute_start).count());
+  if (timed) tick_compute_.record((monotonicNow() - compute_start).count());
   return status;
 }
 

@@ -520,10 +520,10 @@ void StudyDatabase::writeNewStudy(const StudyDefinition& study, const std::map<s
 
 StudyDatabase StudyDatabase::open(const std::filesystem::path& file, OpenMode mode, const StoreOptions& options) {
   if (isPostgresStudy(file.string())) return openPostgres(file.string(), mode, options);
-  return openSqlite(file, mode);
+  return openSqlite(file, mode, options);
 }
 
-StudyDatabase StudyDatabase::openSqlite(const std::filesystem::path& file, OpenMode mode) {
+StudyDatabase StudyDatabase::openSqlite(const std::filesystem::path& file, OpenMode mode, const StoreOptions& options) {
   HATTR_THROW_UNLESS(std::filesystem::is_regular_file(file), "{}: no such study database (create one with `hattr study init`)",
                      file.string());
   sqlite3* handle = mode == OpenMode::kReadOnly ? openForReading(file) : openSqliteFile(file, SQLITE_OPEN_READWRITE);
@@ -555,9 +555,10 @@ StudyDatabase StudyDatabase::openSqlite(const std::filesystem::path& file, OpenM
                      "opened for writing (`hattr study run` or `hattr study analyze`), and cannot be read as it is",
                      file.string(), version, kStudySchemaVersion);
   if (mode != OpenMode::kReadOnly) {
-    db.exec("PRAGMA synchronous = FULL");
+    db.exec(options.scratch ? "PRAGMA synchronous = OFF" : "PRAGMA synchronous = FULL");
     db.exec("PRAGMA foreign_keys = ON");
   }
+  database.options_ = options;
   if (mode == OpenMode::kRunner) database.lock_fd_ = takeRunnerLock(file, db);
   if (mode != OpenMode::kReadOnly && version < kStudySchemaVersion) migrate(db, static_cast<int>(version));
   if (mode == OpenMode::kRunner) {
@@ -658,7 +659,15 @@ HapticProfile StudyDatabase::trialProfile(std::int64_t trial_id) const {
               "SELECT s.raw_pressure, s.raw_tilt, s.sample_count, s.data, t.metadata, t.subject, t.sequence, s.encoding "
               "FROM samples s JOIN trials t ON t.id = s.trial WHERE s.trial = ?");
   s.bind(1, trial_id);
-  HATTR_THROW_UNLESS(s.step(), "{}: trial {} has no recorded samples", file_.string(), trial_id);
+  if (!s.step()) {
+    // A completed trial without samples was run in a scratch study (completeTrial otherwise
+    // stores them in the same transaction).
+    Statement status(*db_, "SELECT status FROM trials WHERE id = ?");
+    status.bind(1, trial_id);
+    const bool completed = status.step() && status.text(0) == "completed";
+    throw InputError(fmt::format("{}: trial {} has no recorded samples{}", file_.string(), trial_id,
+                                 completed ? " (it was run in a scratch study, which keeps none)" : ""));
+  }
   // What was stored is checked as it is read back: a damaged trial is named, never half-read.
   try {
     const RawChannels raw{s.integer(0) != 0, s.integer(1) != 0};
@@ -752,7 +761,7 @@ json metadataJson(const ProfileMetadata& m) {
 
 void StudyDatabase::completeTrial(std::int64_t trial_id, const HapticProfile& profile, const std::string& outcome,
                                   const std::string& disturbed) {
-  const std::string data = encodeTrialSamples(profile, study_.resolution);
+  const std::string data = options_.scratch ? std::string() : encodeTrialSamples(profile, study_.resolution);
   Transaction t(*db_);
   holdLease(trial_id);
   Statement trial(*db_, "UPDATE trials SET status = 'completed', ended_utc = ?, outcome = ?, metadata = ?, disturbed = ? "
@@ -765,6 +774,10 @@ void StudyDatabase::completeTrial(std::int64_t trial_id, const HapticProfile& pr
   }
   trial.bind(5, trial_id).run();
   refuseUnwritable(trial.changes(), trial_id, "replaced");
+  if (options_.scratch) {  // the row only: the caller scored the samples as the trial ended
+    t.commit();
+    return;
+  }
   Statement samples(*db_,
                     "INSERT INTO samples (trial, raw_pressure, raw_tilt, sample_count, data, encoding) "
                     "VALUES (?, ?, ?, ?, ?, ?) ON CONFLICT (trial) DO UPDATE SET raw_pressure = excluded.raw_pressure, "

@@ -208,6 +208,7 @@ StudyDatabase StudyDatabase::createPostgres(const std::string& location, const S
 }
 
 StudyDatabase StudyDatabase::openPostgres(const std::string& location, OpenMode mode, const StoreOptions& options) {
+  HATTR_DEMAND(!options.scratch, "StoreOptions::scratch: only for an SQLite study, not {}", location);
   HATTR_THROW_UNLESS(options.lease_timeout_s >= 1.0 && options.lease_timeout_s <= 3600.0,
                      "lease timeout: expected 1 to 3600 s, got {} s", options.lease_timeout_s);
   StudyDatabase database(location, detail::connectPostgres(location));

@@ -89,6 +89,13 @@ int StudyRunner::run(const RunOptions& options) {
                      options.subjects_at_once);
   stopping_ = false;
   waiting_.clear();
+  if (options.environment) {
+    const StudyDefinition& study = db_.study();
+    HATTR_DEMAND(options.environment->deviceUri() == study.device && options.environment->rate_hz() == study.rate_hz,
+                 "RunOptions::environment: made for {} at {} Hz, the study runs {} at {} Hz",
+                 options.environment->deviceUri(), options.environment->rate_hz(), study.device, study.rate_hz);
+  }
+  environment_.given = options.environment;
   int ran = 0;
   for (;;) {
     held_elsewhere_ = false;
@@ -153,6 +160,12 @@ int StudyRunner::runSubjectsAtOnce(const std::vector<SubjectRecord>& subjects, c
   for (auto& worker : workers) worker.join();
   if (failure) std::rethrow_exception(failure);
   return ran;
+}
+
+TrialEnvironment& StudyRunner::environmentOf(EnvironmentSlot& slot) const {
+  if (slot.given) return *slot.given;
+  if (!slot.made) slot.made = std::make_unique<TrialEnvironment>(db_.study().device, world_, db_.study().rate_hz);
+  return *slot.made;
 }
 
 HapticProfile StudyRunner::storedProfile(std::int64_t trial_id) {
@@ -265,8 +278,7 @@ void StudyRunner::runTrialsLeft(const SubjectRecord& subject, const RunOptions& 
               ? withDatabase([&](StudyDatabase&) { return options.inject_stall_at_s(plan, steps.attempt()); })
               : -1.0;
       withDatabase([&](StudyDatabase& db) { steps.begin(db, session); });
-      if (!environment) environment = std::make_unique<TrialEnvironment>(study.device, world_, study.rate_hz);
-      result = runTrial(*environment, setup, participant.handForTrial(plan));
+      result = runTrial(environmentOf(environment), setup, participant.handForTrial(plan));
       outcome = withDatabase([&](StudyDatabase& db) { return steps.end(db, result, rescue_folder); });
       // A trial the device broke off is not data: marked failed, everything stored kept, and the run stops.
       if (outcome.ending == SubjectTrials::Ending::kFailed) {
@@ -283,7 +295,10 @@ void StudyRunner::runTrialsLeft(const SubjectRecord& subject, const RunOptions& 
 
     // The participant learns from what was stored (at a declared resolution, not what was
     // measured), as it does on resume: a resumed study stays bit-identical.
-    participant.trialCompleted(plan, study.resolution.empty() ? result.profile : storedProfile(record.id));
+    const HapticProfile stored = study.resolution.empty() ? HapticProfile() : storedProfile(record.id);
+    const HapticProfile& as_stored = study.resolution.empty() ? result.profile : stored;
+    participant.trialCompleted(plan, as_stored);
+    if (options.stored) options.stored(outcome.trial, as_stored);
     if (study.protocol.show_scores && options.score_text) {
       participant.prompt(withDatabase([&](StudyDatabase&) { return options.score_text(plan, result.profile); }));
     }

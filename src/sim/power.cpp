@@ -4,17 +4,23 @@
 
 #include <algorithm>
 #include <iterator>
+#include <numeric>
+#include <mutex>
 #include <optional>
 #include <set>
+#include <thread>
 
 #include <fmt/format.h>
 
 #include "hattr/analysis/anova.hpp"
+#include "hattr/analysis/trial_score.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/guidance/training_guidance.hpp"
+#include "hattr/render/world_config.hpp"
 #include "hattr/report/design_analysis.hpp"
 #include "hattr/session/study_database.hpp"
 #include "hattr/session/study_runner.hpp"
+#include "hattr/session/trial.hpp"
 #include "hattr/sim/in_silico.hpp"
 #include "hattr/sim/participant.hpp"
 
@@ -103,6 +109,66 @@ analysis::OneWayData subjectMeans(const std::vector<const report::DesignTrialSco
   return data;
 }
 
+/// A replicate's trials scored as they end, so that its store keeps no samples: each trial the
+/// analysis reads is prepared at once (its channels on the expert's time steps, a fraction of
+/// its recording) and scored with others a DTW batch at a time, exactly as the analysis would
+/// score it (same options, z left out: no metric uses it). Called from the subjects' threads.
+class ScoredAsTheyEnd {
+ public:
+  /// Every trial of a design (its analysis reads them all); the paper's recall trials.
+  ScoredAsTheyEnd(const session::StudyDatabase& db, bool every_trial) : every_trial_(every_trial) {
+    for (const auto& [skill, file] : db.study().experts) {
+      skills_.try_emplace(skill, analysis::TrialScorer(db.expert(skill), {.score_z = false}));
+    }
+  }
+
+  void add(const session::TrialRecord& trial, const HapticProfile& profile) {
+    if (!every_trial_ && trial.plan.phase != session::kPhaseRecall) return;
+    Skill& skill = skills_.at(trial.plan.skill);
+    analysis::PreparedTrial prepared = skill.scorer.prepare(profile);
+    Batch full;
+    {
+      const std::lock_guard lock(mutex_);
+      skill.waiting.ids.push_back(trial.id);
+      skill.waiting.trials.push_back(std::move(prepared));
+      if (skill.waiting.ids.size() < kBatch) return;
+      full = std::exchange(skill.waiting, {});
+    }
+    score(skill, full);
+  }
+
+  /// Every trial's score, the last partial batches scored now.
+  std::map<std::int64_t, analysis::TrialScore> finish() {
+    for (auto& [name, skill] : skills_) score(skill, std::exchange(skill.waiting, {}));
+    return std::move(scores_);
+  }
+
+ private:
+  // Whole SIMD blocks of the batch kernel (32 trials on any target): no idle lanes.
+  static constexpr std::size_t kBatch = 32;
+  struct Batch {
+    std::vector<std::int64_t> ids;
+    std::vector<analysis::PreparedTrial> trials;
+  };
+  struct Skill {
+    explicit Skill(analysis::TrialScorer s) : scorer(std::move(s)) {}
+    analysis::TrialScorer scorer;
+    Batch waiting;
+  };
+
+  void score(const Skill& skill, const Batch& batch) {
+    if (batch.ids.empty()) return;
+    const std::vector<analysis::TrialScore> scores = skill.scorer.scorePrepared(batch.trials);
+    const std::lock_guard lock(mutex_);
+    for (std::size_t i = 0; i < scores.size(); ++i) scores_[batch.ids[i]] = scores[i];
+  }
+
+  bool every_trial_;
+  std::map<std::string, Skill> skills_;
+  std::mutex mutex_;
+  std::map<std::int64_t, analysis::TrialScore> scores_;
+};
+
 }  // namespace
 
 PowerStudy::ScratchFolder::~ScratchFolder() {
@@ -183,6 +249,58 @@ PowerStudy::PowerStudy(const PowerOptions& options) : options_(options) {
 }
 
 report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const std::function<void(double)>& progress) const {
+  return runReplicate(replicate, {.subjects_at_once = options_.threads}, progress);
+}
+
+std::vector<report::ReplicateOutcome> PowerStudy::runReplicates(std::span<const int> replicates,
+                                                                const std::function<void(double)>& progress) const {
+  std::vector<report::ReplicateOutcome> outcomes(replicates.size());
+  const auto workers = static_cast<std::size_t>(options_.threads);
+  if (replicates.size() < workers) {
+    // Fewer replicates than threads: one at a time, its subjects at once.
+    std::optional<session::TrialEnvironment> environment;
+    for (std::size_t k = 0; k < replicates.size(); ++k) {
+      outcomes[k] = runReplicate(replicates[k], {.subjects_at_once = options_.threads, .environment = &environment},
+                                 [&](double fraction) {
+                                   if (progress) progress(static_cast<double>(k) + fraction);
+                                 });
+    }
+    return outcomes;
+  }
+  // A replicate per thread, its subjects one after the other, each thread keeping its paper:
+  // the analysis too runs on both cores, and the outcomes are the same to the bit.
+  std::atomic<std::size_t> next{0};
+  std::mutex progress_mutex;
+  std::vector<double> fractions(replicates.size(), 0.0);
+  std::atomic<bool> failed{false};
+  std::exception_ptr failure;
+  const auto work = [&] {
+    std::optional<session::TrialEnvironment> environment;
+    for (std::size_t k = next++; k < replicates.size() && !failed; k = next++) {
+      try {
+        outcomes[k] = runReplicate(replicates[k], {.subjects_at_once = 1, .environment = &environment},
+                                   [&](double fraction) {
+                                     const std::lock_guard lock(progress_mutex);
+                                     fractions[k] = fraction;
+                                     if (progress) progress(std::accumulate(fractions.begin(), fractions.end(), 0.0));
+                                   });
+      } catch (...) {
+        const std::lock_guard lock(progress_mutex);
+        if (!failure) failure = std::current_exception();
+        failed = true;
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (std::size_t w = 1; w < workers; ++w) threads.emplace_back(work);
+  work();
+  for (auto& t : threads) t.join();
+  if (failure) std::rethrow_exception(failure);
+  return outcomes;
+}
+
+report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const ReplicateRun& how,
+                                                  const std::function<void(double)>& progress) const {
   HATTR_THROW_UNLESS(replicate >= 0 && replicate < plan_.replicates, "power: replicate {}: expected 0 to {}", replicate,
                      plan_.replicates - 1);
   // The largest design's subjects, seeded as the in-silico study with seed + r.
@@ -196,22 +314,35 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const std::func
   std::optional<report::ReplicateOutcome> design;
   {
     (void)session::StudyDatabase::create(file, study);
-    session::StudyDatabase db = session::StudyDatabase::open(file, session::OpenMode::kRunner);
+    // Scored as the trials end, the store keeps no samples (unless the study stores them at a
+    // resolution: then its subjects learn from what was stored, read back).
+    const bool scratch = study.resolution.empty();
+    session::StudyDatabase db = session::StudyDatabase::open(file, session::OpenMode::kRunner, {.scratch = scratch});
     session::StudyRunner runner(db, [](const session::SubjectRecord& s, const HapticProfile& expert) {
       return makeSimulatedParticipant(s, expert);
     });
+    ScoredAsTheyEnd scored(db, !study.paper_form);
+    if (how.environment && !*how.environment) {
+      how.environment->emplace(study.device, render::parseWorldConfig(study.world.dump(), "study world"), study.rate_hz);
+    }
     const double total = static_cast<double>(db.trials().size());
     int done = 0;
     session::RunOptions run;
-    run.subjects_at_once = options_.threads;
+    run.subjects_at_once = how.subjects_at_once;
+    run.environment = how.environment ? &**how.environment : nullptr;
     run.progress = [&](const session::RunProgress&) {
       if (progress) progress(++done / total);
     };
+    if (scratch) run.stored = [&scored](const session::TrialRecord& t, const HapticProfile& p) { scored.add(t, p); };
     (void)runner.run(run);
+    std::map<std::int64_t, analysis::TrialScore> scores;
+    if (scratch) scores = scored.finish();
+    const report::AnalysisOptions options{.threads = static_cast<unsigned>(how.subjects_at_once),
+                                          .scored = scratch ? &scores : nullptr};
     if (study.paper_form) {
-      analysis = report::analyzeStudy(db, {.threads = static_cast<unsigned>(options_.threads)});
+      analysis = report::analyzeStudy(db, options);
     } else {
-      design = designOutcome(replicate, db);
+      design = designOutcome(replicate, db, options);
     }
   }
   std::filesystem::remove_all(folder);
@@ -247,8 +378,9 @@ std::vector<session::SubjectSpec> PowerStudy::replicateSubjects(int replicate) c
   return subjects;
 }
 
-report::ReplicateOutcome PowerStudy::designOutcome(int replicate, const session::StudyDatabase& db) const {
-  const report::DesignAnalysis analysis = report::analyzeDesign(db, {.threads = static_cast<unsigned>(options_.threads)});
+report::ReplicateOutcome PowerStudy::designOutcome(int replicate, const session::StudyDatabase& db,
+                                                  const report::AnalysisOptions& options) const {
+  const report::DesignAnalysis analysis = report::analyzeDesign(db, options);
   // Each subject's number within its group, from its id (GROUP01 ...).
   const auto number = [](const std::string& id) { return std::stoi(id.substr(id.size() - 2)); };
   report::ReplicateOutcome outcome{replicate, {}};

@@ -226,16 +226,29 @@ double SimulatedTrainee::paceFactor(std::uint64_t trial_seed) const {
   return std::clamp(std::exp(traits_.pace_cv * normal.normal()), 0.5, 2.0);
 }
 
-Eigen::MatrixXd SimulatedTrainee::project(const Eigen::MatrixXd& values, const std::vector<char>& mask) const {
-  Eigen::MatrixXd phi_masked = phi_;
-  for (std::size_t i = 0; i < mask.size(); ++i) {
-    if (!mask[i]) phi_masked.row(static_cast<Eigen::Index>(i)).setZero();
+const SimulatedTrainee::Projection& SimulatedTrainee::projectionFor(const std::vector<char>& mask) {
+  for (const Projection& p : projections_) {
+    if (!p.mask.empty() && p.mask == mask) return p;
   }
-  Eigen::MatrixXd gram = phi_masked.transpose() * phi_masked;
+  Projection& p = projections_[next_projection_];
+  next_projection_ = (next_projection_ + 1) % projections_.size();
+  p.mask = mask;
+  p.phi_masked = phi_;
+  for (std::size_t i = 0; i < mask.size(); ++i) {
+    if (!mask[i]) p.phi_masked.row(static_cast<Eigen::Index>(i)).setZero();
+  }
+  Eigen::MatrixXd gram = p.phi_masked.transpose() * p.phi_masked;
   gram.diagonal().array() += ridge_;
-  const Eigen::MatrixXd rhs = phi_masked.transpose() * values;
-  if (gram.diagonal().maxCoeff() <= 0.0) return Eigen::MatrixXd::Zero(gram.rows(), values.cols());
-  return gram.ldlt().solve(rhs);
+  p.empty = gram.diagonal().maxCoeff() <= 0.0;
+  if (!p.empty) p.gram.compute(gram);
+  return p;
+}
+
+Eigen::MatrixXd SimulatedTrainee::project(const Eigen::MatrixXd& values, const std::vector<char>& mask) {
+  const Projection& p = projectionFor(mask);
+  if (p.empty) return Eigen::MatrixXd::Zero(p.phi_masked.cols(), values.cols());
+  const Eigen::MatrixXd rhs = p.phi_masked.transpose() * values;
+  return p.gram.solve(rhs);
 }
 
 void SimulatedTrainee::learn(const HapticProfile& recorded, bool template_shown, double pace_factor) {

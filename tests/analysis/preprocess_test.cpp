@@ -110,6 +110,33 @@ TEST(InterpolateAt, IsExactOnALinearFunctionAndHitsSamplesExactly) {
   }
 }
 
+// Queries in order walk the segments; queries out of order search them: the same values.
+TEST(InterpolateAt, GivesTheSameValueToAQueryInOrderOrOutOfIt) {
+  const std::uint64_t seed = test::testSeed(33);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> gap(0.001, 0.1);
+  std::vector<double> t{0.0};
+  for (int i = 0; i < 200; ++i) t.push_back(t.back() + gap(rng));
+  std::vector<double> v;
+  for (const double ti : t) v.push_back(std::sin(7.0 * ti));
+  std::uniform_real_distribution<double> when(t.front(), t.back());
+  std::vector<double> sorted{t.front(), t[3], t[3], t.back()};
+  for (int q = 0; q < 300; ++q) sorted.push_back(when(rng));
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<double> shuffled = sorted;
+  std::shuffle(shuffled.begin(), shuffled.end(), rng);
+  const auto in_order = interpolateAt(t, v, sorted);
+  const auto out_of_order = interpolateAt(t, v, shuffled);
+  for (std::size_t q = 0; q < sorted.size(); ++q) {
+    const double alone = interpolateAt(t, v, std::vector<double>{sorted[q]}).front();
+    EXPECT_EQ(in_order[q], alone) << "seed " << seed << " query " << q;
+  }
+  for (std::size_t q = 0; q < shuffled.size(); ++q) {
+    const double alone = interpolateAt(t, v, std::vector<double>{shuffled[q]}).front();
+    EXPECT_EQ(out_of_order[q], alone) << "seed " << seed << " query " << q;
+  }
+}
+
 // ---- The whole chain -------------------------------------------------------------------------
 
 // A ramp v = 5 + 2 t over 2..6 s, irregularly sampled, onto expert times in 0..1 s:

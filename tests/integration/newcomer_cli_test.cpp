@@ -137,7 +137,9 @@ TEST(Newcomer, StudyRunAndReportShowProgressOnATerminalAndNothingInAPipe) {
 
   const RunResult run = runOnTerminal(dir, "study run --db " + db);
   ASSERT_EQ(run.exit_code, 0) << run.out;
-  EXPECT_THAT(run.out, HasSubstr("study run: S01"));
+  // A subject's line (at most ten draws a second, the last always: which subjects show between
+  // depends on the host's speed).
+  EXPECT_THAT(run.out, HasSubstr("study run: S0"));
   EXPECT_THAT(run.out, HasSubstr("/34 trials"));  // 36 planned, 2 done before
   EXPECT_THAT(run.out, HasSubstr("ran 34 trials"));
 

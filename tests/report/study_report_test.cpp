@@ -27,7 +27,8 @@ using ::testing::StartsWith;
 /// 1 training + 3 recall trials each.
 struct CompletedStudy {
   /// `protocol_extra`: more protocol keys (JSON, each followed by a comma); `options`: the run's.
-  explicit CompletedStudy(const std::string& protocol_extra = "", session::RunOptions options = {}) {
+  explicit CompletedStudy(const std::string& protocol_extra = "", session::RunOptions options = {},
+                          const session::StoreOptions& store = {}) {
     HapticProfile expert({.subject = "expert", .skill = "curve", .nominal_rate_hz = 100.0});
     for (int i = 0; i <= 40; ++i) {
       Sample s;
@@ -43,11 +44,19 @@ struct CompletedStudy {
         "world": {"relief": {"kind": "flat"}},
         "subjects": {"count": 3, "participant": "script", "options": {"jitter_mm": 2.0}}})");
     { (void)session::StudyDatabase::create(dir / "s.sqlite", session::loadStudy(dir / "study.json")); }
-    session::StudyDatabase db = session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kRunner);
+    session::StudyDatabase db = session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kRunner, store);
     session::StudyRunner(db, session::makeScriptParticipant).run(options);
   }
   test::TempDir dir;
 };
+
+/// Every channel of every sample the same to the bit.
+void expectSameSamples(const HapticProfile& a, const HapticProfile& b, const std::string& what) {
+  ASSERT_EQ(a.size(), b.size()) << what;
+  for (const Channel c : {Channel::kTime, Channel::kX, Channel::kY, Channel::kZ, Channel::kFx, Channel::kFy, Channel::kFz}) {
+    EXPECT_EQ(a.channel(c), b.channel(c)) << what << " channel " << static_cast<int>(c);
+  }
+}
 
 /// A profile's times and one channel within its writing span (as the scorer takes them).
 std::pair<std::vector<double>, std::vector<double>> spanOf(const HapticProfile& p, Channel channel) {
@@ -443,6 +452,96 @@ TEST(OneScorer, TheReportHattrDtwAndTheStudioAgreeOnEveryScore) {
       EXPECT_NEAR(report, single, 1e-12 * std::max(1.0, std::abs(single)));
     }
   }
+}
+
+// What a power analysis does with its replicates: trials prepared as they end and scored in
+// batches of any make-up give scoreAll's numbers to the bit; z is left out when asked.
+TEST(OneScorer, TrialsPreparedOneByOneAndScoredInAnyBatchesGiveScoreAllsNumbers) {
+  CompletedStudy study;
+  const auto db = session::StudyDatabase::open(study.dir / "s.sqlite", session::OpenMode::kReadOnly);
+  std::vector<HapticProfile> trials;
+  for (const auto& t : db.trials()) trials.push_back(db.trialProfile(t.id));
+  std::vector<const HapticProfile*> pointers;
+  for (const auto& t : trials) pointers.push_back(&t);
+  ASSERT_EQ(trials.size(), 3u * 3u * 4u);
+  const analysis::TrialScorer scorer(db.expert("curve"));
+  const std::vector<analysis::TrialScore> all = scorer.scoreAll(pointers, 2);
+
+  const analysis::TrialScorer without_z(db.expert("curve"), {.score_z = false});
+  std::vector<analysis::PreparedTrial> prepared;
+  for (const auto& t : trials) prepared.push_back(without_z.prepare(t));
+  // Batches of 1, 5 and the rest (a full SIMD block and a part of one, on any target).
+  std::vector<analysis::TrialScore> batched;
+  for (const auto& [first, count] : {std::pair<std::size_t, std::size_t>{0, 1}, {1, 5}, {6, prepared.size() - 6}}) {
+    const auto scores = without_z.scorePrepared(std::span(prepared).subspan(first, count));
+    batched.insert(batched.end(), scores.begin(), scores.end());
+  }
+  ASSERT_EQ(batched.size(), all.size());
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    EXPECT_EQ(batched[i].x, all[i].x) << i;
+    EXPECT_EQ(batched[i].y, all[i].y) << i;
+    EXPECT_EQ(batched[i].fx, all[i].fx) << i;
+    EXPECT_EQ(batched[i].fy, all[i].fy) << i;
+    EXPECT_EQ(batched[i].fz, all[i].fz) << i;
+    EXPECT_TRUE(std::isnan(batched[i].z)) << i;
+    EXPECT_GT(all[i].z, 0.0) << i << ": scored when not asked otherwise";
+  }
+}
+
+// A scratch study (a power analysis's replicate) stores each trial's row but no samples; the run
+// hands every trial as stored to the caller, who scores it; the analysis takes those scores and
+// comes to the numbers of the same study stored in full.
+TEST(ScratchStudy, KeepsNoSamplesAndItsAnalysisFromScoresGivenIsTheFullStudysToTheBit) {
+  CompletedStudy full;
+  std::map<std::int64_t, HapticProfile> handed;
+  session::RunOptions options;
+  options.stored = [&handed](const session::TrialRecord& t, const HapticProfile& p) {
+    EXPECT_EQ(t.status, session::TrialStatus::kCompleted);
+    EXPECT_TRUE(handed.emplace(t.id, p).second) << "trial " << t.id << " handed twice";
+  };
+  CompletedStudy scratch("", options, {.scratch = true});
+
+  const auto full_db = session::StudyDatabase::open(full.dir / "s.sqlite", session::OpenMode::kReadOnly);
+  const auto scratch_db = session::StudyDatabase::open(scratch.dir / "s.sqlite", session::OpenMode::kReadOnly);
+  const std::vector<session::TrialRecord> trials = scratch_db.trials();
+  ASSERT_EQ(handed.size(), trials.size());
+  for (const auto& t : trials) {
+    EXPECT_EQ(t.status, session::TrialStatus::kCompleted);
+    expectSameSamples(handed.at(t.id), full_db.trialProfile(t.id), fmt::format("trial {}", t.id));
+  }
+  try {
+    (void)scratch_db.trialProfile(trials.front().id);
+    FAIL() << "a scratch study keeps no samples";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("has no recorded samples (it was run in a scratch study, which keeps none)"));
+  }
+  EXPECT_THROW((void)analyzeStudy(scratch_db), InputError) << "without the scores there is nothing to score";
+
+  // The scores of the trials handed over, as a power analysis keeps them.
+  const analysis::TrialScorer scorer(scratch_db.expert("curve"));
+  std::map<std::int64_t, analysis::TrialScore> scores;
+  for (const auto& [id, profile] : handed) scores[id] = scorer.score(profile);
+  const StudyAnalysis from_scores = analyzeStudy(scratch_db, {.scored = &scores});
+  const StudyAnalysis stored = analyzeStudy(full_db);
+  ASSERT_EQ(from_scores.costs.size(), stored.costs.size());
+  for (std::size_t i = 0; i < stored.costs.size(); ++i) {
+    EXPECT_EQ(from_scores.costs[i].trajectory(), stored.costs[i].trajectory()) << i;
+    EXPECT_EQ(from_scores.costs[i].forceProfile(), stored.costs[i].forceProfile()) << i;
+  }
+  EXPECT_EQ(from_scores.trajectory.overall.row("mode").p, stored.trajectory.overall.row("mode").p);
+  EXPECT_EQ(from_scores.force.overall.row("mode").f, stored.force.overall.row("mode").f);
+}
+
+// The scores given are used as they are, the others computed: a given score shows in the costs.
+TEST(StudyAnalysis, TakesTheScoresItIsGivenAndScoresTheOthers) {
+  CompletedStudy study;
+  const auto db = session::StudyDatabase::open(study.dir / "s.sqlite", session::OpenMode::kReadOnly);
+  const StudyAnalysis plain = analyzeStudy(db);
+  std::map<std::int64_t, analysis::TrialScore> given{{plain.costs[0].trial_id, {1.0, 2.0, 3.0, 4.0, 5.0, 6.0}}};
+  const StudyAnalysis a = analyzeStudy(db, {.scored = &given});
+  EXPECT_EQ(a.costs[0].trajectory(), 3.0);
+  EXPECT_EQ(a.costs[0].forceProfile(), 15.0);
+  for (std::size_t i = 1; i < a.costs.size(); ++i) EXPECT_EQ(a.costs[i].trajectory(), plain.costs[i].trajectory()) << i;
 }
 
 }  // namespace

@@ -169,6 +169,41 @@ TEST(PowerStudy, AGroupDesignsReplicateIsTheDesignRunWithItsSubjectsAndCompared)
   EXPECT_NE(outcome.designs[0][0].p_mode, outcome.designs[1][0].p_mode);
 }
 
+// Replicates two at once (each on its own thread, its subjects in turn, each thread keeping
+// its paper), or one at a time with its subjects at once: the outcomes of each on its own.
+TEST(PowerStudy, ReplicatesRunTogetherAreEachTheSameAsRunOnItsOwn) {
+  HATTR_SKIP_UNDER_THREAD_SANITIZER("three replicates run three ways; the runner's threads are tested under it in "
+                                    "InSilicoStudy.SubjectsRunAtOnceGiveTheSameTrialsToTheBitAsOneAtATime");
+  test::TempDir dir;
+  const PowerStudy power({.training_trials = 1, .recall_trials = 2, .subject_counts = {3}, .replicates = 3,
+                          .seed = 11, .threads = 2, .scratch = dir / "scratch"});
+  const auto encoded = [](const report::ReplicateOutcome& o) {
+    std::vector<double> flat;
+    report::encodeOutcome(o, flat);
+    return flat;
+  };
+  const std::vector<int> order{2, 0, 1};
+  double last_progress = 0.0;
+  const std::vector<report::ReplicateOutcome> together = power.runReplicates(order, [&](double done) {
+    EXPECT_GE(done, 0.0);
+    EXPECT_LE(done, 3.0 + 1e-9);
+    last_progress = done;
+  });
+  EXPECT_NEAR(last_progress, 3.0, 1e-9);
+  const std::vector<report::ReplicateOutcome> one_at_a_time = power.runReplicates(std::vector<int>{1});
+  ASSERT_EQ(together.size(), 3u);
+  ASSERT_EQ(one_at_a_time.size(), 1u);
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    EXPECT_EQ(together[k].replicate, order[k]);
+    const auto alone = encoded(power.runReplicate(order[k]));
+    EXPECT_EQ(encoded(together[k]), alone) << "replicate " << order[k];
+    if (order[k] == 1) {
+      EXPECT_EQ(encoded(one_at_a_time.front()), alone);
+    }
+  }
+  EXPECT_NE(encoded(together[0]), encoded(together[1])) << "different replicates are different studies";
+}
+
 TEST(PowerStudy, RefusesDesignsItCannotAnalyzeNamingTheOption) {
   const auto message = [](const PowerOptions& o) {
     try {

@@ -25,6 +25,9 @@ struct ScoreOptions {
   Normalization normalization = Normalization::kPaper;
   DtwCost cost = DtwCost::kAbsolute;
   double band_fraction = -1.0;  ///< Sakoe–Chiba band (negative: none, the paper's)
+  /// False: the pen height z is not scored (TrialScore::z is NaN), a sixth less DTW, for
+  /// analyses that use only the shape and force (a power analysis).
+  bool score_z = true;
 };
 
 /// One trial's DTW costs per channel (normalized units).
@@ -43,6 +46,12 @@ struct TimeSpan {
 };
 [[nodiscard]] TimeSpan writingSpan(const HapticProfile& profile);
 
+/// A trial's scored channels (x, y, z, fx, fy, fz) normalized and resampled onto the expert's
+/// time steps (steps 1 and 2): what the DTW compares, a fraction of the trial's size.
+struct PreparedTrial {
+  std::array<std::vector<double>, 6> series;
+};
+
 /// Scores trials against one expert profile, whose channels are prepared once.
 class TrialScorer {
  public:
@@ -53,6 +62,12 @@ class TrialScorer {
   /// by up to `threads` threads; the same numbers as score() on each.
   [[nodiscard]] std::vector<TrialScore> scoreAll(std::span<const HapticProfile* const> trials,
                                                  unsigned threads = 1) const;
+  /// scoreAll in two steps, for trials scored as they end (a power analysis keeps the prepared
+  /// channels, not the recordings): steps 1-2 of one trial, then step 3 of many. The same
+  /// numbers as scoreAll, whichever trials are scored together.
+  [[nodiscard]] PreparedTrial prepare(const HapticProfile& trial) const;
+  [[nodiscard]] std::vector<TrialScore> scorePrepared(std::span<const PreparedTrial> trials,
+                                                      unsigned threads = 1) const;
   /// The expert time steps each trial is resampled to.
   [[nodiscard]] std::size_t expertSamples() const noexcept { return expert_t_.size(); }
   [[nodiscard]] const ScoreOptions& options() const noexcept { return options_; }

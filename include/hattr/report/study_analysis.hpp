@@ -29,6 +29,15 @@ struct AnalysisOptions {
   analysis::DtwCost cost = analysis::DtwCost::kAbsolute;
   double band_fraction = -1.0;  ///< Sakoe–Chiba band (negative: none, the paper's)
   unsigned threads = 2;
+  /// Trials scored already, by trial id (a power analysis scores its replicates' trials as
+  /// they end and keeps no samples): these are not read from the store.
+  const std::map<std::int64_t, analysis::TrialScore>* scored = nullptr;
+  /// The trial's score in `scored`, or nullptr.
+  [[nodiscard]] const analysis::TrialScore* scoredAlready(std::int64_t trial_id) const {
+    if (scored == nullptr) return nullptr;
+    const auto it = scored->find(trial_id);
+    return it == scored->end() ? nullptr : &it->second;
+  }
   /// Called on the calling thread as the recall trials are scored: scored so far, in all.
   std::function<void(int scored, int total)> progress;
 };

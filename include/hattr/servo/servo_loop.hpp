@@ -116,7 +116,8 @@ class ServoLoop {
   /// The newest sample, for one display reader.
   [[nodiscard]] TripleBuffer<Sample>& latest() noexcept { return latest_; }
   [[nodiscard]] const LiveCounters& counters() const noexcept { return counters_; }
-  /// |period − nominal| and tick compute time. Read only while the loop is stopped.
+  /// |period − nominal| and tick compute time (on a real clock: none in simulated time). Read
+  /// only while the loop is stopped.
   [[nodiscard]] const DurationHistogram& periodError() const noexcept { return period_error_; }
   [[nodiscard]] const DurationHistogram& tickCompute() const noexcept { return tick_compute_; }
   [[nodiscard]] const ForceSafety& safety() const noexcept { return safety_; }

@@ -68,11 +68,17 @@ struct SubjectRecord {
 
 enum class OpenMode { kReadOnly, kReadWrite, kRunner };
 
-/// How a runner holds its subjects on a PostgreSQL study (SQLite has one runner: no leases).
+/// How a study is held open.
 struct StoreOptions {
-  /// A subject's lease lapses this long after its station's last renewal (renewed every
-  /// third of it); then another station may take the subject over.
+  /// PostgreSQL (SQLite has one runner: no leases): a subject's lease lapses this long after
+  /// its station's last renewal (renewed every third of it); then another station may take
+  /// the subject over.
   double lease_timeout_s = 30.0;
+  /// A scratch study, SQLite only (a power analysis's replicate, scored as its trials end and
+  /// removed once analyzed): a completed trial's row and metadata are stored but not its
+  /// samples (trialProfile refuses the trial), and commits are not synced to disk. Never for
+  /// data that matters.
+  bool scratch = false;
 };
 
 /// A station's write refused because another station took the subject over (PostgreSQL: this
@@ -194,7 +200,7 @@ class StudyDatabase {
   static StudyDatabase createPostgres(const std::string& location, const StudyDefinition& study,
                                       const std::map<std::string, std::string>& expert_csv,
                                       const std::function<void(StudyDatabase&)>& fill);
-  static StudyDatabase openSqlite(const std::filesystem::path& file, OpenMode mode);
+  static StudyDatabase openSqlite(const std::filesystem::path& file, OpenMode mode, const StoreOptions& options);
   static StudyDatabase openPostgres(const std::string& location, OpenMode mode, const StoreOptions& options);
   StudyDatabase(std::filesystem::path file, std::unique_ptr<detail::SqlConnection> db);
   void loadDefinition();

@@ -91,6 +91,15 @@ struct RunOptions {
   bool follow_calendar = false;
   /// Today, for follow_calendar (none: the station's local date).
   std::optional<LocalDate> today;
+  /// After each trial is stored, on the thread that ran it (not under the database's lock:
+  /// other subjects' trials go on meanwhile), with the trial's record and its profile as
+  /// stored: what a caller scores without reading it back (a scratch store keeps no samples).
+  std::function<void(const TrialRecord&, const HapticProfile&)> stored;
+  /// The paper and device to run on, the caller's (a power analysis reuses one across its
+  /// replicates: its texture takes a while to generate); made from the study's device, world
+  /// and rate. Used by the calling thread; subjects run at once get their own besides. Null:
+  /// the runner makes one at the first trial.
+  TrialEnvironment* environment = nullptr;
 };
 
 /// A subject left because its next session is not due yet (RunOptions::follow_calendar).
@@ -116,9 +125,14 @@ class StudyRunner {
   [[nodiscard]] const std::vector<WaitingSubject>& waiting() const noexcept { return waiting_; }
 
  private:
-  /// The paper and the device of one thread, made at its first trial (the paper's texture
-  /// takes a while to generate, and a finished study needs none).
-  using EnvironmentSlot = std::unique_ptr<TrialEnvironment>;
+  /// The paper and the device of one thread: the caller's (RunOptions::environment), else made
+  /// at its first trial (the paper's texture takes a while to generate, and a finished study
+  /// needs none).
+  struct EnvironmentSlot {
+    TrialEnvironment* given = nullptr;
+    std::unique_ptr<TrialEnvironment> made;
+  };
+  TrialEnvironment& environmentOf(EnvironmentSlot& slot) const;
   /// One pass over the subjects (of options.only_subject): each with trials left that this
   /// runner can claim runs to its end; those other stations hold set held_elsewhere_.
   int runEverySubjectOnce(const RunOptions& options, int ran_before);

@@ -14,11 +14,15 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "hattr/report/power.hpp"
+#include "hattr/report/study_analysis.hpp"
 #include "hattr/session/study.hpp"
+#include "hattr/session/trial.hpp"
 
 namespace hattr::sim {
 
@@ -55,13 +59,29 @@ class PowerStudy {
   PowerStudy& operator=(const PowerStudy&) = delete;
 
   [[nodiscard]] const report::PowerPlan& plan() const noexcept { return plan_; }
-  /// Runs replicate r (0 <= r < replicates). `progress` gets the fraction of its trials run.
+  /// Runs replicate r (0 <= r < replicates), its subjects options.threads at once.
+  /// `progress` gets the fraction of its trials run.
   [[nodiscard]] report::ReplicateOutcome runReplicate(int replicate,
                                                       const std::function<void(double)>& progress = {}) const;
+  /// Runs the replicates given, options.threads at once, each on a thread with its subjects one
+  /// after the other (with fewer replicates than threads: one at a time, its subjects at once).
+  /// The outcomes in the order given, each the same to the bit as runReplicate's. `progress`
+  /// gets the replicates run so far (fractions of those under way included), one call at a time.
+  [[nodiscard]] std::vector<report::ReplicateOutcome> runReplicates(
+      std::span<const int> replicates, const std::function<void(double)>& progress = {}) const;
 
  private:
+  /// How a replicate runs: its subjects at once, and the thread's paper and device (made at
+  /// its first replicate, kept for the next).
+  struct ReplicateRun {
+    int subjects_at_once = 1;
+    std::optional<session::TrialEnvironment>* environment = nullptr;
+  };
+  [[nodiscard]] report::ReplicateOutcome runReplicate(int replicate, const ReplicateRun& how,
+                                                      const std::function<void(double)>& progress) const;
   /// A design's outcome for each number of subjects per group, from its replicate's study.
-  [[nodiscard]] report::ReplicateOutcome designOutcome(int replicate, const session::StudyDatabase& db) const;
+  [[nodiscard]] report::ReplicateOutcome designOutcome(int replicate, const session::StudyDatabase& db,
+                                                       const report::AnalysisOptions& options) const;
   /// The replicate's subjects: the paper's (S01 ...), or per group of a design (GROUP01 ...).
   [[nodiscard]] std::vector<session::SubjectSpec> replicateSubjects(int replicate) const;
 

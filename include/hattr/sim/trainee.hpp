@@ -20,11 +20,13 @@
 /// Everything is seeded: the same model, traits, template and seed give the same trainee,
 /// and the same trial seed the same noise, so modes can be compared on common random numbers.
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 
 #include "hattr/core/haptic_profile.hpp"
@@ -140,7 +142,16 @@ class SimulatedTrainee {
   [[nodiscard]] HapticProfile profileOf(const Series& s, const std::string& source, double pace_factor = 1.0) const;
   [[nodiscard]] PlanWeights planWeights() const { return deviation_ + fast_ + slow_; }
   /// Least-squares weights of `values` (N × c) over the masked samples.
-  [[nodiscard]] Eigen::MatrixXd project(const Eigen::MatrixXd& values, const std::vector<char>& mask) const;
+  [[nodiscard]] Eigen::MatrixXd project(const Eigen::MatrixXd& values, const std::vector<char>& mask);
+  /// The basis over the masked samples and its factored Gram matrix, kept for the next mask
+  /// that is the same (most trials' felt mask is): the same numbers, computed once.
+  struct Projection {
+    std::vector<char> mask;
+    Eigen::MatrixXd phi_masked;       // N × K, rows outside the mask zero
+    Eigen::LDLT<Eigen::MatrixXd> gram;  // of phi_masked, plus the ridge
+    bool empty = true;                // no masked sample: the weights are zero
+  };
+  const Projection& projectionFor(const std::vector<char>& mask);
 
   SubjectTraits traits_;
   NormalizedGaussianBasis basis_;
@@ -172,6 +183,8 @@ class SimulatedTrainee {
   PlanWeights fast_;
   PlanWeights slow_;
   int trials_learned_ = 0;
+  std::array<Projection, 2> projections_;  // the last two masks' (learn's visual and felt)
+  std::size_t next_projection_ = 0;       // the one replaced next
 };
 
 }  // namespace hattr::sim
