@@ -12,6 +12,7 @@
 #include "hattr/report/study_report.hpp"
 #include "hattr/session/study_export.hpp"
 #include "hattr/session/study_schedule.hpp"
+#include "hattr/sim/expert.hpp"
 
 namespace hattr::cli {
 namespace {
@@ -74,7 +75,8 @@ nlohmann::json statusJson(const session::StudyDatabase& db) {
 }
 
 void runInit(const StudyOptions& opt) {
-  const session::StudyDefinition study = session::loadStudy(opt.study_file);
+  session::StudyDefinition study = session::loadStudy(opt.study_file);
+  sim::recordNamedExperts(study);  // experts named by their glyph ("na", "ந")
   // An expert the device cannot render is refused before anything is made (issue 38).
   if (!session::checkExpertsRenderable(study)) {
     std::cerr << fmt::format("hattr: the experts were not checked against {}: its limits are known once it is opened "

@@ -18,6 +18,7 @@
 #include "hattr/report/study_analysis.hpp"
 #include "hattr/session/study.hpp"
 #include "hattr/session/study_database.hpp"
+#include "hattr/sim/expert.hpp"
 
 namespace hattr::python {
 namespace {
@@ -152,7 +153,8 @@ void bindStudies(py::module_& m) {
       "create_study",
       [](const std::filesystem::path& path, const StudySource& study, const std::filesystem::path& base_dir) {
         {
-          const session::StudyDefinition definition = definitionOf(study, base_dir);
+          session::StudyDefinition definition = definitionOf(study, base_dir);
+          sim::recordNamedExperts(definition);                 // experts named by their glyph ("na", "ந")
           (void)session::checkExpertsRenderable(definition);  // an expert the device cannot render: refused
           (void)StudyDatabase::create(path, definition);
         }
@@ -160,8 +162,8 @@ void bindStudies(py::module_& m) {
       },
       py::arg("path"), py::arg("study"), py::kw_only(), py::arg("base_dir") = std::filesystem::path("."),
       "Creates a study database at path from a study file (a path) or its JSON as a dict (expert paths relative "
-      "to base_dir), as `hattr study init`; returns it opened read-only. InputError for an existing file or a bad "
-      "study.");
+      "to base_dir; an expert may be named by its glyph, 'na' or 'ந', and is then recorded), as `hattr study "
+      "init`; returns it opened read-only. InputError for an existing file or a bad study.");
   m.def(
       "run_study",
       [](const std::filesystem::path& path, const std::optional<std::string>& subject, std::optional<int> max_trials) {

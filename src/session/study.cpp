@@ -165,6 +165,12 @@ StudyDefinition parseStudy(std::string_view json_text, std::string_view source, 
 
 namespace {
 
+/// Whether an expert's value names a file rather than a glyph: a '/' in it, or a .csv name.
+bool looksLikeAFile(std::string_view value) {
+  return value.find('/') != std::string_view::npos ||
+         (value.size() > 4 && std::filesystem::path(value).extension() == ".csv");
+}
+
 StudyDefinition parseStudyObject(const json& root, std::string_view source, const std::filesystem::path& base_dir,
                                  bool check_files) {
   Problems problems(source);
@@ -200,11 +206,23 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
   } else {
     for (const auto& item : it->items()) {
       if (!item.value().is_string()) {
-        problems.add(fmt::format("experts.{}: expected a file name, got {}", item.key(), jsonExcerpt(item.value())));
+        problems.add(fmt::format("experts.{}: expected a file, a built-in glyph's name or its character, got {}", item.key(),
+                                 jsonExcerpt(item.value())));
         continue;
       }
-      std::filesystem::path file = item.value().get<std::string>();
+      // A file (an existing one, or any value with a '/' or ending in .csv), else a glyph's
+      // name or character: the simulated expert writing it (sim::recordNamedExperts). A stored
+      // definition's files are not looked at (the database holds the experts).
+      const std::string value = item.value().get<std::string>();
+      std::filesystem::path file = value;
       if (file.is_relative()) file = base_dir / file;
+      std::error_code unreadable;
+      const bool existing = check_files && std::filesystem::is_regular_file(file, unreadable);
+      if (!existing && !looksLikeAFile(value)) {
+        study.named_experts[item.key()] = value;
+        study.experts[item.key()] = value;
+        continue;
+      }
       if (check_files && !std::filesystem::is_regular_file(file)) {
         problems.add(fmt::format("experts.{}: expert file \"{}\" not found", item.key(), file.string()));
       }
@@ -324,7 +342,10 @@ bool checkExpertsRenderable(const StudyDefinition& study) {
   const DeviceLimits limits = device::simulatedPenParams(uri).limits;
   std::vector<std::string> refused;
   for (const auto& [skill, path] : study.experts) {
-    for (const std::string& problem : renderabilityProblems(io::readProfileCsv(path), limits)) {
+    const auto named = study.named_expert_profiles.find(skill);
+    if (study.named_experts.contains(skill) && named == study.named_expert_profiles.end()) continue;  // not recorded yet
+    const HapticProfile expert = named != study.named_expert_profiles.end() ? named->second : io::readProfileCsv(path);
+    for (const std::string& problem : renderabilityProblems(expert, limits)) {
       refused.push_back(fmt::format("the expert of {} ({}) on {}: {}", skill, path.string(), study.device, problem));
     }
   }

@@ -438,8 +438,13 @@ StudyDatabase StudyDatabase::create(const std::filesystem::path& file, const Stu
   // Read the experts first: a bad one leaves nothing half-made.
   std::map<std::string, std::string> expert_csv;
   for (const auto& [skill, path] : study.experts) {
+    const auto named = study.named_expert_profiles.find(skill);
+    HATTR_THROW_UNLESS(!study.named_experts.contains(skill) || named != study.named_expert_profiles.end(),
+                       "experts.{}: \"{}\" names the simulated expert writing a glyph, recorded when a study is made "
+                       "(`hattr study init`; in code, sim::recordNamedExperts before StudyDatabase::create)",
+                       skill, study.named_experts.at(skill));
     std::ostringstream text;
-    io::writeProfileCsv(io::readProfileCsv(path), text);
+    io::writeProfileCsv(named != study.named_expert_profiles.end() ? named->second : io::readProfileCsv(path), text);
     expert_csv[skill] = text.str();
   }
   return postgres ? createPostgres(file.string(), study, expert_csv, fill) : createSqlite(file, study, expert_csv, fill);

@@ -52,6 +52,7 @@ std::size_t writeExport(const StudyDatabase& db, StudyDefinition study, const st
     io::writeProfileCsv(db.expert(skill), out / "experts" / (skill + ".csv"));
     path = fs::path("experts") / (skill + ".csv");
   }
+  study.named_experts.clear();  // an expert named by its glyph is a file in the export too
   io::writeFileAtomically(out / "study.json", studyToJson(study).dump(2) + "\n");
 
   // The trials table and a profile per completed trial.

@@ -7,7 +7,9 @@
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/device/device_uri.hpp"
 #include "hattr/device/hand.hpp"
+#include "hattr/render/world_config.hpp"
 #include "minimum_jerk_internal.hpp"
 
 namespace hattr::sim {
@@ -245,6 +247,25 @@ HapticProfile recordExpert(session::TrialEnvironment& environment, const HapticP
   setup.metadata = std::move(metadata);
   setup.duration_s = script.duration_s();
   return session::runTrial(environment, setup, hand).profile;
+}
+
+void recordNamedExperts(session::StudyDefinition& study) {
+  if (study.named_experts.empty()) return;
+  // The study's own pen when simulated (its limits are the ones its trials meet), else the
+  // simulated pen; the study's world and rate.
+  const std::string device = device::parseDeviceUri(study.device).scheme == "sim" ? study.device : "sim://pen";
+  session::TrialEnvironment environment(device, render::parseWorldConfig(study.world.dump(), "study world"),
+                                        study.rate_hz);
+  for (const auto& [skill, name] : study.named_experts) {
+    Glyph glyph;
+    try {
+      glyph = findGlyph(name);
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("experts.{}: {}", skill, e.what()));
+    }
+    study.named_expert_profiles[skill] =
+        recordExpert(environment, expertScript(glyph), {.subject = "expert", .skill = skill, .source = "sim:expert"});
+  }
 }
 
 }  // namespace hattr::sim

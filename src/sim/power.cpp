@@ -21,6 +21,7 @@
 #include "hattr/session/study_database.hpp"
 #include "hattr/session/study_runner.hpp"
 #include "hattr/session/trial.hpp"
+#include "hattr/sim/expert.hpp"
 #include "hattr/sim/in_silico.hpp"
 #include "hattr/sim/participant.hpp"
 
@@ -182,6 +183,7 @@ PowerStudy::PowerStudy(const PowerOptions& options) : options_(options) {
   if (!options_.study.empty()) {
     study_ = session::loadStudy(options_.study);
     checkStudy(study_, options_.study);
+    recordNamedExperts(study_);
   } else {
     HATTR_THROW_UNLESS(options_.recall_trials >= 2 && options_.training_trials >= 0,
                        "trials: expected >= 2 recall and >= 0 training, got {} and {}", options_.recall_trials,

@@ -170,5 +170,30 @@ TEST(DesignsCli, StatusShowsTheScheduleAndTheCalendarHoldsTheNextSession) {
   EXPECT_EQ(bad.exit_code, 2);
 }
 
+// A design whose experts are named by their glyphs (the character, a built-in name) needs no
+// expert files: init records them; a name that is no glyph is refused with exit 2.
+TEST(DesignsCli, ExpertsNamedByTheirGlyphNeedNoFiles) {
+  test::TempDir dir;
+  const RunResult design = runHattr(dir, "study example --design groups-retention");
+  nlohmann::json study = smallDesign(nlohmann::json::parse(design.out));
+  study["experts"] = {{"na", "ந"}, {"loop", "loop"}};
+  test::writeText(dir / "study.json", study.dump(2));
+  const std::string db = (dir / "s.sqlite").string();
+  const RunResult init = runHattr(dir, "study init " + (dir / "study.json").string() + " --db " + db);
+  ASSERT_EQ(init.exit_code, 0) << init.err;
+  ASSERT_EQ(runHattr(dir, "study run --quiet --db " + db).exit_code, 0);
+  const RunResult status = runHattr(dir, "study status --json --db " + db);
+  const auto j = nlohmann::json::parse(status.out);
+  EXPECT_EQ(j["trials_completed"], j["trials_total"]);
+
+  study["experts"]["loop"] = "lop";
+  test::writeText(dir / "typo.json", study.dump(2));
+  const RunResult typo = runHattr(dir, "study init " + (dir / "typo.json").string() + " --db " + (dir / "t.sqlite").string());
+  EXPECT_EQ(typo.exit_code, 2);
+  EXPECT_THAT(typo.err, HasSubstr("experts.loop: "));
+  EXPECT_THAT(typo.err, HasSubstr("lop"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "t.sqlite"));
+}
+
 }  // namespace
 }  // namespace hattr

@@ -4,6 +4,7 @@
 // expert's haptic profile.
 
 #include <cmath>
+#include <map>
 #include <vector>
 
 #include <gmock/gmock.h>
@@ -12,11 +13,16 @@
 #include "hattr/core/error.hpp"
 #include "hattr/sim/data_dir.hpp"
 #include "hattr/sim/expert.hpp"
+#include "hattr/io/profile_csv.hpp"
+#include "hattr/session/study_database.hpp"
+#include "support/test_support.hpp"
 
 namespace hattr::sim {
 namespace {
 
+using ::testing::AllOf;
 using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
 
 const Glyph& na() {
   static const Glyph glyph = loadGlyph(defaultDataDir() / "glyphs" / "na.json");
@@ -237,6 +243,53 @@ TEST(RecordExpert, PlaysTheScriptOnTheSimulatedPen) {
   EXPECT_EQ(in_contact, n);
   EXPECT_LT(std::sqrt(squared / static_cast<double>(n)), 0.0015);
   EXPECT_NEAR(normal / static_cast<double>(n), plateau_N, 0.1 * plateau_N);
+}
+
+// A study may name an expert by its glyph (built-in name or character): the simulated expert
+// writing it on the study's pen and world, the same to the bit as recording it by hand, and
+// stored by create; a file is still a file, a missing one refused, an unknown name refused.
+TEST(RecordNamedExperts, RecordsTheGlyphsSimulatedExpertForTheStudyToStore) {
+  test::TempDir dir;
+  const auto parse = [&](const std::string& experts) {
+    return session::parseStudy(R"({"name": "named", "skill": "na", "experts": )" + experts +
+                                   R"(, "world": {"relief": {"kind": "flat"}},
+                                   "subjects": {"count": 1, "participant": "script"}})",
+                               "study.json", dir.path());
+  };
+  session::StudyDefinition study = parse(R"({"na": "ந", "o": "loop"})");
+  EXPECT_EQ(study.named_experts, (std::map<std::string, std::string>{{"na", "ந"}, {"o", "loop"}}));
+  try {
+    (void)session::StudyDatabase::create(dir / "early.sqlite", study);
+    FAIL() << "a named expert not recorded yet";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("experts.na: \"ந\" names the simulated expert writing a glyph"));
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "early.sqlite"));
+
+  recordNamedExperts(study);
+  render::WorldConfig flat;
+  flat.relief.kind = render::ReliefConfig::Kind::kFlat;
+  session::TrialEnvironment environment("sim://pen", flat, 1000.0);
+  const HapticProfile by_hand = recordExpert(environment, expertScript(findGlyph("na")),
+                                             {.subject = "expert", .skill = "na", .source = "sim:expert"});
+  const HapticProfile& named = study.named_expert_profiles.at("na");
+  ASSERT_EQ(named.size(), by_hand.size());
+  for (const Channel c : {Channel::kTime, Channel::kX, Channel::kY, Channel::kZ, Channel::kFz}) {
+    EXPECT_EQ(named.channel(c), by_hand.channel(c)) << static_cast<int>(c);
+  }
+  EXPECT_EQ(study.named_expert_profiles.at("o").metadata().skill, "o");
+  const session::StudyDatabase db = session::StudyDatabase::create(dir / "s.sqlite", study);
+  EXPECT_EQ(db.expert("na").channel(Channel::kX), by_hand.channel(Channel::kX));
+  EXPECT_EQ(db.study().experts.at("o"), "loop") << "the definition says how the expert was named";
+
+  // A file stays a file; a missing one (a '/' or .csv in it) is refused; a name that is no glyph too.
+  io::writeProfileCsv(by_hand, dir / "na-expert.csv");
+  EXPECT_TRUE(parse(R"({"na": "na-expert.csv"})").named_experts.empty());
+  EXPECT_THAT([&] { (void)parse(R"({"na": "missing.csv"})"); },
+              ThrowsMessage<InputError>(HasSubstr("experts.na: expert file")));
+  session::StudyDefinition unknown = parse(R"({"na": "zz"})");
+  EXPECT_THAT([&] { recordNamedExperts(unknown); },
+              ThrowsMessage<InputError>(AllOf(HasSubstr("experts.na: "), HasSubstr("loop"), HasSubstr("na"))));
 }
 
 }  // namespace

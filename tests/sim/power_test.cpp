@@ -1,5 +1,6 @@
 #include "hattr/sim/power.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -167,6 +168,55 @@ TEST(PowerStudy, AGroupDesignsReplicateIsTheDesignRunWithItsSubjectsAndCompared)
     EXPECT_EQ(outcome.designs[n == 3 ? 0 : 1][0].p_pairs.front(), analysis::tukeyHsdOneWay(data).comparisons.front().p_adjusted);
   }
   EXPECT_NE(outcome.designs[0][0].p_mode, outcome.designs[1][0].p_mode);
+}
+
+// A design comparing strategies within subjects over two sessions a week apart (week-apart,
+// made small): replicate r is that design with its subjects (all01 ...) seeded as the in-silico
+// study with seed + r, and each strategy's recall trials, numbered through both sessions, go into
+// the paper's mode × subject analysis.
+TEST(PowerStudy, AWeekApartReplicateIsTheDesignRunWithItsSubjectsAndItsStrategiesCompared) {
+  HATTR_SKIP_UNDER_THREAD_SANITIZER("a replicate compared with the same study run on its own");
+  test::TempDir dir;
+  const InSilicoResult expert = runInSilicoStudy({.out_dir = dir / "expert", .subjects = 2, .seed = 1,
+                                                  .training_trials = 0, .recall_trials = 2, .write_report = false});
+  std::string blocks;
+  for (int k = 1; k <= 3; ++k) {
+    blocks += fmt::format(R"({}{{"phase": "training", "strategy": {{"order": {}}}, "trials": 1}},
+                             {{"phase": "recall", "strategy": {{"order": {}}}, "guidance": false, "trials": 2}})",
+                          k == 1 ? "" : ", ", k, k);
+  }
+  const auto write = [&](const std::filesystem::path& file, const std::string& subjects) {
+    test::writeText(file, fmt::format(R"({{"name": "w", "skill": "na", "experts": {{"na": "{}"}},
+      "protocol": {{"rest_s": 0}}, "order": {{"kind": "latin-square"}}, "world": {{"relief": {{"kind": "flat"}}}},
+      "groups": [{{"name": "all", "strategies": ["basic", "pcontrol", "alpha"], "subjects": {}}}],
+      "sessions": [{{"day": 0, "blocks": [{}]}}, {{"day": 7, "blocks": [{}]}}]}})",
+                                      (dir / "expert" / "expert.csv").string(), subjects, blocks, blocks));
+  };
+  write(dir / "design.json", R"({"count": 3})");
+  const PowerStudy power({.study = dir / "design.json", .subject_counts = {3}, .replicates = 2, .seed = 5,
+                          .threads = 1, .scratch = dir / "scratch"});
+  EXPECT_EQ(power.plan().modes, (std::vector<std::string>{"BASIC", "PCONTROL", "ALPHA"}));
+  EXPECT_EQ(power.plan().study.at("tested_phase"), "recall");
+  const report::ReplicateOutcome outcome = power.runReplicate(1);
+
+  // The same replicate as a study of its own: subjects all01..03, seeds 6·1000 + place.
+  write(dir / "alone.json", R"([{"id": "all01", "seed": 6001}, {"id": "all02", "seed": 6002}, {"id": "all03", "seed": 6003}])");
+  { (void)session::StudyDatabase::create(dir / "alone.sqlite", session::loadStudy(dir / "alone.json")); }
+  session::StudyDatabase db = session::StudyDatabase::open(dir / "alone.sqlite", session::OpenMode::kRunner);
+  (void)session::StudyRunner(db, [](const session::SubjectRecord& s, const HapticProfile& e) {
+    return makeSimulatedParticipant(s, e);
+  }).run({});
+  const report::DesignAnalysis alone = report::analyzeDesign(db);
+  std::vector<report::TrialCost> costs;
+  for (const auto& t : alone.scores) {
+    if (t.phase == "recall") costs.push_back({t.trial_id, t.subject, t.strategy, t.trial_in_phase, t.score, ""});
+  }
+  ASSERT_EQ(costs.size(), 3u * 3u * 4u) << "2 recall trials per strategy in each of 2 sessions";
+  EXPECT_EQ(std::count_if(costs.begin(), costs.end(), [](const report::TrialCost& c) { return c.trial == 4; }), 9)
+      << "numbered through both sessions";
+  expectOutcomeOf(outcome.designs[0][0], report::analyzeMetric("trajectory", costs, true), power.plan(), "trajectory");
+  expectOutcomeOf(outcome.designs[0][1], report::analyzeMetric("force", costs, false), power.plan(), "force");
+  EXPECT_NE(outcome.designs[0][0].p_mode, power.runReplicate(0).designs[0][0].p_mode) << "another replicate";
 }
 
 // Replicates two at once (each on its own thread, its subjects in turn, each thread keeping

@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "hattr/core/haptic_profile.hpp"
 #include "hattr/guidance/training_guidance.hpp"
 #include "hattr/io/sample_codec.hpp"
 #include "hattr/session/study_design.hpp"
@@ -92,7 +93,14 @@ struct StudyMentor {
 struct StudyDefinition {
   std::string name;
   std::string skill;                                        ///< the skill trained (a block's default)
-  std::map<std::string, std::filesystem::path> experts;     ///< skill -> expert profile file
+  std::map<std::string, std::filesystem::path> experts;     ///< skill -> expert profile file (or its name)
+  /// Skill -> the glyph its expert is named by in place of a file (a built-in glyph's name,
+  /// "na", or the character, "ந"): the simulated expert writing it, recorded on the study's pen
+  /// and world when the study is made (sim::recordNamedExperts), before StudyDatabase::create
+  /// stores it. Such a skill's `experts` entry is the name as written.
+  std::map<std::string, std::string> named_experts;
+  /// The named experts' recordings, skill -> profile (sim::recordNamedExperts).
+  std::map<std::string, HapticProfile> named_expert_profiles;
   std::vector<guidance::TrainingMode> modes;                ///< every strategy the study uses, first use first
   Protocol protocol;
   /// The between-subjects groups (one, kWithinSubjectsGroup, in the paper's form) and the

@@ -21,6 +21,7 @@
 #include <numbers>
 
 #include "hattr/core/haptic_profile.hpp"
+#include "hattr/session/study.hpp"
 #include "hattr/session/trial.hpp"
 #include "hattr/sim/glyph.hpp"
 
@@ -59,5 +60,12 @@ HapticProfile expertScript(const Glyph& glyph, const ExpertConfig& config = {});
 /// clock. `metadata` is the recording's (subject, skill, ...). Throws what runTrial throws.
 HapticProfile recordExpert(session::TrialEnvironment& environment, const HapticProfile& script,
                            ProfileMetadata metadata);
+
+/// Records the experts a study names by a glyph (StudyDefinition::named_experts: a built-in
+/// glyph's name or its character) into study.named_expert_profiles: the simulated expert's
+/// script for the glyph performed on the study's pen (a sim:// one; else the simulated pen),
+/// world and rate, with the skill's name. Throws InputError naming the skill and listing the
+/// built-in glyphs for a name that is none.
+void recordNamedExperts(session::StudyDefinition& study);
 
 }  // namespace hattr::sim
