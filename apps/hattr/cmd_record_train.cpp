@@ -1,10 +1,12 @@
 // hattr record | train: one trial through the whole pipeline, written as a haptic profile.
 
+#include <algorithm>
 #include <iostream>
 
 #include <fmt/format.h>
 
 #include "cli_common.hpp"
+#include "hattr/guidance/strategy_catalog.hpp"
 #include "hattr/session/trial_physics.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
@@ -30,6 +32,8 @@ struct TrialOptions {
   bool keep_disturbed = false;
   // train only
   std::string mode = "basic";
+  std::vector<std::string> params;
+  std::uint64_t seed = 1;
   std::string reference;
   std::string indexing = "time";
   double speed = 1.0;
@@ -106,9 +110,14 @@ void runTrialCommand(const TrialOptions& opt, bool training) {
     scripted.expert = &expert;
     scripted.reference_label = opt.reference;
     scripted.mode = guidance::parseMode(opt.mode);
+    HATTR_THROW_UNLESS(!guidance::isMentored(scripted.mode),
+                       "--mode {}: a mentored strategy's guidance comes from a live expert's station: run it with "
+                       "`hattr mentor` (docs/mentoring.md)", opt.mode);
     scripted.indexing = guidance::parseIndexing(opt.indexing);
     scripted.speed = opt.speed;
     scripted.trial = opt.trial;
+    scripted.parameters = opt.params;
+    scripted.seed = opt.seed;
   }
   const session::TrialSetup setup = session::scriptedTrialSetup(hand, script, scripted);
   const session::TrialResult result = session::runTrial(env, setup, hand);
@@ -153,9 +162,48 @@ void runTrialCommand(const TrialOptions& opt, bool training) {
   }
 }
 
+/// `hattr strategies`: every training strategy, its plain name, what it does, its source and
+/// its parameters.
+void runStrategies(bool json) {
+  const auto lower = [](std::string_view name) {
+    std::string out(name);
+    std::transform(out.begin(), out.end(), out.begin(), [](unsigned char c) { return std::tolower(c); });
+    return out;
+  };
+  if (json) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const auto& s : guidance::strategyCatalog()) {
+      nlohmann::json parameters = nlohmann::json::array();
+      for (const auto& p : s.parameters) {
+        parameters.push_back({{"name", p.name}, {"unit", p.unit}, {"default", p.default_value},
+                              {"min", p.min}, {"max", p.max}, {"meaning", p.meaning}});
+      }
+      list.push_back({{"name", lower(guidance::modeName(s.mode))}, {"plain_name", s.plain_name},
+                      {"description", s.description}, {"source", s.source}, {"mentored", s.mentored},
+                      {"parameters", parameters}});
+    }
+    return printJson({{"strategies", list}});
+  }
+  for (const auto& s : guidance::strategyCatalog()) {
+    std::cout << fmt::format("{:<19} {} — {}\n", lower(guidance::modeName(s.mode)), s.plain_name, s.description);
+    for (const auto& p : s.parameters) {
+      const std::string_view unit = p.unit == "1" ? "" : p.unit;  // a ratio: no unit to show
+      std::cout << fmt::format("{:<19}   {} = {}{}{} ({} to {}): {}\n", "", p.name, p.default_value, unit.empty() ? "" : " ",
+                               unit, p.min, p.max, p.meaning);
+    }
+  }
+}
+
 }  // namespace
 
 void registerRecordTrainCommands(CLI::App& app) {
+  auto strategies_json = std::make_shared<bool>(false);
+  auto* strategies = app.add_subcommand("strategies", "The training strategies: name, plain name, what each does, its "
+                                                      "parameters with units, defaults and ranges (docs/training_modes.md)");
+  strategies->add_flag("--json", *strategies_json, "Print JSON: strategies [{name, plain_name, description, source, "
+                                                   "mentored, parameters [{name, unit, default, min, max, meaning}]}]");
+  strategies->callback([strategies_json] { runStrategies(*strategies_json); });
+
   auto record_opt = std::make_shared<TrialOptions>();
   auto* record = app.add_subcommand(
       "record", "Record a haptic profile while the (simulated) hand writes the script on the virtual paper");
@@ -164,12 +212,15 @@ void registerRecordTrainCommands(CLI::App& app) {
 
   auto train_opt = std::make_shared<TrialOptions>();
   auto* train = app.add_subcommand(
-      "train", "One training trial against an expert's profile in a mode (BASIC, PCONTROL, ALPHA); the output "
-               "holds the user's force and the guidance force separately");
+      "train", "One training trial against an expert's profile with a training strategy (`hattr strategies` lists "
+               "them); the output holds the user's force and the guidance force separately");
   addCommonOptions(*train, *train_opt);
-  train->add_option("--mode", train_opt->mode, "basic (no assistance), pcontrol (position guidance), alpha (force guidance)")
-      ->check(CLI::IsMember({"basic", "pcontrol", "alpha"}, CLI::ignore_case))
+  train->add_option("--mode", train_opt->mode, "The strategy: basic (no assistance), pcontrol (position guidance), "
+                    "alpha (force guidance), channel, error-augmentation, noise, playback (`hattr strategies`)")
       ->capture_default_str();
+  train->add_option("--param", train_opt->params, "A parameter of the strategy, KEY=VALUE in the units `hattr "
+                    "strategies` gives (repeatable), e.g. --param half_width_mm=1.5");
+  train->add_option("--seed", train_opt->seed, "Seed of the strategy's random force (noise)")->capture_default_str();
   train->add_option("--reference", train_opt->reference, "The expert's haptic profile")->required();
   train->add_option("--indexing", train_opt->indexing, "time (the paper's) or progress (follows the trainee along the path)")
       ->check(CLI::IsMember({"time", "progress"}))

@@ -2,7 +2,10 @@
 // time), as `hattr record` and `hattr train` run it, and the paper's whole study in silico,
 // as `hattr demo` runs it.
 
+#include <algorithm>
+#include <cctype>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -14,6 +17,7 @@
 
 #include "bindings.hpp"
 #include "hattr/core/error.hpp"
+#include "hattr/guidance/strategy_catalog.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/report/study_analysis.hpp"
 #include "hattr/session/trial.hpp"
@@ -60,12 +64,16 @@ void bindSimulation(py::module_& m) {
       [](const ProfileSource& hand, const std::optional<ProfileSource>& reference, const std::string& mode,
          const WorldSource& world, const std::string& device, double rate_hz, const std::string& clock,
          double tail_s, double pen_up_end_s, double max_duration_s, const std::string& indexing, double speed,
-         const std::string& subject, const std::string& skill, int trial) {
+         const std::string& subject, const std::string& skill, int trial, const std::map<std::string, double>& params,
+         std::uint64_t seed) {
         session::ScriptedTrialOptions options{.rate_hz = rate_hz, .tail_s = tail_s, .pen_up_end_s = pen_up_end_s,
                                               .max_duration_s = max_duration_s, .clock = session::parseClock(clock),
                                               .subject = subject, .skill = skill, .mode = guidance::parseMode(mode),
                                               .indexing = guidance::parseIndexing(indexing), .speed = speed,
-                                              .trial = trial};
+                                              .trial = trial, .seed = seed};
+        HATTR_THROW_UNLESS(!guidance::isMentored(options.mode),
+                           "mode {}: a mentored strategy's guidance comes from a live expert's station", mode);
+        for (const auto& [key, value] : params) options.parameters.push_back(fmt::format("{}={}", key, value));
         const HapticProfile script = profileOf(hand, options.hand_label);
         std::optional<HapticProfile> expert;
         if (reference) {
@@ -96,15 +104,50 @@ void bindSimulation(py::module_& m) {
       py::arg("clock") = "sim", py::arg("tail_s") = 0.3, py::arg("pen_up_end_s") = 0.0,
       py::arg("max_duration_s") = 0.0, py::arg("indexing") = "time", py::arg("speed") = 1.0,
       py::arg("subject") = "", py::arg("skill") = "", py::arg("trial") = 0,
+      py::arg("params") = std::map<std::string, double>{}, py::arg("seed") = 1,
       "One trial as `hattr train` (with a reference) or `hattr record` (without) runs it: the simulated hand "
-      "writes `hand` (a HapticProfile or a profile file) on the paper, with the mode's guidance toward "
-      "`reference` ('basic', 'pcontrol', 'alpha'). Simulated time unless clock='real'. The trial lasts the "
+      "writes `hand` (a HapticProfile or a profile file) on the paper, with the strategy's guidance toward "
+      "`reference` (mode: 'basic', 'pcontrol', 'alpha', 'channel', 'error-augmentation', 'noise', 'playback'; "
+      "params: its parameters by name in the units hattr.strategies() gives; seed: the noise's). Simulated time "
+      "unless clock='real'. The trial lasts the "
       "script plus tail_s [s], or with pen_up_end_s > 0 [s] ends once the pen has been up that long. world: "
       "None (defaults), a dict or a world file. Returns {profile, clamps, ticks, missed_samples, overruns, "
       "faults, link_faults, stalls, clock, end_reason, failure, disturbed}; disturbed says how the trial was "
       "disturbed (stalls, missed samples, the pen through the paper, the device at its force limit, ...), \"\" when clean. "
       "With a reference, a reference or hand the device cannot render (too strong, outside its workspace) raises "
       "InputError with the numbers and the remedy. Releases the GIL.");
+
+  m.def(
+      "strategies",
+      [] {
+        py::list out;
+        for (const auto& s : guidance::strategyCatalog()) {
+          py::list parameters;
+          for (const auto& p : s.parameters) {
+            py::dict d;
+            d["name"] = std::string(p.name);
+            d["unit"] = std::string(p.unit);
+            d["default"] = p.default_value;
+            d["min"] = p.min;
+            d["max"] = p.max;
+            d["meaning"] = std::string(p.meaning);
+            parameters.append(d);
+          }
+          std::string name(guidance::modeName(s.mode));
+          std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return std::tolower(c); });
+          py::dict d;
+          d["name"] = name;
+          d["plain_name"] = std::string(s.plain_name);
+          d["description"] = std::string(s.description);
+          d["source"] = std::string(s.source);
+          d["mentored"] = s.mentored;
+          d["parameters"] = parameters;
+          out.append(d);
+        }
+        return out;
+      },
+      "The training strategies, as `hattr strategies --json` lists them: [{name, plain_name, description, source, "
+      "mentored, parameters [{name, unit, default, min, max, meaning}]}].");
 
   m.def(
       "simulate_study",

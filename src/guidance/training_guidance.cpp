@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "hattr/core/error.hpp"
 #include "hattr/core/passivity.hpp"
@@ -21,6 +23,10 @@ std::string_view modeName(TrainingMode mode) {
     case TrainingMode::kMentorPosition: return "MENTOR-POSITION";
     case TrainingMode::kMentorForce: return "MENTOR-FORCE";
     case TrainingMode::kMentorBilateral: return "MENTOR-BILATERAL";
+    case TrainingMode::kChannel: return "CHANNEL";
+    case TrainingMode::kErrorAugmentation: return "ERROR-AUGMENTATION";
+    case TrainingMode::kNoise: return "NOISE";
+    case TrainingMode::kPlayback: return "PLAYBACK";
   }
   return "?";
 }
@@ -28,11 +34,16 @@ std::string_view modeName(TrainingMode mode) {
 TrainingMode parseMode(std::string_view text) {
   std::string upper(text);
   std::transform(upper.begin(), upper.end(), upper.begin(), [](unsigned char c) { return std::toupper(c); });
-  for (int m = 0; m <= static_cast<int>(TrainingMode::kMentorBilateral); ++m) {
-    if (upper == modeName(static_cast<TrainingMode>(m))) return static_cast<TrainingMode>(m);
+  std::vector<std::string> names;
+  for (int m = 0; m <= static_cast<int>(kLastMode); ++m) {
+    const std::string_view name = modeName(static_cast<TrainingMode>(m));
+    if (upper == name) return static_cast<TrainingMode>(m);
+    names.emplace_back(name);
   }
-  throw InputError(fmt::format("mode: expected basic, pcontrol, alpha, mentor-observe, mentor-position, mentor-force "
-                               "or mentor-bilateral, got \"{}\"", text));
+  for (auto& name : names) {
+    std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return std::tolower(c); });
+  }
+  throw InputError(fmt::format("mode: expected one of {}, got \"{}\"", fmt::join(names, ", "), text));
 }
 
 std::vector<std::string> clampGains(GuidanceConfig& config, const DeviceLimits& limits, double rate_hz,
@@ -72,12 +83,28 @@ std::vector<std::string> clampGains(GuidanceConfig& config, const DeviceLimits& 
   changes.insert(changes.end(), tangential.begin(), tangential.end());
   if (f.kp != before.kp) changes.push_back(fmt::format("ALPHA Kp {:.4g} -> {:.4g}", before.kp, f.kp));
   if (f.kd_s != before.kd_s) changes.push_back(fmt::format("ALPHA Kd {:.4g} s -> {:.4g} s", before.kd_s, f.kd_s));
+
+  // CHANNEL's wall is PCONTROL's spring and damper, outside the tube.
+  const auto channel = clampImpedance(config.channel.kp_N_per_m, config.channel.kd_N_s_per_m,
+                                      {.stiffness_name = "CHANNEL Kp", .damping_name = "CHANNEL Kd",
+                                       .k_other_N_per_m = world.tangential_stiffness_N_per_m},
+                                      limits, rate_hz);
+  changes.insert(changes.end(), channel.begin(), channel.end());
+  // ERROR-AUGMENTATION is a negative spring: no larger than a positive one may be.
+  double augmentation = config.augmentation.gain_N_per_m;
+  double no_damping = 0.0;
+  const auto augmented = clampImpedance(augmentation, no_damping,
+                                        {.stiffness_name = "ERROR-AUGMENTATION gain", .damping_name = "-",
+                                         .k_other_N_per_m = world.tangential_stiffness_N_per_m},
+                                        limits, rate_hz);
+  config.augmentation.gain_N_per_m = augmentation;
+  changes.insert(changes.end(), augmented.begin(), augmented.end());
   return changes;
 }
 
 TrainingGuidance::TrainingGuidance(std::shared_ptr<const ReferenceTrajectory> reference, const GuidanceConfig& config)
     : reference_(std::move(reference)), config_(config), mode_(config.mode), previous_mode_(config.mode) {
-  HATTR_THROW_UNLESS(reference_ || config.mode == TrainingMode::kBasic || isMentored(config.mode),
+  HATTR_THROW_UNLESS(reference_ || !needsReference(config.mode),
                      "guidance: mode {} needs an expert reference", modeName(config.mode));
   const auto check = [](double value, const char* name) {
     HATTR_THROW_UNLESS(std::isfinite(value) && value >= 0.0, "guidance: {}: expected a finite number >= 0, got {}",
@@ -89,9 +116,20 @@ TrainingGuidance::TrainingGuidance(std::shared_ptr<const ReferenceTrajectory> re
   check(config.force.kd_s, "ALPHA Kd");
   check(config.crossfade_s, "cross-fade time");
   check(config.lift_fade_s, "lift fade time");
+  check(config.channel.half_width_m, "CHANNEL half-width");
+  check(config.channel.kp_N_per_m, "CHANNEL Kp");
+  check(config.channel.kd_N_s_per_m, "CHANNEL Kd");
+  check(config.channel.search_s, "CHANNEL search");
+  check(config.augmentation.gain_N_per_m, "ERROR-AUGMENTATION gain");
+  check(config.augmentation.saturation_m, "ERROR-AUGMENTATION saturation");
+  check(config.noise.rms_N, "NOISE rms");
+  check(config.playback_force.gain, "PLAYBACK gain");
+  HATTR_THROW_UNLESS(std::isfinite(config.noise.cutoff_hz) && config.noise.cutoff_hz > 0.0,
+                     "guidance: NOISE cut-off: expected > 0 Hz, got {}", config.noise.cutoff_hz);
   HATTR_THROW_UNLESS(config.force.derivative_cutoff_hz > 0.0, "guidance: ALPHA derivative cut-off: expected > 0 Hz, got {}",
                      config.force.derivative_cutoff_hz);
   if (reference_) player_ = std::make_unique<ReferencePlayer>(*reference_, config.playback);
+  restartNoise();
 }
 
 void TrainingGuidance::reset() noexcept {
@@ -103,6 +141,7 @@ void TrainingGuidance::reset() noexcept {
   error_rate_.setZero();
   cue_ = {};
   cue_index_.store(-1.0, std::memory_order_relaxed);
+  restartNoise();
 }
 
 void TrainingGuidance::startTrial(double t_s) noexcept {
@@ -112,7 +151,7 @@ void TrainingGuidance::startTrial(double t_s) noexcept {
 
 void TrainingGuidance::switchMode(TrainingMode mode) noexcept {
   if (mode == mode_) return;
-  if (!reference_ && mode != TrainingMode::kBasic && !isMentored(mode)) return;  // nothing to guide toward
+  if (!reference_ && needsReference(mode)) return;  // nothing to guide toward
   // A switch during a fade starts from the mode that dominates now.
   previous_mode_ = fade_ >= 0.5 ? mode_ : previous_mode_;
   mode_ = mode;
@@ -123,7 +162,7 @@ bool TrainingGuidance::setParameter(int parameter, double value) noexcept {
   switch (parameter) {
     case kParameterMode: {
       const int m = static_cast<int>(value);
-      if (m < 0 || m > 2) return false;
+      if (m < 0 || m > static_cast<int>(kLastMode) || isMentored(static_cast<TrainingMode>(m))) return false;
       switchMode(static_cast<TrainingMode>(m));
       return true;
     }
@@ -149,8 +188,80 @@ Vec3 TrainingGuidance::modeForce(TrainingMode mode, const PenState& pen, const V
     case TrainingMode::kMentorPosition:
     case TrainingMode::kMentorForce:
     case TrainingMode::kMentorBilateral: return Vec3::Zero();
+    case TrainingMode::kChannel: return cue_.weight * channelForce(pen);
+    case TrainingMode::kErrorAugmentation: {
+      // Away from the reference point, in the plane, no more than gain × saturation.
+      Vec3 e = pen.p_WT - cue_.point.p_WT;
+      e.z() = 0.0;
+      const double size = e.norm();
+      const double limit = config_.augmentation.saturation_m;
+      if (size > limit) e *= limit / size;
+      return cue_.weight * config_.augmentation.gain_N_per_m * e;
+    }
+    case TrainingMode::kNoise: return noise_;
+    case TrainingMode::kPlayback: return cue_.weight * config_.playback_force.gain * cue_.point.f_W;
   }
   return Vec3::Zero();
+}
+
+Vec3 TrainingGuidance::channelForce(const PenState& pen) const noexcept {
+  // The nearest point of the path within the search window around the cue, in the plane.
+  const ReferenceTrajectory& path = *reference_;
+  const auto reach = static_cast<std::size_t>(config_.channel.search_s / path.dt_s());
+  const auto at = static_cast<std::size_t>(std::max(0.0, cue_.index));
+  const std::size_t first = at > reach ? at - reach : 0;
+  const std::size_t last = std::min(path.size() - 1, at + reach);
+  double nearest_sq = std::numeric_limits<double>::infinity();
+  Eigen::Vector2d nearest = Eigen::Vector2d::Zero();
+  for (std::size_t k = first; k <= last; ++k) {
+    const Eigen::Vector2d q = path[k].p_WT.head<2>();
+    const double d_sq = (pen.p_WT.head<2>() - q).squaredNorm();
+    if (d_sq < nearest_sq) {
+      nearest_sq = d_sq;
+      nearest = q;
+    }
+  }
+  // Inside the tube, nothing; outside, a spring and damper toward its wall.
+  const double distance = std::sqrt(nearest_sq);
+  if (!(distance > config_.channel.half_width_m)) return Vec3::Zero();
+  const Eigen::Vector2d out = (pen.p_WT.head<2>() - nearest) / distance;
+  const double outward_speed = out.dot(pen.v_WT.head<2>());
+  const Eigen::Vector2d f = -(config_.channel.kp_N_per_m * (distance - config_.channel.half_width_m) +
+                              config_.channel.kd_N_s_per_m * outward_speed) * out;
+  return Vec3(f.x(), f.y(), 0.0);
+}
+
+namespace {
+
+/// splitmix64: the next 64 random bits.
+std::uint64_t nextBits(std::uint64_t& state) noexcept {
+  std::uint64_t z = (state += 0x9E3779B97F4A7C15ULL);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
+/// A uniform number in (0, 1].
+double uniformOpen(std::uint64_t& state) noexcept {
+  return (static_cast<double>(nextBits(state) >> 11) + 1.0) * 0x1.0p-53;
+}
+
+}  // namespace
+
+void TrainingGuidance::restartNoise() noexcept {
+  noise_state_ = config_.noise.seed;
+  noise_.setZero();
+}
+
+void TrainingGuidance::stepNoise(double dt_s) noexcept {
+  // Two standard normals (Box–Muller), through a first-order low-pass whose output has the
+  // asked RMS: a white input of variance σ² gives σ²·α/(2 − α).
+  const double radius = std::sqrt(-2.0 * std::log(uniformOpen(noise_state_)));
+  const double angle = 2.0 * std::numbers::pi * uniformOpen(noise_state_);
+  const double alpha = dt_s / (dt_s + 1.0 / (2.0 * std::numbers::pi * config_.noise.cutoff_hz));
+  const double input_sd = config_.noise.rms_N * std::sqrt((2.0 - alpha) / alpha);
+  const Vec3 white(radius * std::cos(angle), radius * std::sin(angle), 0.0);
+  noise_ += alpha * (input_sd * white - noise_);
 }
 
 Vec3 TrainingGuidance::compute(const PenState& pen, const ContactForces& contact, double dt_s) noexcept {
@@ -177,6 +288,8 @@ Vec3 TrainingGuidance::compute(const PenState& pen, const ContactForces& contact
   // ALPHA fades out while the pen is off the paper, and back in on touch-down.
   const double lift_step = config_.lift_fade_s > 0.0 ? dt / config_.lift_fade_s : 1.0;
   contact_weight_ = std::clamp(contact_weight_ + (contact.in_contact ? lift_step : -lift_step), 0.0, 1.0);
+
+  if (mode_ == TrainingMode::kNoise || (fade_ < 1.0 && previous_mode_ == TrainingMode::kNoise)) stepNoise(dt);
 
   // Cross-fade between the previous and the current mode.
   const Vec3 current = modeForce(mode_, pen, error);

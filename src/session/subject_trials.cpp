@@ -139,6 +139,7 @@ TrialSetup SubjectTrials::setup(Clock clock, LiveGuidance* mentor) const {
   setup.clock = clock;
   setup.live_guidance = mentor;
   setup.live_seed = studyLiveSeed(subject_.spec, current()->plan, attempt_);
+  setup.guidance.noise.seed = setup.live_seed;  // NOISE: the same trial and attempt, the same force
   return setup;
 }
 

@@ -9,6 +9,7 @@
 
 #include "hattr/core/error.hpp"
 #include "hattr/device/device_uri.hpp"
+#include "hattr/guidance/strategy_catalog.hpp"
 #include "hattr/servo/servo_loop.hpp"
 #include "hattr/session/trial_run.hpp"
 #include "hattr/session/trial_watch.hpp"
@@ -112,6 +113,16 @@ ProfileMetadata trialMetadata(ProfileMetadata metadata, const TrialEnvironment& 
   extra["pcontrol_kd_N_s_per_m"] = fmt::format("{}", config.position.kd_N_s_per_m);
   extra["alpha_kp"] = fmt::format("{}", config.force.kp);
   extra["alpha_kd_s"] = fmt::format("{}", config.force.kd_s);
+  // The strategies beyond the paper's: each of the active one's parameters, in its catalog unit
+  // ("channel.half_width_mm"), after the clamps; NOISE's seed.
+  if (static_cast<int>(config.mode) >= static_cast<int>(guidance::TrainingMode::kChannel)) {
+    std::string prefix(guidance::modeName(config.mode));
+    std::transform(prefix.begin(), prefix.end(), prefix.begin(), [](unsigned char c) { return std::tolower(c); });
+    for (const auto& p : guidance::strategyInfo(config.mode).parameters) {
+      extra[fmt::format("{}.{}", prefix, p.name)] = fmt::format("{}", guidance::strategyParameter(config, config.mode, p.name));
+    }
+    if (config.mode == guidance::TrainingMode::kNoise) extra["noise.seed"] = fmt::format("{}", config.noise.seed);
+  }
   extra["clamps"] = clamps.empty() ? "none" : joined(clamps);
   extra["clock"] = clock == Clock::kSimulated ? "simulated" : "real-time";
   return metadata;
@@ -186,7 +197,7 @@ Clock parseClock(std::string_view name) {
 
 TrialSetup scriptedTrialSetup(const device::ProfileHandScript& hand, const HapticProfile& script,
                               const ScriptedTrialOptions& options) {
-  HATTR_THROW_UNLESS(options.expert != nullptr || options.mode == guidance::TrainingMode::kBasic,
+  HATTR_THROW_UNLESS(options.expert != nullptr || !guidance::needsReference(options.mode),
                      "a trial in mode {} needs a reference (the expert's profile); only BASIC runs without one",
                      guidance::modeName(options.mode));
   TrialSetup setup;
@@ -209,6 +220,8 @@ TrialSetup scriptedTrialSetup(const device::ProfileHandScript& hand, const Hapti
   setup.guidance.mode = options.mode;
   setup.guidance.playback.indexing = options.indexing;
   setup.guidance.playback.speed = options.speed;
+  guidance::setStrategyParameters(setup.guidance, options.mode, options.parameters);
+  setup.guidance.noise.seed = options.seed;
   setup.metadata.extra["reference"] = options.reference_label;
   setup.metadata.extra["trial"] = fmt::format("{}", options.trial);
   if (setup.metadata.skill.empty()) setup.metadata.skill = options.expert->metadata().skill;

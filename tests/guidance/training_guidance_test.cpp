@@ -168,8 +168,8 @@ TEST(TrainingGuidance, RefusesBadModesAndSettings) {
     (void)parseMode("beta");
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_STREQ(e.what(), "mode: expected basic, pcontrol, alpha, mentor-observe, mentor-position, mentor-force or "
-                           "mentor-bilateral, got \"beta\"");
+    EXPECT_STREQ(e.what(), "mode: expected one of basic, pcontrol, alpha, mentor-observe, mentor-position, "
+                           "mentor-force, mentor-bilateral, channel, error-augmentation, noise, playback, got \"beta\"");
   }
   // The mentored modes by name; the recorded reference gives them no force (the live expert does).
   EXPECT_EQ(parseMode("mentor-force"), TrainingMode::kMentorForce);

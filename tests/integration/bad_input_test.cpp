@@ -315,6 +315,20 @@ std::vector<BadInput> corpus() {
                "colour", ""});
   c.push_back({"args_out_of_range", [](const fs::path& dir) { return "world check " + q(dir / "w.json") + " --rate 0"; },
                "rate", ""});
+  // Issue 36: a strategy's parameter outside its range, named with its range and unit.
+  const auto trainWith = [](const std::string& tail) {
+    return [tail](const fs::path& dir) {
+      const std::string script = "t_s,x_m,y_m,z_m,fx_N,fy_N,fz_N,pen_down_bool\n0,0,0,0,0,0,-1,1\n0.01,0.001,0,0,0,0,-1,1\n";
+      test::writeText(dir / "hand.csv", script);
+      return "train --hand " + q(dir / "hand.csv") + " --reference " + q(dir / "hand.csv") + " -o " + q(dir / "t.csv") +
+             " " + tail;
+    };
+  };
+  c.push_back({"args_strategy_parameter_out_of_range", trainWith("--mode channel --param half_width_mm=50"),
+               "CHANNEL half_width_mm: expected 0 to 20 mm, got 50", ""});
+  c.push_back({"args_strategy_parameter_unknown", trainWith("--mode noise --param width=1"),
+               "NOISE: no parameter \"width\": expected one of rms_N, cutoff_hz", ""});
+  c.push_back({"args_strategy_unknown", trainWith("--mode chanel"), "expected one of basic, pcontrol, alpha", ""});
   return c;
 }
 

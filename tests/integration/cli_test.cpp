@@ -332,7 +332,8 @@ TEST(Cli, TrainRefusesBadModesAndMissingFilesWithExitTwo) {
   const RunResult bad_mode =
       runHattr(dir, "train --mode beta --reference " + script + " --hand " + script + " -o " + (dir / "o.csv").string());
   EXPECT_EQ(bad_mode.exit_code, 2);
-  EXPECT_THAT(bad_mode.err, HasSubstr("beta not in {basic,pcontrol,alpha}"));
+  EXPECT_THAT(bad_mode.err, HasSubstr("mode: expected one of basic, pcontrol, alpha, "));
+  EXPECT_THAT(bad_mode.err, HasSubstr("got \"beta\""));
   const RunResult missing = runHattr(dir, "train --mode alpha --reference " + (dir / "none.csv").string() + " --hand " +
                                               script + " -o " + (dir / "o.csv").string());
   EXPECT_EQ(missing.exit_code, 2);

@@ -30,6 +30,34 @@ def test_a_training_trial_through_python_equals_one_through_the_cli(tmp_path, ex
     assert (guided == 0.0) == (mode == "basic")
 
 
+# The hand writes the expert's own script: on the path the channel gives no force; the others do.
+@pytest.mark.parametrize("mode,params,seed,guided", [("channel", {"half_width_mm": 0.5}, 1, False),
+                                                     ("error-augmentation", {"gain_N_per_mm": 0.2}, 1, True),
+                                                     ("noise", {"rms_N": 0.5}, 9, True), ("playback", {}, 1, True)])
+def test_the_strategies_beyond_the_papers_run_through_python_as_through_the_cli(tmp_path, expert_files, mode, params,
+                                                                                seed, guided):
+    # Issue 36: the strategy, its parameters by name and the noise's seed, as `hattr train` takes them.
+    expert, script = expert_files
+    args = [a for k, v in params.items() for a in ("--param", f"{k}={v}")]
+    # Played open loop, the expert's press adds to the hand's own: the pen may go through the
+    # paper, and the trial is kept, marked disturbed.
+    run_cli("train", "--hand", script, "--reference", expert, "--mode", mode, "--seed", seed, *args,
+            "--keep-disturbed", "-o", tmp_path / "cli.csv")
+    run = hattr.run_trial(str(script), str(expert), mode, params=params, seed=seed)
+    assert_same_recording(run["profile"], hattr.read_profile(tmp_path / "cli.csv"))
+    assert (np.abs(run["profile"].f_guide_W_N).max() > 0.0) == guided
+    with pytest.raises(hattr.InputError, match="expected"):
+        hattr.run_trial(str(script), str(expert), mode, params={"no_such": 1.0})
+
+
+def test_the_strategies_are_listed_as_the_cli_lists_them():
+    import json
+    listed = json.loads(run_cli("strategies", "--json")[0])["strategies"]
+    assert hattr.strategies() == listed
+    assert len(listed) >= 11
+    assert {"channel", "error-augmentation", "noise", "playback"} <= {s["name"] for s in listed}
+
+
 def test_a_recording_with_the_end_rule_equals_the_clis(tmp_path, expert_files):
     _, script = expert_files
     run_cli("record", "--hand", script, "--pen-up-end", 0.5, "--rate", 2000, "-o", tmp_path / "cli.csv")

@@ -114,6 +114,79 @@ TEST(RecordAndTrain, ForceControlLowersTheForceErrorOfAHandPressingTooLightly) {
   EXPECT_LT(e_guided.force_rms_N, 0.8 * e_basic.force_rms_N);
 }
 
+// Issue 36's strategies, black-box: in a recorded trial of a drifting hand, every sample's
+// guidance force is the strategy's law applied to the recorded pen and the expert's reference.
+TEST(RecordAndTrain, EachNewStrategysRecordedGuidanceIsItsLawOfTheRecordedPen) {
+  Fixture f;
+  const HapticProfile script = writingScript();
+  const auto trained = [&](guidance::TrainingMode mode, std::uint64_t seed = 1) {
+    DriftingHand hand(script, 0.004);  // 8 mm off by the end
+    TrialSetup setup{.reference = f.reference, .duration_s = 2.0};
+    setup.guidance.mode = mode;
+    setup.guidance.noise.seed = seed;
+    return runTrial(f.env, setup, hand);
+  };
+  const guidance::ReferenceTrajectory& ref = *f.reference;
+  const guidance::GuidanceConfig defaults;
+  std::size_t checked = 0, outside = 0;
+
+  // CHANNEL: nothing within 2 mm of the path (the nearest point within 0.5 s), 350 N/m beyond.
+  const TrialResult channel = trained(guidance::TrainingMode::kChannel);
+  for (const Sample& s : channel.profile.samples()) {
+    const double index = s.t_s / ref.dt_s();
+    if (index < 10 || index > static_cast<double>(ref.size()) - 10) continue;
+    double nearest = INFINITY;
+    const auto at = static_cast<std::size_t>(index);
+    for (std::size_t k = at > 500 ? at - 500 : 0; k <= std::min(ref.size() - 1, at + 500); ++k) {
+      nearest = std::min(nearest, (s.p_WT - ref[k].p_WT).head<2>().norm());
+    }
+    const double expected = std::max(0.0, nearest - defaults.channel.half_width_m) * defaults.channel.kp_N_per_m;
+    ASSERT_NEAR(s.f_guide_W.norm(), expected, 1e-6) << "t = " << s.t_s;
+    EXPECT_EQ(s.f_guide_W.z(), 0.0);
+    outside += expected > 0.0 ? 1 : 0;
+    ++checked;
+  }
+  EXPECT_GT(checked, 1500u);
+  EXPECT_GT(outside, 200u) << "the hand drifted out of the channel";
+  EXPECT_EQ(channel.profile.metadata().extra.at("channel.half_width_mm"), "2");
+
+  // ERROR-AUGMENTATION: 100 N/m times the deviation from the expert's point at that moment,
+  // counted as 10 mm beyond 10 mm.
+  const TrialResult augmented = trained(guidance::TrainingMode::kErrorAugmentation);
+  std::size_t saturated = 0;
+  for (const Sample& s : augmented.profile.samples()) {
+    const double index = s.t_s / ref.dt_s();
+    if (index > static_cast<double>(ref.size() - 1)) break;
+    Vec3 e = s.p_WT - ref.at(index).p_WT;
+    e.z() = 0.0;
+    if (e.norm() > 0.01) {
+      e *= 0.01 / e.norm();
+      ++saturated;
+    }
+    ASSERT_NEAR((s.f_guide_W - 100.0 * e).norm(), 0.0, 1e-6) << "t = " << s.t_s;
+  }
+  EXPECT_GT(saturated, 0u) << "pushed away, the hand went beyond the saturation";
+
+  // PLAYBACK: the expert's force at that moment, whatever the pen did.
+  const TrialResult played = trained(guidance::TrainingMode::kPlayback);
+  for (const Sample& s : played.profile.samples()) {
+    const double index = s.t_s / ref.dt_s();
+    if (index > static_cast<double>(ref.size() - 1)) break;
+    ASSERT_NEAR((s.f_guide_W - ref.at(index).f_W).norm(), 0.0, 1e-6) << "t = " << s.t_s;
+  }
+
+  // NOISE: the seed's force, again the same, recorded in the plane with its seed.
+  const TrialResult noise_a = trained(guidance::TrainingMode::kNoise, 42), noise_b = trained(guidance::TrainingMode::kNoise, 42);
+  ASSERT_EQ(noise_a.profile.size(), noise_b.profile.size());
+  double sq = 0.0;
+  for (std::size_t i = 0; i < noise_a.profile.size(); ++i) {
+    EXPECT_EQ(noise_a.profile[i].f_guide_W, noise_b.profile[i].f_guide_W) << i;
+    sq += noise_a.profile[i].f_guide_W.head<2>().squaredNorm();
+  }
+  EXPECT_GT(std::sqrt(sq / static_cast<double>(noise_a.profile.size())), 0.05);
+  EXPECT_EQ(noise_a.profile.metadata().extra.at("noise.seed"), "42");
+}
+
 TEST(RecordAndTrain, ClampsAreWrittenIntoTheTrialsMetadata) {
   Fixture f;
   device::ProfileHandScript hand(writingScript());

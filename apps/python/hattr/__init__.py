@@ -20,6 +20,6 @@ __all__ = [
     "dtw", "dtw_with_path", "dtw_batch", "dtw_cost_matrix", "dtw_simd_target",
     "TrialScorer", "AnovaTable", "TukeyResult", "two_way_anova", "tukey_hsd", "describe_groups",
     "Study", "create_study", "run_study",
-    "run_trial", "simulate_study",
+    "run_trial", "strategies", "simulate_study",
     "servo_check", "check_device",
 ]

@@ -221,7 +221,9 @@ def run_trial(hand: HapticProfile | _Path, reference: HapticProfile | _Path | No
               world: dict[str, Any] | _Path | None = ..., device: str = ..., rate_hz: float = ...,
               clock: str = ..., tail_s: float = ..., pen_up_end_s: float = ..., max_duration_s: float = ...,
               indexing: str = ..., speed: float = ..., subject: str = ..., skill: str = ...,
-              trial: int = ...) -> _TrialRun: ...
+              trial: int = ..., params: dict[str, float] = ..., seed: int = ...) -> _TrialRun: ...
+
+def strategies() -> list[dict[str, Any]]: ...
 
 class _SimulatedStudy(TypedDict):
     database: os.PathLike[str]

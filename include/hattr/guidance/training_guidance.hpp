@@ -1,15 +1,24 @@
 #pragma once
-/// The paper's three training modes as one guidance controller on the servo thread:
+/// The training strategies' force laws as one guidance controller on the servo thread. The
+/// paper's three:
 ///   BASIC     no assistance;
 ///   PCONTROL  PD position guidance toward the reference, in the paper plane:
 ///             F = Kp·(x_ref − x) + Kd·(v_ref − v), paper defaults 0.35 N/mm and 0.17 N·s/mm;
 ///   ALPHA     PD force guidance from the haptic profile, per axis:
 ///             F = Kp·e + Kd·ė, e = f_expert(t) − f_user(t), paper defaults 0.5 and 0.1 s,
 ///             the derivative low-pass filtered.
+/// and the field's since (issue 36; each with its source in docs/training_modes.md):
+///   CHANNEL             a haptic channel: no force within a tube around the reference path, a
+///                       spring and damper toward it outside (in the plane);
+///   ERROR-AUGMENTATION  a force that amplifies the deviation from the reference, saturated;
+///   NOISE               a band-limited random force in the plane, seeded per trial;
+///   PLAYBACK            the expert's force played open-loop ("record and play").
 /// Mode switches cross-fade the force (default 100 ms). Gains are clamped to what the device
-/// renders passively together with the paper (clampGains). See docs/training_modes.md.
+/// renders passively together with the paper (clampGains). strategy_catalog.hpp describes every
+/// strategy and its parameters. See docs/training_modes.md.
 
 #include <atomic>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -34,16 +43,28 @@ enum class TrainingMode : int {
   kMentorPosition = 4,
   kMentorForce = 5,
   kMentorBilateral = 6,
+  kChannel = 7,
+  kErrorAugmentation = 8,
+  kNoise = 9,
+  kPlayback = 10,
 };
+/// The last mode (for loops over every mode).
+inline constexpr TrainingMode kLastMode = TrainingMode::kPlayback;
 
 /// Where users see them: the paper's "BASIC", "PCONTROL", "ALPHA"; "MENTOR-OBSERVE",
-/// "MENTOR-POSITION", "MENTOR-FORCE", "MENTOR-BILATERAL".
+/// "MENTOR-POSITION", "MENTOR-FORCE", "MENTOR-BILATERAL"; "CHANNEL", "ERROR-AUGMENTATION",
+/// "NOISE", "PLAYBACK".
 std::string_view modeName(TrainingMode mode);
 /// The names of modeName in any case; throws InputError listing them otherwise.
 TrainingMode parseMode(std::string_view text);
 /// A mentored mode: a live expert's pen guides (the MENTOR-... modes).
 [[nodiscard]] constexpr bool isMentored(TrainingMode mode) noexcept {
-  return static_cast<int>(mode) >= static_cast<int>(TrainingMode::kMentorObserve);
+  return static_cast<int>(mode) >= static_cast<int>(TrainingMode::kMentorObserve) &&
+         static_cast<int>(mode) <= static_cast<int>(TrainingMode::kMentorBilateral);
+}
+/// A mode whose force law needs the expert's reference (all but BASIC and the mentored ones).
+[[nodiscard]] constexpr bool needsReference(TrainingMode mode) noexcept {
+  return mode != TrainingMode::kBasic && !isMentored(mode);
 }
 
 struct PositionGains {
@@ -57,10 +78,44 @@ struct ForceGains {
   double derivative_cutoff_hz = 20.0;  ///< first-order low-pass on ė
 };
 
+/// CHANNEL: a tube of half-width `half_width_m` around the reference path (the nearest
+/// reference point within PlaybackConfig::progress_window samples of the cue); outside it a
+/// spring and damper toward the tube's wall, in the paper plane.
+struct ChannelGains {
+  double half_width_m = 0.002;                                          ///< 2 mm
+  double kp_N_per_m = units::newtonsPerMillimetreToSi(0.35);            ///< the paper's PCONTROL Kp
+  double kd_N_s_per_m = 0.0;                                            ///< across the wall
+  double search_s = 0.5;   ///< the path searched: this long before and after the cue
+};
+
+/// ERROR-AUGMENTATION: F = gain·sat(x − x_ref) in the paper plane (a negative spring), the
+/// deviation saturated at `saturation_m`, so the force never exceeds gain·saturation_m.
+struct AugmentationGains {
+  double gain_N_per_m = units::newtonsPerMillimetreToSi(0.1);   ///< 100 N/m
+  double saturation_m = 0.01;                                    ///< 10 mm
+};
+
+/// NOISE: a Gaussian force in the plane, each axis white noise through a first-order low-pass
+/// at `cutoff_hz`, scaled to `rms_N`; the same trial seed gives the same force.
+struct NoiseConfig {
+  double rms_N = 0.3;
+  double cutoff_hz = 5.0;
+  std::uint64_t seed = 1;   ///< set per trial (the session: from the trial's seed)
+};
+
+/// PLAYBACK: the expert's force on the paper, times `gain`, pushed onto the pen open-loop.
+struct PlaybackGains {
+  double gain = 1.0;
+};
+
 struct GuidanceConfig {
   TrainingMode mode = TrainingMode::kBasic;
   PositionGains position;
   ForceGains force;
+  ChannelGains channel;
+  AugmentationGains augmentation;
+  NoiseConfig noise;
+  PlaybackGains playback_force;
   PlaybackConfig playback;
   double crossfade_s = 0.1;    ///< mode switches fade over this long
   double lift_fade_s = 0.05;   ///< ALPHA fades out over this long while the pen is off the paper
@@ -75,8 +130,10 @@ struct WorldImpedance {
 
 /// Clamps PCONTROL's Kp, Kd and ALPHA's Kp, Kd so that guidance plus world stay passive on
 /// the device (hattr::clampImpedance). ALPHA acts through the paper: its effective stiffness
-/// is Kp·K and its effective damping Kp·C + Kd·K on each axis. Returns one line per changed
-/// value, each starting with the mode's name ("PCONTROL Kd 170 N·s/m -> 0.46 N·s/m: ...").
+/// is Kp·K and its effective damping Kp·C + Kd·K on each axis. CHANNEL's spring and damper
+/// are clamped as PCONTROL's; ERROR-AUGMENTATION's gain, a negative spring, to the stiffness a
+/// positive one may have. Returns one line per changed value, each starting with the mode's
+/// name ("PCONTROL Kd 170 N·s/m -> 0.46 N·s/m: ...").
 std::vector<std::string> clampGains(GuidanceConfig& config, const DeviceLimits& limits, double rate_hz,
                                     const WorldImpedance& world);
 
@@ -109,6 +166,10 @@ class TrainingGuidance final : public GuidanceController {
 
  private:
   Vec3 modeForce(TrainingMode mode, const PenState& pen, const Vec3& force_error) const noexcept;
+  Vec3 channelForce(const PenState& pen) const noexcept;
+  /// NOISE's filtered force, one step (once per tick, whichever mode shows it).
+  void stepNoise(double dt_s) noexcept;
+  void restartNoise() noexcept;
 
   std::shared_ptr<const ReferenceTrajectory> reference_;
   GuidanceConfig config_;
@@ -124,6 +185,8 @@ class TrainingGuidance final : public GuidanceController {
   Vec3 error_rate_ = Vec3::Zero();   // filtered ė
   ReferenceCue cue_;
   std::atomic<double> cue_index_{-1.0};  // cue_.index while running, else -1 (cueIndex())
+  std::uint64_t noise_state_ = 0;        // NOISE's generator (splitmix64), from config_.noise.seed
+  Vec3 noise_ = Vec3::Zero();            // NOISE's filtered force
 };
 
 }  // namespace hattr::guidance

@@ -226,6 +226,9 @@ struct ScriptedTrialOptions {
   guidance::Indexing indexing = guidance::Indexing::kTime;
   double speed = 1.0;            ///< reference playback speed (time indexing)
   int trial = 0;                 ///< trial number recorded when training
+  /// The mode's parameters, "key=value" in the catalog's units (guidance::setStrategyParameters).
+  std::vector<std::string> parameters;
+  std::uint64_t seed = 1;        ///< NOISE's seed
 };
 
 /// The set-up of a scripted trial: its duration (the script's plus the tail, or the end rule's

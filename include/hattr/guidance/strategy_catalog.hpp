@@ -1,0 +1,52 @@
+#pragma once
+/// Every training strategy hattr has, described for people and programs (`hattr strategies`,
+/// the studio, Python): its name, a plain-language name for a teacher, what it does in one line,
+/// its source, and its parameters with units, defaults and ranges. A parameter is set by its
+/// name in the units shown (millimetres and the paper's N/mm at this edge, converted once) and
+/// refused outside its range. docs/training_modes.md has the same table with the reasoning.
+
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "hattr/guidance/training_guidance.hpp"
+
+namespace hattr::guidance {
+
+/// One parameter of a strategy, in the units people give it.
+struct StrategyParameter {
+  std::string_view name;         ///< "half_width_mm"
+  std::string_view unit;         ///< "mm"
+  double default_value = 0.0;    ///< in `unit`
+  double min = 0.0;              ///< the range accepted, in `unit`
+  double max = 0.0;
+  std::string_view meaning;      ///< one line
+};
+
+struct StrategyInfo {
+  TrainingMode mode;
+  std::string_view plain_name;   ///< for a teacher: "Guided path"
+  std::string_view description;  ///< one line
+  std::string_view source;       ///< where the law comes from; what of it is hattr's choice
+  bool mentored = false;         ///< a live expert guides (docs/mentoring.md)
+  std::vector<StrategyParameter> parameters;
+};
+
+/// Every strategy, in TrainingMode order.
+[[nodiscard]] const std::vector<StrategyInfo>& strategyCatalog();
+[[nodiscard]] const StrategyInfo& strategyInfo(TrainingMode mode);
+
+/// Sets `mode`'s parameter `name` to `value` (in the catalog's unit) in `config`. Throws
+/// InputError naming the strategy's parameters for an unknown name, and the parameter, its
+/// range with its unit and the value for one outside it.
+void setStrategyParameter(GuidanceConfig& config, TrainingMode mode, std::string_view name, double value);
+
+/// "key=value" settings (`hattr train --param`), each through setStrategyParameter; InputError
+/// for one that is not KEY=NUMBER.
+void setStrategyParameters(GuidanceConfig& config, TrainingMode mode, std::span<const std::string> settings);
+
+/// A parameter's value in `config`, in the catalog's unit.
+[[nodiscard]] double strategyParameter(const GuidanceConfig& config, TrainingMode mode, std::string_view name);
+
+}  // namespace hattr::guidance
