@@ -1,6 +1,5 @@
 // hattr record | train: one trial through the whole pipeline, written as a haptic profile.
 
-#include <algorithm>
 #include <iostream>
 
 #include <fmt/format.h>
@@ -110,13 +109,10 @@ void runTrialCommand(const TrialOptions& opt, bool training) {
     scripted.expert = &expert;
     scripted.reference_label = opt.reference;
     scripted.mode = guidance::parseMode(opt.mode);
-    HATTR_THROW_UNLESS(!guidance::isMentored(scripted.mode),
-                       "--mode {}: a mentored strategy's guidance comes from a live expert's station: run it with "
-                       "`hattr mentor` (docs/mentoring.md)", opt.mode);
     scripted.indexing = guidance::parseIndexing(opt.indexing);
     scripted.speed = opt.speed;
     scripted.trial = opt.trial;
-    scripted.parameters = opt.params;
+    for (const auto& setting : opt.params) scripted.parameters.push_back(guidance::parseStrategySetting(setting));
     scripted.seed = opt.seed;
   }
   const session::TrialSetup setup = session::scriptedTrialSetup(hand, script, scripted);
@@ -165,11 +161,6 @@ void runTrialCommand(const TrialOptions& opt, bool training) {
 /// `hattr strategies`: every training strategy, its plain name, what it does, its source and
 /// its parameters.
 void runStrategies(bool json) {
-  const auto lower = [](std::string_view name) {
-    std::string out(name);
-    std::transform(out.begin(), out.end(), out.begin(), [](unsigned char c) { return std::tolower(c); });
-    return out;
-  };
   if (json) {
     nlohmann::json list = nlohmann::json::array();
     for (const auto& s : guidance::strategyCatalog()) {
@@ -178,14 +169,14 @@ void runStrategies(bool json) {
         parameters.push_back({{"name", p.name}, {"unit", p.unit}, {"default", p.default_value},
                               {"min", p.min}, {"max", p.max}, {"meaning", p.meaning}});
       }
-      list.push_back({{"name", lower(guidance::modeName(s.mode))}, {"plain_name", s.plain_name},
+      list.push_back({{"name", guidance::strategyName(s.mode)}, {"plain_name", s.plain_name},
                       {"description", s.description}, {"source", s.source}, {"mentored", s.mentored},
                       {"parameters", parameters}});
     }
     return printJson({{"strategies", list}});
   }
   for (const auto& s : guidance::strategyCatalog()) {
-    std::cout << fmt::format("{:<19} {} — {}\n", lower(guidance::modeName(s.mode)), s.plain_name, s.description);
+    std::cout << fmt::format("{:<19} {} — {}\n", guidance::strategyName(s.mode), s.plain_name, s.description);
     for (const auto& p : s.parameters) {
       const std::string_view unit = p.unit == "1" ? "" : p.unit;  // a ratio: no unit to show
       std::cout << fmt::format("{:<19}   {} = {}{}{} ({} to {}): {}\n", "", p.name, p.default_value, unit.empty() ? "" : " ",

@@ -2,8 +2,6 @@
 // time), as `hattr record` and `hattr train` run it, and the paper's whole study in silico,
 // as `hattr demo` runs it.
 
-#include <algorithm>
-#include <cctype>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -71,9 +69,7 @@ void bindSimulation(py::module_& m) {
                                               .subject = subject, .skill = skill, .mode = guidance::parseMode(mode),
                                               .indexing = guidance::parseIndexing(indexing), .speed = speed,
                                               .trial = trial, .seed = seed};
-        HATTR_THROW_UNLESS(!guidance::isMentored(options.mode),
-                           "mode {}: a mentored strategy's guidance comes from a live expert's station", mode);
-        for (const auto& [key, value] : params) options.parameters.push_back(fmt::format("{}={}", key, value));
+        options.parameters.assign(params.begin(), params.end());
         const HapticProfile script = profileOf(hand, options.hand_label);
         std::optional<HapticProfile> expert;
         if (reference) {
@@ -133,10 +129,8 @@ void bindSimulation(py::module_& m) {
             d["meaning"] = std::string(p.meaning);
             parameters.append(d);
           }
-          std::string name(guidance::modeName(s.mode));
-          std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return std::tolower(c); });
           py::dict d;
-          d["name"] = name;
+          d["name"] = guidance::strategyName(s.mode);
           d["plain_name"] = std::string(s.plain_name);
           d["description"] = std::string(s.description);
           d["source"] = std::string(s.source);

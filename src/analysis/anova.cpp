@@ -281,7 +281,12 @@ std::vector<TukeyComparison> tukeyComparisons(const std::vector<std::string>& le
       const double se = std::sqrt((error.error_mean_sq / 2.0) * (1.0 / counts[i] + 1.0 / counts[j]));
       c.lower = c.diff - q * se;
       c.upper = c.diff + q * se;
-      c.p_adjusted = studentizedRangeUpperTail(std::abs(c.diff) / se, groups, df);
+      // No error variance (or none estimable): a difference is certain, no difference says
+      // nothing (NaN, as R's ptukey gives), rather than a failed analysis.
+      const double statistic = std::abs(c.diff) / se;
+      c.p_adjusted = std::isnan(statistic)   ? std::numeric_limits<double>::quiet_NaN()
+                     : std::isinf(statistic) ? 0.0
+                                             : studentizedRangeUpperTail(statistic, groups, df);
       out.push_back(std::move(c));
     }
   }

@@ -86,6 +86,7 @@ PreparedTrial TrialScorer::prepare(const HapticProfile& trial) const {
   const Cropped c = crop(trial, "trial");
   PreparedTrial p;
   for (std::size_t k = 0; k < kScoredChannels.size(); ++k) {
+    if (kScoredChannels[k] == Channel::kZ && !options_.score_z) continue;  // left empty: not scored
     p.series[k] = preprocessTrial(c.t_s, c.series[k], expert_t_, options_.normalization);
   }
   return p;

@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <set>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -137,16 +138,25 @@ void setStrategyParameter(GuidanceConfig& config, TrainingMode mode, std::string
   *b.value = value * b.si_per_unit;
 }
 
-void setStrategyParameters(GuidanceConfig& config, TrainingMode mode, std::span<const std::string> settings) {
-  for (const std::string& setting : settings) {
-    const auto equals = setting.find('=');
-    double value = 0.0;
-    const char* begin = equals == std::string::npos ? nullptr : setting.data() + equals + 1;
-    const char* end = setting.data() + setting.size();
-    const auto parsed = begin ? std::from_chars(begin, end, value) : std::from_chars_result{end, std::errc::invalid_argument};
-    HATTR_THROW_UNLESS(equals != std::string::npos && equals > 0 && parsed.ec == std::errc() && parsed.ptr == end,
-                       "--param \"{}\": expected KEY=NUMBER (e.g. half_width_mm=1.5)", setting);
-    setStrategyParameter(config, mode, std::string_view(setting).substr(0, equals), value);
+StrategySetting parseStrategySetting(std::string_view text) {
+  const auto equals = text.find('=');
+  const std::string_view key = text.substr(0, std::min(equals, text.size()));
+  std::string_view number = equals == std::string_view::npos ? std::string_view() : text.substr(equals + 1);
+  if (number.starts_with('+')) number.remove_prefix(1);
+  double value = 0.0;
+  const auto [end, ec] = std::from_chars(number.data(), number.data() + number.size(), value);
+  const bool whole = !number.empty() && end == number.data() + number.size();
+  HATTR_THROW_UNLESS(!key.empty() && whole && (ec == std::errc() || ec == std::errc::result_out_of_range),
+                     "--param \"{}\": expected KEY=NUMBER (e.g. half_width_mm=1.5)", text);
+  if (ec == std::errc::result_out_of_range) value = number.starts_with('-') ? -INFINITY : INFINITY;
+  return {std::string(key), value};
+}
+
+void setStrategyParameters(GuidanceConfig& config, TrainingMode mode, std::span<const StrategySetting> settings) {
+  std::set<std::string_view> seen;
+  for (const auto& [name, value] : settings) {
+    HATTR_THROW_UNLESS(seen.insert(name).second, "{} {}: given twice", modeName(mode), name);
+    setStrategyParameter(config, mode, name, value);
   }
 }
 

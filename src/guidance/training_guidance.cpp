@@ -36,14 +36,17 @@ TrainingMode parseMode(std::string_view text) {
   std::transform(upper.begin(), upper.end(), upper.begin(), [](unsigned char c) { return std::toupper(c); });
   std::vector<std::string> names;
   for (int m = 0; m <= static_cast<int>(kLastMode); ++m) {
-    const std::string_view name = modeName(static_cast<TrainingMode>(m));
-    if (upper == name) return static_cast<TrainingMode>(m);
-    names.emplace_back(name);
-  }
-  for (auto& name : names) {
-    std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return std::tolower(c); });
+    const auto mode = static_cast<TrainingMode>(m);
+    if (upper == modeName(mode)) return mode;
+    names.push_back(strategyName(mode));
   }
   throw InputError(fmt::format("mode: expected one of {}, got \"{}\"", fmt::join(names, ", "), text));
+}
+
+std::string strategyName(TrainingMode mode) {
+  std::string name(modeName(mode));
+  std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return std::tolower(c); });
+  return name;
 }
 
 std::vector<std::string> clampGains(GuidanceConfig& config, const DeviceLimits& limits, double rate_hz,
@@ -120,6 +123,8 @@ TrainingGuidance::TrainingGuidance(std::shared_ptr<const ReferenceTrajectory> re
   check(config.channel.kp_N_per_m, "CHANNEL Kp");
   check(config.channel.kd_N_s_per_m, "CHANNEL Kd");
   check(config.channel.search_s, "CHANNEL search");
+  HATTR_THROW_UNLESS(config.channel.search_s <= 10.0, "guidance: CHANNEL search: expected at most 10 s, got {}",
+                     config.channel.search_s);
   check(config.augmentation.gain_N_per_m, "ERROR-AUGMENTATION gain");
   check(config.augmentation.saturation_m, "ERROR-AUGMENTATION saturation");
   check(config.noise.rms_N, "NOISE rms");
@@ -198,7 +203,7 @@ Vec3 TrainingGuidance::modeForce(TrainingMode mode, const PenState& pen, const V
       if (size > limit) e *= limit / size;
       return cue_.weight * config_.augmentation.gain_N_per_m * e;
     }
-    case TrainingMode::kNoise: return noise_;
+    case TrainingMode::kNoise: return cue_.weight * noise_;  // fades out with the reference, as the others
     case TrainingMode::kPlayback: return cue_.weight * config_.playback_force.gain * cue_.point.f_W;
   }
   return Vec3::Zero();
@@ -207,7 +212,8 @@ Vec3 TrainingGuidance::modeForce(TrainingMode mode, const PenState& pen, const V
 Vec3 TrainingGuidance::channelForce(const PenState& pen) const noexcept {
   // The nearest point of the path within the search window around the cue, in the plane.
   const ReferenceTrajectory& path = *reference_;
-  const auto reach = static_cast<std::size_t>(config_.channel.search_s / path.dt_s());
+  const std::size_t reach =
+      std::min(kMaxChannelReach, static_cast<std::size_t>(config_.channel.search_s / path.dt_s()));
   const auto at = static_cast<std::size_t>(std::max(0.0, cue_.index));
   const std::size_t first = at > reach ? at - reach : 0;
   const std::size_t last = std::min(path.size() - 1, at + reach);

@@ -165,10 +165,11 @@ StudyDefinition parseStudy(std::string_view json_text, std::string_view source, 
 
 namespace {
 
-/// Whether an expert's value names a file rather than a glyph: a '/' in it, or a .csv name.
-bool looksLikeAFile(std::string_view value) {
-  return value.find('/') != std::string_view::npos ||
-         (value.size() > 4 && std::filesystem::path(value).extension() == ".csv");
+/// A file name's extension in lower case (".csv").
+std::string lowerExtension(std::string_view value) {
+  std::string extension = std::filesystem::path(value).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return std::tolower(c); });
+  return extension;
 }
 
 StudyDefinition parseStudyObject(const json& root, std::string_view source, const std::filesystem::path& base_dir,
@@ -210,17 +211,23 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
                                  jsonExcerpt(item.value())));
         continue;
       }
-      // A file (an existing one, or any value with a '/' or ending in .csv), else a glyph's
-      // name or character: the simulated expert writing it (sim::recordNamedExperts). A stored
-      // definition's files are not looked at (the database holds the experts).
+      // A glyph file (.json, beside the study file), a built-in glyph's name or its character:
+      // the simulated expert writing it (sim::recordNamedExperts). Else a profile file: an
+      // existing one, or any value with a '/' or ending in .csv. A stored definition's files are
+      // not looked at (the database holds the experts).
       const std::string value = item.value().get<std::string>();
       std::filesystem::path file = value;
       if (file.is_relative()) file = base_dir / file;
       std::error_code unreadable;
       const bool existing = check_files && std::filesystem::is_regular_file(file, unreadable);
-      if (!existing && !looksLikeAFile(value)) {
-        study.named_experts[item.key()] = value;
-        study.experts[item.key()] = value;
+      const bool glyph_file = lowerExtension(value) == ".json";
+      if (glyph_file || (!existing && value.find('/') == std::string::npos && lowerExtension(value) != ".csv")) {
+        if (glyph_file && check_files && !existing) {
+          problems.add(fmt::format("experts.{}: glyph file \"{}\" not found", item.key(), file.string()));
+        }
+        const std::filesystem::path named = glyph_file ? std::filesystem::absolute(file) : std::filesystem::path(value);
+        study.named_experts[item.key()] = named.string();
+        study.experts[item.key()] = named;
         continue;
       }
       if (check_files && !std::filesystem::is_regular_file(file)) {

@@ -116,10 +116,11 @@ ProfileMetadata trialMetadata(ProfileMetadata metadata, const TrialEnvironment& 
   // The strategies beyond the paper's: each of the active one's parameters, in its catalog unit
   // ("channel.half_width_mm"), after the clamps; NOISE's seed.
   if (static_cast<int>(config.mode) >= static_cast<int>(guidance::TrainingMode::kChannel)) {
-    std::string prefix(guidance::modeName(config.mode));
-    std::transform(prefix.begin(), prefix.end(), prefix.begin(), [](unsigned char c) { return std::tolower(c); });
+    const std::string prefix = guidance::strategyName(config.mode);
     for (const auto& p : guidance::strategyInfo(config.mode).parameters) {
-      extra[fmt::format("{}.{}", prefix, p.name)] = fmt::format("{}", guidance::strategyParameter(config, config.mode, p.name));
+      // 12 digits: the unit's conversion (mm to m and back) leaves no 1.4999999999999998.
+      extra[fmt::format("{}.{}", prefix, p.name)] =
+          fmt::format("{:.12g}", guidance::strategyParameter(config, config.mode, p.name));
     }
     if (config.mode == guidance::TrainingMode::kNoise) extra["noise.seed"] = fmt::format("{}", config.noise.seed);
   }
@@ -197,6 +198,9 @@ Clock parseClock(std::string_view name) {
 
 TrialSetup scriptedTrialSetup(const device::ProfileHandScript& hand, const HapticProfile& script,
                               const ScriptedTrialOptions& options) {
+  HATTR_THROW_UNLESS(!guidance::isMentored(options.mode),
+                     "mode {}: a mentored strategy's guidance comes from a live expert's station: run it with "
+                     "`hattr mentor` (docs/mentoring.md)", guidance::strategyName(options.mode));
   HATTR_THROW_UNLESS(options.expert != nullptr || !guidance::needsReference(options.mode),
                      "a trial in mode {} needs a reference (the expert's profile); only BASIC runs without one",
                      guidance::modeName(options.mode));

@@ -257,9 +257,11 @@ void recordNamedExperts(session::StudyDefinition& study) {
   session::TrialEnvironment environment(device, render::parseWorldConfig(study.world.dump(), "study world"),
                                         study.rate_hz);
   for (const auto& [skill, name] : study.named_experts) {
+    // A glyph file (parseStudy made its path whole: it has a '/'), else a built-in glyph: never
+    // a file relative to wherever this process runs.
     Glyph glyph;
     try {
-      glyph = findGlyph(name);
+      glyph = name.find('/') != std::string::npos ? loadGlyph(name) : findBuiltInGlyph(name);
     } catch (const InputError& e) {
       throw InputError(fmt::format("experts.{}: {}", skill, e.what()));
     }

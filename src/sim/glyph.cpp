@@ -136,6 +136,10 @@ Glyph findGlyph(std::string_view name) {
       std::filesystem::is_regular_file(as_path, ec)) {
     return loadGlyph(as_path);
   }
+  return findBuiltInGlyph(name);
+}
+
+Glyph findBuiltInGlyph(std::string_view name) {
   const std::vector<Glyph> glyphs = builtInGlyphs();
   for (const Glyph& g : glyphs) {
     if (g.name == name || (!g.character.empty() && g.character == name)) return g;

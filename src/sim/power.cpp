@@ -116,10 +116,14 @@ analysis::OneWayData subjectMeans(const std::vector<const report::DesignTrialSco
 /// score it (same options, z left out: no metric uses it). Called from the subjects' threads.
 class ScoredAsTheyEnd {
  public:
-  /// Every trial of a design (its analysis reads them all); the paper's recall trials.
-  ScoredAsTheyEnd(const session::StudyDatabase& db, bool every_trial) : every_trial_(every_trial) {
+  /// Every trial of a design (its analysis reads them all); the paper's recall trials. Scored
+  /// as `options` says, as the analysis would score them.
+  ScoredAsTheyEnd(const session::StudyDatabase& db, bool every_trial, const report::AnalysisOptions& options)
+      : every_trial_(every_trial) {
+    const analysis::ScoreOptions score{.normalization = options.normalization, .cost = options.cost,
+                                       .band_fraction = options.band_fraction, .score_z = false};
     for (const auto& [skill, file] : db.study().experts) {
-      skills_.try_emplace(skill, analysis::TrialScorer(db.expert(skill), {.score_z = false}));
+      skills_.try_emplace(skill, analysis::TrialScorer(db.expert(skill), score));
     }
   }
 
@@ -257,6 +261,9 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const std::func
 std::vector<report::ReplicateOutcome> PowerStudy::runReplicates(std::span<const int> replicates,
                                                                 const std::function<void(double)>& progress) const {
   std::vector<report::ReplicateOutcome> outcomes(replicates.size());
+  const std::set<int> distinct(replicates.begin(), replicates.end());
+  HATTR_THROW_UNLESS(distinct.size() == replicates.size(), "power: a replicate is given twice (each has its own "
+                     "scratch folder)");
   const auto workers = static_cast<std::size_t>(options_.threads);
   if (replicates.size() < workers) {
     // Fewer replicates than threads: one at a time, its subjects at once.
@@ -294,7 +301,13 @@ std::vector<report::ReplicateOutcome> PowerStudy::runReplicates(std::span<const 
     }
   };
   std::vector<std::thread> threads;
-  for (std::size_t w = 1; w < workers; ++w) threads.emplace_back(work);
+  try {
+    for (std::size_t w = 1; w < workers; ++w) threads.emplace_back(work);
+  } catch (...) {  // no thread for this one: the others stop, and the error is the run's
+    failed = true;
+    for (auto& t : threads) t.join();
+    throw;
+  }
   work();
   for (auto& t : threads) t.join();
   if (failure) std::rethrow_exception(failure);
@@ -323,7 +336,8 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const Replicate
     session::StudyRunner runner(db, [](const session::SubjectRecord& s, const HapticProfile& expert) {
       return makeSimulatedParticipant(s, expert);
     });
-    ScoredAsTheyEnd scored(db, !study.paper_form);
+    const report::AnalysisOptions analysis_options{.threads = static_cast<unsigned>(how.subjects_at_once)};
+    ScoredAsTheyEnd scored(db, !study.paper_form, analysis_options);
     if (how.environment && !*how.environment) {
       how.environment->emplace(study.device, render::parseWorldConfig(study.world.dump(), "study world"), study.rate_hz);
     }
@@ -339,8 +353,8 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const Replicate
     (void)runner.run(run);
     std::map<std::int64_t, analysis::TrialScore> scores;
     if (scratch) scores = scored.finish();
-    const report::AnalysisOptions options{.threads = static_cast<unsigned>(how.subjects_at_once),
-                                          .scored = scratch ? &scores : nullptr};
+    report::AnalysisOptions options = analysis_options;
+    options.scored = scratch ? &scores : nullptr;
     if (study.paper_form) {
       analysis = report::analyzeStudy(db, options);
     } else {

@@ -227,11 +227,16 @@ double SimulatedTrainee::paceFactor(std::uint64_t trial_seed) const {
 }
 
 const SimulatedTrainee::Projection& SimulatedTrainee::projectionFor(const std::vector<char>& mask) {
-  for (const Projection& p : projections_) {
-    if (!p.mask.empty() && p.mask == mask) return p;
+  // Two slots, the least recently used replaced: learn's felt mask (the same trial after trial)
+  // stays while its visual one changes.
+  for (std::size_t k = 0; k < projections_.size(); ++k) {
+    if (!projections_[k].mask.empty() && projections_[k].mask == mask) {
+      next_projection_ = 1 - k;
+      return projections_[k];
+    }
   }
   Projection& p = projections_[next_projection_];
-  next_projection_ = (next_projection_ + 1) % projections_.size();
+  next_projection_ = 1 - next_projection_;
   p.mask = mask;
   p.phi_masked = phi_;
   for (std::size_t i = 0; i < mask.size(); ++i) {

@@ -851,5 +851,20 @@ TEST(OneWayAnova, RefusesOneGroupAndNonFiniteData) {
   EXPECT_THROW((void)oneWayAnova(too_few), InputError);
 }
 
+// No variance within the groups: Tukey's comparisons still come (a power analysis counts a p it
+// cannot give as not significant), a difference certain (p 0), none telling nothing (NaN).
+TEST(OneWayAnova, TukeyWithoutErrorVarianceGivesZeroOrNaNInsteadOfFailing) {
+  const OneWayData flat{"group", {"a", "a", "b", "b", "c", "c"}, {1.0, 1.0, 1.0, 1.0, 2.0, 2.0}};
+  const TukeyResult t = tukeyHsdOneWay(flat);
+  ASSERT_EQ(t.comparisons.size(), 3u);
+  for (const auto& c : t.comparisons) {
+    if (c.diff == 0.0) {
+      EXPECT_TRUE(std::isnan(c.p_adjusted)) << c.comparison;
+    } else {
+      EXPECT_EQ(c.p_adjusted, 0.0) << c.comparison;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace hattr::analysis

@@ -19,10 +19,10 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::ThrowsMessage;
 
-/// A straight stroke along x over 2 s at 1 kHz (10 mm/s), pressing 1 N, with a sideways force.
-HapticProfile straightStroke() {
+/// A straight stroke along x over `seconds` at 1 kHz (10 mm/s), pressing 1 N, with a sideways force.
+HapticProfile straightStroke(int seconds = 2) {
   HapticProfile p;
-  for (int i = 0; i <= 2000; ++i) {
+  for (int i = 0; i <= 1000 * seconds; ++i) {
     Sample s;
     s.t_s = i * 1e-3;
     s.p_WT = Vec3(0.01 * s.t_s, 0.0, -0.001);
@@ -45,7 +45,9 @@ PenState penAt(double t_s, const Vec3& p, const Vec3& v = Vec3::Zero()) {
 struct Rig {
   explicit Rig(TrainingMode mode, const std::vector<std::string>& parameters = {}) {
     GuidanceConfig config{.mode = mode};
-    setStrategyParameters(config, mode, parameters);
+    std::vector<StrategySetting> settings;
+    for (const auto& p : parameters) settings.push_back(parseStrategySetting(p));
+    setStrategyParameters(config, mode, settings);
     guidance = std::make_unique<TrainingGuidance>(reference, config);
   }
   std::shared_ptr<const ReferenceTrajectory> reference =
@@ -92,9 +94,10 @@ TEST(Playback, PushesTheExpertsForceOpenLoopWhateverThePenDoes) {
 TEST(Noise, IsARepeatableBandLimitedForceOfTheAskedSizeInThePlane) {
   const auto run = [](std::uint64_t seed) {
     GuidanceConfig config{.mode = TrainingMode::kNoise};
-    setStrategyParameters(config, TrainingMode::kNoise, std::vector<std::string>{"rms_N=0.4", "cutoff_hz=5"});
+    setStrategyParameters(config, TrainingMode::kNoise, std::vector<StrategySetting>{{"rms_N", 0.4}, {"cutoff_hz", 5.0}});
     config.noise.seed = seed;
-    TrainingGuidance guidance(std::make_shared<ReferenceTrajectory>(straightStroke(), 1000.0), config);
+    // A reference as long as the run: the noise fades out with the reference's end, as every law.
+    TrainingGuidance guidance(std::make_shared<ReferenceTrajectory>(straightStroke(201), 1000.0), config);
     std::vector<Vec3> forces;
     for (int i = 0; i < 200'000; ++i) forces.push_back(guidance.compute(penAt(i * 1e-3, Vec3::Zero()), {}, 1e-3));
     return forces;
@@ -182,8 +185,14 @@ TEST(StrategyCatalog, ListsEveryModeWithItsParametersAndRefusesValuesOutsideThei
               ThrowsMessage<InputError>(HasSubstr("CHANNEL: no parameter \"width\": expected one of half_width_mm")));
   EXPECT_THAT([&] { setStrategyParameter(config, TrainingMode::kBasic, "gain", 1.0); },
               ThrowsMessage<InputError>(HasSubstr("it has no parameters")));
-  EXPECT_THAT([&] { setStrategyParameters(config, TrainingMode::kNoise, std::vector<std::string>{"rms_N"}); },
-              ThrowsMessage<InputError>(HasSubstr("expected KEY=NUMBER")));
+  EXPECT_THAT([] { (void)parseStrategySetting("rms_N"); }, ThrowsMessage<InputError>(HasSubstr("expected KEY=NUMBER")));
+  EXPECT_THAT([] { (void)parseStrategySetting("rms_N=0.3x"); }, ThrowsMessage<InputError>(HasSubstr("expected KEY=NUMBER")));
+  EXPECT_EQ(parseStrategySetting("rms_N=+0.25"), (StrategySetting{"rms_N", 0.25}));
+  EXPECT_THAT([&] { setStrategyParameters(config, TrainingMode::kNoise, std::vector{parseStrategySetting("rms_N=1e400")}); },
+              ThrowsMessage<InputError>(HasSubstr("NOISE rms_N: expected 0 to 2 N, got inf")));
+  EXPECT_THAT([&] {
+    setStrategyParameters(config, TrainingMode::kNoise, std::vector<StrategySetting>{{"rms_N", 0.1}, {"rms_N", 0.2}});
+  }, ThrowsMessage<InputError>(HasSubstr("NOISE rms_N: given twice")));
   EXPECT_THAT([] { (void)parseMode("chanel"); }, ThrowsMessage<InputError>(HasSubstr("channel, error-augmentation")));
 }
 

@@ -282,11 +282,23 @@ TEST(RecordNamedExperts, RecordsTheGlyphsSimulatedExpertForTheStudyToStore) {
   EXPECT_EQ(db.expert("na").channel(Channel::kX), by_hand.channel(Channel::kX));
   EXPECT_EQ(db.study().experts.at("o"), "loop") << "the definition says how the expert was named";
 
-  // A file stays a file; a missing one (a '/' or .csv in it) is refused; a name that is no glyph too.
+  // A file stays a file; a missing one (a '/' or .csv in it, in any case) is refused; a name that
+  // is no glyph too. A glyph file beside the study is a glyph, wherever the program runs.
   io::writeProfileCsv(by_hand, dir / "na-expert.csv");
   EXPECT_TRUE(parse(R"({"na": "na-expert.csv"})").named_experts.empty());
   EXPECT_THAT([&] { (void)parse(R"({"na": "missing.csv"})"); },
               ThrowsMessage<InputError>(HasSubstr("experts.na: expert file")));
+  EXPECT_THAT([&] { (void)parse(R"({"na": "missing.CSV"})"); },
+              ThrowsMessage<InputError>(HasSubstr("experts.na: expert file")));
+  EXPECT_THAT([&] { (void)parse(R"({"na": "mine.json"})"); },
+              ThrowsMessage<InputError>(HasSubstr("experts.na: glyph file")));
+  std::filesystem::copy_file(defaultDataDir() / "glyphs" / "loop.json", dir / "mine.json");
+  session::StudyDefinition own = parse(R"({"na": "mine.json"})");
+  EXPECT_EQ(own.named_experts.at("na"), (dir / "mine.json").string());
+  recordNamedExperts(own);
+  const HapticProfile loop_by_hand = recordExpert(environment, expertScript(findGlyph("loop")),
+                                                  {.subject = "expert", .skill = "na", .source = "sim:expert"});
+  EXPECT_EQ(own.named_expert_profiles.at("na").channel(Channel::kX), loop_by_hand.channel(Channel::kX));
   session::StudyDefinition unknown = parse(R"({"na": "zz"})");
   EXPECT_THAT([&] { recordNamedExperts(unknown); },
               ThrowsMessage<InputError>(AllOf(HasSubstr("experts.na: "), HasSubstr("loop"), HasSubstr("na"))));

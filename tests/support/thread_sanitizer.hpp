@@ -17,3 +17,17 @@
 #else
 #define HATTR_SKIP_UNDER_THREAD_SANITIZER(why) static_cast<void>(0)
 #endif
+
+// The same for AddressSanitizer, for a test whose cases repeat one path over data: one case
+// keeps the path under it, the others skip saying which one runs it.
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define HATTR_UNDER_ADDRESS_SANITIZER 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__) || defined(HATTR_UNDER_ADDRESS_SANITIZER)
+#define HATTR_SKIP_UNDER_ADDRESS_SANITIZER(why) \
+  GTEST_SKIP() << "left to the release build under AddressSanitizer: " << (why)
+#else
+#define HATTR_SKIP_UNDER_ADDRESS_SANITIZER(why) static_cast<void>(0)
+#endif

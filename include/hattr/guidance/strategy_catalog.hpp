@@ -8,6 +8,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "hattr/guidance/training_guidance.hpp"
@@ -42,9 +43,15 @@ struct StrategyInfo {
 /// range with its unit and the value for one outside it.
 void setStrategyParameter(GuidanceConfig& config, TrainingMode mode, std::string_view name, double value);
 
-/// "key=value" settings (`hattr train --param`), each through setStrategyParameter; InputError
-/// for one that is not KEY=NUMBER.
-void setStrategyParameters(GuidanceConfig& config, TrainingMode mode, std::span<const std::string> settings);
+/// A parameter's name and value as given.
+using StrategySetting = std::pair<std::string, double>;
+
+/// One "KEY=VALUE" setting (`hattr train --param`); InputError for one that is not KEY=NUMBER.
+/// A number too large for a double reads as infinite (then refused by its range).
+[[nodiscard]] StrategySetting parseStrategySetting(std::string_view text);
+
+/// Each setting through setStrategyParameter; InputError for a name given twice.
+void setStrategyParameters(GuidanceConfig& config, TrainingMode mode, std::span<const StrategySetting> settings);
 
 /// A parameter's value in `config`, in the catalog's unit.
 [[nodiscard]] double strategyParameter(const GuidanceConfig& config, TrainingMode mode, std::string_view name);

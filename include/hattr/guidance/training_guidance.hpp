@@ -18,6 +18,7 @@
 /// strategy and its parameters. See docs/training_modes.md.
 
 #include <atomic>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -57,6 +58,9 @@ inline constexpr TrainingMode kLastMode = TrainingMode::kPlayback;
 std::string_view modeName(TrainingMode mode);
 /// The names of modeName in any case; throws InputError listing them otherwise.
 TrainingMode parseMode(std::string_view text);
+/// modeName as people type it, in lower case ("error-augmentation"): the CLI's, Python's and
+/// `hattr strategies`' spelling.
+std::string strategyName(TrainingMode mode);
 /// A mentored mode: a live expert's pen guides (the MENTOR-... modes).
 [[nodiscard]] constexpr bool isMentored(TrainingMode mode) noexcept {
   return static_cast<int>(mode) >= static_cast<int>(TrainingMode::kMentorObserve) &&
@@ -79,8 +83,9 @@ struct ForceGains {
 };
 
 /// CHANNEL: a tube of half-width `half_width_m` around the reference path (the nearest
-/// reference point within PlaybackConfig::progress_window samples of the cue); outside it a
-/// spring and damper toward the tube's wall, in the paper plane.
+/// reference point within `search_s` of the cue, at most kMaxChannelReach samples either side);
+/// outside it a spring and damper toward the tube's wall, in the paper plane.
+inline constexpr std::size_t kMaxChannelReach = 1000;  ///< a tick's search: at most 2001 points
 struct ChannelGains {
   double half_width_m = 0.002;                                          ///< 2 mm
   double kp_N_per_m = units::newtonsPerMillimetreToSi(0.35);            ///< the paper's PCONTROL Kp

@@ -94,10 +94,11 @@ struct StudyDefinition {
   std::string name;
   std::string skill;                                        ///< the skill trained (a block's default)
   std::map<std::string, std::filesystem::path> experts;     ///< skill -> expert profile file (or its name)
-  /// Skill -> the glyph its expert is named by in place of a file (a built-in glyph's name,
-  /// "na", or the character, "ந"): the simulated expert writing it, recorded on the study's pen
-  /// and world when the study is made (sim::recordNamedExperts), before StudyDatabase::create
-  /// stores it. Such a skill's `experts` entry is the name as written.
+  /// Skill -> the glyph its expert is named by in place of a profile file: a built-in glyph's
+  /// name ("na") or character ("ந"), or a glyph file's whole path (.json, given beside the study
+  /// file): the simulated expert writing it, recorded on the study's pen and world when the
+  /// study is made (sim::recordNamedExperts), before StudyDatabase::create stores it. Such a
+  /// skill's `experts` entry is the same.
   std::map<std::string, std::string> named_experts;
   /// The named experts' recordings, skill -> profile (sim::recordNamedExperts).
   std::map<std::string, HapticProfile> named_expert_profiles;

@@ -76,8 +76,8 @@ struct StoreOptions {
   double lease_timeout_s = 30.0;
   /// A scratch study, SQLite only (a power analysis's replicate, scored as its trials end and
   /// removed once analyzed): a completed trial's row and metadata are stored but not its
-  /// samples (trialProfile refuses the trial), and commits are not synced to disk. Never for
-  /// data that matters.
+  /// samples (trialProfile refuses the trial; a disturbed attempt kept for the record is stored
+  /// whole), and commits are not synced to disk. Never for data that matters.
   bool scratch = false;
 };
 

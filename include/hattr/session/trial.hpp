@@ -226,8 +226,8 @@ struct ScriptedTrialOptions {
   guidance::Indexing indexing = guidance::Indexing::kTime;
   double speed = 1.0;            ///< reference playback speed (time indexing)
   int trial = 0;                 ///< trial number recorded when training
-  /// The mode's parameters, "key=value" in the catalog's units (guidance::setStrategyParameters).
-  std::vector<std::string> parameters;
+  /// The mode's parameters by name, in the catalog's units (guidance::setStrategyParameters).
+  std::vector<std::pair<std::string, double>> parameters;
   std::uint64_t seed = 1;        ///< NOISE's seed
 };
 

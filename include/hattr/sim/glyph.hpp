@@ -51,6 +51,9 @@ Glyph loadGlyph(const std::filesystem::path& file);
 /// in .json), a built-in glyph's name (data/glyphs/NAME.json: "na", "loop"), or the character
 /// itself ("ந"). Throws InputError naming what was tried and listing the built-in glyphs.
 Glyph findGlyph(std::string_view name);
+/// A built-in glyph by its name or character only (no file is looked for); InputError listing
+/// the built-in glyphs otherwise.
+Glyph findBuiltInGlyph(std::string_view name);
 
 /// The built-in glyphs (data/glyphs/*.json), sorted by name.
 std::vector<Glyph> builtInGlyphs();

@@ -184,7 +184,7 @@ class SimulatedTrainee {
   PlanWeights slow_;
   int trials_learned_ = 0;
   std::array<Projection, 2> projections_;  // the last two masks' (learn's visual and felt)
-  std::size_t next_projection_ = 0;       // the one replaced next
+  std::size_t next_projection_ = 0;       // the one replaced next: the least recently used
 };
 
 }  // namespace hattr::sim
