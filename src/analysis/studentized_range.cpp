@@ -27,6 +27,14 @@
 namespace hattr::analysis {
 namespace {
 
+/// ln Γ(x) for x > 0, safe on any thread: std::lgamma writes the global signgam (a data race
+/// when analyses run on several threads, as a power analysis's replicates do); lgamma_r is the
+/// same glibc function without it, so the value is the same to the bit.
+double logGamma(double x) {
+  int sign = 0;
+  return ::lgamma_r(x, &sign);
+}
+
 // Positive nodes and weights of the 12-point Gauss–Legendre rule (inner integral).
 constexpr std::array<double, 6> kRangeNodes = {
     0.981560634246719250690549090149, 0.904117256370474856678465866119,
@@ -118,7 +126,7 @@ double cdfUnchecked(double q, int groups, double df) {
   const double quarter_df = 0.25 * df;
   const double ulen = df <= 100.0 ? 1.0 : df <= 800.0 ? 0.5 : df <= 5000.0 ? 0.25 : 0.125;
   const double log_constant =
-      half_df * std::log(df) - df * std::numbers::ln2 - std::lgamma(half_df) + std::log(ulen);
+      half_df * std::log(df) - df * std::numbers::ln2 - logGamma(half_df) + std::log(ulen);
   const double power = half_df - 1.0;
 
   constexpr double kLogSkip = -30.0;    // density factors below e^-30 are dropped
