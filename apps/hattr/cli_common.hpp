@@ -52,6 +52,8 @@ void registerSimCommands(CLI::App& app);
 void registerPowerCommands(CLI::App& sim);
 /// hattr sim compare-hypotheses (cmd_sim_hypotheses.cpp).
 void registerHypothesisCommands(CLI::App& sim);
+/// hattr sim compare-strategies (cmd_sim_strategies.cpp).
+void registerStrategyComparisonCommand(CLI::App& sim);
 void registerDevicesCommands(CLI::App& app);
 void registerMentorCommands(CLI::App& app);
 /// `serve` and `keygen` under the `devices` (alias `device`) command: the network device server.

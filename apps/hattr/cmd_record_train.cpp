@@ -3,12 +3,14 @@
 #include <iostream>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "cli_common.hpp"
 #include "hattr/guidance/strategy_catalog.hpp"
 #include "hattr/session/trial_physics.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
+#include "hattr/ops/json.hpp"
 #include "hattr/session/trial.hpp"
 
 namespace hattr::cli {
@@ -161,23 +163,16 @@ void runTrialCommand(const TrialOptions& opt, bool training) {
 /// `hattr strategies`: every training strategy, its plain name, what it does, its source and
 /// its parameters.
 void runStrategies(bool json) {
-  if (json) {
-    nlohmann::json list = nlohmann::json::array();
-    for (const auto& s : guidance::strategyCatalog()) {
-      nlohmann::json parameters = nlohmann::json::array();
-      for (const auto& p : s.parameters) {
-        parameters.push_back({{"name", p.name}, {"unit", p.unit}, {"default", p.default_value},
-                              {"min", p.min}, {"max", p.max}, {"meaning", p.meaning}});
-      }
-      list.push_back({{"name", guidance::strategyName(s.mode)}, {"plain_name", s.plain_name},
-                      {"description", s.description}, {"source", s.source}, {"mentored", s.mentored},
-                      {"parameters", parameters}});
-    }
-    return printJson({{"strategies", list}});
-  }
+  if (json) return printJson({{"strategies", ops::strategiesJson()}});
   for (const auto& s : guidance::strategyCatalog()) {
     std::cout << fmt::format("{:<19} {} — {}\n", guidance::strategyName(s.mode), s.plain_name, s.description);
     for (const auto& p : s.parameters) {
+      if (!p.choices.empty()) {
+        std::cout << fmt::format("{:<19}   {} = {} ({}): {}\n", "", p.name,
+                                 p.choices.at(static_cast<std::size_t>(p.default_value)), fmt::join(p.choices, " or "),
+                                 p.meaning);
+        continue;
+      }
       const std::string_view unit = p.unit == "1" ? "" : p.unit;  // a ratio: no unit to show
       std::cout << fmt::format("{:<19}   {} = {}{}{} ({} to {}): {}\n", "", p.name, p.default_value, unit.empty() ? "" : " ",
                                unit, p.min, p.max, p.meaning);
@@ -192,7 +187,8 @@ void registerRecordTrainCommands(CLI::App& app) {
   auto* strategies = app.add_subcommand("strategies", "The training strategies: name, plain name, what each does, its "
                                                       "parameters with units, defaults and ranges (docs/training_modes.md)");
   strategies->add_flag("--json", *strategies_json, "Print JSON: strategies [{name, plain_name, description, source, "
-                                                   "mentored, parameters [{name, unit, default, min, max, meaning}]}]");
+                                                   "mentored, scheduled, parameters [{name, unit, default, min, max, "
+                                                   "meaning} or {name, default, choices, meaning}]}]");
   strategies->callback([strategies_json] { runStrategies(*strategies_json); });
 
   auto record_opt = std::make_shared<TrialOptions>();
@@ -207,10 +203,12 @@ void registerRecordTrainCommands(CLI::App& app) {
                "them); the output holds the user's force and the guidance force separately");
   addCommonOptions(*train, *train_opt);
   train->add_option("--mode", train_opt->mode, "The strategy: basic (no assistance), pcontrol (position guidance), "
-                    "alpha (force guidance), channel, error-augmentation, noise, playback (`hattr strategies`)")
+                    "alpha (force guidance), channel, error-augmentation, noise, playback, fading, assist-as-needed, "
+                    "partial-then-full (`hattr strategies`)")
       ->capture_default_str();
   train->add_option("--param", train_opt->params, "A parameter of the strategy, KEY=VALUE in the units `hattr "
-                    "strategies` gives (repeatable), e.g. --param half_width_mm=1.5");
+                    "strategies` gives, or a choice's name (repeatable), e.g. --param half_width_mm=1.5 --param base=alpha; a "
+                    "scheduled strategy (fading, ...) plays its first trial's law and gain");
   train->add_option("--seed", train_opt->seed, "Seed of the strategy's random force (noise)")->capture_default_str();
   train->add_option("--reference", train_opt->reference, "The expert's haptic profile")->required();
   train->add_option("--indexing", train_opt->indexing, "time (the paper's) or progress (follows the trainee along the path)")

@@ -176,6 +176,7 @@ void registerSimCommands(CLI::App& app) {
 
   registerPowerCommands(*simc);
   registerHypothesisCommands(*simc);
+  registerStrategyComparisonCommand(*simc);
 }
 
 }  // namespace hattr::cli

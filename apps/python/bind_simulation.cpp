@@ -17,6 +17,7 @@
 #include "hattr/core/error.hpp"
 #include "hattr/guidance/strategy_catalog.hpp"
 #include "hattr/io/profile_csv.hpp"
+#include "hattr/ops/json.hpp"
 #include "hattr/report/study_analysis.hpp"
 #include "hattr/session/trial.hpp"
 #include "hattr/session/trial_physics.hpp"
@@ -62,14 +63,19 @@ void bindSimulation(py::module_& m) {
       [](const ProfileSource& hand, const std::optional<ProfileSource>& reference, const std::string& mode,
          const WorldSource& world, const std::string& device, double rate_hz, const std::string& clock,
          double tail_s, double pen_up_end_s, double max_duration_s, const std::string& indexing, double speed,
-         const std::string& subject, const std::string& skill, int trial, const std::map<std::string, double>& params,
+         const std::string& subject, const std::string& skill, int trial, const std::map<std::string, std::variant<double, std::string>>& params,
          std::uint64_t seed) {
         session::ScriptedTrialOptions options{.rate_hz = rate_hz, .tail_s = tail_s, .pen_up_end_s = pen_up_end_s,
                                               .max_duration_s = max_duration_s, .clock = session::parseClock(clock),
                                               .subject = subject, .skill = skill, .mode = guidance::parseMode(mode),
                                               .indexing = guidance::parseIndexing(indexing), .speed = speed,
                                               .trial = trial, .seed = seed};
-        options.parameters.assign(params.begin(), params.end());
+        // A number as its shortest exact text; a choice by its name.
+        for (const auto& [name, value] : params) {
+          options.parameters.emplace_back(name, std::holds_alternative<double>(value)
+                                                    ? fmt::format("{}", std::get<double>(value))
+                                                    : std::get<std::string>(value));
+        }
         const HapticProfile script = profileOf(hand, options.hand_label);
         std::optional<HapticProfile> expert;
         if (reference) {
@@ -100,11 +106,12 @@ void bindSimulation(py::module_& m) {
       py::arg("clock") = "sim", py::arg("tail_s") = 0.3, py::arg("pen_up_end_s") = 0.0,
       py::arg("max_duration_s") = 0.0, py::arg("indexing") = "time", py::arg("speed") = 1.0,
       py::arg("subject") = "", py::arg("skill") = "", py::arg("trial") = 0,
-      py::arg("params") = std::map<std::string, double>{}, py::arg("seed") = 1,
+      py::arg("params") = std::map<std::string, std::variant<double, std::string>>{}, py::arg("seed") = 1,
       "One trial as `hattr train` (with a reference) or `hattr record` (without) runs it: the simulated hand "
       "writes `hand` (a HapticProfile or a profile file) on the paper, with the strategy's guidance toward "
-      "`reference` (mode: 'basic', 'pcontrol', 'alpha', 'channel', 'error-augmentation', 'noise', 'playback'; "
-      "params: its parameters by name in the units hattr.strategies() gives; seed: the noise's). Simulated time "
+      "`reference` (mode: a name of hattr.strategies(), not a mentored one; params: its parameters by name in "
+      "the units hattr.strategies() gives, or a choice's name; seed: the noise's; a scheduled strategy plays its "
+      "first trial's law and gain). Simulated time "
       "unless clock='real'. The trial lasts the "
       "script plus tail_s [s], or with pen_up_end_s > 0 [s] ends once the pen has been up that long. world: "
       "None (defaults), a dict or a world file. Returns {profile, clamps, ticks, missed_samples, overruns, "
@@ -114,34 +121,10 @@ void bindSimulation(py::module_& m) {
       "InputError with the numbers and the remedy. Releases the GIL.");
 
   m.def(
-      "strategies",
-      [] {
-        py::list out;
-        for (const auto& s : guidance::strategyCatalog()) {
-          py::list parameters;
-          for (const auto& p : s.parameters) {
-            py::dict d;
-            d["name"] = std::string(p.name);
-            d["unit"] = std::string(p.unit);
-            d["default"] = p.default_value;
-            d["min"] = p.min;
-            d["max"] = p.max;
-            d["meaning"] = std::string(p.meaning);
-            parameters.append(d);
-          }
-          py::dict d;
-          d["name"] = guidance::strategyName(s.mode);
-          d["plain_name"] = std::string(s.plain_name);
-          d["description"] = std::string(s.description);
-          d["source"] = std::string(s.source);
-          d["mentored"] = s.mentored;
-          d["parameters"] = parameters;
-          out.append(d);
-        }
-        return out;
-      },
+      "strategies", [] { return toPython(ops::strategiesJson()); },
       "The training strategies, as `hattr strategies --json` lists them: [{name, plain_name, description, source, "
-      "mentored, parameters [{name, unit, default, min, max, meaning}]}].");
+      "mentored, scheduled, parameters [{name, unit, default, min, max, meaning} or {name, default, choices, "
+      "meaning}]}].");
 
   m.def(
       "simulate_study",

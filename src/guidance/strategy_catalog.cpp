@@ -1,5 +1,7 @@
 #include "hattr/guidance/strategy_catalog.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <set>
@@ -72,13 +74,47 @@ std::vector<StrategyInfo> makeCatalog() {
        "record and play, open loop (Yokokohji et al.; Henmi & Yoshikawa), the approach the paper contrasts "
        "ALPHA with",
        false, {{"gain", "1", 1.0, 0.0, 3.0, "share of the expert's force played"}}},
+      {M::kFading, "Less help each time",
+       "The guided path's (or pressure's) pull weakens trial by trial, or each time the trainee writes well, "
+       "until the trainee writes alone.",
+       "guidance fading, the field's answer to the guidance hypothesis (Salmoni, Schmidt & Walter 1984; "
+       "Winstein, Pohl & Lewthwaite 1994); the linear and the performance schedule and their defaults are "
+       "hattr's choices",
+       false,
+       {{"base", "", 0.0, 0.0, 1.0, "the guidance that fades", {"pcontrol", "alpha"}},
+        {"by", "", 0.0, 0.0, 1.0, "fade over trials, or a step after each good trial", {"trials", "performance"}},
+        {"start_gain", "1", 1.0, 0.0, 1.0, "share of the guidance in the first guided trial"},
+        {"end_gain", "1", 0.0, 0.0, 1.0, "share it fades to"},
+        {"trials", "trials", 10.0, 1.0, 1000.0, "by trials: the guided trial (from 1) that reaches end_gain"},
+        {"step", "1", 0.2, 0.01, 1.0, "by performance: the fall after a good trial"},
+        {"threshold_mm", "mm", 2.0, 0.1, 50.0, "by performance: a good trial's tracking error at most"}}},
+      {M::kAssistAsNeeded, "Help when needed",
+       "The pull toward the expert's writing grows after a trial with large errors and fades after good ones.",
+       "assist-as-needed (Emken, Benitez & Reinkensmeyer 2007): an error-based update of the assistance with a "
+       "forgetting factor, between trials; applied as a gain on PCONTROL or ALPHA with the trial's tracking "
+       "error, the defaults hattr's choices",
+       false,
+       {{"base", "", 0.0, 0.0, 1.0, "the guidance whose strength adapts", {"pcontrol", "alpha"}},
+        {"start_gain", "1", 1.0, 0.0, 1.0, "share of the guidance in the first guided trial"},
+        {"forgetting", "1", 0.9, 0.0, 1.0, "share of the gain kept from one trial to the next"},
+        {"error_gain_per_mm", "1/mm", 0.05, 0.0, 10.0, "gain added per millimetre of tracking error"},
+        {"deadband_mm", "mm", 0.5, 0.0, 20.0, "tracking error ignored as the trainee's own variability"}}},
+      {M::kPartialThenFull, "Channel first, then guided path",
+       "Only a channel around the path corrects the pen in the first trials (partial guidance); then the "
+       "guided path leads it (full guidance).",
+       "partial then full haptic guidance (Teranishi et al. 2017, 2018): partial guidance is hattr's CHANNEL, "
+       "full guidance PCONTROL, each with its own parameters; the switch is hattr's choice",
+       false, {{"partial_trials", "trials", 5.0, 0.0, 1000.0, "guided trials with the channel before the full guidance"}}},
   };
 }
 
-/// Where a parameter lives in a configuration, and its unit's size in SI.
+/// Where a parameter lives in a configuration, and its unit's size in SI (a choice: the mode
+/// or the fading schedule it selects).
 struct Binding {
   double* value = nullptr;
   double si_per_unit = 1.0;
+  TrainingMode* base = nullptr;
+  FadingConfig::By* by = nullptr;
 };
 
 Binding bind(GuidanceConfig& c, TrainingMode mode, std::string_view name) {
@@ -100,7 +136,31 @@ Binding bind(GuidanceConfig& c, TrainingMode mode, std::string_view name) {
   if (is(M::kNoise, "rms_N")) return {&c.noise.rms_N, 1.0};
   if (is(M::kNoise, "cutoff_hz")) return {&c.noise.cutoff_hz, 1.0};
   if (is(M::kPlayback, "gain")) return {&c.playback_force.gain, 1.0};
+  if (is(M::kFading, "base")) return {.base = &c.fading.base};
+  if (is(M::kFading, "by")) return {.by = &c.fading.by};
+  if (is(M::kFading, "start_gain")) return {&c.fading.start_gain, 1.0};
+  if (is(M::kFading, "end_gain")) return {&c.fading.end_gain, 1.0};
+  if (is(M::kFading, "trials")) return {&c.fading.trials, 1.0};
+  if (is(M::kFading, "step")) return {&c.fading.step, 1.0};
+  if (is(M::kFading, "threshold_mm")) return {&c.fading.threshold_m, kMm};
+  if (is(M::kAssistAsNeeded, "base")) return {.base = &c.assist.base};
+  if (is(M::kAssistAsNeeded, "start_gain")) return {&c.assist.start_gain, 1.0};
+  if (is(M::kAssistAsNeeded, "forgetting")) return {&c.assist.forgetting, 1.0};
+  if (is(M::kAssistAsNeeded, "error_gain_per_mm")) return {&c.assist.error_gain_per_m, kPerMm};
+  if (is(M::kAssistAsNeeded, "deadband_mm")) return {&c.assist.deadband_m, kMm};
+  if (is(M::kPartialThenFull, "partial_trials")) return {&c.partial_then_full.partial_trials, 1.0};
   return {};
+}
+
+/// " mm" after a number in a message; nothing for a ratio ("1").
+std::string unitSuffix(const StrategyParameter& p) {
+  return p.unit.empty() || p.unit == "1" ? std::string() : fmt::format(" {}", p.unit);
+}
+
+std::string lowerCase(std::string_view text) {
+  std::string lower(text);
+  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+  return lower;
 }
 
 const StrategyParameter& findParameter(TrainingMode mode, std::string_view name) {
@@ -131,25 +191,52 @@ const StrategyInfo& strategyInfo(TrainingMode mode) {
 
 void setStrategyParameter(GuidanceConfig& config, TrainingMode mode, std::string_view name, double value) {
   const StrategyParameter& p = findParameter(mode, name);
-  HATTR_THROW_UNLESS(std::isfinite(value) && value >= p.min && value <= p.max,
-                     "{} {}: expected {} to {} {}, got {}", modeName(mode), name, p.min, p.max, p.unit, value);
   const Binding b = bind(config, mode, name);
-  HATTR_DEMAND(b.value != nullptr, "strategy parameter {} {} has no place in GuidanceConfig", modeName(mode), name);
+  HATTR_DEMAND(b.value || b.base || b.by, "strategy parameter {} {} has no place in GuidanceConfig", modeName(mode), name);
+  if (!p.choices.empty()) {
+    const bool index = value >= 0.0 && value < static_cast<double>(p.choices.size()) && value == std::floor(value);
+    HATTR_THROW_UNLESS(index, "{} {}: expected one of {}, got {}", modeName(mode), name, fmt::join(p.choices, ", "), value);
+    const auto i = static_cast<std::size_t>(value);
+    if (b.base) *b.base = parseMode(p.choices[i]);
+    if (b.by) *b.by = static_cast<FadingConfig::By>(i);
+    return;
+  }
+  HATTR_THROW_UNLESS(std::isfinite(value) && value >= p.min && value <= p.max,
+                     "{} {}: expected {} to {}{}, got {}", modeName(mode), name, p.min, p.max, unitSuffix(p), value);
   *b.value = value * b.si_per_unit;
+}
+
+void setStrategyParameter(GuidanceConfig& config, TrainingMode mode, std::string_view name, std::string_view value) {
+  const StrategyParameter& p = findParameter(mode, name);
+  // A choice by its name.
+  if (!p.choices.empty()) {
+    for (std::size_t i = 0; i < p.choices.size(); ++i) {
+      if (p.choices[i] == lowerCase(value)) {
+        setStrategyParameter(config, mode, name, static_cast<double>(i));
+        return;
+      }
+    }
+    throw InputError(fmt::format("{} {}: expected one of {}, got \"{}\"", modeName(mode), name,
+                                 fmt::join(p.choices, ", "), value));
+  }
+  // A number, whole ("+0.25" too; one too large for a double is infinite, refused by the range).
+  std::string_view number = value;
+  if (number.starts_with('+')) number.remove_prefix(1);
+  double parsed = 0.0;
+  const auto [end, ec] = std::from_chars(number.data(), number.data() + number.size(), parsed);
+  const bool whole = !number.empty() && end == number.data() + number.size();
+  HATTR_THROW_UNLESS(whole && (ec == std::errc() || ec == std::errc::result_out_of_range),
+                     "{} {}: expected a number from {} to {}{}, got \"{}\"", modeName(mode), name, p.min, p.max,
+                     unitSuffix(p), value);
+  if (ec == std::errc::result_out_of_range) parsed = number.starts_with('-') ? -INFINITY : INFINITY;
+  setStrategyParameter(config, mode, name, parsed);
 }
 
 StrategySetting parseStrategySetting(std::string_view text) {
   const auto equals = text.find('=');
-  const std::string_view key = text.substr(0, std::min(equals, text.size()));
-  std::string_view number = equals == std::string_view::npos ? std::string_view() : text.substr(equals + 1);
-  if (number.starts_with('+')) number.remove_prefix(1);
-  double value = 0.0;
-  const auto [end, ec] = std::from_chars(number.data(), number.data() + number.size(), value);
-  const bool whole = !number.empty() && end == number.data() + number.size();
-  HATTR_THROW_UNLESS(!key.empty() && whole && (ec == std::errc() || ec == std::errc::result_out_of_range),
-                     "--param \"{}\": expected KEY=NUMBER (e.g. half_width_mm=1.5)", text);
-  if (ec == std::errc::result_out_of_range) value = number.starts_with('-') ? -INFINITY : INFINITY;
-  return {std::string(key), value};
+  HATTR_THROW_UNLESS(equals != std::string_view::npos && equals > 0 && equals + 1 < text.size(),
+                     "--param \"{}\": expected KEY=VALUE (e.g. half_width_mm=1.5, base=alpha)", text);
+  return {std::string(text.substr(0, equals)), std::string(text.substr(equals + 1))};
 }
 
 void setStrategyParameters(GuidanceConfig& config, TrainingMode mode, std::span<const StrategySetting> settings) {
@@ -161,11 +248,26 @@ void setStrategyParameters(GuidanceConfig& config, TrainingMode mode, std::span<
 }
 
 double strategyParameter(const GuidanceConfig& config, TrainingMode mode, std::string_view name) {
-  (void)findParameter(mode, name);
+  const StrategyParameter& p = findParameter(mode, name);
   GuidanceConfig copy = config;
   const Binding b = bind(copy, mode, name);
-  HATTR_DEMAND(b.value != nullptr, "strategy parameter {} {} has no place in GuidanceConfig", modeName(mode), name);
+  HATTR_DEMAND(b.value || b.base || b.by, "strategy parameter {} {} has no place in GuidanceConfig", modeName(mode), name);
+  if (b.by) return static_cast<double>(static_cast<int>(*b.by));
+  if (b.base) {
+    for (std::size_t i = 0; i < p.choices.size(); ++i) {
+      if (parseMode(p.choices[i]) == *b.base) return static_cast<double>(i);
+    }
+    throw Error(fmt::format("{} {}: {} is none of its choices", modeName(mode), name, modeName(*b.base)));
+  }
   return *b.value / b.si_per_unit;
+}
+
+std::string strategyParameterText(const GuidanceConfig& config, TrainingMode mode, std::string_view name) {
+  const StrategyParameter& p = findParameter(mode, name);
+  const double value = strategyParameter(config, mode, name);
+  // 12 digits: the unit's conversion (mm to m and back) leaves no 1.4999999999999998.
+  if (p.choices.empty()) return fmt::format("{:.12g}", value);
+  return std::string(p.choices.at(static_cast<std::size_t>(value)));
 }
 
 }  // namespace hattr::guidance

@@ -27,6 +27,9 @@ std::string_view modeName(TrainingMode mode) {
     case TrainingMode::kErrorAugmentation: return "ERROR-AUGMENTATION";
     case TrainingMode::kNoise: return "NOISE";
     case TrainingMode::kPlayback: return "PLAYBACK";
+    case TrainingMode::kFading: return "FADING";
+    case TrainingMode::kAssistAsNeeded: return "ASSIST-AS-NEEDED";
+    case TrainingMode::kPartialThenFull: return "PARTIAL-THEN-FULL";
   }
   return "?";
 }
@@ -131,6 +134,13 @@ TrainingGuidance::TrainingGuidance(std::shared_ptr<const ReferenceTrajectory> re
   check(config.playback_force.gain, "PLAYBACK gain");
   HATTR_THROW_UNLESS(std::isfinite(config.noise.cutoff_hz) && config.noise.cutoff_hz > 0.0,
                      "guidance: NOISE cut-off: expected > 0 Hz, got {}", config.noise.cutoff_hz);
+  // A scheduled mode plays one of the plain reference laws, at most at full strength.
+  const TrainingMode law = config.scheduled.law;
+  HATTR_THROW_UNLESS(law == TrainingMode::kPositionControl || law == TrainingMode::kForceControl ||
+                         law == TrainingMode::kChannel,
+                     "guidance: a scheduled strategy's law: expected PCONTROL, ALPHA or CHANNEL, got {}", modeName(law));
+  HATTR_THROW_UNLESS(std::isfinite(config.scheduled.gain) && config.scheduled.gain >= 0.0 && config.scheduled.gain <= 1.0,
+                     "guidance: a scheduled strategy's gain: expected 0 to 1, got {}", config.scheduled.gain);
   HATTR_THROW_UNLESS(config.force.derivative_cutoff_hz > 0.0, "guidance: ALPHA derivative cut-off: expected > 0 Hz, got {}",
                      config.force.derivative_cutoff_hz);
   if (reference_) player_ = std::make_unique<ReferencePlayer>(*reference_, config.playback);
@@ -205,6 +215,11 @@ Vec3 TrainingGuidance::modeForce(TrainingMode mode, const PenState& pen, const V
     }
     case TrainingMode::kNoise: return cue_.weight * noise_;  // fades out with the reference, as the others
     case TrainingMode::kPlayback: return cue_.weight * config_.playback_force.gain * cue_.point.f_W;
+    // The law the session chose for this trial, at its gain (the law is never a scheduled one).
+    case TrainingMode::kFading:
+    case TrainingMode::kAssistAsNeeded:
+    case TrainingMode::kPartialThenFull:
+      return config_.scheduled.gain * modeForce(config_.scheduled.law, pen, force_error);
   }
   return Vec3::Zero();
 }

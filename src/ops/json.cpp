@@ -1,5 +1,7 @@
 #include "hattr/ops/json.hpp"
 
+#include "hattr/guidance/strategy_catalog.hpp"
+
 #include <string>
 
 namespace hattr::ops {
@@ -55,6 +57,26 @@ nlohmann::json verdictsJson(const servo::LoopJudgement& judgement) {
                        {"rule", f.rule}});
   }
   return figures;
+}
+
+nlohmann::json strategiesJson() {
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& s : guidance::strategyCatalog()) {
+    nlohmann::json parameters = nlohmann::json::array();
+    for (const auto& p : s.parameters) {
+      if (p.choices.empty()) {
+        parameters.push_back({{"name", p.name}, {"unit", p.unit}, {"default", p.default_value}, {"min", p.min},
+                              {"max", p.max}, {"meaning", p.meaning}});
+      } else {
+        parameters.push_back({{"name", p.name}, {"default", p.choices.at(static_cast<std::size_t>(p.default_value))},
+                              {"choices", p.choices}, {"meaning", p.meaning}});
+      }
+    }
+    list.push_back({{"name", guidance::strategyName(s.mode)}, {"plain_name", s.plain_name},
+                    {"description", s.description}, {"source", s.source}, {"mentored", s.mentored},
+                    {"scheduled", guidance::isScheduled(s.mode)}, {"parameters", parameters}});
+  }
+  return list;
 }
 
 }  // namespace hattr::ops

@@ -44,9 +44,7 @@ SubjectMean overSubjects(const std::map<std::string, std::vector<double>>& value
   for (const auto& [subject, v] : values) {
     if (!v.empty()) means.push_back(detail::meanWithCi(v).first);
   }
-  if (means.empty()) return {0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
-  const auto [mean, ci] = detail::meanWithCi(means);
-  return {static_cast<int>(means.size()), mean, ci};
+  return meanOverSubjects(means);
 }
 
 /// Per subject: shape and force values of the scores that `select` takes.
@@ -251,6 +249,29 @@ nlohmann::json meanJson(const SubjectMean& m) {
 std::string cell(double v) { return std::isfinite(v) ? fmt::format("{}", v) : ""; }
 
 }  // namespace
+
+SubjectMean meanOverSubjects(const std::vector<double>& values) {
+  if (values.empty()) return {0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
+  const auto [mean, ci] = detail::meanWithCi(values);
+  return {static_cast<int>(values.size()), mean, ci};
+}
+
+analysis::OneWayData groupSubjectMeans(const std::vector<const DesignTrialScore*>& scores, bool shape) {
+  std::map<std::string, std::pair<std::string, std::vector<double>>> by_subject;
+  for (const auto* s : scores) {
+    auto& [group, values] = by_subject[s->subject];
+    group = s->group;
+    values.push_back(shape ? s->shape() : s->force());
+  }
+  analysis::OneWayData data;
+  for (const auto& [subject, entry] : by_subject) {
+    double sum = 0.0;
+    for (const double v : entry.second) sum += v;
+    data.group.push_back(entry.first);
+    data.y.push_back(sum / static_cast<double>(entry.second.size()));
+  }
+  return data;
+}
 
 DesignAnalysis analyzeDesign(const session::StudyDatabase& db, const AnalysisOptions& options) {
   const session::StudyDefinition& study = db.study();

@@ -3,6 +3,7 @@
 #include "hattr/core/text_file.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <fstream>
 #include <numeric>
 #include <random>
@@ -153,6 +154,50 @@ void readMentor(const json& root, const std::filesystem::path& base_dir, bool ch
   }
 }
 
+/// strategy_parameters: {"STRATEGY": {"PARAMETER": number or choice, ...}, ...}, each checked
+/// against the catalog as it would be set.
+void readStrategyParameters(const json& root, StudyDefinition& study, Problems& problems) {
+  const auto it = root.find("strategy_parameters");
+  if (it == root.end()) return;
+  if (!it->is_object()) {
+    problems.add(fmt::format("strategy_parameters: expected {{\"strategy\": {{\"parameter\": value, ...}}, ...}}, got {}",
+                             jsonExcerpt(*it)));
+    return;
+  }
+  for (const auto& strategy : it->items()) {
+    guidance::TrainingMode mode{};
+    try {
+      mode = guidance::parseMode(strategy.key());
+    } catch (const InputError& e) {
+      problems.add(fmt::format("strategy_parameters: {}", e.what()));
+      continue;
+    }
+    if (!strategy.value().is_object()) {
+      problems.add(fmt::format("strategy_parameters.{}: expected {{\"parameter\": value, ...}}, got {}", strategy.key(),
+                               jsonExcerpt(strategy.value())));
+      continue;
+    }
+    std::vector<guidance::StrategySetting> settings;
+    for (const auto& parameter : strategy.value().items()) {
+      const json& v = parameter.value();
+      if (!v.is_number() && !v.is_string()) {
+        problems.add(fmt::format("strategy_parameters.{}.{}: expected a number or a choice's name, got {}", strategy.key(),
+                                 parameter.key(), jsonExcerpt(v)));
+        continue;
+      }
+      // A number as its shortest exact text.
+      settings.emplace_back(parameter.key(), v.is_string() ? v.get<std::string>() : fmt::format("{}", v.get<double>()));
+    }
+    try {
+      guidance::GuidanceConfig check;
+      guidance::setStrategyParameters(check, mode, settings);
+    } catch (const InputError& e) {
+      problems.add(fmt::format("strategy_parameters: {}", e.what()));
+    }
+    study.strategy_parameters[mode] = std::move(settings);
+  }
+}
+
 StudyDefinition parseStudyObject(const json& root, std::string_view source, const std::filesystem::path& base_dir,
                                  bool check_files);
 
@@ -180,7 +225,7 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
   static const std::set<std::string> kKeys{"format",   "name",    "skill",    "experts",  "modes",
                                            "protocol", "order",   "device",   "world",    "rate_hz",
                                            "indexing", "subjects", "mentor",  "storage",  "groups",
-                                           "sessions"};
+                                           "sessions", "strategy_parameters"};
   for (const auto& item : root.items()) {
     if (!kKeys.contains(item.key())) problems.add(fmt::format("unknown key \"{}\"", item.key()));
   }
@@ -316,6 +361,8 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
     }
   }
 
+  readStrategyParameters(root, study, problems);
+
   // Groups, subjects and the schedule (or the paper's modes, protocol and subjects).
   detail::readDesign(root, study, problems);
 
@@ -411,6 +458,22 @@ nlohmann::json studyToJson(const StudyDefinition& s) {
             {"expert_device", s.mentor.expert_device},
             {"passivity", s.mentor.passivity},
             {"deadband", s.mentor.deadband}}}};
+  // Only a study that sets strategy parameters says so (a stored definition stays as it was).
+  if (!s.strategy_parameters.empty()) {
+    json parameters = json::object();
+    for (const auto& [mode, settings] : s.strategy_parameters) {
+      json values = json::object();
+      for (const auto& [name, value] : settings) {
+        // A number as a number (its text is exact), a choice as its name.
+        double number = 0.0;
+        const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), number);
+        const bool numeric = ec == std::errc() && end == value.data() + value.size();
+        values[name] = numeric ? json(number) : json(value);
+      }
+      parameters[guidance::strategyName(mode)] = values;
+    }
+    root["strategy_parameters"] = parameters;
+  }
   // A design is written as one; the paper's form stays as it was read (a stored definition
   // is compared byte for byte by `study push`).
   if (!s.paper_form) detail::writeDesign(s, root);

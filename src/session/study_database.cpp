@@ -619,6 +619,28 @@ std::vector<SubjectRecord> StudyDatabase::subjects() const {
   return out;
 }
 
+namespace {
+
+/// A scheduled strategy's keys in a completed trial's stored metadata (TrialRecord::strategy_state).
+std::map<std::string, std::string> strategyState(const std::string& metadata, const std::filesystem::path& file,
+                                                 const TrialRecord& trial) {
+  constexpr std::string_view kKeys[] = {"guidance_law", "guidance_gain", "tracking_rms_m"};
+  std::map<std::string, std::string> state;
+  if (metadata.find("tracking_rms_m") == std::string::npos) return state;  // not one (and no parse)
+  try {
+    const json extra = json::parse(metadata).at("extra");
+    for (const std::string_view key : kKeys) {
+      if (const auto it = extra.find(key); it != extra.end()) state[std::string(key)] = it->get<std::string>();
+    }
+  } catch (const json::exception& e) {
+    throw InputError(fmt::format("{}: trial {} (subject {}, sequence {}) is damaged: metadata: {}", file.string(),
+                                 trial.id, textExcerpt(trial.plan.subject), trial.plan.sequence, jsonLibraryMessage(e)));
+  }
+  return state;
+}
+
+}  // namespace
+
 std::vector<TrialRecord> StudyDatabase::trials(const std::string& subject) const {
   std::vector<TrialRecord> out;
   Statement s(*db_,
@@ -626,7 +648,7 @@ std::vector<TrialRecord> StudyDatabase::trials(const std::string& subject) const
               "t.status, t.attempts, t.interruptions, t.started_utc, t.ended_utc, t.outcome, "
               "COALESCE(s.sample_count, 0), COALESCE(t.disturbed, ''), "
               "(SELECT COUNT(*) FROM disturbed_attempts d WHERE d.trial = t.id), COALESCE(t.skill, ''), "
-              "t.schedule_session, t.day, t.block, u.group_name "
+              "t.schedule_session, t.day, t.block, u.group_name, COALESCE(t.metadata, '') "
               "FROM trials t LEFT JOIN samples s ON s.trial = t.id JOIN subjects u ON u.id = t.subject "
               "WHERE ? = '' OR t.subject = ? ORDER BY t.subject, t.sequence");
   s.bind(1, subject).bind(2, subject);
@@ -647,6 +669,7 @@ std::vector<TrialRecord> StudyDatabase::trials(const std::string& subject) const
     r.sample_count = s.integer(14);
     r.disturbed = s.text(15);
     r.disturbed_attempts = static_cast<int>(s.integer(16));
+    r.strategy_state = strategyState(s.text(22), file_, r);
     out.push_back(std::move(r));
   }
   return out;

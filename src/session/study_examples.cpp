@@ -138,6 +138,44 @@ constexpr std::string_view kLearner = R"({
 }
 )";
 
+/// Guidance fading over sessions: the guided path at full strength throughout, faded to nothing
+/// over three days of training, or adapted to each trainee's errors; then a post-test and retention.
+constexpr std::string_view kFading = R"({
+  "format": "hattr-study/1",
+  "name": "Guided path: constant, fading over sessions, or as needed",
+  "skill": "na",
+  "experts": {"na": "expert.csv"},
+  "protocol": {"rest_s": 10, "trial_end": {"pen_up_s": 1.0, "max_s": 0}, "disturbed_trials": "repeat",
+               "max_repeats": 2, "show_scores": false},
+  "order": {"kind": "fixed"},
+  "device": "sim://pen",
+  "world": {"relief": {"kind": "grain"}},
+  "rate_hz": 1000,
+  "indexing": "time",
+  "strategy_parameters": {
+    "fading": {"base": "pcontrol", "by": "trials", "start_gain": 1, "end_gain": 0, "trials": 30},
+    "assist-as-needed": {"base": "pcontrol", "start_gain": 1}
+  },
+  "groups": [
+    {"name": "constant", "strategies": ["pcontrol"], "subjects": {"count": 8, "prefix": "C"}},
+    {"name": "fading", "strategies": ["fading"], "subjects": {"count": 8, "prefix": "F"}},
+    {"name": "as-needed", "strategies": ["assist-as-needed"], "subjects": {"count": 8, "prefix": "N"}}
+  ],
+  "sessions": [
+    {"day": 0, "blocks": [
+      {"phase": "baseline", "trials": 5, "show_reference": true},
+      {"phase": "training", "strategy": "group", "trials": 10}
+    ]},
+    {"day": 1, "blocks": [{"phase": "training", "strategy": "group", "trials": 10}]},
+    {"day": 2, "blocks": [
+      {"phase": "training", "strategy": "group", "trials": 10},
+      {"phase": "post-test", "trials": 5}
+    ]},
+    {"day": 3, "blocks": [{"phase": "retention", "trials": 5}]}
+  ]
+}
+)";
+
 }  // namespace
 
 const std::vector<ExampleDesign>& exampleDesigns() {
@@ -148,6 +186,9 @@ const std::vector<ExampleDesign>& exampleDesigns() {
        kGroupsRetention},
       {"week-apart", "does each mode's effect hold a week later: the paper's modes, repeated on day 7", kWeekApart},
       {"learner", "how one learner progresses: practice three times a week for two weeks, then retention", kLearner},
+      {"fading",
+       "does guidance that fades over sessions, or adapts to errors, leave more learning than constant guidance",
+       kFading},
   };
   return designs;
 }

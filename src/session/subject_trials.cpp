@@ -1,10 +1,12 @@
 #include "hattr/session/subject_trials.hpp"
 
 #include <algorithm>
+#include <charconv>
 
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/guidance/strategy_schedule.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/session/study_export.hpp"
 
@@ -40,6 +42,10 @@ TrialSetup studyTrialSetup(const StudyDefinition& study, const TrialPlan& plan,
   setup.metadata.extra["trial"] = fmt::format("{}", plan.index);
   setup.metadata.extra["sequence"] = fmt::format("{}", plan.sequence);
   setup.metadata.extra["reference_shown"] = plan.view.show_reference ? "yes" : "no";
+  // The study's strategy parameters, every strategy's (a scheduled one plays its base law's).
+  for (const auto& [mode, settings] : study.strategy_parameters) {
+    guidance::setStrategyParameters(setup.guidance, mode, settings);
+  }
   if (!study.paper_form) {  // the paper's trials keep their metadata as it always was
     setup.metadata.extra["group"] = plan.group;
     setup.metadata.extra["session"] = fmt::format("{}", plan.session + 1);
@@ -140,7 +146,34 @@ TrialSetup SubjectTrials::setup(Clock clock, LiveGuidance* mentor) const {
   setup.live_guidance = mentor;
   setup.live_seed = studyLiveSeed(subject_.spec, current()->plan, attempt_);
   setup.guidance.noise.seed = setup.live_seed;  // NOISE: the same trial and attempt, the same force
+  // A scheduled strategy's law and gain, from the tracking errors stored with the trials before.
+  const TrialPlan& plan = current()->plan;
+  if (guidance::isScheduled(plan.mode) && plan.view.guidance) {
+    setup.guidance.scheduled = guidance::scheduleTrial(setup.guidance, plan.mode, scheduledErrorsBefore());
+  }
   return setup;
+}
+
+bool SubjectTrials::scheduledTrial(const TrialPlan& plan) noexcept {
+  return guidance::isScheduled(plan.mode) && plan.view.guidance;
+}
+
+std::vector<double> SubjectTrials::scheduledErrorsBefore() const {
+  const TrialPlan& now = current()->plan;
+  std::vector<double> errors;
+  for (std::size_t i = 0; i < next_; ++i) {
+    const TrialRecord& before = trials_[i];
+    if (before.status != TrialStatus::kCompleted || before.plan.mode != now.mode || !scheduledTrial(before.plan)) continue;
+    const auto it = before.strategy_state.find("tracking_rms_m");
+    double error = 0.0;
+    const bool stored = it != before.strategy_state.end() &&
+                        std::from_chars(it->second.data(), it->second.data() + it->second.size(), error).ec == std::errc();
+    HATTR_THROW_UNLESS(stored, "subject {}: trial {} ({} training, sequence {}) has no stored tracking error "
+                       "(tracking_rms_m), which {} schedules the next trial from", subject_.id, before.plan.index,
+                       guidance::modeName(before.plan.mode), before.plan.sequence, guidance::modeName(now.mode));
+    errors.push_back(error);
+  }
+  return errors;
 }
 
 void SubjectTrials::begin(StudyDatabase& db, std::int64_t session) const {
@@ -166,6 +199,12 @@ SubjectTrials::Outcome SubjectTrials::end(StudyDatabase& db, TrialResult& result
   if (result.profile.empty()) throw Error("the trial recorded no samples; it stays to be run again");
   // Nothing in the profile may depend on when it ran, so a resumed study is bit-identical.
   result.profile.metadata().created_utc = "";
+  // A scheduled strategy's trial keeps its tracking error: the next trial's schedule reads it.
+  auto& extra = result.profile.metadata().extra;
+  if (scheduledTrial(record.plan)) {
+    const double error = guidance::trackingErrorRms(*references_.at(record.plan.skill), result.profile);
+    extra["tracking_rms_m"] = fmt::format("{}", error);
+  }
   // Its counters and events in the recording (TrialRun::finish wrote them already; a result
   // built elsewhere gets them here).
   const std::string disturbed = noteLoopCounters(result);
@@ -179,6 +218,11 @@ SubjectTrials::Outcome SubjectTrials::end(StudyDatabase& db, TrialResult& result
                                           result.missed_samples, result.faults, disturbed.empty() ? "" : "; disturbed");
   storeOrRescue(db, record, result.profile, outcome, disturbed, rescue_folder);
   record.status = TrialStatus::kCompleted;
+  if (scheduledTrial(record.plan)) {  // as StudyDatabase::trials reads it back
+    for (const char* key : {"guidance_law", "guidance_gain", "tracking_rms_m"}) {
+      if (const auto it = extra.find(key); it != extra.end()) record.strategy_state[key] = it->second;
+    }
+  }
   ++completed_;
   ++next_;
   attempt_ = 0;

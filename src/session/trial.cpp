@@ -10,6 +10,7 @@
 #include "hattr/core/error.hpp"
 #include "hattr/device/device_uri.hpp"
 #include "hattr/guidance/strategy_catalog.hpp"
+#include "hattr/guidance/strategy_schedule.hpp"
 #include "hattr/servo/servo_loop.hpp"
 #include "hattr/session/trial_run.hpp"
 #include "hattr/session/trial_watch.hpp"
@@ -118,11 +119,14 @@ ProfileMetadata trialMetadata(ProfileMetadata metadata, const TrialEnvironment& 
   if (static_cast<int>(config.mode) >= static_cast<int>(guidance::TrainingMode::kChannel)) {
     const std::string prefix = guidance::strategyName(config.mode);
     for (const auto& p : guidance::strategyInfo(config.mode).parameters) {
-      // 12 digits: the unit's conversion (mm to m and back) leaves no 1.4999999999999998.
-      extra[fmt::format("{}.{}", prefix, p.name)] =
-          fmt::format("{:.12g}", guidance::strategyParameter(config, config.mode, p.name));
+      extra[fmt::format("{}.{}", prefix, p.name)] = guidance::strategyParameterText(config, config.mode, p.name);
     }
     if (config.mode == guidance::TrainingMode::kNoise) extra["noise.seed"] = fmt::format("{}", config.noise.seed);
+    // A scheduled strategy: the law and gain its schedule chose for this trial.
+    if (guidance::isScheduled(config.mode)) {
+      extra["guidance_law"] = std::string(guidance::modeName(config.scheduled.law));
+      extra["guidance_gain"] = fmt::format("{}", config.scheduled.gain);
+    }
   }
   extra["clamps"] = clamps.empty() ? "none" : joined(clamps);
   extra["clock"] = clock == Clock::kSimulated ? "simulated" : "real-time";
@@ -225,6 +229,7 @@ TrialSetup scriptedTrialSetup(const device::ProfileHandScript& hand, const Hapti
   setup.guidance.playback.indexing = options.indexing;
   setup.guidance.playback.speed = options.speed;
   guidance::setStrategyParameters(setup.guidance, options.mode, options.parameters);
+  setup.guidance.scheduled = guidance::scheduleTrial(setup.guidance, options.mode, {});  // a first trial
   setup.guidance.noise.seed = options.seed;
   setup.metadata.extra["reference"] = options.reference_label;
   setup.metadata.extra["trial"] = fmt::format("{}", options.trial);

@@ -92,24 +92,6 @@ std::string testedPhase(const session::StudyDefinition& study, const std::string
   return phases.back();
 }
 
-/// Each subject's mean of one metric over `scores`, and their group: the one-way data.
-analysis::OneWayData subjectMeans(const std::vector<const report::DesignTrialScore*>& scores, bool shape) {
-  std::map<std::string, std::pair<std::string, std::vector<double>>> by_subject;
-  for (const auto* s : scores) {
-    auto& [group, values] = by_subject[s->subject];
-    group = s->group;
-    values.push_back(shape ? s->shape() : s->force());
-  }
-  analysis::OneWayData data;
-  for (const auto& [subject, entry] : by_subject) {
-    double sum = 0.0;
-    for (const double v : entry.second) sum += v;
-    data.group.push_back(entry.first);
-    data.y.push_back(sum / static_cast<double>(entry.second.size()));
-  }
-  return data;
-}
-
 /// A replicate's trials scored as they end, so that its store keeps no samples: each trial the
 /// analysis reads is prepared at once (its channels on the expert's time steps, a fraction of
 /// its recording) and scored with others a DTW batch at a time, exactly as the analysis would
@@ -409,7 +391,7 @@ report::ReplicateOutcome PowerStudy::designOutcome(int replicate, const session:
     for (const bool shape : {true, false}) {
       if (between_groups_) {
         // Between groups: each subject's mean, one-way ANOVA and Tukey HSD.
-        analysis::OneWayData data = subjectMeans(tested, shape);
+        analysis::OneWayData data = report::groupSubjectMeans(tested, shape);
         data.factor = "group";
         metrics[shape ? 0 : 1] = report::metricOutcome(analysis::oneWayAnova(data).row("group"),
                                                        analysis::tukeyHsdOneWay(data), plan_);

@@ -1,7 +1,9 @@
 // The strategies beyond the paper's (issue 36): each force law against its formula, the
 // catalog's parameters and ranges, no allocation on the tick, and the passivity clamps.
 
+#include <algorithm>
 #include <cmath>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -10,6 +12,7 @@
 
 #include "hattr/core/error.hpp"
 #include "hattr/guidance/strategy_catalog.hpp"
+#include "hattr/guidance/strategy_schedule.hpp"
 #include "hattr/guidance/training_guidance.hpp"
 #include "support/no_allocation.hpp"
 
@@ -94,7 +97,7 @@ TEST(Playback, PushesTheExpertsForceOpenLoopWhateverThePenDoes) {
 TEST(Noise, IsARepeatableBandLimitedForceOfTheAskedSizeInThePlane) {
   const auto run = [](std::uint64_t seed) {
     GuidanceConfig config{.mode = TrainingMode::kNoise};
-    setStrategyParameters(config, TrainingMode::kNoise, std::vector<StrategySetting>{{"rms_N", 0.4}, {"cutoff_hz", 5.0}});
+    setStrategyParameters(config, TrainingMode::kNoise, std::vector<StrategySetting>{{"rms_N", "0.4"}, {"cutoff_hz", "5"}});
     config.noise.seed = seed;
     // A reference as long as the run: the noise fades out with the reference's end, as every law.
     TrainingGuidance guidance(std::make_shared<ReferenceTrajectory>(straightStroke(201), 1000.0), config);
@@ -123,7 +126,8 @@ TEST(Noise, IsARepeatableBandLimitedForceOfTheAskedSizeInThePlane) {
 
 TEST(Strategies, NoTickOfAnyStrategyAllocatesOrLocks) {
   for (const TrainingMode mode : {TrainingMode::kChannel, TrainingMode::kErrorAugmentation, TrainingMode::kNoise,
-                                  TrainingMode::kPlayback, TrainingMode::kPositionControl, TrainingMode::kForceControl}) {
+                                  TrainingMode::kPlayback, TrainingMode::kPositionControl, TrainingMode::kForceControl,
+                                  TrainingMode::kFading, TrainingMode::kAssistAsNeeded, TrainingMode::kPartialThenFull}) {
     Rig rig(mode);
     (void)rig.guidance->compute(penAt(0.0, Vec3::Zero()), ContactForces{}, 1e-3);  // warm up outside the scope
     const test::NoAllocationScope scope;
@@ -185,15 +189,131 @@ TEST(StrategyCatalog, ListsEveryModeWithItsParametersAndRefusesValuesOutsideThei
               ThrowsMessage<InputError>(HasSubstr("CHANNEL: no parameter \"width\": expected one of half_width_mm")));
   EXPECT_THAT([&] { setStrategyParameter(config, TrainingMode::kBasic, "gain", 1.0); },
               ThrowsMessage<InputError>(HasSubstr("it has no parameters")));
-  EXPECT_THAT([] { (void)parseStrategySetting("rms_N"); }, ThrowsMessage<InputError>(HasSubstr("expected KEY=NUMBER")));
-  EXPECT_THAT([] { (void)parseStrategySetting("rms_N=0.3x"); }, ThrowsMessage<InputError>(HasSubstr("expected KEY=NUMBER")));
-  EXPECT_EQ(parseStrategySetting("rms_N=+0.25"), (StrategySetting{"rms_N", 0.25}));
+  EXPECT_THAT([] { (void)parseStrategySetting("rms_N"); }, ThrowsMessage<InputError>(HasSubstr("expected KEY=VALUE")));
+  EXPECT_THAT([] { (void)parseStrategySetting("rms_N="); }, ThrowsMessage<InputError>(HasSubstr("expected KEY=VALUE")));
+  EXPECT_EQ(parseStrategySetting("rms_N=+0.25"), (StrategySetting{"rms_N", "+0.25"}));
+  setStrategyParameters(config, TrainingMode::kNoise, std::vector{parseStrategySetting("rms_N=+0.25")});
+  EXPECT_EQ(config.noise.rms_N, 0.25);
+  EXPECT_THAT([&] { setStrategyParameters(config, TrainingMode::kNoise, std::vector{parseStrategySetting("rms_N=0.3x")}); },
+              ThrowsMessage<InputError>(HasSubstr("NOISE rms_N: expected a number from 0 to 2 N, got \"0.3x\"")));
   EXPECT_THAT([&] { setStrategyParameters(config, TrainingMode::kNoise, std::vector{parseStrategySetting("rms_N=1e400")}); },
               ThrowsMessage<InputError>(HasSubstr("NOISE rms_N: expected 0 to 2 N, got inf")));
   EXPECT_THAT([&] {
-    setStrategyParameters(config, TrainingMode::kNoise, std::vector<StrategySetting>{{"rms_N", 0.1}, {"rms_N", 0.2}});
+    setStrategyParameters(config, TrainingMode::kNoise, std::vector<StrategySetting>{{"rms_N", "0.1"}, {"rms_N", "0.2"}});
   }, ThrowsMessage<InputError>(HasSubstr("NOISE rms_N: given twice")));
   EXPECT_THAT([] { (void)parseMode("chanel"); }, ThrowsMessage<InputError>(HasSubstr("channel, error-augmentation")));
+  // A choice by its name, in any case; its index as a number; nothing else.
+  setStrategyParameter(config, TrainingMode::kFading, "base", std::string_view("ALPHA"));
+  EXPECT_EQ(config.fading.base, TrainingMode::kForceControl);
+  EXPECT_EQ(strategyParameterText(config, TrainingMode::kFading, "base"), "alpha");
+  setStrategyParameter(config, TrainingMode::kFading, "by", 1.0);
+  EXPECT_EQ(config.fading.by, FadingConfig::By::kPerformance);
+  EXPECT_THAT([&] { setStrategyParameter(config, TrainingMode::kAssistAsNeeded, "base", std::string_view("noise")); },
+              ThrowsMessage<InputError>(HasSubstr("ASSIST-AS-NEEDED base: expected one of pcontrol, alpha, got \"noise\"")));
+  EXPECT_THAT([&] { setStrategyParameter(config, TrainingMode::kFading, "by", 2.0); },
+              ThrowsMessage<InputError>(HasSubstr("FADING by: expected one of trials, performance, got 2")));
+}
+
+// ---- The scheduled strategies ---------------------------------------------------------------
+
+TEST(ScheduledStrategies, PlayTheirTrialsLawAtItsGain) {
+  // The same pen state under the plain law and under each scheduled strategy playing it.
+  const PenState pen = penAt(0.5, Vec3(0.003, 0.004, -0.001), Vec3(0.004, -0.01, 0.0));  // outside the channel
+  ContactForces contact;
+  contact.in_contact = true;
+  contact.f_on_paper_W = Vec3(0.2, 0.1, -0.5);
+  const auto force = [&](TrainingMode mode, const ScheduledLaw& scheduled) {
+    GuidanceConfig config{.mode = mode};
+    config.scheduled = scheduled;
+    config.lift_fade_s = 0.0;  // ALPHA at full weight in contact from the first tick
+    TrainingGuidance guidance(std::make_shared<ReferenceTrajectory>(straightStroke(), 1000.0), config);
+    (void)guidance.compute(penAt(0.499, pen.p_WT, pen.v_WT), contact, 1e-3);
+    return guidance.compute(pen, contact, 1e-3);
+  };
+  for (const TrainingMode law : {TrainingMode::kPositionControl, TrainingMode::kForceControl, TrainingMode::kChannel}) {
+    const Vec3 plain = force(law, {});
+    ASSERT_GT(plain.norm(), 0.01) << modeName(law);
+    for (const TrainingMode mode : {TrainingMode::kFading, TrainingMode::kAssistAsNeeded, TrainingMode::kPartialThenFull}) {
+      EXPECT_LT((force(mode, {law, 0.35}) - 0.35 * plain).norm(), 1e-12) << modeName(mode) << " " << modeName(law);
+      EXPECT_EQ(force(mode, {law, 0.0}), Vec3::Zero());
+    }
+  }
+  // A scheduled law must be a plain one, its gain within 0 to 1.
+  GuidanceConfig bad{.mode = TrainingMode::kFading};
+  bad.scheduled = {TrainingMode::kFading, 0.5};
+  EXPECT_THROW(TrainingGuidance(std::make_shared<ReferenceTrajectory>(straightStroke(), 1000.0), bad), InputError);
+  bad.scheduled = {TrainingMode::kPositionControl, 1.5};
+  EXPECT_THROW(TrainingGuidance(std::make_shared<ReferenceTrajectory>(straightStroke(), 1000.0), bad), InputError);
+}
+
+TEST(ScheduledStrategies, FadingFallsLinearlyOverTrialsOrByAStepAfterEachGoodTrial) {
+  GuidanceConfig config;
+  setStrategyParameters(config, TrainingMode::kFading,
+                        std::vector<StrategySetting>{{"base", "alpha"}, {"start_gain", "1"}, {"end_gain", "0.2"},
+                                                     {"trials", "5"}});
+  const std::vector<double> errors(8, 0.001);
+  // Trial n (from 0) of 5: 1 − 0.8·n/4, then 0.2 from the fifth on.
+  for (std::size_t n = 0; n <= errors.size(); ++n) {
+    const ScheduledLaw law = scheduleTrial(config, TrainingMode::kFading, std::span(errors).first(n));
+    EXPECT_EQ(law.law, TrainingMode::kForceControl);
+    EXPECT_NEAR(law.gain, n >= 4 ? 0.2 : 1.0 - 0.8 * static_cast<double>(n) / 4.0, 1e-12) << n;
+  }
+  // By performance: a 0.25 step after each trial of at most 1.5 mm, none after a worse one.
+  setStrategyParameters(config, TrainingMode::kFading,
+                        std::vector<StrategySetting>{{"by", "performance"}, {"step", "0.25"}, {"threshold_mm", "1.5"}});
+  const std::vector<double> mixed{0.001, 0.003, 0.0015, INFINITY, 0.0002, 0.0001, 0.0001};
+  const std::vector<double> expected{1.0, 0.75, 0.75, 0.5, 0.5, 0.25, 0.2, 0.2};
+  for (std::size_t n = 0; n <= mixed.size(); ++n) {
+    EXPECT_NEAR(scheduleTrial(config, TrainingMode::kFading, std::span(mixed).first(n)).gain, expected[n], 1e-12) << n;
+  }
+}
+
+TEST(ScheduledStrategies, AssistAsNeededFollowsTheErrorWithForgetting) {
+  GuidanceConfig config;
+  setStrategyParameters(config, TrainingMode::kAssistAsNeeded,
+                        std::vector<StrategySetting>{{"start_gain", "0.6"}, {"forgetting", "0.8"},
+                                                     {"error_gain_per_mm", "0.1"}, {"deadband_mm", "0.5"}});
+  const std::vector<double> errors{0.0025, 0.0004, 0.0001, 0.02, 0.0005};
+  // g₁ = 0.6; g_{n+1} = clamp(0.8·g_n + 0.1/mm · max(0, e_n − 0.5 mm), 0, 1).
+  double g = 0.6;
+  for (std::size_t n = 0; n <= errors.size(); ++n) {
+    const ScheduledLaw law = scheduleTrial(config, TrainingMode::kAssistAsNeeded, std::span(errors).first(n));
+    EXPECT_EQ(law.law, TrainingMode::kPositionControl);
+    EXPECT_NEAR(law.gain, g, 1e-12) << n;
+    if (n < errors.size()) g = std::clamp(0.8 * g + 100.0 * std::max(0.0, errors[n] - 0.0005), 0.0, 1.0);
+  }
+  EXPECT_NEAR(scheduleTrial(config, TrainingMode::kAssistAsNeeded, std::span(errors).first(4)).gain, 1.0, 1e-12)
+      << "20 mm of error: full assistance";
+}
+
+TEST(ScheduledStrategies, PartialThenFullSwitchesFromTheChannelToTheGuidedPath) {
+  GuidanceConfig config;
+  setStrategyParameter(config, TrainingMode::kPartialThenFull, "partial_trials", 2.0);
+  const std::vector<double> errors(4, 0.001);
+  for (std::size_t n = 0; n <= errors.size(); ++n) {
+    const ScheduledLaw law = scheduleTrial(config, TrainingMode::kPartialThenFull, std::span(errors).first(n));
+    EXPECT_EQ(law.law, n < 2 ? TrainingMode::kChannel : TrainingMode::kPositionControl) << n;
+    EXPECT_EQ(law.gain, 1.0);
+  }
+}
+
+TEST(ScheduledStrategies, TrackingErrorIsTheRmsDistanceOfThePenDownSamplesToThePath) {
+  const ReferenceTrajectory reference(straightStroke(), 1000.0);
+  HapticProfile trial;
+  for (int i = 0; i <= 100; ++i) {
+    Sample s;
+    s.t_s = i * 1e-2;
+    // Along the path, 1 mm beside it then 3 mm; the pen up (ignored) 10 mm away in between.
+    s.p_WT = Vec3(0.0002 * i, i < 50 ? 0.001 : 0.003, 0.0);
+    s.pen_down = i % 10 != 5;
+    if (!s.pen_down) s.p_WT.y() = 0.01;
+    trial.append(s);
+  }
+  // 45 samples at 1 mm (0..49 less 5 up), 46 at 3 mm (50..100 less 5 up).
+  EXPECT_NEAR(trackingErrorRms(reference, trial), std::sqrt((45 * 1e-6 + 46 * 9e-6) / 91.0), 1e-12);
+  HapticProfile nothing;
+  for (int i = 0; i < 10; ++i) nothing.append(Sample{.t_s = i * 1e-2});
+  EXPECT_EQ(trackingErrorRms(reference, nothing), INFINITY);
 }
 
 }  // namespace

@@ -169,7 +169,8 @@ TEST(TrainingGuidance, RefusesBadModesAndSettings) {
     FAIL();
   } catch (const InputError& e) {
     EXPECT_STREQ(e.what(), "mode: expected one of basic, pcontrol, alpha, mentor-observe, mentor-position, "
-                           "mentor-force, mentor-bilateral, channel, error-augmentation, noise, playback, got \"beta\"");
+                           "mentor-force, mentor-bilateral, channel, error-augmentation, noise, playback, fading, "
+                           "assist-as-needed, partial-then-full, got \"beta\"");
   }
   // The mentored modes by name; the recorded reference gives them no force (the live expert does).
   EXPECT_EQ(parseMode("mentor-force"), TrainingMode::kMentorForce);

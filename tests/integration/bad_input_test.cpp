@@ -228,6 +228,16 @@ std::vector<BadInput> corpus() {
   c.push_back(studyCase("study_unknown_mode", study("\"pcontrol\"", "\"gamma\""), "got \"gamma\""));
   c.push_back(studyCase("study_mentored_without_connect", study("\"pcontrol\"]", R"("mentor-position"], "mentor": {"expert": "live"})"),
                         "mentor.connect"));
+  // A strategy's parameter in the study file: checked at init as `--param` is.
+  c.push_back(studyCase("study_strategy_parameter_out_of_range",
+                        study("\"name\"", R"("strategy_parameters": {"fading": {"end_gain": 2}}, "name")"),
+                        "strategy_parameters: FADING end_gain: expected 0 to 1, got 2"));
+  c.push_back(studyCase("study_strategy_parameter_bad_choice",
+                        study("\"name\"", R"("strategy_parameters": {"assist-as-needed": {"base": "noise"}}, "name")"),
+                        "ASSIST-AS-NEEDED base: expected one of pcontrol, alpha, got \"noise\""));
+  c.push_back(studyCase("study_strategy_parameter_unknown_strategy",
+                        study("\"name\"", R"("strategy_parameters": {"fadeing": {}}, "name")"),
+                        "strategy_parameters: mode: expected one of"));
   c.push_back(studyCase("study_negative_rate", study("\"name\"", "\"rate_hz\": -5, \"name\""), "rate_hz"));
   c.push_back(studyCase("study_expert_absurd", study(), "expected at most 1 m"));
   c.back().prepare = [](const fs::path& dir) {  // the expert reference itself is absurd

@@ -147,7 +147,7 @@ TEST_P(ShippedDesign, RunsEndToEndWithAKillAndAResume) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Designs, ShippedDesign,
-                         ::testing::Values("paper", "groups-retention", "week-apart", "learner"),
+                         ::testing::Values("paper", "groups-retention", "week-apart", "learner", "fading"),
                          [](const auto& param_info) {
                            std::string n = param_info.param;
                            std::replace(n.begin(), n.end(), '-', '_');

@@ -33,7 +33,11 @@ def test_a_training_trial_through_python_equals_one_through_the_cli(tmp_path, ex
 # The hand writes the expert's own script: on the path the channel gives no force; the others do.
 @pytest.mark.parametrize("mode,params,seed,guided", [("channel", {"half_width_mm": 0.5}, 1, False),
                                                      ("error-augmentation", {"gain_N_per_mm": 0.2}, 1, True),
-                                                     ("noise", {"rms_N": 0.5}, 9, True), ("playback", {}, 1, True)])
+                                                     ("noise", {"rms_N": 0.5}, 9, True), ("playback", {}, 1, True),
+                                                     # scheduled: the first trial's law at its gain
+                                                     ("fading", {"base": "alpha", "start_gain": 0.5}, 1, True),
+                                                     ("assist-as-needed", {"start_gain": 0.0}, 1, False),
+                                                     ("partial-then-full", {"partial_trials": 2}, 1, False)])
 def test_the_strategies_beyond_the_papers_run_through_python_as_through_the_cli(tmp_path, expert_files, mode, params,
                                                                                 seed, guided):
     # Issue 36: the strategy, its parameters by name and the noise's seed, as `hattr train` takes them.
@@ -54,8 +58,12 @@ def test_the_strategies_are_listed_as_the_cli_lists_them():
     import json
     listed = json.loads(run_cli("strategies", "--json")[0])["strategies"]
     assert hattr.strategies() == listed
-    assert len(listed) >= 11
-    assert {"channel", "error-augmentation", "noise", "playback"} <= {s["name"] for s in listed}
+    assert len(listed) >= 14
+    assert {"channel", "error-augmentation", "noise", "playback", "fading", "assist-as-needed",
+            "partial-then-full"} <= {s["name"] for s in listed}
+    fading = next(s for s in listed if s["name"] == "fading")
+    assert fading["scheduled"] and fading["parameters"][0] == {
+        "name": "base", "default": "pcontrol", "choices": ["pcontrol", "alpha"], "meaning": "the guidance that fades"}
 
 
 def test_a_recording_with_the_end_rule_equals_the_clis(tmp_path, expert_files):

@@ -79,6 +79,7 @@ TEST(StudyDesigns, EveryShippedDesignReadsAndPlansWhatItSays) {
   EXPECT_EQ(trials_of_first_subject["groups-retention"], 40u);  // 5 + 10, 10 + 5, 5 + 5
   EXPECT_EQ(trials_of_first_subject["week-apart"], 132u);       // the paper's, twice
   EXPECT_EQ(trials_of_first_subject["learner"], 14u + 5 * 11 + 3);
+  EXPECT_EQ(trials_of_first_subject["fading"], 45u);            // 5 + 10, 10, 10 + 5, 5
   EXPECT_EQ(subjects["groups-retention"], 24u);
   EXPECT_EQ(subjects["learner"], 1u);
   EXPECT_THROW((void)exampleDesign("nonesuch"), InputError);

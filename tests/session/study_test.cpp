@@ -59,8 +59,8 @@ TEST(StudyDefinition, ValidationNamesEveryProblemAtOnce) {
   EXPECT_THAT(message, HasSubstr("unknown key \"colour\""));
   EXPECT_THAT(message, HasSubstr("experts.na: expert file"));
   EXPECT_THAT(message, HasSubstr("modes: mode: expected one of basic, pcontrol, alpha, mentor-observe, mentor-position, "
-                                 "mentor-force, mentor-bilateral, channel, error-augmentation, noise, playback, got "
-                                 "\"gamma\""));
+                                 "mentor-force, mentor-bilateral, channel, error-augmentation, noise, playback, fading, "
+                                 "assist-as-needed, partial-then-full, got \"gamma\""));
   EXPECT_THAT(message, HasSubstr("modes: \"basic\" listed twice"));
   EXPECT_THAT(message, HasSubstr("protocol: zero trials per mode"));
   EXPECT_THAT(message, HasSubstr("subjects[1]: id \"S1\" used twice"));

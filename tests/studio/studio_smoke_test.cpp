@@ -26,6 +26,7 @@
 #include "ui/pen_scene_view.hpp"
 #include "ui/profile_plot.hpp"
 #include "ui/record_tab.hpp"
+#include "ui/train_tab.hpp"
 
 using namespace hattr;
 using namespace hattr::studio;
@@ -486,7 +487,7 @@ class StudioSmokeTest : public QObject {
     QTest::keyClick(&w, Qt::Key_1);
     QCOMPARE(w.mode(), guidance::TrainingMode::kBasic);
     QTest::keyClick(&w, Qt::Key_Space);  // the Train tab's main action: start a trial
-    QCOMPARE(w.activity(), MainWindow::Activity::kTrial);
+    QVERIFY2(w.activity() == MainWindow::Activity::kTrial, qPrintable(w.lastError()));
     QCOMPARE(w.rig().spec().guidance.mode, guidance::TrainingMode::kBasic);
     QTest::keyClick(&w, Qt::Key_Escape);
     QCOMPARE(w.activity(), MainWindow::Activity::kFree);
@@ -513,14 +514,21 @@ class StudioSmokeTest : public QObject {
 
   void settingsAreRememberedAcrossSessions() {
     const QString ini = QString::fromStdString((dir_ / "studio.ini").string());
-    window_->setMode(guidance::TrainingMode::kForceControl);
+    // Every strategy but the mentored ones is offered by its plain name, the technical beside;
+    // one past the paper's three is remembered.
+    const QComboBox* modes = window_->trainTab()->widgets().mode;
+    QCOMPARE(modes->count(), static_cast<int>(guidance::kLastMode) + 1 - 4);
+    QCOMPARE(modes->itemText(1), QString("Guided path — PCONTROL"));
+    QCOMPARE(modes->itemText(modes->count() - 2), QString("Help when needed — ASSIST-AS-NEEDED"));
+    window_->setMode(guidance::TrainingMode::kAssistAsNeeded);
+    QCOMPARE(modes->currentText(), QString("Help when needed — ASSIST-AS-NEEDED"));
     window_->setSceneShown(true);
     window_->setInteractive(false, true);  // "quit and lose the unsaved trial?" yes
     QVERIFY(window_->close());
     window_.reset();
     MainWindow again(std::make_unique<QSettings>(ini, QSettings::IniFormat));
     again.setInteractive(false, true);
-    QCOMPARE(again.mode(), guidance::TrainingMode::kForceControl);
+    QCOMPARE(again.mode(), guidance::TrainingMode::kAssistAsNeeded);
     QVERIFY(!again.sceneView()->isHidden());  // the 3-D view shown last time is shown again
     QVERIFY(again.startTrial());  // the reference of last time is loaded again
     again.abortActivity();

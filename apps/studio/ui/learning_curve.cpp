@@ -11,7 +11,7 @@ LearningCurve::LearningCurve(QWidget* parent) : QWidget(parent) {
   setSizePolicy(QSizePolicy::Preferred, QSizePolicy::Fixed);
   setMinimumHeight(minimumSizeHint().height());
   setToolTip(tr("Your training trials' scores against this reference, in order; lower is closer. "
-                "Grey: BASIC, blue: PCONTROL, green: ALPHA."));
+                "Each point in its strategy's colour: grey BASIC, blue PCONTROL, green ALPHA, ..."));
 }
 
 void LearningCurve::add(guidance::TrainingMode mode, const analysis::TrialScore& score) {
@@ -28,6 +28,13 @@ QColor LearningCurve::modeColour(guidance::TrainingMode mode) {
   switch (mode) {
     case guidance::TrainingMode::kPositionControl: return {40, 110, 230};
     case guidance::TrainingMode::kForceControl: return {0, 150, 70};
+    case guidance::TrainingMode::kChannel: return {0, 150, 170};
+    case guidance::TrainingMode::kErrorAugmentation: return {200, 60, 40};
+    case guidance::TrainingMode::kNoise: return {150, 90, 30};
+    case guidance::TrainingMode::kPlayback: return {140, 60, 170};
+    case guidance::TrainingMode::kFading: return {120, 160, 240};
+    case guidance::TrainingMode::kAssistAsNeeded: return {230, 140, 0};
+    case guidance::TrainingMode::kPartialThenFull: return {90, 120, 40};
     default: return {110, 110, 110};
   }
 }

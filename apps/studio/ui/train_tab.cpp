@@ -10,8 +10,11 @@
 #include <QSettings>
 #include <QVBoxLayout>
 #include <algorithm>
+#include <cmath>
 
 #include "core/profile_files.hpp"
+#include "hattr/guidance/strategy_catalog.hpp"
+#include "hattr/guidance/strategy_schedule.hpp"
 #include "hattr/session/study.hpp"
 #include "ui/learning_curve.hpp"
 #include "ui/ui_text.hpp"
@@ -24,8 +27,10 @@ TrainTab::TrainTab(QSettings& settings, TrainHost host, QWidget* parent)
   w_.indexing->setCurrentIndex(settings_.value("train/indexing", 0).toInt());
   w_.show_reference->setChecked(settings_.value("train/show_reference", true).toBool());
   w_.settle->setValue(settings_.value("train/settle_s", 1.5).toDouble());
-  mode_ = static_cast<guidance::TrainingMode>(std::clamp(settings_.value("train/mode", 0).toInt(), 0, 2));
-  w_.mode->setCurrentIndex(static_cast<int>(mode_));
+  // A remembered strategy the tab offers, else BASIC.
+  const int remembered = w_.mode->findData(settings_.value("train/mode", 0).toInt());
+  mode_ = static_cast<guidance::TrainingMode>(w_.mode->itemData(std::max(remembered, 0)).toInt());
+  w_.mode->setCurrentIndex(std::max(remembered, 0));
 }
 
 TrainTab::~TrainTab() = default;
@@ -49,13 +54,22 @@ void TrainTab::buildUi() {
 
   // The mode, its indexing, the get-ready time and whether the reference is drawn.
   auto* form = new QFormLayout;
+  // Every strategy but the mentored ones (the Mentor tab's): its plain name, the technical
+  // name beside, what it does in the tooltip.
   w_.mode = new QComboBox;
-  for (const auto mode : {guidance::TrainingMode::kBasic, guidance::TrainingMode::kPositionControl,
-                          guidance::TrainingMode::kForceControl}) {
-    w_.mode->addItem(qs(guidance::modeName(mode)));
+  for (const auto& strategy : guidance::strategyCatalog()) {
+    if (strategy.mentored) continue;
+    w_.mode->addItem(tr("%1 — %2").arg(qs(strategy.plain_name), qs(guidance::modeName(strategy.mode))),
+                     static_cast<int>(strategy.mode));
+    w_.mode->setItemData(w_.mode->count() - 1, qs(strategy.description), Qt::ToolTipRole);
   }
-  w_.mode->setToolTip(tr("BASIC: no assistance (1) · PCONTROL: position guidance (2) · ALPHA: force guidance (3)"));
-  connect(w_.mode, &QComboBox::activated, this, [this](int index) { setMode(static_cast<guidance::TrainingMode>(index)); });
+  // The longest names are shown elided: the tab keeps its width on a small screen.
+  w_.mode->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
+  w_.mode->setMinimumContentsLength(22);
+  w_.mode->setToolTip(tr("The training strategy (`hattr strategies`); keys 1, 2, 3: the paper's BASIC, PCONTROL, "
+                         "ALPHA"));
+  connect(w_.mode, &QComboBox::activated, this,
+          [this](int index) { setMode(static_cast<guidance::TrainingMode>(w_.mode->itemData(index).toInt())); });
   w_.indexing = new QComboBox;
   w_.indexing->addItem(tr("time (the paper's)"));
   w_.indexing->addItem(tr("progress (follows you)"));
@@ -158,6 +172,7 @@ void TrainTab::setReference(HapticProfile profile, const QString& file, const QS
   reference_is_take_ = false;
   w_.reference->setText(label_html);
   w_.curve->clear();  // scores against another reference do not compare
+  scheduled_errors_.clear();  // nor do its tracking errors
   host_.show_reference(*reference_, referenceShown());
   host_.changed();
 }
@@ -166,7 +181,7 @@ void TrainTab::setReference(HapticProfile profile, const QString& file, const QS
 
 void TrainTab::setMode(guidance::TrainingMode mode) {
   mode_ = mode;
-  w_.mode->setCurrentIndex(static_cast<int>(mode));
+  w_.mode->setCurrentIndex(w_.mode->findData(static_cast<int>(mode)));
   // During a trial the mode switches through the servo mailbox, with the cross-fade.
   if (host_.trial_running() && !host_.switch_mode(mode)) {
     host_.error(tr("The mode could not be switched"), tr("the servo loop's mailbox is full; try again"));
@@ -183,6 +198,8 @@ bool TrainTab::start() {
     auto reference = std::make_shared<guidance::ReferenceTrajectory>(*reference_, host_.rate_hz());
     session::TrialSetup setup;
     setup.guidance.mode = mode_;
+    // A scheduled strategy's law and gain from this reference's trials in it so far.
+    setup.guidance.scheduled = guidance::scheduleTrial(setup.guidance, mode_, scheduled_errors_[mode_]);
     setup.guidance.playback.indexing =
         w_.indexing->currentIndex() == 0 ? guidance::Indexing::kTime : guidance::Indexing::kProgress;
     // A study's default end: 1 s with the pen lifted after writing, at most 3 × the expert.
@@ -196,8 +213,12 @@ bool TrainTab::start() {
     setup.metadata.skill = reference_->metadata().skill;
     setup.metadata.source = "studio";
     setup.metadata.extra["reference_file"] = reference_name_.toStdString();
-    host_.start_trial(setup, *reference_, referenceShown(), tr("Trial: %1").arg(qs(guidance::modeName(mode_))),
-                      w_.scores);
+    QString title = tr("Trial: %1").arg(qs(guidance::strategyInfo(mode_).plain_name));
+    if (guidance::isScheduled(mode_)) {
+      title += tr(" (%1 at %2 %)").arg(qs(guidance::modeName(setup.guidance.scheduled.law)))
+                   .arg(std::round(100.0 * setup.guidance.scheduled.gain));
+    }
+    host_.start_trial(setup, *reference_, referenceShown(), title, w_.scores);
   } catch (const std::exception& e) {
     host_.error(tr("The trial could not start"), what(e));
     return false;
@@ -207,8 +228,13 @@ bool TrainTab::start() {
 }
 
 void TrainTab::trialEnded(const std::optional<analysis::TrialScore>& scores, const session::TrialResult& result) {
-  // A trial the device or the loop cut short (failure) is scored, but is no point of the curve.
+  // A trial the device or the loop cut short (failure) is scored, but is no point of the curve,
+  // nor one a scheduled strategy learns from.
   if (scores && result.failure.empty()) w_.curve->add(trial_mode_, *scores);
+  if (guidance::isScheduled(trial_mode_) && result.failure.empty() && !result.profile.empty() && reference_) {
+    const guidance::ReferenceTrajectory expert(*reference_, host_.rate_hz());
+    scheduled_errors_[trial_mode_].push_back(guidance::trackingErrorRms(expert, result.profile));
+  }
   w_.scores->setText(w_.scores->text() + tr("<br>%1 ticks, %2 overruns, %3 missed samples, %4 faults")
                                              .arg(result.ticks)
                                              .arg(result.overruns)

@@ -1,15 +1,18 @@
 #pragma once
-/// The Train tab: the training reference (a profile file or the Record tab's take), the mode
-/// (BASIC, PCONTROL, ALPHA) with its indexing and get-ready time, a trial against the reference,
-/// its scores and the learning curve. The tab owns the reference, the mode and its widgets, and
+/// The Train tab: the training reference (a profile file or the Record tab's take), the
+/// strategy (every one but the mentored, by its plain name; a scheduled one's law and gain set
+/// from this reference's trials in it so far) with its indexing and get-ready time, a trial
+/// against the reference, its scores and the learning curve. The tab owns the reference, the mode and its widgets, and
 /// sets a trial up for session::runTrial's pipeline; the rig, the paper, the plot and the last
 /// trial are the main window's, lent through TrainHost. GUI thread only.
 
 #include <QString>
 #include <QWidget>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "hattr/analysis/trial_score.hpp"
 #include "hattr/core/haptic_profile.hpp"
@@ -141,6 +144,8 @@ class TrainTab final : public QWidget {
   bool reference_is_take_ = false;  // the reference is the Record tab's take
   guidance::TrainingMode mode_ = guidance::TrainingMode::kBasic;
   guidance::TrainingMode trial_mode_ = guidance::TrainingMode::kBasic;  // the mode the trial started in
+  // A scheduled strategy's tracking errors of this reference's trials in it, in order.
+  std::map<guidance::TrainingMode, std::vector<double>> scheduled_errors_;
 };
 
 }  // namespace hattr::studio

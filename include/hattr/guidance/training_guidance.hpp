@@ -12,7 +12,12 @@
 ///                       spring and damper toward it outside (in the plane);
 ///   ERROR-AUGMENTATION  a force that amplifies the deviation from the reference, saturated;
 ///   NOISE               a band-limited random force in the plane, seeded per trial;
-///   PLAYBACK            the expert's force played open-loop ("record and play").
+///   PLAYBACK            the expert's force played open-loop ("record and play");
+/// and three scheduled strategies, a law above with a gain the session sets before each trial
+/// from the trials before it (strategy_schedule.hpp):
+///   FADING              PCONTROL or ALPHA with a gain falling over trials, or with performance;
+///   ASSIST-AS-NEEDED    PCONTROL or ALPHA with a gain adapted to the error, with forgetting;
+///   PARTIAL-THEN-FULL   CHANNEL for the first trials, then PCONTROL.
 /// Mode switches cross-fade the force (default 100 ms). Gains are clamped to what the device
 /// renders passively together with the paper (clampGains). strategy_catalog.hpp describes every
 /// strategy and its parameters. See docs/training_modes.md.
@@ -48,13 +53,16 @@ enum class TrainingMode : int {
   kErrorAugmentation = 8,
   kNoise = 9,
   kPlayback = 10,
+  kFading = 11,
+  kAssistAsNeeded = 12,
+  kPartialThenFull = 13,
 };
 /// The last mode (for loops over every mode).
-inline constexpr TrainingMode kLastMode = TrainingMode::kPlayback;
+inline constexpr TrainingMode kLastMode = TrainingMode::kPartialThenFull;
 
 /// Where users see them: the paper's "BASIC", "PCONTROL", "ALPHA"; "MENTOR-OBSERVE",
 /// "MENTOR-POSITION", "MENTOR-FORCE", "MENTOR-BILATERAL"; "CHANNEL", "ERROR-AUGMENTATION",
-/// "NOISE", "PLAYBACK".
+/// "NOISE", "PLAYBACK"; "FADING", "ASSIST-AS-NEEDED", "PARTIAL-THEN-FULL".
 std::string_view modeName(TrainingMode mode);
 /// The names of modeName in any case; throws InputError listing them otherwise.
 TrainingMode parseMode(std::string_view text);
@@ -69,6 +77,12 @@ std::string strategyName(TrainingMode mode);
 /// A mode whose force law needs the expert's reference (all but BASIC and the mentored ones).
 [[nodiscard]] constexpr bool needsReference(TrainingMode mode) noexcept {
   return mode != TrainingMode::kBasic && !isMentored(mode);
+}
+/// A scheduled strategy: between trials, the session chooses its law and gain for the next
+/// trial from the trials before it (guidance::scheduleTrial).
+[[nodiscard]] constexpr bool isScheduled(TrainingMode mode) noexcept {
+  return mode == TrainingMode::kFading || mode == TrainingMode::kAssistAsNeeded ||
+         mode == TrainingMode::kPartialThenFull;
 }
 
 struct PositionGains {
@@ -113,6 +127,43 @@ struct PlaybackGains {
   double gain = 1.0;
 };
 
+/// FADING: the base law's gain, from start_gain to end_gain, falling linearly over the first
+/// `trials` guided trials (by = kTrials), or by `step` after each trial whose tracking error was
+/// at most `threshold_m` (by = kPerformance).
+struct FadingConfig {
+  enum class By : int { kTrials = 0, kPerformance = 1 };
+  TrainingMode base = TrainingMode::kPositionControl;  ///< PCONTROL or ALPHA
+  By by = By::kTrials;
+  double start_gain = 1.0;
+  double end_gain = 0.0;
+  double trials = 10.0;        ///< kTrials: the gain reaches end_gain at this guided trial
+  double step = 0.2;           ///< kPerformance: the gain's fall after a good trial
+  double threshold_m = 0.002;  ///< kPerformance: a good trial's tracking error at most [m]
+};
+
+/// ASSIST-AS-NEEDED (Emken, Benitez & Reinkensmeyer 2007): g₁ = start_gain, then
+/// g_{n+1} = clamp(forgetting·g_n + error_gain·max(0, e_n − deadband), 0, 1), e_n the trial's
+/// tracking error: assistance fades by the forgetting factor and grows with the error.
+struct AssistAsNeededConfig {
+  TrainingMode base = TrainingMode::kPositionControl;  ///< PCONTROL or ALPHA
+  double start_gain = 1.0;
+  double forgetting = 0.9;
+  double error_gain_per_m = 50.0;   ///< 0.05 per mm of tracking error
+  double deadband_m = 0.0005;       ///< errors up to this are the trainee's own variability
+};
+
+/// PARTIAL-THEN-FULL (Teranishi et al. 2017): CHANNEL (partial guidance) for the first
+/// `partial_trials` guided trials, then PCONTROL (full guidance), each with its own parameters.
+struct PartialThenFullConfig {
+  double partial_trials = 5.0;
+};
+
+/// A scheduled strategy's law and gain for one trial (set by the session before the trial).
+struct ScheduledLaw {
+  TrainingMode law = TrainingMode::kPositionControl;  ///< PCONTROL, ALPHA or CHANNEL
+  double gain = 1.0;                                  ///< 0 to 1
+};
+
 struct GuidanceConfig {
   TrainingMode mode = TrainingMode::kBasic;
   PositionGains position;
@@ -121,6 +172,10 @@ struct GuidanceConfig {
   AugmentationGains augmentation;
   NoiseConfig noise;
   PlaybackGains playback_force;
+  FadingConfig fading;
+  AssistAsNeededConfig assist;
+  PartialThenFullConfig partial_then_full;
+  ScheduledLaw scheduled;      ///< a scheduled mode's law and gain in this trial
   PlaybackConfig playback;
   double crossfade_s = 0.1;    ///< mode switches fade over this long
   double lift_fade_s = 0.05;   ///< ALPHA fades out over this long while the pen is off the paper

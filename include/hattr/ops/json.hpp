@@ -32,4 +32,10 @@ nlohmann::json realtimeReportJson(const servo::RealtimeReport& report);
 /// [{figure, value, unit, verdict, rule}].
 nlohmann::json verdictsJson(const servo::LoopJudgement& judgement);
 
+/// Every training strategy (guidance::strategyCatalog), as `hattr strategies --json` and
+/// Python's hattr.strategies() give it: [{name, plain_name, description, source, mentored,
+/// scheduled, parameters}], a number parameter {name, unit, default, min, max, meaning}, a
+/// choice {name, default, choices, meaning} (the default a choice's name).
+nlohmann::json strategiesJson();
+
 }  // namespace hattr::ops

@@ -20,6 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "hattr/analysis/anova.hpp"
 #include "hattr/report/study_analysis.hpp"
 
 namespace hattr::report {
@@ -105,6 +106,13 @@ struct DesignAnalysis {
   int trials_flagged = 0;               ///< disturbed, analyzed and flagged
   std::string disturbed_policy;
 };
+
+/// The mean of one value per subject with its interval (SubjectMean; none: NaN, 0 subjects).
+SubjectMean meanOverSubjects(const std::vector<double>& values);
+
+/// Each subject's mean cost (shape, or force) over `scores`, with the subject's group: the data
+/// of a one-way ANOVA between the groups (factor "group"), subjects in id order.
+analysis::OneWayData groupSubjectMeans(const std::vector<const DesignTrialScore*>& scores, bool shape);
 
 /// Scores and tabulates a study's completed trials. Throws InputError when none is completed.
 DesignAnalysis analyzeDesign(const session::StudyDatabase& db, const AnalysisOptions& options = {});

@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "hattr/core/haptic_profile.hpp"
+#include "hattr/guidance/strategy_catalog.hpp"
 #include "hattr/guidance/training_guidance.hpp"
 #include "hattr/io/sample_codec.hpp"
 #include "hattr/session/study_design.hpp"
@@ -103,6 +104,10 @@ struct StudyDefinition {
   /// The named experts' recordings, skill -> profile (sim::recordNamedExperts).
   std::map<std::string, HapticProfile> named_expert_profiles;
   std::vector<guidance::TrainingMode> modes;                ///< every strategy the study uses, first use first
+  /// strategy_parameters: each strategy's parameters as the study sets them (by name, in the
+  /// catalog's units or a choice's name; guidance/strategy_catalog.hpp), applied to every trial's
+  /// guidance, so a scheduled strategy's base law has the study's settings too.
+  std::map<guidance::TrainingMode, std::vector<guidance::StrategySetting>> strategy_parameters;
   Protocol protocol;
   /// The between-subjects groups (one, kWithinSubjectsGroup, in the paper's form) and the
   /// schedule; study_design.hpp. Always at least one of each once parsed.

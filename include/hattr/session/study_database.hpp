@@ -57,6 +57,9 @@ struct TrialRecord {
   std::int64_t sample_count = 0;
   std::string disturbed;        ///< how the loop disturbed the kept attempt ("" when clean)
   int disturbed_attempts = 0;   ///< disturbed attempts kept and run again (policy "repeat")
+  /// A completed trial of a scheduled strategy: what its schedule chose and measured, from its
+  /// stored metadata (guidance_law, guidance_gain, tracking_rms_m); empty for any other.
+  std::map<std::string, std::string> strategy_state;
 };
 
 struct SubjectRecord {

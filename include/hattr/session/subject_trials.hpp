@@ -79,8 +79,10 @@ class SubjectTrials {
   /// "Training with ALPHA: trial 3 of 11", "Retention: trial 2 of 5". Needs a current trial.
   [[nodiscard]] std::string prompt() const;
   /// The current attempt's set-up (studyTrialSetup) on `clock`, with the mentored modes' expert
-  /// station and its link's seed. The caller sets the settle time, the stop request and any
-  /// injected stall.
+  /// station and its link's seed; for a scheduled strategy's guided trial, the law and gain its
+  /// schedule gives from the tracking errors stored with the subject's guided trials of the same
+  /// strategy before it (guidance::scheduleTrial). The caller sets the settle time, the stop
+  /// request and any injected stall.
   [[nodiscard]] TrialSetup setup(Clock clock, LiveGuidance* mentor) const;
 
   /// Marks the current trial running in `session` (each call counts an attempt in the database).
@@ -97,7 +99,8 @@ class SubjectTrials {
     TrialRecord trial;      ///< the trial as it is now (completed when stored)
   };
   /// The current trial ended with `result` (clearing its created_utc and noting its loop's
-  /// counters, so a resumed study stays bit-identical). A failure is marked failed; a disturbed
+  /// counters, so a resumed study stays bit-identical; a scheduled strategy's guided trial gets
+  /// its tracking error, tracking_rms_m, in its metadata). A failure is marked failed; a disturbed
   /// trial the policy repeats is kept as an attempt; any other is stored with its outcome text.
   /// When the store refuses it the recording is written to `rescue_folder` (a profile CSV) and an
   /// Error says where; the trial stays running, to be run again. Throws SubjectTakenOver when
@@ -112,6 +115,11 @@ class SubjectTrials {
   static void storeOrRescue(StudyDatabase& db, const TrialRecord& record, const HapticProfile& profile,
                             const std::string& outcome, const std::string& disturbed,
                             const std::filesystem::path& rescue_folder);
+
+  /// A guided trial of a scheduled strategy.
+  static bool scheduledTrial(const TrialPlan& plan) noexcept;
+  /// The tracking errors of the current trial's scheduled strategy's guided trials before it.
+  [[nodiscard]] std::vector<double> scheduledErrorsBefore() const;
 
   const StudyDefinition& study_;
   SubjectRecord subject_;

@@ -14,6 +14,7 @@
 #include "hattr/core/haptic_profile.hpp"
 #include "hattr/device/device.hpp"
 #include "hattr/device/hand.hpp"
+#include "hattr/guidance/strategy_catalog.hpp"
 #include "hattr/guidance/training_guidance.hpp"
 #include "hattr/render/world_config.hpp"
 #include "hattr/session/recorder.hpp"
@@ -226,8 +227,9 @@ struct ScriptedTrialOptions {
   guidance::Indexing indexing = guidance::Indexing::kTime;
   double speed = 1.0;            ///< reference playback speed (time indexing)
   int trial = 0;                 ///< trial number recorded when training
-  /// The mode's parameters by name, in the catalog's units (guidance::setStrategyParameters).
-  std::vector<std::pair<std::string, double>> parameters;
+  /// The mode's parameters by name, in the catalog's units or a choice's name
+  /// (guidance::setStrategyParameters). A scheduled mode plays its first trial's law and gain.
+  std::vector<guidance::StrategySetting> parameters;
   std::uint64_t seed = 1;        ///< NOISE's seed
 };
 
