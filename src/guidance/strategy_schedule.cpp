@@ -12,7 +12,7 @@ namespace {
 
 /// FADING by trials: start to end, linearly, reached at guided trial `trials` (from 1).
 double fadedByTrials(const FadingConfig& f, std::size_t done) {
-  if (f.trials <= 1.0) return done == 0 ? f.start_gain : f.end_gain;
+  if (f.trials <= 1.0) return f.end_gain;  // reached at the first guided trial
   const double share = std::min(1.0, static_cast<double>(done) / (f.trials - 1.0));
   return f.start_gain + (f.end_gain - f.start_gain) * share;
 }
@@ -33,8 +33,10 @@ double fadedByPerformance(const FadingConfig& f, std::span<const double> errors_
 double assisted(const AssistAsNeededConfig& a, std::span<const double> errors_m) {
   double gain = a.start_gain;
   for (const double e : errors_m) {
+    // An error beyond any (nothing written) adds full assistance, unless errors add none.
     const double excess = std::isnan(e) ? 0.0 : std::max(0.0, e - a.deadband_m);
-    gain = std::clamp(a.forgetting * gain + a.error_gain_per_m * excess, 0.0, 1.0);
+    const double added = a.error_gain_per_m > 0.0 ? a.error_gain_per_m * excess : 0.0;
+    gain = std::clamp(a.forgetting * gain + added, 0.0, 1.0);
   }
   return gain;
 }

@@ -178,6 +178,8 @@ bool TrainingGuidance::setParameter(int parameter, double value) noexcept {
     case kParameterMode: {
       const int m = static_cast<int>(value);
       if (m < 0 || m > static_cast<int>(kLastMode) || isMentored(static_cast<TrainingMode>(m))) return false;
+      // A scheduled mode plays the law and gain set for the trial's own mode, and no other.
+      if (isScheduled(static_cast<TrainingMode>(m)) && static_cast<TrainingMode>(m) != config_.mode) return false;
       switchMode(static_cast<TrainingMode>(m));
       return true;
     }

@@ -1,6 +1,7 @@
 #include "hattr/report/study_report.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -31,9 +32,14 @@ using detail::Table;
 
 /// One colour per mode, the same in every figure.
 std::string modeColour(const std::string& mode) {
-  if (mode == "BASIC") return "#1f77b4";
-  if (mode == "PCONTROL") return "#2ca02c";
-  if (mode == "ALPHA") return "#d62728";
+  // One colour per strategy (the paper's three first), in TrainingMode order; grey for another name.
+  static constexpr std::array<const char*, 14> kColours{"#1f77b4", "#2ca02c", "#d62728", "#9467bd", "#8c564b",
+                                                        "#e377c2", "#bcbd22", "#17becf", "#ff7f0e", "#393b79",
+                                                        "#637939", "#8c6d31", "#843c39", "#7b4173"};
+  static_assert(kColours.size() == static_cast<std::size_t>(guidance::kLastMode) + 1);
+  for (int m = 0; m <= static_cast<int>(guidance::kLastMode); ++m) {
+    if (guidance::modeName(static_cast<guidance::TrainingMode>(m)) == mode) return kColours[static_cast<std::size_t>(m)];
+  }
   return "#7f7f7f";
 }
 

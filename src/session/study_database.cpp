@@ -622,19 +622,17 @@ std::vector<SubjectRecord> StudyDatabase::subjects() const {
 namespace {
 
 /// A scheduled strategy's keys in a completed trial's stored metadata (TrialRecord::strategy_state).
-std::map<std::string, std::string> strategyState(const std::string& metadata, const std::filesystem::path& file,
-                                                 const TrialRecord& trial) {
+/// Damaged metadata gives none: listing the trials never fails on it, and the schedule that
+/// needs them names the trial (SubjectTrials).
+std::map<std::string, std::string> strategyState(const std::string& metadata) {
   constexpr std::string_view kKeys[] = {"guidance_law", "guidance_gain", "tracking_rms_m"};
   std::map<std::string, std::string> state;
   if (metadata.find("tracking_rms_m") == std::string::npos) return state;  // not one (and no parse)
-  try {
-    const json extra = json::parse(metadata).at("extra");
-    for (const std::string_view key : kKeys) {
-      if (const auto it = extra.find(key); it != extra.end()) state[std::string(key)] = it->get<std::string>();
-    }
-  } catch (const json::exception& e) {
-    throw InputError(fmt::format("{}: trial {} (subject {}, sequence {}) is damaged: metadata: {}", file.string(),
-                                 trial.id, textExcerpt(trial.plan.subject), trial.plan.sequence, jsonLibraryMessage(e)));
+  const json parsed = json::parse(metadata, nullptr, false);
+  if (!parsed.is_object() || !parsed.contains("extra") || !parsed["extra"].is_object()) return state;
+  for (const std::string_view key : kKeys) {
+    const auto it = parsed["extra"].find(key);
+    if (it != parsed["extra"].end() && it->is_string()) state[std::string(key)] = it->get<std::string>();
   }
   return state;
 }
@@ -669,7 +667,7 @@ std::vector<TrialRecord> StudyDatabase::trials(const std::string& subject) const
     r.sample_count = s.integer(14);
     r.disturbed = s.text(15);
     r.disturbed_attempts = static_cast<int>(s.integer(16));
-    r.strategy_state = strategyState(s.text(22), file_, r);
+    r.strategy_state = strategyState(s.text(22));
     out.push_back(std::move(r));
   }
   return out;

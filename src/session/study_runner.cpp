@@ -279,6 +279,7 @@ void StudyRunner::runTrialsLeft(const SubjectRecord& subject, const RunOptions& 
               : -1.0;
       withDatabase([&](StudyDatabase& db) { steps.begin(db, session); });
       result = runTrial(environmentOf(environment), setup, participant.handForTrial(plan));
+      steps.measure(result);  // beside the other subjects, not under the database's lock
       outcome = withDatabase([&](StudyDatabase& db) { return steps.end(db, result, rescue_folder); });
       // A trial the device broke off is not data: marked failed, everything stored kept, and the run stops.
       if (outcome.ending == SubjectTrials::Ending::kFailed) {

@@ -200,11 +200,8 @@ SubjectTrials::Outcome SubjectTrials::end(StudyDatabase& db, TrialResult& result
   // Nothing in the profile may depend on when it ran, so a resumed study is bit-identical.
   result.profile.metadata().created_utc = "";
   // A scheduled strategy's trial keeps its tracking error: the next trial's schedule reads it.
-  auto& extra = result.profile.metadata().extra;
-  if (scheduledTrial(record.plan)) {
-    const double error = guidance::trackingErrorRms(*references_.at(record.plan.skill), result.profile);
-    extra["tracking_rms_m"] = fmt::format("{}", error);
-  }
+  measure(result);
+  const auto& extra = result.profile.metadata().extra;
   // Its counters and events in the recording (TrialRun::finish wrote them already; a result
   // built elsewhere gets them here).
   const std::string disturbed = noteLoopCounters(result);
@@ -227,6 +224,15 @@ SubjectTrials::Outcome SubjectTrials::end(StudyDatabase& db, TrialResult& result
   ++next_;
   attempt_ = 0;
   return {Ending::kStored, disturbed, record};
+}
+
+void SubjectTrials::measure(TrialResult& result) const {
+  HATTR_DEMAND(current() != nullptr, "subject {}: no trial to measure", subject_.id);
+  const TrialPlan& plan = current()->plan;
+  auto& extra = result.profile.metadata().extra;
+  if (!scheduledTrial(plan) || result.profile.empty() || extra.contains("tracking_rms_m")) return;
+  const double error = guidance::trackingErrorRms(*references_.at(plan.skill), result.profile);
+  extra["tracking_rms_m"] = fmt::format("{}", error);
 }
 
 void SubjectTrials::storeOrRescue(StudyDatabase& db, const TrialRecord& record, const HapticProfile& profile,

@@ -94,7 +94,9 @@ std::unique_ptr<device::Device> openTrialDevice(const std::string& uri_text, dev
 
 std::vector<std::string> clampTrialGains(guidance::GuidanceConfig& config, const TrialEnvironment& env) {
   std::vector<std::string> clamps = env.worldClamps();
-  const std::string_view active = guidance::modeName(config.mode);
+  // A scheduled strategy's clamps are its law's.
+  const std::string_view active =
+      guidance::modeName(guidance::isScheduled(config.mode) ? config.scheduled.law : config.mode);
   for (auto& line : guidance::clampGains(config, env.limits(), env.rate_hz(), env.impedance())) {
     if (config.mode != guidance::TrainingMode::kBasic && line.starts_with(active)) clamps.push_back(std::move(line));
   }
@@ -122,10 +124,16 @@ ProfileMetadata trialMetadata(ProfileMetadata metadata, const TrialEnvironment& 
       extra[fmt::format("{}.{}", prefix, p.name)] = guidance::strategyParameterText(config, config.mode, p.name);
     }
     if (config.mode == guidance::TrainingMode::kNoise) extra["noise.seed"] = fmt::format("{}", config.noise.seed);
-    // A scheduled strategy: the law and gain its schedule chose for this trial.
+    // A scheduled strategy: the law and gain its schedule chose for this trial, and the law's
+    // parameters beside its own ("pcontrol.kp_N_per_mm", ...).
     if (guidance::isScheduled(config.mode)) {
-      extra["guidance_law"] = std::string(guidance::modeName(config.scheduled.law));
+      const guidance::TrainingMode law = config.scheduled.law;
+      extra["guidance_law"] = std::string(guidance::modeName(law));
       extra["guidance_gain"] = fmt::format("{}", config.scheduled.gain);
+      for (const auto& p : guidance::strategyInfo(law).parameters) {
+        extra[fmt::format("{}.{}", guidance::strategyName(law), p.name)] =
+            guidance::strategyParameterText(config, law, p.name);
+      }
     }
   }
   extra["clamps"] = clamps.empty() ? "none" : joined(clamps);

@@ -146,6 +146,57 @@ std::vector<std::pair<std::pair<std::string, std::string>, std::vector<const rep
   return out;
 }
 
+/// Each subject's mean cost over `scores` minus its mean over `baseline`, with its group (the
+/// subjects with both): what it learned, free of who it was to begin with.
+analysis::OneWayData changeFromBaseline(const std::vector<const report::DesignTrialScore*>& scores,
+                                        const std::vector<const report::DesignTrialScore*>& baseline, bool shape) {
+  const auto means = [shape](const std::vector<const report::DesignTrialScore*>& of) {
+    std::map<std::string, std::pair<std::string, std::vector<double>>> by_subject;
+    for (const auto* s : of) {
+      by_subject[s->subject].first = s->group;
+      by_subject[s->subject].second.push_back(shape ? s->shape() : s->force());
+    }
+    std::map<std::string, std::pair<std::string, double>> out;
+    for (const auto& [subject, entry] : by_subject) {
+      out[subject] = {entry.first, report::meanOverSubjects(entry.second).mean};
+    }
+    return out;
+  };
+  const auto after = means(scores), before = means(baseline);
+  analysis::OneWayData data;
+  for (const auto& [subject, entry] : after) {
+    const auto b = before.find(subject);
+    if (b == before.end()) continue;
+    data.group.push_back(entry.first);
+    data.y.push_back(entry.second - b->second.second);
+  }
+  return data;
+}
+
+/// The phases compared: each (phase, skill), then each one after a baseline of its skill as its
+/// change from that baseline ("post-test − baseline"). Each with its one-way data (shape, force).
+struct ComparedPhase {
+  std::string phase;
+  std::string skill;
+  analysis::OneWayData shape, force;
+};
+std::vector<ComparedPhase> comparedPhases(const report::DesignAnalysis& analysis) {
+  const auto phases = byPhase(analysis);
+  std::vector<ComparedPhase> out;
+  for (const auto& [key, scores] : phases) {
+    out.push_back({key.first, key.second, report::groupSubjectMeans(scores, true), report::groupSubjectMeans(scores, false)});
+  }
+  for (const auto& [key, scores] : phases) {
+    const auto baseline = std::find_if(phases.begin(), phases.end(), [&](const auto& entry) {
+      return entry.first.first == session::kPhaseBaseline && entry.first.second == key.second;
+    });
+    if (key.first == session::kPhaseBaseline || baseline == phases.end()) continue;
+    out.push_back({fmt::format("{} − baseline", key.first), key.second, changeFromBaseline(scores, baseline->second, true),
+                   changeFromBaseline(scores, baseline->second, false)});
+  }
+  return out;
+}
+
 /// The one-way ANOVA's p between the strategies (NaN when it cannot be computed: one strategy's
 /// subjects only, no residual).
 double pBetween(const analysis::OneWayData& data) {
@@ -214,11 +265,9 @@ StrategyComparison compareStrategies(const StrategyComparisonOptions& options) {
       HypothesisStrategies outcome{h, {}};
       const report::DesignAnalysis guided = runAndAnalyze(study(o.seed, true), scratch / name, o.threads);
       if (o.progress) o.progress(++done, total, fmt::format("{}: the strategies", name));
-      for (const auto& [key, scores] : byPhase(guided)) {
-        const analysis::OneWayData shape = report::groupSubjectMeans(scores, true);
-        const analysis::OneWayData force = report::groupSubjectMeans(scores, false);
-        outcome.phases.push_back({key.first, key.second, strategyMeans(shape, o.strategies),
-                                  strategyMeans(force, o.strategies), pBetween(shape), pBetween(force), 0, 0});
+      for (const ComparedPhase& p : comparedPhases(guided)) {
+        outcome.phases.push_back({p.phase, p.skill, strategyMeans(p.shape, o.strategies),
+                                  strategyMeans(p.force, o.strategies), pBetween(p.shape), pBetween(p.force), 0, 0});
       }
       // A/A: every force off, other subjects; a phase found different counts.
       for (int k = 1; k <= o.aa_seeds; ++k) {
@@ -226,11 +275,11 @@ StrategyComparison compareStrategies(const StrategyComparisonOptions& options) {
             runAndAnalyze(study(o.seed + static_cast<std::uint64_t>(k), false), scratch / fmt::format("{}-aa", name),
                           o.threads);
         if (o.progress) o.progress(++done, total, fmt::format("{}: A/A study {} of {}", name, k, o.aa_seeds));
-        for (const auto& [key, scores] : byPhase(aa)) {
+        for (const ComparedPhase& p : comparedPhases(aa)) {
           for (auto& phase : outcome.phases) {
-            if (phase.phase != key.first || phase.skill != key.second) continue;
-            phase.aa_significant_shape += pBetween(report::groupSubjectMeans(scores, true)) < 0.05 ? 1 : 0;
-            phase.aa_significant_force += pBetween(report::groupSubjectMeans(scores, false)) < 0.05 ? 1 : 0;
+            if (phase.phase != p.phase || phase.skill != p.skill) continue;
+            phase.aa_significant_shape += pBetween(p.shape) < 0.05 ? 1 : 0;
+            phase.aa_significant_force += pBetween(p.force) < 0.05 ? 1 : 0;
           }
         }
       }

@@ -238,6 +238,14 @@ TEST(ScheduledStrategies, PlayTheirTrialsLawAtItsGain) {
       EXPECT_EQ(force(mode, {law, 0.0}), Vec3::Zero());
     }
   }
+  // The mailbox switches to no scheduled mode but the trial's own (its law and gain are that one's).
+  {
+    GuidanceConfig config{.mode = TrainingMode::kFading};
+    TrainingGuidance guidance(std::make_shared<ReferenceTrajectory>(straightStroke(), 1000.0), config);
+    EXPECT_FALSE(guidance.setParameter(kParameterMode, static_cast<double>(TrainingMode::kAssistAsNeeded)));
+    EXPECT_TRUE(guidance.setParameter(kParameterMode, static_cast<double>(TrainingMode::kBasic)));
+    EXPECT_TRUE(guidance.setParameter(kParameterMode, static_cast<double>(TrainingMode::kFading)));
+  }
   // A scheduled law must be a plain one, its gain within 0 to 1.
   GuidanceConfig bad{.mode = TrainingMode::kFading};
   bad.scheduled = {TrainingMode::kFading, 0.5};
@@ -258,6 +266,11 @@ TEST(ScheduledStrategies, FadingFallsLinearlyOverTrialsOrByAStepAfterEachGoodTri
     EXPECT_EQ(law.law, TrainingMode::kForceControl);
     EXPECT_NEAR(law.gain, n >= 4 ? 0.2 : 1.0 - 0.8 * static_cast<double>(n) / 4.0, 1e-12) << n;
   }
+  // Reached at guided trial `trials`: with 1, at the first.
+  GuidanceConfig at_once;
+  setStrategyParameter(at_once, TrainingMode::kFading, "trials", 1.0);
+  setStrategyParameter(at_once, TrainingMode::kFading, "end_gain", 0.3);
+  EXPECT_EQ(scheduleTrial(at_once, TrainingMode::kFading, {}).gain, 0.3);
   // By performance: a 0.25 step after each trial of at most 1.5 mm, none after a worse one.
   setStrategyParameters(config, TrainingMode::kFading,
                         std::vector<StrategySetting>{{"by", "performance"}, {"step", "0.25"}, {"threshold_mm", "1.5"}});
@@ -284,6 +297,12 @@ TEST(ScheduledStrategies, AssistAsNeededFollowsTheErrorWithForgetting) {
   }
   EXPECT_NEAR(scheduleTrial(config, TrainingMode::kAssistAsNeeded, std::span(errors).first(4)).gain, 1.0, 1e-12)
       << "20 mm of error: full assistance";
+  // A trial with nothing written (an infinite error) gives full assistance; with no error gain,
+  // none added: never a gain that is not a number.
+  const std::vector<double> nothing{INFINITY};
+  EXPECT_EQ(scheduleTrial(config, TrainingMode::kAssistAsNeeded, nothing).gain, 1.0);
+  setStrategyParameter(config, TrainingMode::kAssistAsNeeded, "error_gain_per_mm", 0.0);
+  EXPECT_NEAR(scheduleTrial(config, TrainingMode::kAssistAsNeeded, nothing).gain, 0.8 * 0.6, 1e-12);
 }
 
 TEST(ScheduledStrategies, PartialThenFullSwitchesFromTheChannelToTheGuidedPath) {

@@ -34,16 +34,27 @@ TEST(StrategiesCli, TabulatesEachPhaseUnderEachStrategyAndHypothesisWithAnAaChec
   EXPECT_EQ(j["strategies"], nlohmann::json({"basic", "pcontrol", "fading"}));
   ASSERT_EQ(j["hypotheses"].size(), 2u);
   for (const auto& h : j["hypotheses"]) {
-    // groups-retention's phases in its order, transfer on the second character.
+    // groups-retention's phases in its order, transfer on the second character, then each phase
+    // of the baseline's character as its change from the baseline.
     std::vector<std::string> phases;
     for (const auto& p : h["phases"]) phases.push_back(p["phase"].get<std::string>() + "/" + p["skill"].get<std::string>());
     EXPECT_EQ(phases, (std::vector<std::string>{"baseline/na", "training/na", "post-test/na", "retention/na",
-                                                "transfer/loop"}));
+                                                "transfer/loop", "training − baseline/na", "post-test − baseline/na",
+                                                "retention − baseline/na"}));
+    // A change is each subject's phase mean less its baseline mean, averaged: the means' difference.
+    for (std::size_t s = 0; s < 3; ++s) {
+      const double change = h["phases"][6]["strategies"][s]["shape"]["mean"];
+      const double post = h["phases"][2]["strategies"][s]["shape"]["mean"];
+      const double baseline = h["phases"][0]["strategies"][s]["shape"]["mean"];
+      EXPECT_NEAR(change, post - baseline, 1e-9 * std::abs(post));
+    }
     for (const auto& p : h["phases"]) {
       ASSERT_EQ(p["strategies"].size(), 3u);
       for (const auto& s : p["strategies"]) {
         EXPECT_EQ(s["shape"]["subjects"], 3) << p.dump();
-        EXPECT_GT(s["shape"]["mean"].get<double>(), 0.0);
+        if (p["phase"].get<std::string>().find("baseline") == 0 || p["phase"].get<std::string>().find(' ') == std::string::npos) {
+          EXPECT_GT(s["shape"]["mean"].get<double>(), 0.0);
+        }
       }
       EXPECT_GE(p["p_shape"].get<double>(), 0.0);
       EXPECT_LE(p["p_shape"].get<double>(), 1.0);

@@ -489,6 +489,10 @@ class StudioSmokeTest : public QObject {
     QTest::keyClick(&w, Qt::Key_Space);  // the Train tab's main action: start a trial
     QVERIFY2(w.activity() == MainWindow::Activity::kTrial, qPrintable(w.lastError()));
     QCOMPARE(w.rig().spec().guidance.mode, guidance::TrainingMode::kBasic);
+    // A scheduled strategy is not switched into mid-trial (its gain is set before a trial).
+    w.setMode(guidance::TrainingMode::kFading);
+    QCOMPARE(w.mode(), guidance::TrainingMode::kBasic);
+    QVERIFY2(w.lastError().contains("Less help each time sets its guidance before each trial"), qPrintable(w.lastError()));
     QTest::keyClick(&w, Qt::Key_Escape);
     QCOMPARE(w.activity(), MainWindow::Activity::kFree);
   }

@@ -180,6 +180,15 @@ void TrainTab::setReference(HapticProfile profile, const QString& file, const QS
 // ---- The mode and the trial -----------------------------------------------------------------
 
 void TrainTab::setMode(guidance::TrainingMode mode) {
+  // A scheduled strategy's law and gain are chosen before its trial: not switched into or out of.
+  if (host_.trial_running() && mode != trial_mode_ &&
+      (guidance::isScheduled(mode) || guidance::isScheduled(trial_mode_))) {
+    w_.mode->setCurrentIndex(w_.mode->findData(static_cast<int>(mode_)));
+    host_.error(tr("The strategy cannot change during this trial"),
+                tr("%1 sets its guidance before each trial from the trials before it; choose it between trials")
+                    .arg(qs(guidance::strategyInfo(guidance::isScheduled(mode) ? mode : trial_mode_).plain_name)));
+    return;
+  }
   mode_ = mode;
   w_.mode->setCurrentIndex(w_.mode->findData(static_cast<int>(mode)));
   // During a trial the mode switches through the servo mailbox, with the cross-fade.

@@ -199,7 +199,7 @@ std::vector<std::string> clampGains(GuidanceConfig& config, const DeviceLimits& 
 
 /// Mailbox parameters (servo::ServoCommand::kSetGuidanceParameter).
 enum GuidanceParameter : int {
-  kParameterMode = 1,          ///< value: a TrainingMode as a number; cross-fades
+  kParameterMode = 1,          ///< value: a TrainingMode as a number; cross-fades (a scheduled mode: only the trial's own)
   kParameterRestartTrial = 2,  ///< the trial starts at this tick
 };
 

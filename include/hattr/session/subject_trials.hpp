@@ -106,6 +106,10 @@ class SubjectTrials {
   /// Error says where; the trial stays running, to be run again. Throws SubjectTakenOver when
   /// another station took the subject over, and Error for an empty recording (nothing to store).
   Outcome end(StudyDatabase& db, TrialResult& result, const std::filesystem::path& rescue_folder);
+  /// The part of end() that needs no database, which a caller holding a lock for end() may do
+  /// before taking it: a scheduled strategy's guided trial gets its tracking error
+  /// (tracking_rms_m) in its metadata, once. Nothing for any other trial.
+  void measure(TrialResult& result) const;
   /// The current trial failed (why): marked failed in the database; its next run is attempt 0.
   void fail(StudyDatabase& db, const std::string& reason);
 

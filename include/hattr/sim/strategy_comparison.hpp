@@ -3,7 +3,9 @@
 /// strategies"): one design run once per learning hypothesis with a group of simulated subjects
 /// per strategy (each block of the design's group strategy takes the group's), analyzed per phase
 /// (training, post-test, retention, transfer, ...): each subject's mean cost, each strategy's
-/// mean over its subjects with a 95 % interval, and a one-way ANOVA between the strategies. An
+/// mean over its subjects with a 95 % interval, and a one-way ANOVA between the strategies; and
+/// each phase after a baseline of its skill again as each subject's change from its baseline
+/// ("post-test − baseline": what it learned, free of who it was to begin with). An
 /// A/A check runs the same design with every guidance off under other seeds, so the strategies
 /// are labels only: how often it finds a difference between them is the false-positive rate the
 /// table's p-values stand against.
@@ -57,7 +59,7 @@ struct PhaseComparison {
 
 struct HypothesisStrategies {
   LearningHypothesis hypothesis = LearningHypothesis::kPositionPlan;
-  std::vector<PhaseComparison> phases;  ///< in the design's order
+  std::vector<PhaseComparison> phases;  ///< in the design's order, then the changes from baseline
 };
 
 struct StrategyComparison {
