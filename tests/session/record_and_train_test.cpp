@@ -187,6 +187,65 @@ TEST(RecordAndTrain, EachNewStrategysRecordedGuidanceIsItsLawOfTheRecordedPen) {
   EXPECT_EQ(noise_a.profile.metadata().extra.at("noise.seed"), "42");
 }
 
+// The scheduled strategies, black-box: in a recorded trial of a drifting hand, every sample's
+// guidance force is the trial's law applied to the recorded pen, times the trial's gain; the
+// metadata names the law, the gain and the law's clamped gains.
+TEST(RecordAndTrain, EachScheduledStrategysRecordedGuidanceIsItsLawAtItsGain) {
+  Fixture f;
+  const HapticProfile script = writingScript();
+  const guidance::ReferenceTrajectory& ref = *f.reference;
+  const auto trained = [&](guidance::TrainingMode mode, guidance::ScheduledLaw law) {
+    DriftingHand hand(script, 0.004);  // 8 mm off by the end
+    TrialSetup setup{.reference = f.reference, .duration_s = 2.0};
+    setup.guidance.mode = mode;
+    setup.guidance.scheduled = law;
+    return runTrial(f.env, setup, hand);
+  };
+  for (const auto mode : {guidance::TrainingMode::kFading, guidance::TrainingMode::kAssistAsNeeded}) {
+    const TrialResult r = trained(mode, {guidance::TrainingMode::kPositionControl, 0.4});
+    const auto& extra = r.profile.metadata().extra;
+    EXPECT_EQ(extra.at("guidance_law"), "PCONTROL");
+    EXPECT_EQ(extra.at("guidance_gain"), "0.4");
+    EXPECT_NE(extra.at("clamps").find("PCONTROL Kd"), std::string::npos) << "the law's clamps: " << extra.at("clamps");
+    // 0.4 × (Kp·(x_ref − x) + Kd·(v_ref − v)) in the plane, with the clamped gains the trial used.
+    const double kp = std::stod(extra.at("pcontrol_kp_N_per_m")), kd = std::stod(extra.at("pcontrol_kd_N_s_per_m"));
+    EXPECT_EQ(extra.at("pcontrol.kp_N_per_mm"), "0.35");
+    std::size_t checked = 0;
+    double largest = 0.0;
+    for (const Sample& s : r.profile.samples()) {
+      const double index = s.t_s / ref.dt_s();
+      if (index > static_cast<double>(ref.size() - 1)) break;
+      const guidance::ReferencePoint at = ref.at(index);
+      Vec3 expected = 0.4 * (kp * (at.p_WT - s.p_WT) + kd * (at.v_WT - s.v_WT));
+      expected.z() = 0.0;
+      ASSERT_NEAR((s.f_guide_W - expected).norm(), 0.0, 1e-6) << guidance::modeName(mode) << " t = " << s.t_s;
+      largest = std::max(largest, s.f_guide_W.norm());
+      ++checked;
+    }
+    EXPECT_GT(checked, 1500u);
+    EXPECT_GT(largest, 0.3) << "the drift was pulled back";
+  }
+  // PARTIAL-THEN-FULL's partial trial: CHANNEL's law at gain 1.
+  const TrialResult partial = trained(guidance::TrainingMode::kPartialThenFull, {guidance::TrainingMode::kChannel, 1.0});
+  EXPECT_EQ(partial.profile.metadata().extra.at("guidance_law"), "CHANNEL");
+  EXPECT_EQ(partial.profile.metadata().extra.at("channel.half_width_mm"), "2");
+  const guidance::GuidanceConfig defaults;
+  std::size_t outside = 0;
+  for (const Sample& s : partial.profile.samples()) {
+    const double index = s.t_s / ref.dt_s();
+    if (index < 10 || index > static_cast<double>(ref.size()) - 10) continue;
+    double nearest = INFINITY;
+    const auto at = static_cast<std::size_t>(index);
+    for (std::size_t k = at > 500 ? at - 500 : 0; k <= std::min(ref.size() - 1, at + 500); ++k) {
+      nearest = std::min(nearest, (s.p_WT - ref[k].p_WT).head<2>().norm());
+    }
+    const double expected = std::max(0.0, nearest - defaults.channel.half_width_m) * defaults.channel.kp_N_per_m;
+    ASSERT_NEAR(s.f_guide_W.norm(), expected, 1e-6) << "t = " << s.t_s;
+    outside += expected > 0.0 ? 1 : 0;
+  }
+  EXPECT_GT(outside, 200u);
+}
+
 TEST(RecordAndTrain, ClampsAreWrittenIntoTheTrialsMetadata) {
   Fixture f;
   device::ProfileHandScript hand(writingScript());
