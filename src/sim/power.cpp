@@ -1,7 +1,5 @@
 #include "hattr/sim/power.hpp"
 
-#include <stdlib.h>
-
 #include <algorithm>
 #include <iterator>
 #include <numeric>
@@ -58,19 +56,6 @@ void checkStudy(const session::StudyDefinition& study, const std::filesystem::pa
                        "ones and takes their options from the study's: expected simulated subjects",
                        where, s.id, s.participant);
   }
-}
-
-/// The scratch folder: the given one, or a new one in the temporary folder.
-std::filesystem::path makeScratch(const std::filesystem::path& given, bool& own) {
-  own = given.empty();
-  if (!own) {
-    std::filesystem::create_directories(given);
-    return std::filesystem::absolute(given);
-  }
-  std::string pattern = (std::filesystem::temp_directory_path() / "hattr-power-XXXXXX").string();
-  HATTR_THROW_UNLESS(mkdtemp(pattern.data()) != nullptr, "power: cannot make a scratch folder in {}",
-                     std::filesystem::temp_directory_path().string());
-  return pattern;
 }
 
 /// The phase a design's power analysis compares: `asked`, or its retention, post-test,
@@ -158,11 +143,6 @@ class ScoredAsTheyEnd {
 
 }  // namespace
 
-PowerStudy::ScratchFolder::~ScratchFolder() {
-  std::error_code ignored;
-  if (own) std::filesystem::remove_all(path, ignored);
-}
-
 PowerStudy::PowerStudy(const PowerOptions& options) : options_(options) {
   checkOptions(options_);
   std::sort(options_.subject_counts.begin(), options_.subject_counts.end());
@@ -175,9 +155,9 @@ PowerStudy::PowerStudy(const PowerOptions& options) : options_(options) {
                        "trials: expected >= 2 recall and >= 0 training, got {} and {}", options_.recall_trials,
                        options_.training_trials);
   }
-  scratch_.path = makeScratch(options_.scratch, scratch_.own);
+  scratch_.emplace(options_.scratch, "power");
   if (options_.study.empty()) {
-    study_ = writePaperStudy(scratch_.path, {.glyph = options_.glyph, .subjects = options_.subject_counts.back(),
+    study_ = writePaperStudy(scratch_->path(), {.glyph = options_.glyph, .subjects = options_.subject_counts.back(),
                                              .seed = options_.seed, .training_trials = options_.training_trials,
                                              .recall_trials = options_.recall_trials});
   }
@@ -303,7 +283,7 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const Replicate
   // The largest design's subjects, seeded as the in-silico study with seed + r.
   session::StudyDefinition study = study_;
   study.subjects = replicateSubjects(replicate);
-  const std::filesystem::path folder = scratch_.path / fmt::format("replicate-{}", replicate);
+  const std::filesystem::path folder = scratch_->path() / fmt::format("replicate-{}", replicate);
   std::filesystem::remove_all(folder);
   std::filesystem::create_directories(folder);
   const std::filesystem::path file = folder / "study.sqlite";

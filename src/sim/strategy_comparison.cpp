@@ -1,7 +1,5 @@
 #include "hattr/sim/strategy_comparison.hpp"
 
-#include <stdlib.h>
-
 #include <algorithm>
 #include <limits>
 #include <map>
@@ -18,6 +16,7 @@
 #include "hattr/sim/expert.hpp"
 #include "hattr/sim/glyph.hpp"
 #include "hattr/sim/participant.hpp"
+#include "hattr/sim/scratch_folder.hpp"
 
 namespace hattr::sim {
 namespace {
@@ -98,18 +97,6 @@ bool usesGroupStrategy(const session::StudyDefinition& study) {
     }
   }
   return false;
-}
-
-/// A scratch folder: the given one, or a new one in the temporary folder (removed by the caller).
-std::filesystem::path scratchFolder(const std::filesystem::path& given) {
-  if (!given.empty()) {
-    std::filesystem::create_directories(given);
-    return std::filesystem::absolute(given);
-  }
-  std::string pattern = (std::filesystem::temp_directory_path() / "hattr-strategies-XXXXXX").string();
-  HATTR_THROW_UNLESS(mkdtemp(pattern.data()) != nullptr, "compare-strategies: cannot make a scratch folder in {}",
-                     std::filesystem::temp_directory_path().string());
-  return pattern;
 }
 
 /// Runs one study in `folder` and analyzes it (the folder removed after).
@@ -249,49 +236,41 @@ StrategyComparison compareStrategies(const StrategyComparisonOptions& options) {
   recordNamedExperts(probe);
 
   StrategyComparison result{o.strategies, o.study.empty() ? o.design : o.study.string(), o.subjects, o.aa_seeds, o.seed, {}};
-  const std::filesystem::path scratch = scratchFolder(o.scratch);
-  const bool own_scratch = o.scratch.empty();
+  const ScratchFolder scratch_folder(o.scratch, "strategies");
+  const std::filesystem::path& scratch = scratch_folder.path();
   const int total = static_cast<int>(o.hypotheses.size()) * (1 + o.aa_seeds);
   int done = 0;
-  try {
-    for (const LearningHypothesis h : o.hypotheses) {
-      const auto study = [&](std::uint64_t seed, bool guidance) {
-        session::StudyDefinition s =
-            session::parseStudy(comparisonStudy(design, o, o.strategies, h, seed, guidance).dump(), where, base_dir);
-        s.named_expert_profiles = probe.named_expert_profiles;  // recorded once
-        return s;
-      };
-      const std::string name(hypothesisName(h));
-      HypothesisStrategies outcome{h, {}};
-      const report::DesignAnalysis guided = runAndAnalyze(study(o.seed, true), scratch / name, o.threads);
-      if (o.progress) o.progress(++done, total, fmt::format("{}: the strategies", name));
-      for (const ComparedPhase& p : comparedPhases(guided)) {
-        outcome.phases.push_back({p.phase, p.skill, strategyMeans(p.shape, o.strategies),
-                                  strategyMeans(p.force, o.strategies), pBetween(p.shape), pBetween(p.force), 0, 0});
-      }
-      // A/A: every force off, other subjects; a phase found different counts.
-      for (int k = 1; k <= o.aa_seeds; ++k) {
-        const report::DesignAnalysis aa =
-            runAndAnalyze(study(o.seed + static_cast<std::uint64_t>(k), false), scratch / fmt::format("{}-aa", name),
-                          o.threads);
-        if (o.progress) o.progress(++done, total, fmt::format("{}: A/A study {} of {}", name, k, o.aa_seeds));
-        for (const ComparedPhase& p : comparedPhases(aa)) {
-          for (auto& phase : outcome.phases) {
-            if (phase.phase != p.phase || phase.skill != p.skill) continue;
-            phase.aa_significant_shape += pBetween(p.shape) < 0.05 ? 1 : 0;
-            phase.aa_significant_force += pBetween(p.force) < 0.05 ? 1 : 0;
-          }
+  for (const LearningHypothesis h : o.hypotheses) {
+    const auto study = [&](std::uint64_t seed, bool guidance) {
+      session::StudyDefinition s =
+          session::parseStudy(comparisonStudy(design, o, o.strategies, h, seed, guidance).dump(), where, base_dir);
+      s.named_expert_profiles = probe.named_expert_profiles;  // recorded once
+      return s;
+    };
+    const std::string name(hypothesisName(h));
+    HypothesisStrategies outcome{h, {}};
+    const report::DesignAnalysis guided = runAndAnalyze(study(o.seed, true), scratch / name, o.threads);
+    if (o.progress) o.progress(++done, total, fmt::format("{}: the strategies", name));
+    for (const ComparedPhase& p : comparedPhases(guided)) {
+      outcome.phases.push_back({p.phase, p.skill, strategyMeans(p.shape, o.strategies),
+                                strategyMeans(p.force, o.strategies), pBetween(p.shape), pBetween(p.force), 0, 0});
+    }
+    // A/A: every force off, other subjects; a phase found different counts.
+    for (int k = 1; k <= o.aa_seeds; ++k) {
+      const report::DesignAnalysis aa =
+          runAndAnalyze(study(o.seed + static_cast<std::uint64_t>(k), false), scratch / fmt::format("{}-aa", name),
+                        o.threads);
+      if (o.progress) o.progress(++done, total, fmt::format("{}: A/A study {} of {}", name, k, o.aa_seeds));
+      for (const ComparedPhase& p : comparedPhases(aa)) {
+        for (auto& phase : outcome.phases) {
+          if (phase.phase != p.phase || phase.skill != p.skill) continue;
+          phase.aa_significant_shape += pBetween(p.shape) < 0.05 ? 1 : 0;
+          phase.aa_significant_force += pBetween(p.force) < 0.05 ? 1 : 0;
         }
       }
-      result.hypotheses.push_back(std::move(outcome));
     }
-  } catch (...) {
-    std::error_code ignored;
-    if (own_scratch) std::filesystem::remove_all(scratch, ignored);
-    throw;
+    result.hypotheses.push_back(std::move(outcome));
   }
-  std::error_code ignored;
-  if (own_scratch) std::filesystem::remove_all(scratch, ignored);
   return result;
 }
 

@@ -23,6 +23,7 @@
 #include "hattr/report/study_analysis.hpp"
 #include "hattr/session/study.hpp"
 #include "hattr/session/trial.hpp"
+#include "hattr/sim/scratch_folder.hpp"
 
 namespace hattr::sim {
 
@@ -93,12 +94,7 @@ class PowerStudy {
   bool between_groups_ = false;     ///< a design of several groups (else strategies within subjects)
   report::PowerPlan plan_;
   /// The scratch folder, removed when made here (also when the constructor throws).
-  struct ScratchFolder {
-    std::filesystem::path path;
-    bool own = false;
-    ~ScratchFolder();
-  };
-  ScratchFolder scratch_;
+  std::optional<ScratchFolder> scratch_;
 };
 
 }  // namespace hattr::sim
