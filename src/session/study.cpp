@@ -172,6 +172,10 @@ void readStrategyParameters(const json& root, StudyDefinition& study, Problems& 
       problems.add(fmt::format("strategy_parameters: {}", e.what()));
       continue;
     }
+    if (study.strategy_parameters.contains(mode)) {  // "Fading" and "fading": names in any case
+      problems.add(fmt::format("strategy_parameters.{}: {} is given twice", strategy.key(), guidance::strategyName(mode)));
+      continue;
+    }
     if (!strategy.value().is_object()) {
       problems.add(fmt::format("strategy_parameters.{}: expected {{\"parameter\": value, ...}}, got {}", strategy.key(),
                                jsonExcerpt(strategy.value())));

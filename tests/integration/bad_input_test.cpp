@@ -235,6 +235,9 @@ std::vector<BadInput> corpus() {
   c.push_back(studyCase("study_strategy_parameter_bad_choice",
                         study("\"name\"", R"("strategy_parameters": {"assist-as-needed": {"base": "noise"}}, "name")"),
                         "ASSIST-AS-NEEDED base: expected one of pcontrol, alpha, got \"noise\""));
+  c.push_back(studyCase("study_strategy_parameters_twice",
+                        study("\"name\"", R"("strategy_parameters": {"Fading": {}, "fading": {}}, "name")"),
+                        "fading is given twice"));
   c.push_back(studyCase("study_strategy_parameter_unknown_strategy",
                         study("\"name\"", R"("strategy_parameters": {"fadeing": {}}, "name")"),
                         "strategy_parameters: mode: expected one of"));
