@@ -47,6 +47,7 @@ void registerWorldCommands(CLI::App& app);
 void registerRecordTrainCommands(CLI::App& app);
 void registerStudyCommands(CLI::App& app);
 void registerAnalysisCommands(CLI::App& app);
+void registerLmmCommand(CLI::App& app);
 void registerSimCommands(CLI::App& app);
 /// `hattr sim power` and `hattr sim power merge` (cmd_sim_power.cpp).
 void registerPowerCommands(CLI::App& sim);

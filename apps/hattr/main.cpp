@@ -90,6 +90,7 @@ int main(int argc, char** argv) {
   registerRecordTrainCommands(app);
   registerStudyCommands(app);
   registerAnalysisCommands(app);
+  registerLmmCommand(app);
   registerSimCommands(app);
   registerDemoCommand(app);
 

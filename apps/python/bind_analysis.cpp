@@ -15,9 +15,11 @@
 #include "bindings.hpp"
 #include "hattr/analysis/anova.hpp"
 #include "hattr/analysis/dtw.hpp"
+#include "hattr/analysis/lmm.hpp"
 #include "hattr/analysis/preprocess.hpp"
 #include "hattr/analysis/trial_score.hpp"
 #include "hattr/core/error.hpp"
+#include "hattr/io/table_csv.hpp"
 
 namespace hattr::python {
 namespace {
@@ -336,6 +338,82 @@ void bindStatistics(py::module_& m) {
       "Count, mean, variance and sd (n − 1) of y per level of a, of b, or per cell: records.");
 }
 
+/// A table for the mixed model: a CSV file's path, or a mapping of column names to
+/// sequences (a dict, a pandas DataFrame). A column of numbers stays numbers; any other
+/// column is text, each value as str() gives it.
+analysis::DataTable dataTableOf(const py::object& data) {
+  if (py::isinstance<py::str>(data) || py::hasattr(data, "__fspath__")) {
+    const std::string path = py::str(data);
+    const io::Table t = io::readTable(path);
+    return analysis::dataTableFromText(t.columns, t.rows, path);
+  }
+  HATTR_THROW_UNLESS(py::hasattr(data, "keys"), "lmm: data: expected a CSV file's path or a mapping of column names to "
+                     "sequences (a dict or a pandas DataFrame), got {}", std::string(py::str(data.get_type())));
+  analysis::DataTable table;
+  table.source = "data";
+  for (const py::handle key : data.attr("keys")()) {
+    analysis::DataColumn column{py::str(key), {}, {}};
+    const py::object values = data[key];
+    bool numbers = true;
+    std::vector<std::string> text;
+    for (const py::handle v : values) {
+      const bool number = PyNumber_Check(v.ptr()) != 0 && !py::isinstance<py::str>(v) && !py::isinstance<py::bool_>(v);
+      numbers = numbers && number;
+      if (number) column.numbers.push_back(v.cast<double>());
+      text.push_back(py::str(v));
+    }
+    if (!numbers) {
+      column.numbers.clear();
+      column.text = std::move(text);
+    }
+    table.columns.push_back(std::move(column));
+  }
+  return table;
+}
+
+analysis::LmmOptions lmmOptionsOf(bool ml, const std::map<std::string, std::string>& reference,
+                                  const std::vector<std::string>& factors) {
+  return {.reml = !ml, .reference = reference, .factors = std::set<std::string>(factors.begin(), factors.end())};
+}
+
+void bindMixedModels(py::module_& m) {
+  m.def(
+      "lmm",
+      [](const py::object& data, const std::string& formula, bool ml, const std::map<std::string, std::string>& reference,
+         const std::vector<std::string>& factors) {
+        const analysis::DataTable table = dataTableOf(data);
+        const analysis::LmmOptions options = lmmOptionsOf(ml, reference, factors);
+        nlohmann::json fit;
+        {
+          const py::gil_scoped_release release;
+          fit = analysis::toJson(analysis::fitLmm(table, formula, options));
+        }
+        return toPython(fit);
+      },
+      py::arg("data"), py::arg("formula"), py::kw_only(), py::arg("ml") = false,
+      py::arg("reference") = std::map<std::string, std::string>{}, py::arg("factors") = std::vector<std::string>{},
+      "Linear mixed model as R's lme4::lmer with lmerTest (REML unless ml): data a CSV path or a mapping of "
+      "columns (a dict, a pandas DataFrame); formula in lme4's language; reference {factor: baseline level}; "
+      "factors: numeric columns to treat as factors. Returns the record `hattr lmm --json` prints for the model.");
+  m.def(
+      "compare_lmm",
+      [](const py::object& data, const std::vector<std::string>& formulas, const std::map<std::string, std::string>& reference,
+         const std::vector<std::string>& factors) {
+        const analysis::DataTable table = dataTableOf(data);
+        const analysis::LmmOptions options = lmmOptionsOf(false, reference, factors);
+        nlohmann::json tests = nlohmann::json::array();
+        {
+          const py::gil_scoped_release release;
+          for (const auto& t : analysis::compareLmms(table, formulas, options)) tests.push_back(analysis::toJson(t));
+        }
+        return toPython(tests);
+      },
+      py::arg("data"), py::arg("formulas"), py::kw_only(), py::arg("reference") = std::map<std::string, std::string>{},
+      py::arg("factors") = std::vector<std::string>{},
+      "Likelihood-ratio tests between nested models, as lme4's anova(m1, m2, ...): each refitted by maximum "
+      "likelihood, ordered by size, each tested against the one before. Records {smaller, larger, chi_sq, df, p}.");
+}
+
 }  // namespace
 
 void bindAnalysis(py::module_& m) {
@@ -343,6 +421,7 @@ void bindAnalysis(py::module_& m) {
   bindDtw(m);
   bindScorer(m);
   bindStatistics(m);
+  bindMixedModels(m);
 }
 
 }  // namespace hattr::python

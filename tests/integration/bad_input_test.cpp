@@ -342,6 +342,28 @@ std::vector<BadInput> corpus() {
   c.push_back({"args_strategy_parameter_unknown", trainWith("--mode noise --param width=1"),
                "NOISE: no parameter \"width\": expected one of rms_N, cutoff_hz", ""});
   c.push_back({"args_strategy_unknown", trainWith("--mode chanel"), "expected one of basic, pcontrol, alpha", ""});
+  // Issue 37: mixed models of a table, each refusal naming the file and what it found.
+  const auto lmmWith = [](const std::string& table, const std::string& tail) {
+    return [table, tail](const fs::path& dir) {
+      test::writeText(dir / "t.csv", table);
+      return "lmm " + q(dir / "t.csv") + " " + tail;
+    };
+  };
+  const std::string table = "subject,mode,cost\nA,x,1\nA,y,2\nB,x,1.5\nB,y,2.5\nC,x,0.5\nC,y,3\n";
+  c.push_back({"lmm_unknown_column", lmmWith(table, "--formula 'cost ~ mode + (1 | sbject)'"),
+               "the formula names column 'sbject', which is not in the table; columns: subject, mode, cost", "t.csv"});
+  c.push_back({"lmm_formula_unparsed", lmmWith(table, "--formula 'cost ~ mode + (1 | subject'"), "expected ')'", ""});
+  c.push_back({"lmm_no_random_term", lmmWith(table, "--formula 'cost ~ mode'"), "no random-effects term", ""});
+  c.push_back({"lmm_missing_value", lmmWith("subject,mode,cost\nA,x,1\nA,y,NA\nB,x,2\nB,y,3\n", "--formula 'cost ~ mode + (1 | subject)'"),
+               "row 2 of column 'cost' is missing", "t.csv"});
+  c.push_back({"lmm_infinite_value", lmmWith("subject,mode,cost\nA,x,1\nA,y,inf\nB,x,2\nB,y,3\n", "--formula 'cost ~ mode + (1 | subject)'"),
+               "row 2 of column 'cost' is 'inf'; expected a finite number", "t.csv"});
+  c.push_back({"lmm_one_level_factor", lmmWith("subject,mode,cost\nA,x,1\nA,x,2\nB,x,2\nB,x,3\n", "--formula 'cost ~ mode + (1 | subject)'"),
+               "factor 'mode' has one level ('x')", "t.csv"});
+  c.push_back({"lmm_bad_reference", lmmWith(table, "--formula 'cost ~ mode + (1 | subject)' --reference mode"),
+               "expected COLUMN=LEVEL", ""});
+  c.push_back({"lmm_compare_models_of_one_size", lmmWith(table, "--formula 'cost ~ mode + (1 | subject)' --formula 'cost ~ mode + (1 | subject)'"),
+               "the second model must be the larger", ""});
   return c;
 }
 

@@ -3,6 +3,8 @@ command): preprocessing, DTW, the trial scorer, the ANOVA and Tukey HSD. Also: r
 pandas takes as they are, and the GIL released in long calls."""
 
 import csv
+import os
+from pathlib import Path
 import threading
 
 import numpy as np
@@ -182,3 +184,33 @@ def test_a_dtw_batch_lets_other_python_threads_run():
         threading.Event().wait(0.001)
     worker.join()
     assert seen_running > 5, "the main thread never ran while the batch ran: the GIL was held"
+
+
+LMM_DATA = Path(os.environ.get("HATTR_SOURCE_DIR", ".")) / "tests" / "analysis" / "lmm_reference" / "slopes.csv"
+LMM_FORMULA = "cost ~ mode * trial + (1 + trial | subject)"
+
+
+def test_lmm_of_a_file_a_dict_and_a_dataframe_equal_the_clis():
+    """The mixed model (equal to R's lme4 + lmerTest: tests/analysis/lmm_test.cpp) from a path, a dict of
+    columns and a pandas DataFrame gives the CLI's fit bit for bit."""
+    cli = cli_json("lmm", LMM_DATA, "--formula", LMM_FORMULA, "--reference", "mode=BASIC")["models"][0]
+    frame = pd.read_csv(LMM_DATA)
+    for data in (LMM_DATA, str(LMM_DATA), {c: list(frame[c]) for c in frame.columns}, frame):
+        fit = hattr.lmm(data, LMM_FORMULA, reference={"mode": "BASIC"})
+        assert fit == cli, type(data)
+    assert [c["name"] for c in cli["fixed_effects"]][:3] == ["(Intercept)", "modeALPHA", "modePCONTROL"]
+    assert pd.DataFrame(cli["fixed_effects"]).shape == (6, 6)
+
+
+def test_compare_lmm_equals_the_clis_likelihood_ratio_tests():
+    formulas = ["cost ~ trial + (1 + trial | subject)", "cost ~ mode + trial + (1 + trial | subject)"]
+    cli = cli_json("lmm", LMM_DATA, "--formula", formulas[1], "--formula", formulas[0])["likelihood_ratio_tests"]
+    assert hattr.compare_lmm(LMM_DATA, formulas) == cli
+    assert cli[0]["df"] == 2 and cli[0]["smaller"] == formulas[0]
+
+
+def test_lmm_bad_input_raises_input_error_naming_the_column():
+    with pytest.raises(hattr.InputError, match="column 'sbject', which is not in the table"):
+        hattr.lmm(LMM_DATA, "cost ~ mode + (1 | sbject)")
+    with pytest.raises(hattr.InputError, match="row 2 of column 'y' is nan"):
+        hattr.lmm({"y": [1.0, float("nan"), 2.0, 3.0], "g": ["a", "a", "b", "b"]}, "y ~ 1 + (1 | g)")

@@ -1,7 +1,7 @@
 # Type stubs of the hattr package (the extension hattr._hattr). Units are in the names and
 # docstrings: seconds, metres, newtons.
 import os
-from typing import Any, Callable, Iterable, Sequence, TypedDict
+from typing import Any, Callable, Iterable, Mapping, Sequence, TypedDict
 
 import numpy as np
 import numpy.typing as npt
@@ -151,6 +151,10 @@ def two_way_anova(a: Iterable[Any], b: Iterable[Any], y: _Floats, *, a_name: str
                   b_random: bool = ...) -> AnovaTable: ...
 def tukey_hsd(a: Iterable[Any], b: Iterable[Any], y: _Floats, *, factor: str = ..., a_name: str = ...,
               b_name: str = ..., b_random: bool = ..., confidence: float = ...) -> TukeyResult: ...
+def lmm(data: _Path | Mapping[str, Iterable[Any]], formula: str, *, ml: bool = ...,
+        reference: Mapping[str, str] = ..., factors: Sequence[str] = ...) -> dict[str, Any]: ...
+def compare_lmm(data: _Path | Mapping[str, Iterable[Any]], formulas: Sequence[str], *,
+                reference: Mapping[str, str] = ..., factors: Sequence[str] = ...) -> list[dict[str, Any]]: ...
 def describe_groups(a: Iterable[Any], b: Iterable[Any], y: _Floats, *, by: str = ...) -> list[_GroupStats]: ...
 
 class _SubjectRecord(TypedDict):
