@@ -1,4 +1,4 @@
-// hattr dtw | anova: the paper's evaluation on files.
+// hattr dtw | anova | kinematics: the paper's evaluation, and handwriting kinematics, on files.
 
 #include <iostream>
 #include <sstream>
@@ -8,6 +8,7 @@
 #include "cli_common.hpp"
 #include "hattr/analysis/anova.hpp"
 #include "hattr/analysis/dtw.hpp"
+#include "hattr/analysis/kinematics.hpp"
 #include "hattr/analysis/trial_score.hpp"
 #include "hattr/analysis/preprocess.hpp"
 #include "hattr/core/error.hpp"
@@ -152,6 +153,34 @@ void runAnova(const AnovaCommandOptions& opt) {
   }
 }
 
+struct KinematicsCommandOptions {
+  std::vector<std::string> files;
+  double cutoff_hz = 10.0;
+  bool json = false;
+};
+
+/// Each profile's handwriting kinematics: SI units in JSON, millimetres in the text.
+void runKinematics(const KinematicsCommandOptions& opt) {
+  nlohmann::json trials = nlohmann::json::array();
+  for (const std::string& file : opt.files) {
+    const analysis::TrialKinematics k =
+        analysis::trialKinematics(io::readProfileCsv(file), {.cutoff_hz = opt.cutoff_hz});
+    nlohmann::json row = analysis::toJson(k);
+    row["file"] = file;
+    trials.push_back(row);
+    if (opt.json) continue;
+    std::cout << fmt::format(
+        "{}\n  time        {:.3f} s ({:.3f} s writing, {:.3f} s in the air between strokes)\n"
+        "  strokes     {} ({} pen lifts)\n  path        {:.2f} mm\n  speed       mean {:.2f} mm/s, peak {:.2f} mm/s\n"
+        "  fluency     {} velocity peaks, normalized jerk {}\n  press       mean {:.3f} N, peak {:.3f} N\n",
+        file, k.duration_s, k.writing_time_s, k.in_air_time_s, k.strokes, k.pen_lifts, k.path_length_m * 1e3,
+        k.mean_speed_m_per_s * 1e3, k.peak_speed_m_per_s * 1e3, k.velocity_peaks,
+        std::isfinite(k.normalized_jerk) ? fmt::format("{:.4g}", k.normalized_jerk) : "n/a (no stroke of 8 samples)",
+        k.mean_normal_force_N, k.peak_normal_force_N);
+  }
+  if (opt.json) printJson({{"cutoff_hz", opt.cutoff_hz}, {"trials", trials}});
+}
+
 }  // namespace
 
 void registerAnalysisCommands(CLI::App& app) {
@@ -185,6 +214,16 @@ void registerAnalysisCommands(CLI::App& app) {
   anova->add_option("--tukey", anova_opt->tukey, "Also Tukey HSD between the levels of this factor");
   anova->add_flag("--json", anova_opt->json, "Print JSON: rows [{source, df, ss, ms, f, p, partial_eta_sq}], tukey");
   anova->callback([anova_opt] { runAnova(*anova_opt); });
+
+  auto kin_opt = std::make_shared<KinematicsCommandOptions>();
+  auto* kin = app.add_subcommand("kinematics", "Handwriting kinematics of profiles: time, pen lifts, path, speed, "
+                                               "velocity peaks, normalized jerk, press (docs/analysis.md)");
+  kin->add_option("PROFILE", kin_opt->files, "Profile CSV files (a trial, an expert, an imported recording)")->required();
+  kin->add_option("--cutoff", kin_opt->cutoff_hz, "Low-pass cut-off for the positions [Hz]; 0: the raw samples")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
+  kin->add_flag("--json", kin_opt->json, "Print JSON: trials [{file, duration_s, writing_time_s, ...}], SI units");
+  kin->callback([kin_opt] { runKinematics(*kin_opt); });
 }
 
 }  // namespace hattr::cli

@@ -129,7 +129,7 @@ void registerLmmCommand(CLI::App& app) {
       ->required();
   lmm->add_flag("--ml", opt->ml, "Fit by maximum likelihood instead of REML");
   lmm->add_option("--reference", opt->references, "A factor's baseline level, COLUMN=LEVEL (default: the first in "
-                                                 "sorted order, as R)");
+                                                 "sorted order, as R in the C locale: bytes, so B before a)");
   lmm->add_option("--factor", opt->factors, "Treat this numeric column as a factor (as R's factor())");
   lmm->add_flag("--json", opt->json, "Print JSON: models [{fixed_effects, terms, random_effects, aic, bic, ...}], "
                                      "likelihood_ratio_tests");

@@ -15,6 +15,8 @@
 #include "bindings.hpp"
 #include "hattr/analysis/anova.hpp"
 #include "hattr/analysis/dtw.hpp"
+#include "hattr/analysis/kinematics.hpp"
+#include "hattr/analysis/learning_curve.hpp"
 #include "hattr/analysis/lmm.hpp"
 #include "hattr/analysis/preprocess.hpp"
 #include "hattr/analysis/trial_score.hpp"
@@ -357,10 +359,12 @@ analysis::DataTable dataTableOf(const py::object& data) {
     bool numbers = true;
     std::vector<std::string> text;
     for (const py::handle v : values) {
+      // None, and NaN among text (pandas' missing values), are missing: "NA", which fitting refuses.
       const bool number = PyNumber_Check(v.ptr()) != 0 && !py::isinstance<py::str>(v) && !py::isinstance<py::bool_>(v);
       numbers = numbers && number;
-      if (number) column.numbers.push_back(v.cast<double>());
-      text.push_back(py::str(v));
+      const double value = number ? v.cast<double>() : 0.0;
+      if (number) column.numbers.push_back(value);
+      text.push_back(v.is_none() || (number && std::isnan(value)) ? std::string("NA") : std::string(py::str(v)));
     }
     if (!numbers) {
       column.numbers.clear();
@@ -394,7 +398,8 @@ void bindMixedModels(py::module_& m) {
       py::arg("reference") = std::map<std::string, std::string>{}, py::arg("factors") = std::vector<std::string>{},
       "Linear mixed model as R's lme4::lmer with lmerTest (REML unless ml): data a CSV path or a mapping of "
       "columns (a dict, a pandas DataFrame); formula in lme4's language; reference {factor: baseline level}; "
-      "factors: numeric columns to treat as factors. Returns the record `hattr lmm --json` prints for the model.");
+      "factors: numeric columns to treat as factors. Levels sort as R sorts them in the C locale (bytes); "
+      "missing values (None, NaN) are refused. Returns the record `hattr lmm --json` prints for the model.");
   m.def(
       "compare_lmm",
       [](const py::object& data, const std::vector<std::string>& formulas, const std::map<std::string, std::string>& reference,
@@ -414,6 +419,41 @@ void bindMixedModels(py::module_& m) {
       "likelihood, ordered by size, each tested against the one before. Records {smaller, larger, chi_sq, df, p}.");
 }
 
+void bindKinematicsAndCurves(py::module_& m) {
+  m.def(
+      "kinematics",
+      [](const HapticProfile& profile, double cutoff_hz) {
+        nlohmann::json k;
+        {
+          const py::gil_scoped_release release;
+          k = analysis::toJson(analysis::trialKinematics(profile, {.cutoff_hz = cutoff_hz}));
+        }
+        return toPython(k);
+      },
+      py::arg("profile"), py::kw_only(), py::arg("cutoff_hz") = 10.0,
+      "Handwriting kinematics of a profile, as `hattr kinematics --json` gives each trial: duration_s, "
+      "writing_time_s, in_air_time_s, strokes, pen_lifts, path_length_m, mean_speed_m_per_s, peak_speed_m_per_s, "
+      "velocity_peaks, normalized_jerk (None without a stroke of 8 samples), mean_normal_force_N, "
+      "peak_normal_force_N. Positions low-passed at cutoff_hz (0: raw) before differentiating.");
+  m.def(
+      "fit_learning_curve",
+      [](const py::object& n, const py::object& y, const std::string& law, double confidence) {
+        const Array trials = floatArray(n, "n");
+        const Array scores = floatArray(y, "y");
+        HATTR_THROW_UNLESS(law == "exponential" || law == "power",
+                           "fit_learning_curve: law \"{}\": expected exponential or power", law);
+        const std::span<const double> a = valuesOf(trials, "n");
+        const std::span<const double> b = valuesOf(scores, "y");
+        return toPython(analysis::toJson(analysis::fitLearningCurve(
+            {a.begin(), a.end()}, {b.begin(), b.end()},
+            law == "power" ? analysis::CurveLaw::kPower : analysis::CurveLaw::kExponential, confidence)));
+      },
+      py::arg("n"), py::arg("y"), py::kw_only(), py::arg("law") = "exponential", py::arg("confidence") = 0.95,
+      "Fits a law of practice to scores y at trial numbers n (from 1): exponential a + b·exp(−c(n − 1)) or power "
+      "a + b·n^(−c), as R's nls(): {law, asymptote, amplitude, rate (each {estimate, std_error, lower, upper}), "
+      "rss, sigma, points, confidence, note}.");
+}
+
 }  // namespace
 
 void bindAnalysis(py::module_& m) {
@@ -422,6 +462,7 @@ void bindAnalysis(py::module_& m) {
   bindScorer(m);
   bindStatistics(m);
   bindMixedModels(m);
+  bindKinematicsAndCurves(m);
 }
 
 }  // namespace hattr::python

@@ -66,7 +66,8 @@ Deviance::Deviance(const Model& model, bool reml, Eigen::Index dense_schur_limit
   first_block_size_ = static_cast<Eigen::Index>(model.blocks.front().size());
   first_block_columns_ = first_block_size_ * static_cast<Eigen::Index>(model.blocks.front().levels);
   const Eigen::Index rest = column - first_block_columns_;
-  block_path_ = rest <= kDenseSchurLimit && rest * first_block_columns_ <= kDenseSchurLimit * kDenseSchurLimit;
+  block_path_ = kDenseSchurLimit > 0 && rest <= kDenseSchurLimit &&
+                rest * first_block_columns_ <= kDenseSchurLimit * kDenseSchurLimit;
   if (!block_path_) cholesky_.analyzePattern(a_);
   // A diagonal Λ (random intercepts, independent effects) scales each value of ZᵀZ by two
   // elements of θ: no sparse product per evaluation.
@@ -482,8 +483,8 @@ LikelihoodRatioTest likelihoodRatio(const LmmFit& smaller, const LmmFit& larger)
                      smaller.formula, smaller.observations, smaller.response, larger.formula, larger.observations,
                      larger.response);
   HATTR_THROW_UNLESS(larger.parameters > smaller.parameters, "likelihood-ratio test: '{}' has {} parameters, '{}' {}; "
-                     "the second model must be the larger", smaller.formula, smaller.parameters, larger.formula,
-                     larger.parameters);
+                     "a likelihood-ratio test needs nested models of different sizes, the smaller first",
+                     smaller.formula, smaller.parameters, larger.formula, larger.parameters);
   LikelihoodRatioTest t;
   t.smaller = smaller.formula;
   t.larger = larger.formula;

@@ -103,12 +103,35 @@ class Parser {
     parseSum(f);
     HATTR_THROW_UNLESS(peek().kind == Token::kEnd, "formula '{}': unexpected '{}' at character {}", text_, peek().text,
                        peek().position + 1);
-    f.variables = variables_;
-    HATTR_THROW_UNLESS(std::find(f.variables.begin(), f.variables.end(), f.response) == f.variables.end(),
+    HATTR_THROW_UNLESS(std::find(variables_.begin(), variables_.end(), f.response) == variables_.end(),
                        "formula '{}': the response '{}' is also a predictor", text_, f.response);
+    renumberFixedFirst(f);
     // R orders terms by degree, keeping their order within a degree.
     std::stable_sort(f.fixed.begin(), f.fixed.end(), [](const Term& a, const Term& b) { return a.size() < b.size(); });
     return f;
+  }
+
+  /// lme4 builds X from the fixed part alone: its variables come first, in the order they
+  /// appear there (which orders the names of interactions: "aB:x"), then the others.
+  void renumberFixedFirst(ParsedFormula& f) const {
+    std::vector<int> order = fixed_order_;
+    for (int v = 0; v < static_cast<int>(variables_.size()); ++v) {
+      if (std::find(order.begin(), order.end(), v) == order.end()) order.push_back(v);
+    }
+    std::vector<int> index(variables_.size());
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      index[static_cast<std::size_t>(order[k])] = static_cast<int>(k);
+      f.variables.push_back(variables_[static_cast<std::size_t>(order[k])]);
+    }
+    const auto remap = [&](Term& t, bool sort) {
+      for (int& v : t) v = index[static_cast<std::size_t>(v)];
+      if (sort) std::sort(t.begin(), t.end());
+    };
+    for (Term& t : f.fixed) remap(t, true);
+    for (RandomTerm& r : f.random) {
+      for (Term& t : r.terms) remap(t, true);
+      remap(r.group, false);  // the grouping keeps its written order, as lme4 names it
+    }
   }
 
  private:
@@ -127,9 +150,15 @@ class Parser {
 
   int variable(const std::string& name) {
     const auto it = std::find(variables_.begin(), variables_.end(), name);
-    if (it != variables_.end()) return static_cast<int>(it - variables_.begin());
+    if (it != variables_.end()) {
+      const int v = static_cast<int>(it - variables_.begin());
+      if (in_fixed_ && std::find(fixed_order_.begin(), fixed_order_.end(), v) == fixed_order_.end()) fixed_order_.push_back(v);
+      return v;
+    }
     variables_.push_back(name);
-    return static_cast<int>(variables_.size() - 1);
+    const int v = static_cast<int>(variables_.size() - 1);
+    if (in_fixed_ && std::find(fixed_order_.begin(), fixed_order_.end(), v) == fixed_order_.end()) fixed_order_.push_back(v);
+    return v;
   }
 
   /// Is the parenthesis at the cursor a random-effects term "( ... | ... )"?
@@ -146,24 +175,41 @@ class Parser {
     return false;
   }
 
-  /// The right-hand side: fixed terms and random-effects terms joined by + (and "- 1").
+  /// The right-hand side: fixed terms and random-effects terms.
   void parseSum(ParsedFormula& f) {
-    bool minus = false;
-    do {
+    const Terms t = parseSumOf(&f);
+    f.fixed = t.terms;
+    f.intercept = t.intercept != 0;
+  }
+
+  /// A sum: items joined by + or −, as R reads them ("- 1" and "+ 0" remove the intercept,
+  /// "- 0" and "+ 1" keep it); at the top level (`f` given) an item may be a random term.
+  Terms parseSumOf(ParsedFormula* f) {
+    Terms out;
+    bool minus = accept("-");
+    for (;;) {
       if (minus) {
         HATTR_THROW_UNLESS(peek().kind == Token::kNumber && (peek().text == "1" || peek().text == "0"),
-                           "formula '{}': only '- 1' can be subtracted (character {})", text_, peek().position + 1);
-        next();
-        f.intercept = false;
-      } else if (atRandomTerm()) {
-        parseRandomTerm(f);
+                           "formula '{}': only 1 or 0 can be subtracted (character {}), got '{}'", text_,
+                           peek().position + 1, describe(peek()));
+        out.intercept = next().text == "0" ? 1 : 0;
+      } else if (f != nullptr && atRandomTerm()) {
+        parseRandomTerm(*f);
       } else {
+        if (f != nullptr) in_fixed_ = true;  // nested sums (parentheses) keep the flag
         const Terms t = parseProduct();
-        if (t.intercept >= 0) f.intercept = t.intercept == 1;
-        for (const Term& term : t.terms) addTerm(f.fixed, term);
+        if (f != nullptr) in_fixed_ = false;
+        if (t.intercept >= 0) out.intercept = t.intercept;
+        for (const Term& term : t.terms) addTerm(out.terms, term);
       }
-      minus = peek().kind == Token::kSymbol && peek().text == "-";
-    } while (accept("+") || accept("-"));
+      if (accept("+")) {
+        minus = false;
+      } else if (accept("-")) {
+        minus = true;
+      } else {
+        return out;
+      }
+    }
   }
 
   void parseRandomTerm(ParsedFormula& f) {
@@ -197,6 +243,8 @@ class Parser {
     while (accept(":")) chain.back().push_back(parseGroupName());
     while (accept("/")) chain.push_back({parseGroupName()});
     if (chain.size() == 1) return {chain[0]};
+    HATTR_THROW_UNLESS(chain.size() == 2, "formula '{}': nest one level with '/' (a/b); for deeper nesting write "
+                       "the groupings out: (1 | a) + (1 | a:b) + (1 | a:b:c)", text_);
     // lme4 names the inner factor first: (1 | a/b) is (1 | b:a) + (1 | a).
     std::vector<Term> out;
     for (std::size_t depth = chain.size(); depth-- > 0;) {
@@ -212,16 +260,8 @@ class Parser {
     return variable(next().text);
   }
 
-  // expression := product ('+' product)*  (inside parentheses and random terms)
-  Terms parseExpression() {
-    Terms out = parseProduct();
-    while (accept("+")) {
-      const Terms more = parseProduct();
-      if (more.intercept >= 0) out.intercept = more.intercept;
-      for (const Term& t : more.terms) addTerm(out.terms, t);
-    }
-    return out;
-  }
+  // expression := a sum (inside parentheses and random terms)
+  Terms parseExpression() { return parseSumOf(nullptr); }
 
   // product := interaction ('*' interaction)*;  a*b = a + b + a:b
   Terms parseProduct() {
@@ -266,6 +306,8 @@ class Parser {
   std::vector<Token> tokens_;
   std::size_t at_ = 0;
   std::vector<std::string> variables_;
+  bool in_fixed_ = false;          // parsing a fixed term of the top level
+  std::vector<int> fixed_order_;   // variables in the order the fixed part first names them
 };
 
 // ---- Variables ----------------------------------------------------------------------
@@ -297,21 +339,35 @@ const DataColumn& findColumn(const DataTable& data, const std::string& name) {
 
 std::size_t rowCount(const DataColumn& c) { return c.text.empty() ? c.numbers.size() : c.text.size(); }
 
-/// Orders a factor's levels: by value when every level is a number, else by bytes (R in
-/// the C locale); then moves the baseline first.
-void orderLevels(Variable& v, const std::vector<std::string>& cells, const std::string& reference,
-                 const std::string& source) {
-  std::vector<std::string> levels = cells;
-  std::sort(levels.begin(), levels.end());
-  levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
-  std::vector<double> numbers(levels.size());
-  const bool numeric = std::all_of(levels.begin(), levels.end(), [&](const std::string& l) {
-    double x = 0.0;
-    return parseNumber(l, x);
-  });
-  if (numeric) {
-    std::stable_sort(levels.begin(), levels.end(),
-                     [](const std::string& a, const std::string& b) { return std::strtod(a.c_str(), nullptr) < std::strtod(b.c_str(), nullptr); });
+/// A number as R's as.character() writes it: the fewest significant digits (up to 15) that
+/// give the number back, in fixed notation unless scientific is shorter ("2.5", "1e+05").
+std::string rText(double x) {
+  const double rounded = std::strtod(fmt::format("{:.15g}", x).c_str(), nullptr);
+  const double target = rounded == x || std::abs(rounded - x) <= 1e-15 * std::abs(x) ? rounded : x;
+  int digits = 1;
+  while (digits < 17 && std::strtod(fmt::format("{:.{}e}", target, digits - 1).c_str(), nullptr) != target) ++digits;
+  std::string sci = fmt::format("{:.{}e}", target, digits - 1);  // "2.5e+00"; R: "2.5e+00" as "2.5e+00"
+  const int exponent = target == 0.0 ? 0 : static_cast<int>(std::floor(std::log10(std::abs(target))));
+  const std::string fixed = fmt::format("{:.{}f}", target, std::max(0, digits - 1 - exponent));
+  return fixed.size() <= sci.size() ? fixed : sci;
+}
+
+/// Sets a factor's levels, each row's code, and the baseline first: text levels sorted by
+/// bytes (R in the C locale), numbers by value and written as R writes them.
+void setLevels(Variable& v, std::vector<std::string> cells, const std::vector<double>& numbers,
+               const std::string& reference, const std::string& source) {
+  std::vector<std::string> levels;
+  if (!numbers.empty()) {
+    std::vector<double> values = numbers;
+    std::sort(values.begin(), values.end());
+    values.erase(std::unique(values.begin(), values.end()), values.end());
+    for (double x : values) levels.push_back(rText(x));
+    cells.clear();
+    for (double x : numbers) cells.push_back(rText(x));
+  } else {
+    levels = cells;
+    std::sort(levels.begin(), levels.end());
+    levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
   }
   if (!reference.empty()) {
     const auto it = std::find(levels.begin(), levels.end(), reference);
@@ -323,53 +379,49 @@ void orderLevels(Variable& v, const std::vector<std::string>& cells, const std::
   }
   std::unordered_map<std::string, int> code;
   for (std::size_t i = 0; i < levels.size(); ++i) code[levels[i]] = static_cast<int>(i);
+  v.factor = true;
+  v.values.clear();
   v.levels = levels;
   v.codes.resize(cells.size());
   for (std::size_t r = 0; r < cells.size(); ++r) v.codes[r] = code[cells[r]];
 }
 
-/// Reads one column the formula uses, as numbers or as a factor.
+/// Reads one column the formula uses, as numbers or as a factor: a text column is numbers
+/// when every cell is one (a non-finite one is refused), else a factor.
 Variable readVariable(const DataTable& data, const std::string& name, bool force_factor, const LmmOptions& options) {
   const DataColumn& column = findColumn(data, name);
   Variable v;
   v.name = name;
   const auto reference = options.reference.find(name);
   const std::string ref = reference == options.reference.end() ? "" : reference->second;
-  if (column.text.empty()) {
-    for (std::size_t r = 0; r < column.numbers.size(); ++r) {
-      HATTR_THROW_UNLESS(std::isfinite(column.numbers[r]), "{}: row {} of column '{}' is {}; expected a finite number "
-                         "(remove the row to leave it out)", data.source, r + 1, name, column.numbers[r]);
-    }
+  bool numeric = column.text.empty();
+  if (numeric) {
     v.values = column.numbers;
   } else {
-    bool all_numbers = true;
     v.values.resize(column.text.size());
+    numeric = true;
     for (std::size_t r = 0; r < column.text.size(); ++r) {
       const std::string& cell = column.text[r];
       HATTR_THROW_UNLESS(!isMissing(cell), "{}: row {} of column '{}' is missing ('{}'); expected a value (remove the "
                          "row to leave it out, as R's na.omit would)", data.source, r + 1, name, cell);
-      if (!all_numbers) continue;
-      all_numbers = parseNumber(cell, v.values[r]);
-      HATTR_THROW_UNLESS(!all_numbers || std::isfinite(v.values[r]), "{}: row {} of column '{}' is '{}'; expected a "
-                         "finite number", data.source, r + 1, name, cell);
-    }
-    if (!all_numbers || force_factor) {
-      v.factor = true;
-      v.values.clear();
-      orderLevels(v, column.text, ref, data.source);
-      return v;
+      numeric = numeric && parseNumber(cell, v.values[r]);
     }
   }
-  if (force_factor) {  // numbers as a factor: levels are their shortest text
-    std::vector<std::string> cells;
-    for (double x : v.values) cells.push_back(fmt::format("{}", x));
-    v.factor = true;
-    v.values.clear();
-    orderLevels(v, cells, ref, data.source);
+  if (!numeric) {
+    setLevels(v, column.text, {}, ref, data.source);
+    return v;
+  }
+  for (std::size_t r = 0; r < v.values.size(); ++r) {
+    HATTR_THROW_UNLESS(std::isfinite(v.values[r]), "{}: row {} of column '{}' is {}; expected a finite number (remove "
+                       "the row to leave it out)", data.source, r + 1, name,
+                       column.text.empty() ? fmt::format("{}", v.values[r]) : "'" + column.text[r] + "'");
+  }
+  if (force_factor) {
+    setLevels(v, {}, std::vector<double>(v.values), ref, data.source);
     return v;
   }
   HATTR_THROW_UNLESS(ref.empty(), "{}: --reference names column '{}', which is numeric; a reference level needs a factor "
-                     "(declare it one)", data.source, name);
+                     "(declare it one with --factor {})", data.source, name, name);
   return v;
 }
 
@@ -395,12 +447,6 @@ Part partOf(const Variable& v, bool contrasts, std::size_t rows) {
     p.columns.push_back(std::move(c));
   }
   return p;
-}
-
-/// Is `term` in the model: the empty term is the intercept.
-bool inModel(const Term& term, bool intercept, const std::vector<Term>& terms) {
-  if (term.empty()) return intercept;
-  return std::find(terms.begin(), terms.end(), term) != terms.end();
 }
 
 /// Drops the later of linearly dependent columns, as R's qr() with its tolerance 1e-7 and
@@ -448,8 +494,36 @@ std::string termLabel(const ParsedFormula& formula, const Term& term) {
   return joinNames(names, ":");
 }
 
+std::vector<std::vector<int>> termCodes(const std::vector<Term>& terms) {
+  std::vector<std::vector<int>> codes;
+  for (std::size_t t = 0; t < terms.size(); ++t) {
+    std::vector<int> code;
+    for (int v : terms[t]) {
+      Term margin = terms[t];
+      margin.erase(std::find(margin.begin(), margin.end(), v));
+      bool contained = margin.empty();
+      for (std::size_t earlier = 0; earlier < t && !contained; ++earlier) {
+        contained = std::includes(terms[earlier].begin(), terms[earlier].end(), margin.begin(), margin.end());
+      }
+      code.push_back(contained ? 1 : 2);
+    }
+    codes.push_back(code);
+  }
+  return codes;
+}
+
 Design designMatrix(const std::vector<Variable>& variables, bool intercept, const std::vector<Term>& terms,
                     bool full_indicators) {
+  // R's coding: contrasts (1) or indicators (2) per variable of each term; without an
+  // intercept, the first factor of the first term that has one is coded by indicators.
+  std::vector<std::vector<int>> codes = termCodes(terms);
+  for (std::size_t t = 0; t < terms.size() && !intercept; ++t) {
+    const auto factor = std::find_if(terms[t].begin(), terms[t].end(),
+                                     [&](int v) { return variables[static_cast<std::size_t>(v)].factor; });
+    if (factor == terms[t].end()) continue;
+    codes[t][static_cast<std::size_t>(factor - terms[t].begin())] = 2;
+    break;
+  }
   const std::size_t rows = variables.empty() ? 0 : std::max(variables[0].values.size(), variables[0].codes.size());
   std::vector<Eigen::VectorXd> columns;
   Design d;
@@ -462,11 +536,9 @@ Design designMatrix(const std::vector<Variable>& variables, bool intercept, cons
     // The term's columns: products of its variables' parts, the first varying fastest.
     std::vector<std::string> names{""};
     std::vector<Eigen::VectorXd> product{Eigen::VectorXd::Ones(static_cast<Eigen::Index>(rows))};
-    for (int index : terms[t]) {
-      Term margin = terms[t];
-      margin.erase(std::find(margin.begin(), margin.end(), index));
-      const Variable& v = variables[static_cast<std::size_t>(index)];
-      const bool contrasts = !full_indicators && inModel(margin, intercept, terms);
+    for (std::size_t k = 0; k < terms[t].size(); ++k) {
+      const Variable& v = variables[static_cast<std::size_t>(terms[t][k])];
+      const bool contrasts = !full_indicators && codes[t][k] == 1;
       const Part part = partOf(v, contrasts, rows);
       std::vector<std::string> next_names;
       std::vector<Eigen::VectorXd> next;
@@ -504,9 +576,12 @@ Model buildModel(const DataTable& data, const ParsedFormula& formula, const LmmO
   for (const RandomTerm& r : formula.random) {
     for (int g : r.group) grouping[static_cast<std::size_t>(g)] = true;
   }
+  // A column that groups is a factor there (lme4's factor()), and stays as it is elsewhere.
+  std::vector<Variable> groups(formula.variables.size());
   for (std::size_t i = 0; i < formula.variables.size(); ++i) {
     const std::string& name = formula.variables[i];
-    m.variables.push_back(readVariable(data, name, grouping[i] || options.factors.count(name) > 0, options));
+    m.variables.push_back(readVariable(data, name, options.factors.count(name) > 0, options));
+    if (grouping[i]) groups[i] = m.variables.back().factor ? m.variables.back() : readVariable(data, name, true, options);
     HATTR_THROW_UNLESS(rowCount(findColumn(data, name)) == rows, "{}: column '{}' has {} rows, the response {}",
                        data.source, name, rowCount(findColumn(data, name)), rows);
   }
@@ -517,14 +592,19 @@ Model buildModel(const DataTable& data, const ParsedFormula& formula, const LmmO
   HATTR_THROW_UNLESS(rows >= 2, "{}: {} rows; a mixed model needs more", data.source, rows);
   m.y = Eigen::Map<const Eigen::VectorXd>(response.values.data(), static_cast<Eigen::Index>(rows));
 
-  // Factors in the fixed part need two levels.
-  for (const Term& t : formula.fixed) {
-    for (int v : t) {
-      const Variable& var = m.variables[static_cast<std::size_t>(v)];
-      HATTR_THROW_UNLESS(!var.factor || var.levels.size() >= 2, "{}: factor '{}' has one level ('{}'); a factor in the "
-                         "fixed effects needs at least 2 (leave it out of the formula)", data.source, var.name, var.levels[0]);
+  // Factors in the effects, fixed or random, need two levels (R's contrasts do).
+  const auto twoLevels = [&](const std::vector<Term>& terms, const char* part) {
+    for (const Term& t : terms) {
+      for (int v : t) {
+        const Variable& var = m.variables[static_cast<std::size_t>(v)];
+        HATTR_THROW_UNLESS(!var.factor || var.levels.size() >= 2, "{}: factor '{}' has one level ('{}'); a factor in the "
+                           "{} effects needs at least 2 (leave it out of the formula)", data.source, var.name,
+                           var.levels[0], part);
+      }
     }
-  }
+  };
+  twoLevels(formula.fixed, "fixed");
+  for (const RandomTerm& r : formula.random) twoLevels(r.terms, "random");
   m.fixed = designMatrix(m.variables, formula.intercept, formula.fixed);
   HATTR_THROW_UNLESS(m.fixed.matrix.cols() > 0, "formula '{}': no fixed effects; keep the intercept or name a column",
                      formula.text);
@@ -538,20 +618,34 @@ Model buildModel(const DataTable& data, const ParsedFormula& formula, const LmmO
     b.group_of_row.resize(rows);
     for (std::size_t row = 0; row < rows; ++row) {
       std::vector<int> key;
-      for (int g : r.group) key.push_back(m.variables[static_cast<std::size_t>(g)].codes[row]);
+      for (int g : r.group) key.push_back(groups[static_cast<std::size_t>(g)].codes[row]);
       const auto [it, added] = level_of.emplace(key, static_cast<int>(level_of.size()));
       b.group_of_row[row] = it->second;
     }
     b.levels = level_of.size();
+    // lme4's checks: a grouping needs 2 levels, fewer levels than observations, and fewer
+    // random effects than observations.
+    HATTR_THROW_UNLESS(b.levels >= 2, "{}: grouping factor '{}' has one level; a random effect needs at least 2 "
+                       "(lme4: grouping factors must have > 1 sampled level)", data.source, b.group_name);
     HATTR_THROW_UNLESS(b.levels < rows, "{}: grouping factor '{}' has {} levels for {} rows; each level needs more than "
                        "one observation on average (lme4 refuses this too)", data.source, b.group_name, b.levels, rows);
     const Design effects = designMatrix(m.variables, r.intercept, r.terms);
     b.effects = effects.names;
     b.effects_matrix = effects.matrix;
+    HATTR_THROW_UNLESS(rows > b.levels * b.size(), "{}: {} observations for {} random effects of '{}' ({} levels × {}); "
+                       "the random effects and the residual variance cannot be told apart (lme4 refuses this too): "
+                       "simplify the random term", data.source, rows, b.levels * b.size(), b.group_name, b.levels, b.size());
     m.blocks.push_back(std::move(b));
   }
-  std::stable_sort(m.blocks.begin(), m.blocks.end(),
-                   [](const RandomBlock& a, const RandomBlock& b) { return a.levels > b.levels; });
+  // lme4's order (mkReTrms): when a later grouping has more levels, by decreasing levels,
+  // ties in reverse.
+  bool reorder = false;
+  for (std::size_t i = 1; i < m.blocks.size(); ++i) reorder = reorder || m.blocks[i].levels > m.blocks[i - 1].levels;
+  if (reorder) {
+    std::stable_sort(m.blocks.begin(), m.blocks.end(),
+                     [](const RandomBlock& a, const RandomBlock& b) { return a.levels < b.levels; });
+    std::reverse(m.blocks.begin(), m.blocks.end());
+  }
   std::map<std::string, int> seen;
   for (RandomBlock& b : m.blocks) {
     const int n = seen[b.group_name]++;

@@ -19,8 +19,8 @@ namespace {
 
 constexpr int kRichardsonLevels = 4;
 
-/// The step of a numerical derivative at x, as numDeriv takes it: a tenth of |x|, or 1e-4
-/// at (near) zero.
+/// The step of a numerical derivative at x, as numDeriv takes it: a fraction of |x| (0.1 for
+/// its hessian, 1e-4 for its jacobian), or 1e-4 at (near) zero.
 double stepAt(double x, double fraction) {
   constexpr double kZero = 1.7817416127494958e-05;  // numDeriv's zero.tol: √(ε / 7e-7)
   return std::abs(x) < kZero ? 1e-4 : fraction * std::abs(x);
@@ -75,7 +75,7 @@ std::vector<Eigen::MatrixXd> jacobian(G&& g, const Eigen::VectorXd& x) {
   std::vector<Eigen::MatrixXd> out;
   for (Eigen::Index i = 0; i < x.size(); ++i) {
     std::vector<Eigen::MatrixXd> d;
-    double h = stepAt(x[i], 1e-3);
+    double h = stepAt(x[i], 1e-4);  // numDeriv's jacobian: d = 1e-4
     for (int level = 0; level < kRichardsonLevels; ++level, h /= 2.0) {
       Eigen::VectorXd plus = x;
       Eigen::VectorXd minus = x;
@@ -134,16 +134,22 @@ Eigen::MatrixXd selectColumns(const Eigen::MatrixXd& m, const std::vector<Eigen:
 }
 
 /// lmerTest's term_contain: term a is contained in term b when b has all of a's variables
-/// and more, and the same numeric variables.
-bool contains(const Model& m, const Term& a, const Term& b) {
-  const auto numeric = [&](const Term& t) {
+/// and more, and the same numeric ones, counting in each term only the variables R's terms()
+/// codes 1 (by contrasts: see termCodes()).
+bool contains(const Model& m, const std::vector<std::vector<int>>& codes, std::size_t a, std::size_t b) {
+  const auto coded = [&](std::size_t t, bool numeric_only) {
     Term out;
-    for (int v : t) {
-      if (!m.variables[static_cast<std::size_t>(v)].factor) out.push_back(v);
+    const Term& term = m.formula.fixed[t];
+    for (std::size_t k = 0; k < term.size(); ++k) {
+      const bool numeric = !m.variables[static_cast<std::size_t>(term[k])].factor;
+      if (codes[t][k] == 1 && (numeric || !numeric_only)) out.push_back(term[k]);
     }
     return out;
   };
-  return std::includes(b.begin(), b.end(), a.begin(), a.end()) && b.size() > a.size() && numeric(a) == numeric(b);
+  const Term va = coded(a, false);
+  const Term vb = coded(b, false);
+  return std::includes(vb.begin(), vb.end(), va.begin(), va.end()) && vb.size() > va.size() &&
+         coded(a, true) == coded(b, true);
 }
 
 /// lmerTest's doolittle(): the unit lower triangular factor of X'X, small values zeroed.
@@ -305,6 +311,7 @@ std::vector<Eigen::MatrixXd> typeThreeHypotheses(const Model& m) {
   Eigen::MatrixXd l = x.matrix.colPivHouseholderQr().solve(full.matrix).transpose();
   zapSmall(l);
   // Orthogonalize each term's columns to those of the terms that contain it, highest first.
+  const std::vector<std::vector<int>> codes = termCodes(m.formula.fixed);
   std::vector<std::size_t> order(terms);
   for (std::size_t t = 0; t < terms; ++t) order[t] = t;
   std::stable_sort(order.begin(), order.end(),
@@ -312,7 +319,7 @@ std::vector<Eigen::MatrixXd> typeThreeHypotheses(const Model& m) {
   for (std::size_t t : order) {
     std::vector<Eigen::Index> containing;
     for (std::size_t other = 0; other < terms; ++other) {
-      if (!contains(m, m.formula.fixed[t], m.formula.fixed[other])) continue;
+      if (!contains(m, codes, t, other)) continue;
       const std::vector<Eigen::Index> c = columnsOf(x, static_cast<int>(other));
       containing.insert(containing.end(), c.begin(), c.end());
     }

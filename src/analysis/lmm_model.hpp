@@ -60,10 +60,15 @@ struct Design {
   std::vector<int> term_of_column;
 };
 
-/// R's model.matrix(): the intercept, then each term's columns; a factor in a term is coded
-/// by treatment contrasts where the term without it is in the model (the empty term being
-/// the intercept), else by one indicator a level. `full_indicators` codes every factor by
-/// indicators (lmerTest's rank-deficient matrix for type III hypotheses).
+/// R's terms() "factors" codes (its TermCode): for each variable of each term, 1 (coded by
+/// contrasts) when the term without it is empty or contained in an earlier term, else 2
+/// (coded by one indicator a level). Terms in the model's order.
+[[nodiscard]] std::vector<std::vector<int>> termCodes(const std::vector<Term>& terms);
+
+/// R's model.matrix(): the intercept, then each term's columns, a factor coded by treatment
+/// contrasts or indicators as termCodes() says, except that without an intercept the first
+/// factor of the first term that has one takes indicators. `full_indicators` codes every
+/// factor by indicators (lmerTest's rank-deficient matrix for type III hypotheses).
 [[nodiscard]] Design designMatrix(const std::vector<Variable>& variables, bool intercept,
                                   const std::vector<Term>& terms, bool full_indicators = false);
 
@@ -98,7 +103,8 @@ struct Model {
 class Deviance {
  public:
   /// The dense Schur complement is used while the random effects beyond the first block
-  /// number at most `dense_schur_limit` (tests set 0 to take the sparse path).
+  /// number at most `dense_schur_limit` and, times the first block's, its square; 0 takes
+  /// the sparse path always (the tests compare the two).
   Deviance(const Model& model, bool reml, Eigen::Index dense_schur_limit = 1500);
   /// The profiled REML criterion or ML deviance at θ (σ profiled out).
   double operator()(const Eigen::VectorXd& theta);

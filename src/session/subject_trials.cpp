@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "hattr/analysis/kinematics.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/guidance/strategy_schedule.hpp"
 #include "hattr/io/profile_csv.hpp"
@@ -230,7 +231,16 @@ void SubjectTrials::measure(TrialResult& result) const {
   HATTR_DEMAND(current() != nullptr, "subject {}: no trial to measure", subject_.id);
   const TrialPlan& plan = current()->plan;
   auto& extra = result.profile.metadata().extra;
-  if (!scheduledTrial(plan) || result.profile.empty() || extra.contains("tracking_rms_m")) return;
+  if (result.profile.empty()) return;
+  // Every trial keeps its handwriting kinematics (docs/analysis.md), each as its shortest exact text.
+  if (!extra.contains(kKinematicsPrefix + std::string("duration_s"))) {
+    const nlohmann::json k = analysis::toJson(analysis::trialKinematics(result.profile));
+    for (const char* name : analysis::kinematicsNames()) {
+      const nlohmann::json& v = k.at(name);
+      extra[kKinematicsPrefix + std::string(name)] = v.is_null() ? "NA" : v.dump();
+    }
+  }
+  if (!scheduledTrial(plan) || extra.contains("tracking_rms_m")) return;
   const double error = guidance::trackingErrorRms(*references_.at(plan.skill), result.profile);
   extra["tracking_rms_m"] = fmt::format("{}", error);
 }

@@ -100,3 +100,25 @@ print_fit("Singular", d4, "time ~ trial + (1 | subject)")
 d5 <- d3[!(d3$plan == "weekly" & d3$hand == "left"), ]
 write.csv(d5, "lmm_reference/empty_cell.csv", row.names = FALSE, quote = FALSE)
 print_fit("EmptyCell", d5, "speed ~ plan * hand + (1 | school)")
+
+# 6. R's conventions beyond the usual formula: type III tests of terms without their margins,
+# models without an intercept, interactions named in the fixed part's order, lme4's order
+# of groupings, and a column that is both a covariate and a grouping.
+set.seed(41)
+d6 <- data.frame(g = rep(sprintf("g%d", 1:6), each = 10), h = rep(sprintf("h%02d", 1:15), times = 4),
+                 a = rep(c("A", "B", "C"), 20), b = rep(rep(c("p", "q"), each = 3), 10),
+                 x = round(runif(60, 0, 4), 2), s = rep(1:6, times = 10), stringsAsFactors = FALSE)
+d6$y <- round(3 + 0.5 * d6$x + c(A = 0, B = 1, C = -0.5)[d6$a] * (1 + 0.3 * d6$x) + 0.8 * (d6$b == "q") +
+              0.1 * d6$s + rnorm(6, 0, 1)[match(d6$g, sprintf("g%d", 1:6))] +
+              rnorm(15, 0, 0.5)[match(d6$h, sprintf("h%02d", 1:15))] +
+              rnorm(6, 0, 0.4)[d6$s] + rnorm(60, 0, 0.7), 3)
+write.csv(d6, "lmm_reference/conventions.csv", row.names = FALSE, quote = FALSE)
+print_fit("SlopeWithoutMargin", d6, "y ~ x + x:a + (1 | g)")
+print_fit("NestedFactor", d6, "y ~ a + a:b + (1 | g)")
+print_fit("NoIntercept", d6, "y ~ 0 + a + b + (1 | g)")
+print_fit("NoInterceptSlopes", d6, "y ~ 0 + x + x:a + (1 | g)")
+print_fit("Margins", d6, "y ~ x:a + x:b + (1 | g)")
+print_fit("FixedOrder", d6, "y ~ (1 + x | g) + a * x")
+print_fit("GroupOrder", d6, "y ~ x + (1 + x || g) + (1 | h)")
+print_fit("CovariateAndGroup", d6, "y ~ s + (1 | s) + (1 | h)")
+print_fit("MinusOne", d6, "y ~ -1 + x + b + (x - 1 | g)")

@@ -199,6 +199,180 @@ const LmmReference kEmptyCell{"empty_cell", "speed ~ plan * hand + (1 | school)"
   },
   /*singular*/ false};
 
+// SlopeWithoutMargin: y ~ x + x:a + (1 | g) (REML)
+const LmmReference kSlopeWithoutMargin{"conventions", "y ~ x + x:a + (1 | g)", true,
+  /*criterion*/ 195.48979043908864, /*sigma*/ 1.0871297795414525, /*aic*/ 207.48979043908864, /*bic*/ 220.05585781242124,
+  {
+    {"(Intercept)", 3.3398920762891353, 0.48474056542374938, 11.07701999048099, 2.5298072288679973e-05},
+    {"x", 0.56963966692938428, 0.13911734310904419, 52.799468864768329, 0.00014573346508530105},
+    {"x:aB", 0.69634510732998589, 0.14508533206438198, 51.377387182788574, 1.411638024915332e-05},
+    {"x:aC", -0.26169999738562288, 0.12801028349031218, 51.453716669527857, 0.046050184759140564},
+  },
+  {
+    {"x", 1, 52.799468864768329, 16.766325683113703, 0.00014573346508530105},
+    {"x:a", 2, 51.525747222643133, 21.186983749741607, 1.9282586395201507e-07},
+  },
+  {
+    {"g", "(Intercept)", "", 0.89737736384867106},
+    {"Residual", "", "", 1.0871297795414525},
+  },
+  /*singular*/ false};
+
+// NestedFactor: y ~ a + a:b + (1 | g) (REML)
+const LmmReference kNestedFactor{"conventions", "y ~ a + a:b + (1 | g)", true,
+  /*criterion*/ 185.89025696832849, /*sigma*/ 1.0651659635989714, /*aic*/ 201.89025696832849, /*bic*/ 218.6450134661053,
+  {
+    {"(Intercept)", 3.8105923747884782, 0.55499342534781682, 10.268952984023594, 3.82917775791984e-05},
+    {"aB", 1.6982999999999919, 0.47635670038527345, 48.986868782426463, 0.00082317610672381523},
+    {"aC", -0.49586611115307117, 0.48083842045982778, 49.171145645486675, 0.30746805332422189},
+    {"aA:bq", 1.7714338888469305, 0.48083842045982778, 49.171145645909618, 0.00057152534845331224},
+    {"aB:bq", 0.97608898678767642, 0.4808384204598275, 49.171145650170551, 0.04778774362600343},
+    {"aC:bq", 1.1026550979407383, 0.48083842045982766, 49.171145649127496, 0.026151358435084891},
+  },
+  {
+    {"a", 2, 49.109039006333667, 11.539544132292974, 7.796906551363221e-05},
+    {"a:b", 3, 49.16851330361046, 7.6289064691726587, 0.00027672362682012129},
+  },
+  {
+    {"g", "(Intercept)", "", 1.0764661322555675},
+    {"Residual", "", "", 1.0651659635989714},
+  },
+  /*singular*/ false};
+
+// NoIntercept: y ~ 0 + a + b + (1 | g) (REML)
+const LmmReference kNoIntercept{"conventions", "y ~ 0 + a + b + (1 | g)", true,
+  /*criterion*/ 189.30255923259452, /*sigma*/ 1.0587230516734381, /*aic*/ 201.30255923259452, /*bic*/ 213.86862660592712,
+  {
+    {"aA", 4.050471861874013, 0.52718727459428216, 7.8724991246828218, 6.3605391575084015e-05},
+    {"aB", 5.3574336610298872, 0.52650947693550754, 7.8381151119904588, 8.6405035754251915e-06},
+    {"aC", 3.2222460669480233, 0.52584323612017381, 7.8043130201361794, 0.00031025636793144352},
+    {"bq", 1.2860989400986862, 0.27679122945653739, 51.234884342529639, 2.3952463308728388e-05},
+  },
+  {
+    {"a", 3, 12.064096328203473, 38.266432987949287, 1.931963664896588e-06},
+    {"b", 1, 51.234884342529639, 21.589575896067636, 2.3952463308728388e-05},
+  },
+  {
+    {"g", "(Intercept)", "", 1.1000064862915166},
+    {"Residual", "", "", 1.0587230516734381},
+  },
+  /*singular*/ false};
+
+// NoInterceptSlopes: y ~ 0 + x + x:a + (1 | g) (REML)
+const LmmReference kNoInterceptSlopes{"conventions", "y ~ 0 + x + x:a + (1 | g)", true,
+  /*criterion*/ 211.64226586608527, /*sigma*/ 1.0896049771034459, /*aic*/ 221.64226586608527, /*bic*/ 232.11398867719578,
+  {
+    {"x", 0.35921722312586613, 0.13897680984720973, 53.631991166976768, 0.012500370650655972},
+    {"x:aA", 0.26640771166076999, 0.12853983231259153, 50.611649735665615, 0.043324274127623866},
+    {"x:aB", 0.9786321218750943, 0.14977235022237101, 50.825754821367198, 3.0046416429892968e-08},
+  },
+  {
+    {"x", 1, 53.631991166976768, 6.680817768790817, 0.012500370650655972},
+    {"x:a", 2, 50.725527648025952, 21.914329855521739, 1.3820831520837751e-07},
+  },
+  {
+    {"g", "(Intercept)", "", 3.3188874752291748},
+    {"Residual", "", "", 1.0896049771034459},
+  },
+  /*singular*/ false};
+
+// Margins: y ~ x:a + x:b + (1 | g) (REML)
+const LmmReference kMargins{"conventions", "y ~ x:a + x:b + (1 | g)", true,
+  /*criterion*/ 184.947929846054, /*sigma*/ 0.96180693151220542, /*aic*/ 198.947929846054, /*bic*/ 213.60834178160869,
+  {
+    {"(Intercept)", 3.3999499380483504, 0.47259324882370146, 9.5166835507430498, 3.8260289552395783e-05},
+    {"x:aA", 0.37336435862497452, 0.13325381158885449, 51.468000622925473, 0.007142432537007878},
+    {"x:aB", 1.0303453124379658, 0.16594167242494368, 51.610410555172152, 9.2323394962896214e-08},
+    {"x:aC", 0.059799887476864905, 0.13936870472420065, 51.162007959266113, 0.66966872525231991},
+    {"x:bq", 0.38370144849828131, 0.099086797619351852, 50.310448901793229, 0.00031192262019128007},
+  },
+  {
+    {"x:a", 3, 50.76366376979864, 24.25062894842533, 7.0807395993429154e-10},
+    {"x:b", 1, 50.310448901793229, 14.995304598817194, 0.00031192262019128007},
+  },
+  {
+    {"g", "(Intercept)", "", 0.92922939681367145},
+    {"Residual", "", "", 0.96180693151220542},
+  },
+  /*singular*/ false};
+
+// FixedOrder: y ~ (1 + x | g) + a * x (REML)
+const LmmReference kFixedOrder{"conventions", "y ~ (1 + x | g) + a * x", true,
+  /*criterion*/ 182.07221192797979, /*sigma*/ 0.98793141166955434, /*aic*/ 202.07221192797979, /*bic*/ 223.01565755020079,
+  {
+    {"(Intercept)", 3.1983953954288986, 0.67352568626787357, 13.945004130108776, 0.00031450875965745848},
+    {"aB", 1.3167789550267086, 0.71080156908363878, 49.050951745396461, 0.069972150373847866},
+    {"aC", -0.99027886870809056, 0.74162061862031414, 48.215472712798302, 0.18805147833498798},
+    {"x", 0.6131516169978608, 0.19781441590745288, 49.113748264703148, 0.0032041335395817431},
+    {"aB:x", 0.17654642433215947, 0.28829292847890681, 49.812089623015623, 0.54306828005143637},
+    {"aC:x", 0.072689187772682406, 0.27443445268009226, 49.813899355240494, 0.79220329853321114},
+  },
+  {
+    {"a", 2, 48.83909460092277, 6.2051063560746291, 0.0039695251551473392},
+    {"x", 1, 47.266739241292825, 35.244412327512492, 3.2936767767598627e-07},
+    {"a:x", 2, 49.801109121366643, 0.18902047827967455, 0.8283606433832218},
+  },
+  {
+    {"g", "(Intercept)", "", 0.97271225213148027},
+    {"g", "x", "", 0.013864725150055232},
+    {"g", "(Intercept)", "x", -0.99999999999985845},
+    {"Residual", "", "", 0.98793141166955434},
+  },
+  /*singular*/ true};
+
+// GroupOrder: y ~ x + (1 + x || g) + (1 | h) (REML)
+const LmmReference kGroupOrder{"conventions", "y ~ x + (1 + x || g) + (1 | h)", true,
+  /*criterion*/ 209.74943901565419, /*sigma*/ 1.0543086866714273, /*aic*/ 221.74943901565419, /*bic*/ 234.31550638898679,
+  {
+    {"(Intercept)", 3.4464080550547771, 0.55061859727518292, 17.846332399649629, 6.9234419379358592e-06},
+    {"x", 0.62547440860171188, 0.13708968612208211, 48.101384740177245, 3.501576417719856e-05},
+  },
+  {
+    {"x", 1, 48.101384740177245, 20.816587011519125, 3.501576417719856e-05},
+  },
+  {
+    {"h", "(Intercept)", "", 0.98215221189115032},
+    {"g", "x", "", 2.0358513691994095e-08},
+    {"g.1", "(Intercept)", "", 0.86702446899742824},
+    {"Residual", "", "", 1.0543086866714273},
+  },
+  /*singular*/ true};
+
+// CovariateAndGroup: y ~ s + (1 | s) + (1 | h) (REML)
+const LmmReference kCovariateAndGroup{"conventions", "y ~ s + (1 | s) + (1 | h)", true,
+  /*criterion*/ 225.62564482841043, /*sigma*/ 1.3896095705325779, /*aic*/ 235.62564482841043, /*bic*/ 246.09736763952094,
+  {
+    {"(Intercept)", 4.1722898699093385, 1.1034099436957594, 3.6517999739975724, 0.022893908614953225},
+    {"s", 0.19451718002590515, 0.2815581101328119, 3.5414317548052705, 0.53224379501379937},
+  },
+  {
+    {"s", 1, 3.5414317548052705, 0.47728726507753494, 0.53224379501379937},
+  },
+  {
+    {"h", "(Intercept)", "", 0.53833907164080352},
+    {"s", "(Intercept)", "", 1.081362897117206},
+    {"Residual", "", "", 1.3896095705325779},
+  },
+  /*singular*/ false};
+
+// MinusOne: y ~ -1 + x + b + (x - 1 | g) (REML)
+const LmmReference kMinusOne{"conventions", "y ~ -1 + x + b + (x - 1 | g)", true,
+  /*criterion*/ 216.28079548389707, /*sigma*/ 1.3727798013214381, /*aic*/ 226.28079548389707, /*bic*/ 236.75251829500758,
+  {
+    {"x", 0.51004722459707386, 0.1982006500117256, 15.275617229368329, 0.020965791252438117},
+    {"bp", 3.1242230028783546, 0.40791231589407206, 52.530166880919943, 4.1506741461110006e-10},
+    {"bq", 4.208552988241216, 0.43244099187159057, 53.408833834309924, 1.9889898132835008e-13},
+  },
+  {
+    {"x", 1, 15.275617229368329, 6.6223271037928031, 0.020965791252438117},
+    {"b", 2, 52.823780111980447, 49.143022416138166, 8.7890808555993768e-13},
+  },
+  {
+    {"g", "x", "", 0.31077249154208453},
+    {"Residual", "", "", 1.3727798013214381},
+  },
+  /*singular*/ false};
+
 constexpr double kLrtChiSq = 118.58882277791452;
 constexpr double kLrtDf = 2;
 constexpr double kLrtP = 1.7732269617095018e-26;
@@ -332,6 +506,23 @@ TEST(Lmm, DenseSchurAndSparseFactorizationsAgree) {
   }
 }
 
+// R's conventions beyond the common formula (a review found each of these wrong once): type III
+// tests of terms without their margins, no intercept, interactions named in the fixed part's
+// order, lme4's order of groupings, a column both covariate and grouping, "- 1" inside terms.
+TEST(Lmm, TermsWithoutTheirMarginsAreTestedAsLmerTest) {
+  expectEqualsR(kSlopeWithoutMargin);
+  expectEqualsR(kNestedFactor);
+  expectEqualsR(kMargins);
+}
+TEST(Lmm, ModelsWithoutAnInterceptAreCodedAsR) {
+  expectEqualsR(kNoIntercept);
+  expectEqualsR(kNoInterceptSlopes);
+  expectEqualsR(kMinusOne);
+}
+TEST(Lmm, InteractionsAreNamedInTheFixedPartsOrder) { expectEqualsR(kFixedOrder); }
+TEST(Lmm, GroupingsAreOrderedAsLme4OrdersThem) { expectEqualsR(kGroupOrder); }
+TEST(Lmm, AColumnCanBeACovariateAndAGrouping) { expectEqualsR(kCovariateAndGroup); }
+
 // ---- R's conventions ----------------------------------------------------------------
 
 TEST(Lmm, ReferenceLevelChangesTheBaselineNotTheFit) {
@@ -352,6 +543,18 @@ TEST(Lmm, AnEmptyCellDropsTheDependentColumnAsLme4AndSaysSo) {
   const LmmFit fit = fitReference(kEmptyCell);
   ASSERT_FALSE(fit.warnings.empty());
   EXPECT_THAT(fit.warnings.back(), HasSubstr("dropped planweekly:handright"));
+}
+
+TEST(Lmm, NumbersAsAFactorAreLevelsAsRWritesThem) {
+  const DataTable t{{{"y", {}, {1, 2, 3, 4.5, 5, 6, 7, 8.5}},
+                     {"g", {"a", "a", "b", "b", "c", "c", "d", "d"}, {}},
+                     {"dose", {"01", "1", "2.50", "2.5", "1e5", "100000", "0.5", "1"}, {}}},
+                    "t"};
+  const LmmFit fit = fitLmm(t, "y ~ dose + (1 | g)", {.factors = {"dose"}, .tests = false});
+  ASSERT_EQ(fit.fixed.size(), 4u);  // levels 0.5 (the baseline), 1, 2.5, 1e+05: "01" is 1
+  EXPECT_EQ(fit.fixed[1].name, "dose1");
+  EXPECT_EQ(fit.fixed[2].name, "dose2.5");
+  EXPECT_EQ(fit.fixed[3].name, "dose1e+05");
 }
 
 // ---- Bad input ----------------------------------------------------------------------
@@ -388,6 +591,19 @@ TEST(Lmm, BadInputIsRefusedWithWhatAndWhere) {
   DataTable unused = data;
   unused.columns.push_back({"notes", std::vector<std::string>(data.columns[0].text.size(), "NA"), {}});
   EXPECT_NO_THROW((void)fitLmm(unused, "cost ~ mode + (1 | subject)", {.tests = false}));
+
+  // lme4's own refusals: deeper nesting than a/b (write it out), a grouping of one level, as
+  // many random effects as observations, a factor of one level in a random term.
+  EXPECT_THAT(errorOf(data, "cost ~ mode + (1 | subject/mode/trial)"), HasSubstr("nest one level with '/'"));
+  DataTable single = data;
+  for (std::string& s : single.columns[0].text) s = "s01";
+  EXPECT_THAT(errorOf(single, "cost ~ mode + (1 | subject)"), HasSubstr("grouping factor 'subject' has one level"));
+  EXPECT_THAT(errorOf(data, "cost ~ 1 + (0 + mode | subject:trial)"), HasSubstr("random effects"));
+  EXPECT_THAT(errorOf(one, "cost ~ 1 + (1 + mode | subject)"), HasSubstr("a factor in the random effects needs at least 2"));
+  // A factor column whose cells read as non-finite numbers is still a factor.
+  DataTable names = data;
+  names.columns[1].text[0] = "inf";
+  EXPECT_NO_THROW((void)fitLmm(names, "cost ~ mode + (1 | subject)", {.tests = false}));
 
   DataTable numbers{{{"y", {}, {1.0, 2.0, std::nan("")}}, {"g", {"a", "b", "a"}, {}}}, "numbers"};
   EXPECT_THAT(errorOf(numbers, "y ~ 1 + (1 | g)"), HasSubstr("row 3 of column 'y' is nan"));

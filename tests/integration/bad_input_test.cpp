@@ -363,7 +363,7 @@ std::vector<BadInput> corpus() {
   c.push_back({"lmm_bad_reference", lmmWith(table, "--formula 'cost ~ mode + (1 | subject)' --reference mode"),
                "expected COLUMN=LEVEL", ""});
   c.push_back({"lmm_compare_models_of_one_size", lmmWith(table, "--formula 'cost ~ mode + (1 | subject)' --formula 'cost ~ mode + (1 | subject)'"),
-               "the second model must be the larger", ""});
+               "needs nested models of different sizes", ""});
   return c;
 }
 

@@ -214,3 +214,27 @@ def test_lmm_bad_input_raises_input_error_naming_the_column():
         hattr.lmm(LMM_DATA, "cost ~ mode + (1 | sbject)")
     with pytest.raises(hattr.InputError, match="row 2 of column 'y' is nan"):
         hattr.lmm({"y": [1.0, float("nan"), 2.0, 3.0], "g": ["a", "a", "b", "b"]}, "y ~ 1 + (1 | g)")
+    # pandas' missing values in a text column (None, NaN) are missing, not a level "nan"
+    for missing in (None, float("nan")):
+        frame = pd.DataFrame({"y": [1.0, 2.0, 3.0, 4.0, 5.0, 6.0], "g": ["a", "a", missing, "b", "c", "c"]})
+        with pytest.raises(hattr.InputError, match="row 3 of column 'g' is missing"):
+            hattr.lmm(frame, "y ~ 1 + (1 | g)")
+
+
+def test_kinematics_equal_the_clis(expert_files, trial_file):
+    cli = cli_json("kinematics", expert_files[0], trial_file)["trials"]
+    for path, record in zip((expert_files[0], trial_file), cli):
+        mine = hattr.kinematics(hattr.read_profile(path))
+        assert mine == {k: v for k, v in record.items() if k != "file"}
+    assert hattr.kinematics(hattr.read_profile(trial_file), cutoff_hz=0)["velocity_peaks"] >= cli[1]["velocity_peaks"]
+
+
+def test_fit_learning_curve_returns_the_records_of_the_fit():
+    n = np.arange(1, 12, dtype=float)
+    y = 2 + 6 * np.exp(-0.4 * (n - 1))
+    fit = hattr.fit_learning_curve(n, y)
+    assert fit["rate"]["estimate"] == pytest.approx(0.4, rel=1e-9)
+    assert fit["asymptote"]["estimate"] == pytest.approx(2.0, rel=1e-9)
+    assert hattr.fit_learning_curve(n, y, law="power")["law"] == "power"
+    with pytest.raises(hattr.InputError, match="expected exponential or power"):
+        hattr.fit_learning_curve(n, y, law="hyperbolic")

@@ -19,7 +19,7 @@ __all__ = [
     "normalize", "time_scale", "interpolate_at", "preprocess_trial",
     "dtw", "dtw_with_path", "dtw_batch", "dtw_cost_matrix", "dtw_simd_target",
     "TrialScorer", "AnovaTable", "TukeyResult", "two_way_anova", "tukey_hsd", "describe_groups",
-    "lmm", "compare_lmm",
+    "lmm", "compare_lmm", "kinematics", "fit_learning_curve",
     "Study", "create_study", "run_study",
     "run_trial", "strategies", "simulate_study",
     "servo_check", "check_device",

@@ -19,6 +19,9 @@
 
 namespace hattr::session {
 
+/// The metadata keys of a trial's kinematics start with this ("kinematics.duration_s").
+inline constexpr const char* kKinematicsPrefix = "kinematics.";
+
 /// Each skill's expert reference at the study's rate.
 using StudyReferences = std::map<std::string, std::shared_ptr<const guidance::ReferenceTrajectory>>;
 /// Every expert of the study database as a reference at the study's rate.
@@ -107,8 +110,9 @@ class SubjectTrials {
   /// another station took the subject over, and Error for an empty recording (nothing to store).
   Outcome end(StudyDatabase& db, TrialResult& result, const std::filesystem::path& rescue_folder);
   /// The part of end() that needs no database, which a caller holding a lock for end() may do
-  /// before taking it: a scheduled strategy's guided trial gets its tracking error
-  /// (tracking_rms_m) in its metadata, once. Nothing for any other trial.
+  /// before taking it, once per trial: every trial gets its handwriting kinematics in its
+  /// metadata (kKinematicsPrefix + each of analysis::kinematicsNames(), "NA" where not a
+  /// number), and a scheduled strategy's guided trial its tracking error (tracking_rms_m).
   void measure(TrialResult& result) const;
   /// The current trial failed (why): marked failed in the database; its next run is attempt 0.
   void fail(StudyDatabase& db, const std::string& reason);
