@@ -171,6 +171,7 @@ void runDesignAnalysis(const StudyOptions& opt, session::StudyDatabase& db, bool
   Progress progress(report ? "study report: scoring trials" : "scoring trials", 0, "trials");
   const report::DesignAnalysis analysis = report::analyzeDesign(db, analysisOptions(opt, progress));
   progress.finish();
+  if (!opt.json) std::cout << "analysis: " << analysis.reason << '\n';
   const nlohmann::json json = report::designAnalysisToJson(analysis);
   db.putResult("design_analysis", json.dump());
   if (!opt.out.empty()) report::writeDesignCsv(analysis, opt.out);
@@ -187,15 +188,26 @@ void runDesignAnalysis(const StudyOptions& opt, session::StudyDatabase& db, bool
   for (const auto& line : report::designConclusions(analysis)) std::cout << "  " << line << '\n';
 }
 
+/// Every trial of a paper's study in the long table (trials.csv): its training trials scored
+/// now, its recall trials as the balanced analysis scored them.
+void writePaperTrialsCsv(const StudyOptions& opt, const session::StudyDatabase& db, const report::StudyAnalysis& analysis) {
+  Progress progress("scoring every trial for trials.csv", 0, "trials");
+  report::writeTrialsCsv(db, analysis, analysisOptions(opt, progress), std::filesystem::path(opt.out) / "trials.csv");
+  progress.finish();
+}
+
 void runAnalyze(const StudyOptions& opt) {
   session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kReadWrite);
-  if (!session::isPaperDesign(db.study())) return runDesignAnalysis(opt, db, false);
+  if (!report::chooseAnalysis(db).balanced) return runDesignAnalysis(opt, db, false);
   if (!opt.out.empty()) checkOutputFolder(opt.out, report::kAnalysisCsvFiles, opt.force);  // before anything is written
   Progress progress("scoring recall trials", 0, "trials");
   const report::StudyAnalysis analysis = report::analyzeStudy(db, analysisOptions(opt, progress));
   progress.finish();
   report::storeAnalysis(db, analysis);
-  if (!opt.out.empty()) report::writeAnalysisCsv(analysis, opt.out);
+  if (!opt.out.empty()) {
+    report::writeAnalysisCsv(analysis, opt.out);
+    writePaperTrialsCsv(opt, db, analysis);
+  }
   if (opt.json) return printJson(report::analysisToJson(analysis));
   std::cout << fmt::format("analyzed {} recall trials of {}; results stored in the database{}\n", analysis.costs.size(),
                            opt.db, opt.out.empty() ? "" : fmt::format(" and written to {}/", opt.out));
@@ -204,7 +216,7 @@ void runAnalyze(const StudyOptions& opt) {
 
 void runReport(const StudyOptions& opt) {
   session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kReadWrite);
-  if (!session::isPaperDesign(db.study())) return runDesignAnalysis(opt, db, true);
+  if (!report::chooseAnalysis(db).balanced) return runDesignAnalysis(opt, db, true);
   // Every output checked before anything is written (the database's stored analysis included).
   std::vector<std::string> outputs = report::kAnalysisCsvFiles;
   outputs.insert(outputs.end(), report::kStudyReportFiles.begin(), report::kStudyReportFiles.end());
@@ -216,6 +228,7 @@ void runReport(const StudyOptions& opt) {
   progress.stage("study report: writing the report and figures", 0);
   const auto html = report::writeStudyReport(db, analysis, opt.out);
   progress.finish();
+  writePaperTrialsCsv(opt, db, analysis);
   std::cout << fmt::format("report: {} (and report.md, figures/, CSV tables beside it)\n", html.string());
   const report::PaperComparison paper = report::compareWithPaper(db.study(), db.subjects().size(), analysis);
   for (const auto& line : report::comparisonText(paper)) std::cout << line << '\n';
@@ -310,7 +323,7 @@ void registerStudyCommands(CLI::App& app) {
                  "the database");
   analyze->add_option("--db", opt->db, "Study database")->required();
   analyze->add_option("--out", opt->out, "Also write the tables here (the paper's design: recall_costs.csv, anova.csv, "
-                      "table1.csv; any other: trial_scores.csv, curves.csv, phases.csv, retention.csv, transfer.csv)");
+                      "table1.csv, trials.csv; any other: trials.csv, curves.csv, phases.csv, retention.csv, transfer.csv, models.csv, curve_fits.csv)");
   analyze->add_flag("--force", opt->force, "Replace earlier tables in --out");
   analyze->add_option("--band", opt->band, "Sakoe–Chiba band fraction for DTW (default: none, the paper's)")
       ->check(CLI::Range(0.0, 1.0));

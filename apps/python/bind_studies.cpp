@@ -130,7 +130,7 @@ void bindStudies(py::module_& m) {
             {
               py::gil_scoped_release unlocked;
               // As `hattr study analyze` chooses: the paper's analysis for its design, else the design's.
-              json = session::isPaperDesign(db.study()) ? report::analysisToJson(report::analyzeStudy(db, options))
+              json = report::chooseAnalysis(db).balanced ? report::analysisToJson(report::analyzeStudy(db, options))
                                                         : report::designAnalysisToJson(report::analyzeDesign(db, options));
             }
             return toPython(json);

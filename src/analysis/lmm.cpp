@@ -524,7 +524,8 @@ nlohmann::json toJson(const LmmFit& fit) {
   nlohmann::json fixed = nlohmann::json::array();
   for (const LmmCoefficient& c : fit.fixed) {
     fixed.push_back({{"name", c.name}, {"estimate", number(c.estimate)}, {"std_error", number(c.std_error)},
-                     {"df", number(c.df)}, {"t", number(c.t)}, {"p", number(c.p)}});
+                     {"df", number(c.df)}, {"t", number(c.t)}, {"p", number(c.p)},
+                     {"lower", number(c.lower)}, {"upper", number(c.upper)}});
   }
   nlohmann::json terms = nlohmann::json::array();
   for (const LmmTermTest& t : fit.terms) {

@@ -243,9 +243,13 @@ void testContrast(const Satterthwaite& s, const Eigen::VectorXd& beta, const Eig
   out.std_error = std::sqrt(variance);
   out.df = 2.0 * variance * variance / denominator;
   out.t = out.estimate / out.std_error;
-  out.p = std::numeric_limits<double>::quiet_NaN();
+  out.p = out.lower = out.upper = std::numeric_limits<double>::quiet_NaN();
   if (std::isfinite(out.df) && out.df > 0.0 && std::isfinite(out.t)) {
-    out.p = 2.0 * boost::math::cdf(boost::math::complement(boost::math::students_t(out.df), std::abs(out.t)));
+    const boost::math::students_t t(out.df);
+    out.p = 2.0 * boost::math::cdf(boost::math::complement(t, std::abs(out.t)));
+    const double half = boost::math::quantile(t, 0.975) * out.std_error;
+    out.lower = out.estimate - half;
+    out.upper = out.estimate + half;
   }
 }
 

@@ -7,8 +7,10 @@
 
 #include <fmt/format.h>
 
+#include "hattr/analysis/kinematics.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/io/table_csv.hpp"
+#include "hattr/session/subject_trials.hpp"
 #include "report_document.hpp"
 
 namespace hattr::report {
@@ -95,6 +97,27 @@ std::vector<DesignTrialScore> analyzedTrials(const session::StudyDatabase& db, D
   return scores;
 }
 
+/// A trial's kinematics as stored with it (SubjectTrials::measure), else measured now.
+std::map<std::string, double> kinematicsOf(const HapticProfile& profile) {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  std::map<std::string, double> out;
+  const auto& extra = profile.metadata().extra;
+  for (const char* name : analysis::kinematicsNames()) {
+    const auto it = extra.find(session::kKinematicsPrefix + std::string(name));
+    if (it == extra.end()) {
+      out.clear();
+      break;
+    }
+    char* end = nullptr;
+    const double v = std::strtod(it->second.c_str(), &end);
+    out[name] = it->second == "NA" || end == it->second.c_str() ? kNaN : v;
+  }
+  if (!out.empty()) return out;
+  const nlohmann::json k = analysis::toJson(analysis::trialKinematics(profile));
+  for (const char* name : analysis::kinematicsNames()) out[name] = k.at(name).is_null() ? kNaN : k.at(name).get<double>();
+  return out;
+}
+
 /// Scores every analyzed trial against its skill's expert, a chunk at a time.
 void scoreTrials(const session::StudyDatabase& db, const AnalysisOptions& options, std::vector<DesignTrialScore>& scores) {
   std::map<std::string, analysis::TrialScorer> scorers;
@@ -123,7 +146,10 @@ void scoreTrials(const session::StudyDatabase& db, const AnalysisOptions& option
       std::vector<const HapticProfile*> pointers;
       for (const auto& p : profiles) pointers.push_back(&p);
       const auto result = scorers.at(skill).scoreAll(pointers, options.threads);
-      for (std::size_t k = 0; k < indices.size(); ++k) scores[indices[k]].score = result[k];
+      for (std::size_t k = 0; k < indices.size(); ++k) {
+        scores[indices[k]].score = result[k];
+        scores[indices[k]].kinematics = kinematicsOf(profiles[k]);
+      }
     }
     if (options.progress) options.progress(static_cast<int>(last), total);
   }
@@ -240,7 +266,137 @@ void tabulateTransfer(DesignAnalysis& a) {
   }
 }
 
+/// The conditions of a phase's trials, in the study's order.
+std::vector<std::string> conditionsIn(const DesignAnalysis& a, const std::string& phase) {
+  std::vector<std::string> out;
+  for (const std::string& c : a.conditions) {
+    const bool present = std::any_of(a.scores.begin(), a.scores.end(),
+                                     [&](const DesignTrialScore& s) { return s.phase == phase && s.condition == c; });
+    if (present) out.push_back(c);
+  }
+  return out;
+}
+
+/// Each phase's conditions compared by a linear mixed model of its trials: subjects random,
+/// and a subject's own condition effect random too where each subject did several conditions
+/// with several trials each (the model R's aov(y ~ c + Error(subject/c)) approximates).
+void fitPhaseModels(DesignAnalysis& a) {
+  if (a.subjects < 2) return;
+  const std::string& kind = a.condition_kind;
+  for (const std::string& phase : a.phases) {
+    const std::vector<std::string> present = conditionsIn(a, phase);
+    for (const bool shape : {true, false}) {
+      PhaseModel m{phase, shape ? "shape" : "force", present.empty() ? "" : present.front(), {}, ""};
+      if (present.size() < 2) {
+        m.skipped = fmt::format("one {} only", kind);
+        a.models.push_back(std::move(m));
+        continue;
+      }
+      analysis::DataTable t{{{"subject", {}, {}}, {kind, {}, {}}, {m.metric, {}, {}}}, "the " + phase + " trials"};
+      std::map<std::pair<std::string, std::string>, int> per_cell;
+      std::map<std::string, std::set<std::string>> conditions_of;
+      for (const DesignTrialScore& s : a.scores) {
+        if (s.phase != phase) continue;
+        t.columns[0].text.push_back(s.subject);
+        t.columns[1].text.push_back(s.condition);
+        t.columns[2].numbers.push_back(shape ? s.shape() : s.force());
+        ++per_cell[{s.subject, s.condition}];
+        conditions_of[s.subject].insert(s.condition);
+      }
+      const bool within = std::any_of(conditions_of.begin(), conditions_of.end(), [](const auto& e) { return e.second.size() > 1; });
+      const bool replicated = std::any_of(per_cell.begin(), per_cell.end(), [](const auto& e) { return e.second > 1; });
+      const std::string formula = fmt::format("{} ~ {} + (1 | subject){}", m.metric, kind,
+                                              within && replicated ? fmt::format(" + (1 | subject:{})", kind) : "");
+      try {
+        m.fit = analysis::fitLmm(t, formula, {.reference = {{kind, m.reference}}});
+      } catch (const InputError& e) {
+        m.skipped = e.what();
+      }
+      a.models.push_back(std::move(m));
+    }
+  }
+}
+
+/// Both laws of practice fitted to a series of (trial, cost); none when it has fewer than 4
+/// trials or does not vary.
+bool fitBoth(const std::vector<double>& n, const std::vector<double>& y, CurveFitRow& row) {
+  if (n.size() < 4 || *std::max_element(y.begin(), y.end()) == *std::min_element(y.begin(), y.end())) return false;
+  try {
+    row.exponential = analysis::fitLearningCurve(n, y, analysis::CurveLaw::kExponential);
+    row.power = analysis::fitLearningCurve(n, y, analysis::CurveLaw::kPower);
+  } catch (const InputError&) {
+    return false;
+  }
+  return true;
+}
+
+/// Learning curves fitted per condition and phase (the mean over subjects at each trial), and
+/// per subject (their own cost at each trial, averaged over skills at the same trial).
+void fitCurves(DesignAnalysis& a) {
+  for (const std::string& condition : a.conditions) {
+    for (const std::string& phase : a.phases) {
+      for (const bool shape : {true, false}) {
+        CurveFitRow row{condition, phase, "", shape ? "shape" : "force", {}, {}};
+        std::vector<double> n, y;
+        for (const CurvePoint& p : a.curves) {
+          if (p.condition != condition || p.phase != phase) continue;
+          n.push_back(p.trial_in_phase);
+          y.push_back(shape ? p.shape.mean : p.force.mean);
+        }
+        if (fitBoth(n, y, row)) a.fits.push_back(row);
+        // Each subject's own curve.
+        std::map<std::string, std::map<int, std::vector<double>>> by_subject;
+        for (const DesignTrialScore& s : a.scores) {
+          if (s.condition == condition && s.phase == phase) by_subject[s.subject][s.trial_in_phase].push_back(shape ? s.shape() : s.force());
+        }
+        if (a.subjects < 2) continue;  // one learner: the mean curve is theirs
+        for (const auto& [subject, trials] : by_subject) {
+          CurveFitRow own{condition, phase, subject, row.metric, {}, {}};
+          std::vector<double> sn, sy;
+          for (const auto& [trial, values] : trials) {
+            sn.push_back(trial);
+            sy.push_back(detail::meanWithCi(values).first);
+          }
+          if (fitBoth(sn, sy, own)) a.fits.push_back(own);
+        }
+      }
+    }
+  }
+}
+
+/// One learner: per condition, phase and skill, the first, best and latest shape cost.
+void tabulateLearner(DesignAnalysis& a) {
+  if (a.subjects != 1) return;
+  std::vector<std::tuple<std::string, std::string, std::string>> keys;
+  for (const DesignTrialScore& s : a.scores) {
+    const auto key = std::tuple(s.condition, s.phase, s.skill);
+    if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
+  }
+  for (const auto& [condition, phase, skill] : keys) {
+    LearnerRow row{condition, phase, skill, 0, 0.0, std::numeric_limits<double>::infinity(), 0, 0.0, 0.0};
+    double sum = 0.0;
+    for (const DesignTrialScore& s : a.scores) {
+      if (s.condition != condition || s.phase != phase || s.skill != skill) continue;
+      if (row.trials++ == 0) row.first = s.shape();
+      if (s.shape() < row.best) {
+        row.best = s.shape();
+        row.best_trial = s.trial_in_phase;
+      }
+      row.latest = s.shape();
+      sum += s.shape();
+    }
+    row.mean = sum / row.trials;
+    a.learner.push_back(row);
+  }
+}
+
 nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+nlohmann::json kinematicsJson(const std::map<std::string, double>& k) {
+  nlohmann::json out = nlohmann::json::object();
+  for (const auto& [name, v] : k) out[name] = number(v);
+  return out;
+}
 
 nlohmann::json meanJson(const SubjectMean& m) {
   return {{"subjects", m.subjects}, {"mean", number(m.mean)}, {"ci95", number(m.ci)}};
@@ -285,9 +441,16 @@ DesignAnalysis analyzeDesign(const session::StudyDatabase& db, const AnalysisOpt
   HATTR_THROW_UNLESS(!a.scores.empty(), "{}: no trial of the study is completed yet ({} planned); run the study first",
                      db.file().string(), a.trials_planned);
   scoreTrials(db, options, a.scores);
+  std::set<std::string> subjects;
+  for (const DesignTrialScore& s : a.scores) subjects.insert(s.subject);
+  a.subjects = static_cast<int>(subjects.size());
+  a.reason = chooseAnalysis(db).reason;
   tabulateCurvesAndCells(a);
   tabulateRetention(a);
   tabulateTransfer(a);
+  fitPhaseModels(a);
+  fitCurves(a);
+  tabulateLearner(a);
   // Rows in the study's order of conditions.
   const auto rank = [&a](const std::string& c) { return std::find(a.conditions.begin(), a.conditions.end(), c) - a.conditions.begin(); };
   std::stable_sort(a.retention.begin(), a.retention.end(),
@@ -304,7 +467,8 @@ nlohmann::json designAnalysisToJson(const DesignAnalysis& a) {
     scores.push_back({{"trial_id", s.trial_id}, {"subject", s.subject}, {"condition", s.condition}, {"group", s.group},
                       {"strategy", s.strategy}, {"session", s.session}, {"day", s.day}, {"block", s.block},
                       {"phase", s.phase}, {"skill", s.skill}, {"trial", s.trial}, {"trial_in_phase", s.trial_in_phase},
-                      {"shape", s.shape()}, {"force", s.force()}, {"z", s.score.z}, {"disturbed", s.disturbed}});
+                      {"shape", s.shape()}, {"force", s.force()}, {"z", s.score.z}, {"disturbed", s.disturbed},
+                      {"kinematics", kinematicsJson(s.kinematics)}});
   }
   for (const auto& c : a.curves) {
     curves.push_back({{"condition", c.condition}, {"phase", c.phase}, {"trial_in_phase", c.trial_in_phase},
@@ -325,7 +489,23 @@ nlohmann::json designAnalysisToJson(const DesignAnalysis& a) {
     transfer.push_back({{"condition", t.condition}, {"skill", t.skill}, {"shape", meanJson(t.shape)},
                         {"force", meanJson(t.force)}});
   }
-  return {{"design", "groups-and-sessions"}, {"condition_kind", a.condition_kind}, {"conditions", a.conditions},
+  nlohmann::json models = nlohmann::json::array(), fits = nlohmann::json::array(), learner = nlohmann::json::array();
+  for (const PhaseModel& m : a.models) {
+    models.push_back({{"phase", m.phase}, {"metric", m.metric}, {"reference", m.reference},
+                      {"fit", m.skipped.empty() ? analysis::toJson(m.fit) : nlohmann::json(nullptr)}, {"skipped", m.skipped}});
+  }
+  for (const CurveFitRow& f : a.fits) {
+    fits.push_back({{"condition", f.condition}, {"phase", f.phase}, {"subject", f.subject}, {"metric", f.metric},
+                    {"exponential", analysis::toJson(f.exponential)}, {"power", analysis::toJson(f.power)}});
+  }
+  for (const LearnerRow& r : a.learner) {
+    learner.push_back({{"condition", r.condition}, {"phase", r.phase}, {"skill", r.skill}, {"trials", r.trials},
+                       {"first", number(r.first)}, {"best", number(r.best)}, {"best_trial", r.best_trial},
+                       {"latest", number(r.latest)}, {"mean", number(r.mean)}});
+  }
+  return {{"design", "groups-and-sessions"}, {"analysis", a.reason}, {"subjects", a.subjects},
+          {"summary", designSummary(a)}, {"models", models}, {"curve_fits", fits}, {"learner", learner},
+          {"condition_kind", a.condition_kind}, {"conditions", a.conditions},
           {"phases", a.phases}, {"trials_planned", a.trials_planned}, {"trials_pending", a.trials_pending},
           {"trials_excluded", a.trials_excluded}, {"trials_flagged", a.trials_flagged},
           {"disturbed_policy", a.disturbed_policy}, {"trial_scores", scores}, {"curves", curves}, {"phase_cells", cells},
@@ -334,18 +514,7 @@ nlohmann::json designAnalysisToJson(const DesignAnalysis& a) {
 
 void writeDesignCsv(const DesignAnalysis& a, const std::filesystem::path& dir) {
   std::filesystem::create_directories(dir);
-  io::Table scores{{"trial_id", "subject", "condition", "group", "strategy", "session", "day", "block", "phase", "skill",
-                    "trial", "trial_in_phase", "x", "y", "z", "fx", "fy", "fz", "shape", "force", "disturbed"},
-                   {}, ""};
-  for (const auto& s : a.scores) {
-    const analysis::TrialScore& c = s.score;
-    scores.rows.push_back({fmt::format("{}", s.trial_id), s.subject, s.condition, s.group, s.strategy,
-                           fmt::format("{}", s.session), fmt::format("{}", s.day), fmt::format("{}", s.block), s.phase,
-                           s.skill, fmt::format("{}", s.trial), fmt::format("{}", s.trial_in_phase), cell(c.x), cell(c.y),
-                           cell(c.z), cell(c.fx), cell(c.fy), cell(c.fz), cell(s.shape()), cell(s.force()),
-                           io::plainCell(s.disturbed)});
-  }
-  io::writeTable(scores, dir / "trial_scores.csv", true);
+  writeTrialsCsv(a.scores, dir / "trials.csv");
   const auto means = [](const SubjectMean& m) {
     return std::vector<std::string>{fmt::format("{}", m.subjects), cell(m.mean), cell(m.ci)};
   };
@@ -385,6 +554,72 @@ void writeDesignCsv(const DesignAnalysis& a, const std::filesystem::path& dir) {
                      {}, ""};
   for (const auto& t : a.transfer) transfer.rows.push_back(join(join({t.condition, t.skill}, means(t.shape)), means(t.force)));
   io::writeTable(transfer, dir / "transfer.csv", true);
+
+  // The mixed models: each term's F test, then each coefficient with its 95 % interval.
+  io::Table models{{"phase", "metric", "formula", "kind", "name", "estimate", "std_error", "lower", "upper", "num_df",
+                    "den_df", "statistic", "p", "singular", "skipped"},
+                   {}, ""};
+  for (const PhaseModel& m : a.models) {
+    if (!m.skipped.empty()) {
+      models.rows.push_back({m.phase, m.metric, "", "", "", "", "", "", "", "", "", "", "", "", io::plainCell(m.skipped)});
+      continue;
+    }
+    const std::string singular = m.fit.singular ? "1" : "0";
+    for (const auto& t : m.fit.terms) {
+      models.rows.push_back({m.phase, m.metric, m.fit.formula, "term", t.term, "", "", "", "", cell(t.num_df),
+                             cell(t.den_df), cell(t.f), cell(t.p), singular, ""});
+    }
+    for (const auto& c : m.fit.fixed) {
+      models.rows.push_back({m.phase, m.metric, m.fit.formula, "coefficient", c.name, cell(c.estimate), cell(c.std_error),
+                             cell(c.lower), cell(c.upper), "", cell(c.df), cell(c.t), cell(c.p), singular, ""});
+    }
+  }
+  io::writeTable(models, dir / "models.csv", true);
+  io::Table fits{{"condition", "phase", "subject", "metric", "law", "asymptote", "asymptote_lower", "asymptote_upper",
+                  "amplitude", "amplitude_lower", "amplitude_upper", "rate", "rate_lower", "rate_upper", "rss", "points", "note"},
+                 {}, ""};
+  for (const CurveFitRow& f : a.fits) {
+    for (const analysis::CurveFit* fit : {&f.exponential, &f.power}) {
+      fits.rows.push_back({f.condition, f.phase, f.subject, f.metric, analysis::curveLawName(fit->law),
+                           cell(fit->asymptote.estimate), cell(fit->asymptote.lower), cell(fit->asymptote.upper),
+                           cell(fit->amplitude.estimate), cell(fit->amplitude.lower), cell(fit->amplitude.upper),
+                           cell(fit->rate.estimate), cell(fit->rate.lower), cell(fit->rate.upper), cell(fit->rss),
+                           fmt::format("{}", fit->points), io::plainCell(fit->note)});
+    }
+  }
+  io::writeTable(fits, dir / "curve_fits.csv", true);
+}
+
+void writeTrialsCsv(const session::StudyDatabase& db, const StudyAnalysis& balanced, AnalysisOptions options,
+                    const std::filesystem::path& file) {
+  std::map<std::int64_t, analysis::TrialScore> scored;
+  for (const auto& c : balanced.costs) scored[c.trial_id] = c.score;
+  options.scored = &scored;
+  writeTrialsCsv(analyzeDesign(db, options).scores, file);
+}
+
+void writeTrialsCsv(const std::vector<DesignTrialScore>& scores, const std::filesystem::path& file) {
+  std::vector<std::string> header{"trial_id", "subject", "condition", "group", "strategy", "session", "day", "block",
+                                  "phase", "skill", "trial", "trial_in_phase", "x", "y", "z", "fx", "fy", "fz", "shape",
+                                  "force"};
+  for (const char* name : analysis::kinematicsNames()) header.emplace_back(name);
+  header.emplace_back("disturbed");
+  io::Table table{header, {}, ""};
+  for (const auto& s : scores) {
+    const analysis::TrialScore& c = s.score;
+    std::vector<std::string> row{fmt::format("{}", s.trial_id), s.subject, s.condition, s.group, s.strategy,
+                                 fmt::format("{}", s.session), fmt::format("{}", s.day), fmt::format("{}", s.block), s.phase,
+                                 s.skill, fmt::format("{}", s.trial), fmt::format("{}", s.trial_in_phase), cell(c.x), cell(c.y),
+                                 cell(c.z), cell(c.fx), cell(c.fy), cell(c.fz), cell(s.shape()), cell(s.force())};
+    for (const char* name : analysis::kinematicsNames()) {
+      const auto it = s.kinematics.find(name);
+      row.push_back(it == s.kinematics.end() ? "" : cell(it->second));
+    }
+    row.push_back(io::plainCell(s.disturbed));
+    table.rows.push_back(std::move(row));
+  }
+  std::filesystem::create_directories(file.parent_path());
+  io::writeTable(table, file, true);
 }
 
 std::vector<std::string> designConclusions(const DesignAnalysis& a) {
@@ -415,6 +650,107 @@ std::vector<std::string> designConclusions(const DesignAnalysis& a) {
   if (a.trials_excluded > 0 || a.trials_flagged > 0) {
     out.push_back(fmt::format("Disturbed trials (policy \"{}\"): {} left out, {} analyzed and flagged.", a.disturbed_policy,
                               a.trials_excluded, a.trials_flagged));
+  }
+  return out;
+}
+
+}  // namespace hattr::report
+
+namespace hattr::report {
+namespace {
+
+std::string pText(double p) { return !std::isfinite(p) ? "p not known" : p < 0.001 ? "p < 0.001" : fmt::format("p = {:.3f}", p); }
+
+std::string joined(const std::vector<std::string>& items) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) out += (i == 0 ? "" : i + 1 == items.size() ? " and " : ", ") + items[i];
+  return out;
+}
+
+/// A phase's shape model in words: the test, then each condition against the reference.
+std::string modelSentence(const DesignAnalysis& a, const PhaseModel& m) {
+  const auto term = std::find_if(m.fit.terms.begin(), m.fit.terms.end(),
+                                 [&](const analysis::LmmTermTest& t) { return t.term == a.condition_kind; });
+  if (term == m.fit.terms.end()) return "";
+  const std::string test = fmt::format("F({:g}, {:.1f}) = {:.2f}, {}", term->num_df, term->den_df, term->f, pText(term->p));
+  std::vector<std::string> differences;
+  for (const analysis::LmmCoefficient& c : m.fit.fixed) {
+    if (c.name.rfind(a.condition_kind, 0) != 0) continue;
+    differences.push_back(fmt::format("{} {:+.3g} (95 % CI {:.3g} to {:.3g})", c.name.substr(a.condition_kind.size()),
+                                      c.estimate, c.lower, c.upper));
+  }
+  const bool differed = term->p < 0.05;
+  std::string text =
+      differed ? fmt::format("In {}, the shape cost differed between the {}s ({}).", m.phase, a.condition_kind, test)
+               : fmt::format("In {}, no {} had a shape cost the test can tell from the others' ({}).", m.phase,
+                             a.condition_kind, test);
+  text += fmt::format(" Compared with {} (lower is closer to the expert): {}.", m.reference, joined(differences));
+  if (m.fit.singular) text += " The fit is singular (a variance estimated as zero): read it with care.";
+  return text;
+}
+
+/// The trend of a condition's mean cost over a phase, from its exponential fit's amplitude:
+/// falling (learning), rising (forgetting) or neither, by the amplitude's interval.
+std::string trendSentence(const CurveFitRow& f, bool guided_phase) {
+  const analysis::CurveParameter& b = f.exponential.amplitude;
+  const double first = f.exponential.at(1.0);
+  const double last = f.exponential.at(static_cast<double>(f.exponential.points));
+  if (!std::isfinite(b.lower) || !f.exponential.note.empty() || (b.lower <= 0.0 && b.upper >= 0.0)) {
+    return fmt::format("Over the {} trials with {}, the shape cost showed no trend a fit can tell from none.", f.phase,
+                       f.condition);
+  }
+  if (b.lower > 0.0) {
+    return fmt::format("Over the {} trials with {}, the shape cost fell from about {:.3g} to {:.3g}{}; the exponential "
+                       "law levels off at {:.3g} (95 % CI {:.3g} to {:.3g}).",
+                       f.phase, f.condition, first, last, guided_phase ? " (with guidance)" : ": learning",
+                       f.exponential.asymptote.estimate, f.exponential.asymptote.lower, f.exponential.asymptote.upper);
+  }
+  return fmt::format("Over the {} trials with {}, the shape cost rose from about {:.3g} to {:.3g}: {}.", f.phase,
+                     f.condition, first, last, guided_phase ? "the guidance did not bring it down" : "forgetting, not learning");
+}
+
+}  // namespace
+
+std::vector<std::string> designSummary(const DesignAnalysis& a) {
+  std::vector<std::string> out;
+  std::vector<std::string> present;
+  for (const std::string& c : a.conditions) {
+    if (std::any_of(a.scores.begin(), a.scores.end(), [&](const DesignTrialScore& s) { return s.condition == c; })) {
+      present.push_back(c);
+    }
+  }
+  if (a.subjects == 1) {
+    out.push_back(fmt::format("One learner practised ({}: {}), {} trials in {}. These are one person's scores, so no "
+                              "strategy is tested against another; the curves, sessions, best and latest scores show the "
+                              "learner's progress.",
+                              a.condition_kind, joined(present), a.scores.size(), joined(a.phases)));
+    for (const LearnerRow& r : a.learner) {
+      out.push_back(fmt::format("{} with {} ({}): first shape cost {:.3g}, best {:.3g} (trial {}), latest {:.3g} over {} "
+                                "trials.", r.phase, r.condition, r.skill, r.first, r.best, r.best_trial, r.latest, r.trials));
+    }
+  } else {
+    out.push_back(fmt::format("Compared: {} ({}), {} subjects, {} trials in {}. Analysis: {}.",
+                              a.condition_kind == "strategy" ? "training strategies, each subject trying each" : "groups",
+                              joined(present), a.subjects, a.scores.size(), joined(a.phases), a.reason));
+    for (const PhaseModel& m : a.models) {
+      if (m.metric != "shape") continue;
+      if (!m.skipped.empty()) continue;
+      const std::string sentence = modelSentence(a, m);
+      if (!sentence.empty()) out.push_back(sentence);
+    }
+  }
+  for (const CurveFitRow& f : a.fits) {
+    if (!f.subject.empty() || f.metric != "shape") continue;
+    const bool guided = f.phase == session::kPhaseTraining;
+    out.push_back(trendSentence(f, guided));
+  }
+  if (a.retention.empty()) {
+    out.push_back("What it does not show: whether what was learned lasts, for no retention test was run.");
+  }
+  if (a.subjects >= 2) {
+    out.push_back(fmt::format("A difference the tests cannot tell from none is not evidence that there is none: with {} "
+                              "subjects, small effects go unseen.",
+                              a.subjects));
   }
   return out;
 }

@@ -67,9 +67,8 @@ void writeDesignSection(const session::StudyDatabase& db, const DesignAnalysis& 
   doc.paragraph(fmt::format(
       "Compared: the {}s ({}). Costs: the paper's DTW of the shape (x + y) and of the force profile (fx + fy + fz) "
       "against the expert of each trial's skill; each subject's mean first, then the mean over subjects with its 95 % "
-      "confidence interval. {} of {} planned trials are completed and analyzed; the paper's comparison is not shown: "
-      "this study does not follow the paper's design.",
-      a.condition_kind, fmt::join(a.conditions, ", "), a.scores.size(), a.trials_planned));
+      "confidence interval. {} of {} planned trials are completed and analyzed. Analysis: {}.",
+      a.condition_kind, fmt::join(a.conditions, ", "), a.scores.size(), a.trials_planned, a.reason));
 }
 
 void writeCurves(const DesignAnalysis& a, Document& doc, std::map<std::string, std::string>& files) {
@@ -136,6 +135,68 @@ void writeTables(const DesignAnalysis& a, Document& doc) {
   }
 }
 
+void writeModels(const DesignAnalysis& a, Document& doc) {
+  if (a.subjects < 2) return;
+  doc.heading("Mixed models");
+  doc.paragraph(fmt::format(
+      "Each phase's {}s compared by a linear mixed model of its trials, fitted by REML as R's lme4 fits it, with "
+      "Satterthwaite's degrees of freedom as lmerTest computes them (docs/analysis.md): subjects are random, and so is "
+      "each subject's own {} effect where subjects tried several with several trials each. The F test says whether the "
+      "{}s differ; each difference is from the first {} with its 95 % confidence interval.",
+      a.condition_kind, a.condition_kind, a.condition_kind, a.condition_kind));
+  Table t{{"phase", "cost", "model", "test", "differences (95 % CI)"}, {}};
+  for (const PhaseModel& m : a.models) {
+    if (!m.skipped.empty()) {
+      t.rows.push_back({m.phase, m.metric, "", m.skipped, ""});
+      continue;
+    }
+    std::string test;
+    for (const auto& term : m.fit.terms) {
+      test += fmt::format("{}: F({:g}, {:.1f}) = {}, p = {}", term.term, term.num_df, term.den_df, g(term.f), g(term.p));
+    }
+    std::vector<std::string> differences;
+    for (const auto& c : m.fit.fixed) {
+      if (c.name == "(Intercept)") continue;
+      differences.push_back(fmt::format("{} − {}: {} ({} to {})", c.name.substr(a.condition_kind.size()), m.reference,
+                                        g(c.estimate), g(c.lower), g(c.upper)));
+    }
+    t.rows.push_back({m.phase, m.metric, m.fit.formula + (m.fit.singular ? " (singular)" : ""), test,
+                      fmt::format("{}", fmt::join(differences, "; "))});
+  }
+  doc.table(t);
+}
+
+void writeFits(const DesignAnalysis& a, Document& doc) {
+  Table t{{a.condition_kind, "phase", "cost", "law", "asymptote (95 % CI)", "to learn (95 % CI)", "rate per trial (95 % CI)", "note"}, {}};
+  for (const CurveFitRow& f : a.fits) {
+    if (!f.subject.empty()) continue;
+    for (const analysis::CurveFit* fit : {&f.exponential, &f.power}) {
+      const auto p = [](const analysis::CurveParameter& x) { return fmt::format("{} ({} to {})", g(x.estimate), g(x.lower), g(x.upper)); };
+      t.rows.push_back({f.condition, f.phase, f.metric, analysis::curveLawName(fit->law), p(fit->asymptote),
+                        p(fit->amplitude), p(fit->rate), fit->note});
+    }
+  }
+  if (t.rows.empty()) return;
+  doc.heading("Learning curve fits");
+  doc.paragraph("The mean cost at each trial of a phase fitted by the exponential law a + b·exp(−c(n − 1)) and the power "
+                "law a + b·n^(−c) (least squares, as R's nls): a is where practice leads, b what there was to learn, c the "
+                "rate. Each subject's own fits are in curve_fits.csv.");
+  doc.table(t);
+}
+
+void writeLearner(const DesignAnalysis& a, Document& doc) {
+  if (a.learner.empty()) return;
+  doc.heading("The learner's progress");
+  doc.paragraph("One learner: no between-subject statistics (there is no one to compare with). Shape costs, lower "
+                "closer to the expert.");
+  Table t{{a.condition_kind, "phase", "skill", "trials", "first", "best (trial)", "latest", "mean"}, {}};
+  for (const LearnerRow& r : a.learner) {
+    t.rows.push_back({r.condition, r.phase, r.skill, fmt::format("{}", r.trials), g(r.first),
+                      fmt::format("{} ({})", g(r.best), r.best_trial), g(r.latest), g(r.mean)});
+  }
+  doc.table(t);
+}
+
 }  // namespace
 
 std::filesystem::path writeDesignReport(const session::StudyDatabase& db, const DesignAnalysis& a,
@@ -143,12 +204,17 @@ std::filesystem::path writeDesignReport(const session::StudyDatabase& db, const 
   std::map<std::string, std::string> files;
   Document doc;
   doc.heading(fmt::format("Study report: {}", db.study().name), 1);
+  doc.heading("Summary");
+  doc.list(designSummary(a));
   writeDesignSection(db, a, doc);
   doc.heading("Conclusions");
   const auto lines = designConclusions(a);
   if (lines.empty()) doc.paragraph("No retention or transfer trial is completed yet: see the curves and tables.");
   else doc.list(lines);
+  writeLearner(a, doc);
   writeCurves(a, doc, files);
+  writeModels(a, doc);
+  writeFits(a, doc);
   writeTables(a, doc);
   detail::writeReportFiles(out, db.study().name, doc, files);
   return out / "report.html";

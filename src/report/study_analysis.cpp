@@ -65,19 +65,12 @@ MetricResult analyzeMetric(const std::string& name, const std::vector<TrialCost>
   return r;
 }
 
-StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptions& options) {
+namespace {
+
+/// The analyzed recall trials (unscored), the flagged and the spares used, into `out`; returns
+/// what keeps the balanced design from being complete, each a sentence (none: complete).
+std::vector<std::string> selectRecallTrials(const session::StudyDatabase& db, StudyAnalysis& out) {
   const session::StudyDefinition& study = db.study();
-  HATTR_THROW_UNLESS(session::isPaperDesign(study),
-                     "{}: the paper's analysis (recall trials per mode, the balanced ANOVA) is for the paper's design; "
-                     "this study has groups and sessions: `hattr study analyze` analyzes it as its design says "
-                     "(report::analyzeDesign)",
-                     db.file().string());
-  StudyAnalysis out;
-  out.options = options;
-  out.options.progress = nullptr;  // the caller's callback does not outlive the call
-  for (const auto mode : study.modes) out.modes.emplace_back(guidance::modeName(mode));
-  out.analyzed_recall_trials = session::analyzedRecallTrials(study.protocol);
-  out.disturbed_policy = std::string(session::disturbedPolicyName(study.protocol.disturbed));
   const std::set<int> analyzed(out.analyzed_recall_trials.begin(), out.analyzed_recall_trials.end());
   const bool exclude_disturbed = study.protocol.disturbed == session::DisturbedPolicy::kExclude;
 
@@ -111,23 +104,75 @@ StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptio
       excluded[{t.plan.subject, mode}].push_back(t.plan.index);
     }
   }
-  HATTR_THROW_UNLESS(missing.empty(), "{}: {} recall trial{} not completed yet ({}{}); run the study first",
-                     db.file().string(), missing.size(), missing.size() == 1 ? " is" : "s are", missing.front(),
-                     missing.size() > 1 ? ", ..." : "");
+  std::vector<std::string> problems;
+  if (!missing.empty()) {
+    problems.push_back(fmt::format("{}: {} recall trial{} not completed yet ({}{})", db.file().string(), missing.size(),
+                                   missing.size() == 1 ? " is" : "s are", missing.front(), missing.size() > 1 ? ", ..." : ""));
+  }
   for (const auto& [cell, places] : excluded) {
     const auto& candidates = spares[cell];
     const int count = static_cast<int>(places.size());
-    HATTR_THROW_UNLESS(static_cast<int>(candidates.size()) >= count,
-                       "{}: subject {} {}: {} disturbed recall trial{} excluded (protocol.disturbed_trials \"exclude\") "
-                       "but {} clean spare{} outside the analyzed trials; the balanced design needs every cell: use "
-                       "\"repeat\" or \"flag\", or analyze fewer recall trials",
-                       db.file().string(), cell.first, cell.second, count, count == 1 ? " is" : "s are",
-                       candidates.size(), candidates.size() == 1 ? "" : "s");
+    if (static_cast<int>(candidates.size()) < count) {
+      problems.push_back(fmt::format(
+          "{}: subject {} {}: {} disturbed recall trial{} excluded (protocol.disturbed_trials \"exclude\") but {} clean "
+          "spare{} outside the analyzed trials; the balanced design needs every cell: use \"repeat\" or \"flag\", or "
+          "analyze fewer recall trials",
+          db.file().string(), cell.first, cell.second, count, count == 1 ? " is" : "s are", candidates.size(),
+          candidates.size() == 1 ? "" : "s"));
+      continue;
+    }
     for (int k = 0; k < count; ++k) {
       const session::TrialRecord& t = *candidates[static_cast<std::size_t>(k)];
       out.costs.push_back({t.id, t.plan.subject, cell.second, places[static_cast<std::size_t>(k)], {}, ""});
       out.spares_used.push_back(t.id);
     }
+  }
+  return problems;
+}
+
+}  // namespace
+
+AnalysisChoice chooseAnalysis(const session::StudyDatabase& db) {
+  std::set<std::string> subjects;
+  for (const session::TrialRecord& t : db.trials()) {
+    if (t.status == session::TrialStatus::kCompleted) subjects.insert(t.plan.subject);
+  }
+  if (subjects.size() < 2) {
+    return {false, fmt::format("one learner ({} subject with completed trials): there are no between-subject statistics, "
+                               "so the report shows the learner's curves, sessions, best and latest scores",
+                               subjects.size())};
+  }
+  if (!session::isPaperDesign(db.study())) {
+    return {false, "the study has groups, sessions or phases beyond the paper's: each phase is compared by a linear "
+                   "mixed model of every trial (subjects random), as docs/analysis.md describes"};
+  }
+  StudyAnalysis probe;
+  probe.analyzed_recall_trials = session::analyzedRecallTrials(db.study().protocol);
+  const std::vector<std::string> problems = selectRecallTrials(db, probe);
+  if (!problems.empty()) {
+    return {false, fmt::format("the paper's design is not complete ({}), and the balanced ANOVA needs every cell: a "
+                               "linear mixed model analyzes the trials there are", problems.front())};
+  }
+  return {true, "the paper's design, complete: the balanced two-way ANOVA of mode × subject (subjects random, mode "
+                "tested against mode × subject), as the paper analyzes it"};
+}
+
+StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptions& options) {
+  const session::StudyDefinition& study = db.study();
+  HATTR_THROW_UNLESS(session::isPaperDesign(study),
+                     "{}: the paper's analysis (recall trials per mode, the balanced ANOVA) is for the paper's design; "
+                     "this study has groups and sessions: `hattr study analyze` analyzes it as its design says "
+                     "(report::analyzeDesign)",
+                     db.file().string());
+  StudyAnalysis out;
+  out.options = options;
+  out.options.progress = nullptr;  // the caller's callback does not outlive the call
+  for (const auto mode : study.modes) out.modes.emplace_back(guidance::modeName(mode));
+  out.analyzed_recall_trials = session::analyzedRecallTrials(study.protocol);
+  out.disturbed_policy = std::string(session::disturbedPolicyName(study.protocol.disturbed));
+  const std::vector<std::string> problems = selectRecallTrials(db, out);
+  if (!problems.empty()) {
+    throw InputError(problems.front() + (problems.front().find("not completed") != std::string::npos ? "; run the study first" : ""));
   }
   HATTR_THROW_UNLESS(!out.costs.empty(), "{}: the study has no recall trials to analyze", db.file().string());
 
@@ -289,13 +334,14 @@ void writeAnalysisCsv(const StudyAnalysis& a, const std::filesystem::path& dir) 
   }
   io::writeTable(costs, dir / "recall_costs.csv", true);
 
-  io::Table anova{{"metric", "model", "source", "df", "ss", "ms", "f", "p", "partial_eta_sq"}, {}, ""};
+  // Each row with the row it is tested against (error_term): the mode against mode × subject.
+  io::Table anova{{"metric", "model", "source", "df", "ss", "ms", "f", "p", "partial_eta_sq", "error_term"}, {}, ""};
   const auto add = [&anova](const std::string& metric, const std::string& model, const analysis::AnovaTable& t) {
     for (const auto& r : t.rows) {
       anova.rows.push_back({metric, model, r.source, fmt::format("{}", r.df), fmt::format("{}", r.sum_sq),
                             fmt::format("{}", r.mean_sq), std::isfinite(r.f) ? fmt::format("{}", r.f) : "",
                             std::isfinite(r.p) ? fmt::format("{}", r.p) : "",
-                            std::isfinite(r.partial_eta_sq) ? fmt::format("{}", r.partial_eta_sq) : ""});
+                            std::isfinite(r.partial_eta_sq) ? fmt::format("{}", r.partial_eta_sq) : "", r.error_term});
     }
   };
   for (const MetricResult* m : {&a.trajectory, &a.force}) {

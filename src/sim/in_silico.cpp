@@ -9,6 +9,7 @@
 
 #include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
+#include "hattr/report/design_analysis.hpp"
 #include "hattr/report/study_report.hpp"
 #include "hattr/session/study_runner.hpp"
 #include "hattr/sim/expert.hpp"
@@ -145,6 +146,7 @@ InSilicoResult runInSilicoStudy(const InSilicoOptions& o) {
   if (o.write_report) {
     if (o.progress) o.progress("report", 0, 1);
     report::writeAnalysisCsv(result.analysis, dir);
+    report::writeTrialsCsv(db, result.analysis, result.analysis.options, dir / "trials.csv");
     result.report_html = report::writeStudyReport(db, result.analysis, dir);
   }
   return result;

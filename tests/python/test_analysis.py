@@ -199,7 +199,7 @@ def test_lmm_of_a_file_a_dict_and_a_dataframe_equal_the_clis():
         fit = hattr.lmm(data, LMM_FORMULA, reference={"mode": "BASIC"})
         assert fit == cli, type(data)
     assert [c["name"] for c in cli["fixed_effects"]][:3] == ["(Intercept)", "modeALPHA", "modePCONTROL"]
-    assert pd.DataFrame(cli["fixed_effects"]).shape == (6, 6)
+    assert pd.DataFrame(cli["fixed_effects"]).shape == (6, 8)
 
 
 def test_compare_lmm_equals_the_clis_likelihood_ratio_tests():

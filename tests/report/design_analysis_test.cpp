@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -123,8 +124,17 @@ TEST(DesignAnalysis, ScoresEveryTrialAgainstItsSkillsExpertAndTabulatesTheDesign
 
   // The tables.
   writeDesignCsv(a, study.dir / "out");
-  const io::Table scores = io::readTable(study.dir / "out" / "trial_scores.csv");
+  const io::Table scores = io::readTable(study.dir / "out" / "trials.csv");
   EXPECT_EQ(scores.rows.size(), a.scores.size());
+  // The long table carries each trial's kinematics as stored with the trial when it ended.
+  const auto lifts = scores.numbers("pen_lifts");
+  const auto path = scores.numbers("path_length_m");
+  for (std::size_t i = 0; i < a.scores.size(); ++i) {
+    const HapticProfile profile = db.trialProfile(a.scores[i].trial_id);
+    const auto& extra = profile.metadata().extra;
+    EXPECT_EQ(fmt::format("{}", lifts[i]), extra.at("kinematics.pen_lifts"));
+    EXPECT_EQ(path[i], std::stod(extra.at("kinematics.path_length_m")));
+  }
   EXPECT_EQ(io::readTable(study.dir / "out" / "retention.csv").rows.size(), 2u);
   const nlohmann::json json = designAnalysisToJson(a);
   EXPECT_EQ(json["trial_scores"].size(), a.scores.size());
@@ -146,7 +156,7 @@ TEST(DesignAnalysis, DisturbedTrialsFollowThePolicyAndAStudyInProgressIsAnalyzed
     EXPECT_EQ(a.trials_excluded, policy == "exclude" ? 1 : 0) << policy;
     EXPECT_EQ(a.scores.size(), policy == "flag" ? 48u : 47u);
     writeDesignCsv(a, study.dir / "out");
-    EXPECT_EQ(io::readTable(study.dir / "out" / "trial_scores.csv").rows.size(), a.scores.size());
+    EXPECT_EQ(io::readTable(study.dir / "out" / "trials.csv").rows.size(), a.scores.size());
   }
   // In progress: what is completed is analyzed, and the rest counted.
   session::RunOptions some;
@@ -164,6 +174,64 @@ TEST(DesignAnalysis, DisturbedTrialsFollowThePolicyAndAStudyInProgressIsAnalyzed
   } catch (const InputError& e) {
     EXPECT_THAT(e.what(), HasSubstr("is for the paper's design"));
   }
+}
+
+// Each phase's groups compared by a mixed model. Between subjects with random intercepts and
+// every subject's trial count equal, the group difference it estimates is the difference of the
+// groups' means: a property, not a number copied from the fit.
+TEST(DesignAnalysis, EachPhaseComparesItsConditionsByAMixedModelAndTheSummarySaysIt) {
+  DesignStudy study("flag");
+  const auto db = session::StudyDatabase::open(study.dir / "s.sqlite", session::OpenMode::kReadOnly);
+  const DesignAnalysis a = analyzeDesign(db);
+  EXPECT_EQ(a.subjects, 6);
+  const auto model = std::find_if(a.models.begin(), a.models.end(),
+                                  [](const PhaseModel& m) { return m.phase == "training" && m.metric == "shape"; });
+  ASSERT_NE(model, a.models.end());
+  ASSERT_TRUE(model->skipped.empty()) << model->skipped;
+  EXPECT_EQ(model->fit.formula, "shape ~ group + (1 | subject)");
+  EXPECT_EQ(model->reference, "g1");
+  std::vector<double> g1, g2;
+  for (const DesignTrialScore& s : a.scores) {
+    if (s.phase == "training") (s.condition == "g1" ? g1 : g2).push_back(s.shape());
+  }
+  ASSERT_EQ(model->fit.fixed.size(), 2u);
+  EXPECT_EQ(model->fit.fixed[1].name, "groupg2");
+  EXPECT_NEAR(model->fit.fixed[1].estimate, meanOf(g2) - meanOf(g1), 1e-9);
+  EXPECT_LT(model->fit.fixed[1].lower, model->fit.fixed[1].estimate);
+  EXPECT_EQ(model->fit.terms.at(0).term, "group");
+  // The summary opens with what was compared, and says the test's result for the phase.
+  const std::vector<std::string> summary = designSummary(a);
+  ASSERT_GE(summary.size(), 3u);
+  EXPECT_THAT(summary[0], HasSubstr("Compared: groups (g1 and g2), 6 subjects"));
+  EXPECT_THAT(fmt::format("{}", fmt::join(summary, "\n")), HasSubstr("In training,"));
+  writeDesignCsv(a, study.dir / "out");
+  EXPECT_GT(io::readTable(study.dir / "out" / "models.csv").rows.size(), 4u);
+}
+
+// One learner: no between-subject statistics, and the learner's first, best and latest scores.
+TEST(DesignAnalysis, OneLearnersStudyShowsTheirProgressWithoutBetweenSubjectStatistics) {
+  session::RunOptions only_a01;
+  only_a01.only_subject = "A01";
+  DesignStudy study("flag", only_a01);
+  const auto db = session::StudyDatabase::open(study.dir / "s.sqlite", session::OpenMode::kReadOnly);
+  const DesignAnalysis a = analyzeDesign(db);
+  EXPECT_EQ(a.subjects, 1);
+  EXPECT_TRUE(a.models.empty());
+  EXPECT_THAT(a.reason, HasSubstr("one learner"));
+  const auto training = std::find_if(a.learner.begin(), a.learner.end(),
+                                     [](const LearnerRow& r) { return r.phase == "training"; });
+  ASSERT_NE(training, a.learner.end());
+  std::vector<double> shapes;
+  for (const DesignTrialScore& s : a.scores) {
+    if (s.phase == "training") shapes.push_back(s.shape());
+  }
+  ASSERT_EQ(training->trials, 2);
+  EXPECT_EQ(training->first, shapes.front());
+  EXPECT_EQ(training->latest, shapes.back());
+  EXPECT_EQ(training->best, *std::min_element(shapes.begin(), shapes.end()));
+  EXPECT_THAT(designSummary(a).at(0), HasSubstr("One learner practised"));
+  const auto html = writeDesignReport(db, a, study.dir / "report");
+  EXPECT_TRUE(std::filesystem::exists(html));
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/analysis/trial_score.hpp"
+#include "hattr/report/design_analysis.hpp"
 #include "hattr/session/study_runner.hpp"
 #include "support/test_support.hpp"
 
@@ -279,16 +280,23 @@ TEST(StudyAnalysis, ConclusionsNameTheModesInTheStudysOrder) {
   EXPECT_TRUE(inOrder(text(), "BASIC (", "PCONTROL (", "ALPHA (")) << text();
 }
 
-TEST(StudyAnalysis, RefusesAnUnfinishedStudyNamingWhatIsMissing) {
-  test::TempDir dir;
+/// An expert of skill "c" in `dir`: `samples` pen-down samples 10 ms apart, a wave along x.
+void writeWaveExpert(const std::filesystem::path& dir, int samples) {
   HapticProfile expert({.skill = "c"});
-  for (int i = 0; i < 10; ++i) {
+  for (int i = 0; i < samples; ++i) {
     Sample s;
     s.t_s = i * 0.01;
+    s.p_WT = Vec3(0.0005 * i, 0.003 * std::sin(i * 0.2), 0.0);
+    s.f_user_W = Vec3(0.0, 0.0, -1.0);
     s.pen_down = true;
     expert.append(s);
   }
   io::writeProfileCsv(expert, dir / "expert.csv");
+}
+
+TEST(StudyAnalysis, RefusesAnUnfinishedStudyNamingWhatIsMissing) {
+  test::TempDir dir;
+  writeWaveExpert(dir.path(), 10);
   test::writeText(dir / "study.json", R"({"name": "u", "skill": "c", "experts": {"c": "expert.csv"},
       "protocol": {"training_trials": 1, "recall_trials": 1}, "subjects": {"count": 2, "participant": "script"}})");
   { (void)session::StudyDatabase::create(dir / "s.sqlite", session::loadStudy(dir / "study.json")); }
@@ -301,6 +309,39 @@ TEST(StudyAnalysis, RefusesAnUnfinishedStudyNamingWhatIsMissing) {
   }
 }
 
+// The report's choice: a paper's study missing one recall trial cannot take the balanced ANOVA,
+// so it gets the design's analysis: each phase's strategies by a mixed model, subjects and each
+// subject's strategy random (replicated within subjects), the reason said.
+TEST(StudyAnalysis, AnIncompletePapersStudyIsAnalyzedByMixedModelsAndSaysWhy) {
+  test::TempDir dir;
+  writeWaveExpert(dir.path(), 40);
+  test::writeText(dir / "study.json", R"({"name": "u", "skill": "c", "experts": {"c": "expert.csv"},
+      "modes": ["basic", "pcontrol"], "world": {"relief": {"kind": "flat"}},
+      "protocol": {"training_trials": 2, "recall_trials": 3, "rest_s": 0, "tail_s": 0.05},
+      "subjects": {"count": 3, "participant": "script", "options": {"jitter_mm": 2.0}}})");
+  { (void)session::StudyDatabase::create(dir / "s.sqlite", session::loadStudy(dir / "study.json")); }
+  {
+    session::StudyDatabase db = session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kRunner);
+    session::RunOptions options;
+    options.max_trials = 3 * 2 * 5 - 1;  // the last recall trial is not run
+    session::StudyRunner(db, session::makeScriptParticipant).run(options);
+  }
+  const auto db = session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kReadOnly);
+  const AnalysisChoice choice = chooseAnalysis(db);
+  EXPECT_FALSE(choice.balanced);
+  EXPECT_THAT(choice.reason, HasSubstr("not complete"));
+  EXPECT_THAT(choice.reason, HasSubstr("1 recall trial is not completed"));
+  const DesignAnalysis a = analyzeDesign(db);
+  EXPECT_EQ(a.condition_kind, "strategy");
+  EXPECT_EQ(a.scores.size(), 29u);
+  const auto recall = std::find_if(a.models.begin(), a.models.end(),
+                                   [](const PhaseModel& m) { return m.phase == "recall" && m.metric == "shape"; });
+  ASSERT_NE(recall, a.models.end());
+  ASSERT_TRUE(recall->skipped.empty()) << recall->skipped;
+  EXPECT_EQ(recall->fit.formula, "shape ~ strategy + (1 | subject) + (1 | subject:strategy)");
+  EXPECT_EQ(recall->fit.observations, 3u * 2u * 3u - 1u);
+  EXPECT_EQ(recall->fit.fixed.at(1).name, "strategyPCONTROL");
+}
 
 /// A 30 ms host stall, 0.2 s into the first attempt of S01's recall trial 2 in every mode.
 session::RunOptions stallInS01Recall2() {

@@ -10,8 +10,9 @@ std::filesystem::path reportFolderFor(const std::filesystem::path& db_file) {
 }
 
 ReviewReport writeReviewReport(const session::StudyDatabase& db, const std::filesystem::path& db_file) {
-  // A design of groups and sessions: its own analysis, and each completed trial's costs.
-  if (!session::isPaperDesign(db.study())) {
+  // A design of groups and sessions, one learner, or an incomplete paper's design: the design's
+  // analysis, and each completed trial's costs.
+  if (!report::chooseAnalysis(db).balanced) {
     const report::DesignAnalysis design = report::analyzeDesign(db);
     std::vector<report::TrialCost> costs;
     for (const auto& s : design.scores) costs.push_back({s.trial_id, s.subject, s.strategy, s.trial, s.score, s.disturbed});

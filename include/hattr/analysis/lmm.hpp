@@ -66,6 +66,8 @@ struct LmmCoefficient {
   double df = 0.0;         ///< Satterthwaite's denominator degrees of freedom
   double t = 0.0;          ///< estimate / std_error
   double p = 0.0;          ///< two-sided P(|T(df)| > |t|)
+  double lower = 0.0;      ///< 95 % interval, estimate ± t(0.975, df) × std_error (lmerTest's confint)
+  double upper = 0.0;
 };
 
 /// The F test of one term, a row of lmerTest's anova(type = 3).

@@ -21,6 +21,8 @@
 #include <nlohmann/json.hpp>
 
 #include "hattr/analysis/anova.hpp"
+#include "hattr/analysis/learning_curve.hpp"
+#include "hattr/analysis/lmm.hpp"
 #include "hattr/report/study_analysis.hpp"
 
 namespace hattr::report {
@@ -41,6 +43,9 @@ struct DesignTrialScore {
   int trial_in_phase = 1; ///< within the phase over the sessions, from 1 (the curves' x)
   analysis::TrialScore score;
   std::string disturbed;
+  /// The trial's kinematics by name (analysis::kinematicsNames(); NaN where not a number),
+  /// as stored with the trial, else measured from its samples; empty when not read.
+  std::map<std::string, double> kinematics;
   [[nodiscard]] double shape() const { return score.shape(); }
   [[nodiscard]] double force() const { return score.force(); }
 };
@@ -90,6 +95,38 @@ struct CurvePoint {
   SubjectMean force;
 };
 
+/// A phase's conditions compared by a linear mixed model of its trials (subjects random).
+struct PhaseModel {
+  std::string phase;
+  std::string metric;     ///< "shape" or "force"
+  std::string reference;  ///< the condition the others are compared with
+  analysis::LmmFit fit;   ///< fit.formula says the model; empty formula when skipped
+  std::string skipped;    ///< why no model was fitted ("" when one was)
+};
+
+/// A condition's (or one subject's) mean cost over a phase's trials, fitted by both laws of practice.
+struct CurveFitRow {
+  std::string condition;
+  std::string phase;
+  std::string subject;  ///< "" for the mean over the condition's subjects
+  std::string metric;   ///< "shape" or "force"
+  analysis::CurveFit exponential;
+  analysis::CurveFit power;
+};
+
+/// One learner's scores in one phase of one condition: first, best, latest.
+struct LearnerRow {
+  std::string condition;
+  std::string phase;
+  std::string skill;
+  int trials = 0;
+  double first = 0.0;   ///< shape cost of the phase's first trial
+  double best = 0.0;    ///< the lowest shape cost
+  int best_trial = 0;   ///< at this trial of the phase
+  double latest = 0.0;  ///< the last trial's shape cost
+  double mean = 0.0;
+};
+
 struct DesignAnalysis {
   AnalysisOptions options;
   std::string condition_kind;           ///< "group" or "strategy"
@@ -105,6 +142,11 @@ struct DesignAnalysis {
   int trials_excluded = 0;              ///< disturbed, left out by the "exclude" policy
   int trials_flagged = 0;               ///< disturbed, analyzed and flagged
   std::string disturbed_policy;
+  int subjects = 0;                     ///< with analyzed trials
+  std::string reason;                   ///< why this analysis (chooseAnalysis), for the report
+  std::vector<PhaseModel> models;       ///< per phase and metric, with two subjects or more
+  std::vector<CurveFitRow> fits;        ///< per condition and phase (and per subject) of 4 trials or more
+  std::vector<LearnerRow> learner;      ///< one learner only
 };
 
 /// The mean of one value per subject with its interval (SubjectMean; none: NaN, 0 subjects).
@@ -121,13 +163,25 @@ DesignAnalysis analyzeDesign(const session::StudyDatabase& db, const AnalysisOpt
 nlohmann::json designAnalysisToJson(const DesignAnalysis& analysis);
 
 /// What writeDesignCsv writes.
-inline const std::vector<std::string> kDesignCsvFiles{"trial_scores.csv", "curves.csv", "phases.csv",
-                                                      "retention.csv", "transfer.csv"};
+inline const std::vector<std::string> kDesignCsvFiles{"trials.csv", "curves.csv", "phases.csv", "retention.csv",
+                                                      "transfer.csv", "models.csv", "curve_fits.csv"};
+
+/// The long table of every analyzed trial, the one an R or pandas user starts from: its place
+/// in the design, every score, every kinematic measure, disturbed (trials.csv).
+void writeTrialsCsv(const std::vector<DesignTrialScore>& scores, const std::filesystem::path& file);
+/// The same for a paper's study analyzed by the balanced ANOVA: its recall trials as `balanced`
+/// scored them, the others (training) scored now with `options`.
+void writeTrialsCsv(const session::StudyDatabase& db, const StudyAnalysis& balanced, AnalysisOptions options,
+                    const std::filesystem::path& file);
 /// Writes the tables as CSV into `out_dir` (created; earlier ones replaced).
 void writeDesignCsv(const DesignAnalysis& analysis, const std::filesystem::path& out_dir);
 
 /// One line per finding, stating only what the numbers show (the report's conclusions).
 std::vector<std::string> designConclusions(const DesignAnalysis& analysis);
+
+/// The report's opening in plain words, for a teacher as much as a researcher: what was
+/// compared, what was found with its size and interval, and what the numbers do not show.
+std::vector<std::string> designSummary(const DesignAnalysis& analysis);
 
 /// Writes OUT/report.html, OUT/report.md and OUT/figures/*.svg for a design: the design
 /// (groups, sessions, blocks), learning curves per phase, the session and phase table,

@@ -94,6 +94,16 @@ struct StudyAnalysis {
 /// analyses of a subset of a study's trials (a power analysis's smaller designs).
 MetricResult analyzeMetric(const std::string& name, const std::vector<TrialCost>& costs, bool trajectory);
 
+/// Which analysis a study's report uses, and why in words (the report says it).
+struct AnalysisChoice {
+  bool balanced = false;  ///< the paper's balanced ANOVA (analyzeStudy); else the design's (analyzeDesign)
+  std::string reason;
+};
+
+/// The paper's balanced ANOVA where the design is the paper's and complete with two subjects
+/// or more; the design's analysis (a mixed model per phase, or one learner's progress) otherwise.
+[[nodiscard]] AnalysisChoice chooseAnalysis(const session::StudyDatabase& db);
+
 /// Analyzes every completed recall trial. Throws InputError when the study is not complete
 /// enough for the balanced design (naming the missing trials).
 StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptions& options = {});
@@ -105,8 +115,9 @@ void storeAnalysis(session::StudyDatabase& db, const StudyAnalysis& analysis);
 /// empty when none was. Throws InputError on a stored analysis it cannot read.
 std::vector<TrialCost> storedCosts(const session::StudyDatabase& db);
 /// The files writeAnalysisCsv writes (for checking outputs before any is written).
-inline const std::vector<std::string> kAnalysisCsvFiles{"recall_costs.csv", "anova.csv", "table1.csv"};
-/// Writes recall_costs.csv, anova.csv and table1.csv into `dir` (created; existing ones replaced).
+inline const std::vector<std::string> kAnalysisCsvFiles{"recall_costs.csv", "anova.csv", "table1.csv", "trials.csv"};
+/// Writes recall_costs.csv, anova.csv and table1.csv into `dir` (created; existing ones replaced);
+/// the caller writes trials.csv, the long table of every trial (writeTrialsCsv).
 void writeAnalysisCsv(const StudyAnalysis& analysis, const std::filesystem::path& dir);
 
 }  // namespace hattr::report
