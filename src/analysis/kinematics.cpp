@@ -25,13 +25,28 @@ Biquad butterworth(double cutoff_hz, double rate_hz) {
   return {b0, 2.0 * b0, b0, 2.0 * (k * k - 1.0) * norm, (1.0 - std::numbers::sqrt2 * k + k * k) * norm};
 }
 
-/// One pass over x, started in the steady state of the line through x[0] and x[1]: the
-/// filter's response to a line is the line delayed by its group delay at 0 Hz, τ, so the
-/// pass starts as if the line had always been its input (a constant and a line come out
-/// with no transient; the backward pass cancels τ).
-void filterPass(const Biquad& f, std::vector<double>& x) {
-  const double x0 = x[0];
-  const double slope = x[1] - x[0];  // per sample
+/// One pass over x, started in the steady state of a line: the filter's response to a line
+/// is the line delayed by its group delay at 0 Hz, τ, so the pass starts as if the line had
+/// always been its input (a constant and a line come out with no transient; the backward
+/// pass cancels τ). The line is the least-squares line through the first `fit` samples, so
+/// measurement noise moves the start little (a two-sample slope, times τ of some 20
+/// samples, would amplify it).
+void filterPass(const Biquad& f, std::vector<double>& x, std::size_t fit) {
+  fit = std::min(fit, x.size());
+  double mean_k = 0.0, mean_x = 0.0;
+  for (std::size_t k = 0; k < fit; ++k) {
+    mean_k += static_cast<double>(k);
+    mean_x += x[k];
+  }
+  mean_k /= static_cast<double>(fit);
+  mean_x /= static_cast<double>(fit);
+  double sxy = 0.0, sxx = 0.0;
+  for (std::size_t k = 0; k < fit; ++k) {
+    sxy += (static_cast<double>(k) - mean_k) * (x[k] - mean_x);
+    sxx += (static_cast<double>(k) - mean_k) * (static_cast<double>(k) - mean_k);
+  }
+  const double slope = sxx > 0.0 ? sxy / sxx : 0.0;  // per sample
+  const double x0 = mean_x - slope * mean_k;          // the line at the first sample
   const double tau = (f.b1 + 2.0 * f.b2) / (f.b0 + f.b1 + f.b2) - (f.a1 + 2.0 * f.a2) / (1.0 + f.a1 + f.a2);
   const double y0 = x0 - slope * tau;
   const double y1 = x0 + slope * (1.0 - tau);
@@ -88,6 +103,10 @@ std::size_t localMaxima(const std::vector<double>& v) {
   return count;
 }
 
+/// A stroke's jerk needs this many samples: the filter's padding plus one, so it is measured on
+/// filtered positions, and the third difference central over at least 3 samples.
+constexpr std::size_t kJerkSamples = 10;
+
 /// One stroke's measures.
 struct StrokeMeasures {
   double length_m = 0.0;
@@ -108,8 +127,10 @@ StrokeMeasures measureStroke(const std::vector<Sample>& samples, const Stroke& s
   StrokeMeasures m;
   const std::size_t n = t.size();
   if (n < 2) return m;
-  if (cutoff_hz > 0.0) {
-    const double rate_hz = static_cast<double>(n - 1) / (t.back() - t.front());
+  // Filtered where the stroke is sampled fast enough for the cut-off (a slow or gappy stroke
+  // is measured raw: never an error in the middle of a study).
+  const double rate_hz = static_cast<double>(n - 1) / (t.back() - t.front());
+  if (cutoff_hz > 0.0 && cutoff_hz < rate_hz / 2.0) {
     x = lowPassZeroPhase(x, cutoff_hz, rate_hz);
     y = lowPassZeroPhase(y, cutoff_hz, rate_hz);
   }
@@ -122,30 +143,33 @@ StrokeMeasures measureStroke(const std::vector<Sample>& samples, const Stroke& s
   for (std::size_t i = 0; i < n; ++i) speed[i] = std::hypot(vx[i], vy[i]);
   m.peak_speed = *std::max_element(speed.begin(), speed.end());
   m.peaks = localMaxima(speed);
-  if (n < 8 || m.length_m <= 0.0) return m;
+  if (n < kJerkSamples) return m;
   const std::vector<double> jx = derivative(t, derivative(t, vx));
   const std::vector<double> jy = derivative(t, derivative(t, vy));
-  // The third difference is central (exact on a cubic) from sample 3 to n − 4.
+  // The third difference is central (exact on a cubic) from sample 3 to n − 4: the jerk, its
+  // duration and its length are all taken over that interval.
   double integral = 0.0;
+  double length = 0.0;
   for (std::size_t i = 3; i + 4 < n; ++i) {
     const double a = jx[i] * jx[i] + jy[i] * jy[i];
     const double b = jx[i + 1] * jx[i + 1] + jy[i + 1] * jy[i + 1];
     integral += 0.5 * (a + b) * (t[i + 1] - t[i]);
+    length += std::hypot(x[i + 1] - x[i], y[i + 1] - y[i]);
   }
-  const double duration = t.back() - t.front();
-  m.normalized_jerk = std::sqrt(0.5 * integral * std::pow(duration, 5) / (m.length_m * m.length_m));
+  const double duration = t[n - 4] - t[3];
+  if (length > 0.0) m.normalized_jerk = std::sqrt(0.5 * integral * std::pow(duration, 5) / (length * length));
   return m;
 }
 
 }  // namespace
 
 std::vector<double> lowPassZeroPhase(const std::vector<double>& x, double cutoff_hz, double rate_hz) {
-  HATTR_THROW_UNLESS(std::isfinite(cutoff_hz) && cutoff_hz > 0.0 && cutoff_hz < rate_hz / 2.0,
-                     "low-pass filter: cut-off {} Hz; expected above 0 and below half the sampling rate ({} Hz)",
-                     cutoff_hz, rate_hz / 2.0);
   constexpr std::size_t kPad = 9;  // SciPy's filtfilt: 3 × max(len(a), len(b))
   const std::size_t n = x.size();
   if (n <= kPad) return x;  // too short to pad: left as it is
+  HATTR_THROW_UNLESS(std::isfinite(cutoff_hz) && cutoff_hz > 0.0 && cutoff_hz < rate_hz / 2.0,
+                     "low-pass filter: cut-off {} Hz; expected above 0 and below half the sampling rate ({} Hz)",
+                     cutoff_hz, rate_hz / 2.0);
   // Odd reflection about each end: 2 x0 − x[k], so a line continues as a line.
   std::vector<double> padded;
   padded.reserve(n + 2 * kPad);
@@ -153,9 +177,9 @@ std::vector<double> lowPassZeroPhase(const std::vector<double>& x, double cutoff
   padded.insert(padded.end(), x.begin(), x.end());
   for (std::size_t k = 1; k <= kPad; ++k) padded.push_back(2.0 * x.back() - x[n - 1 - k]);
   const Biquad f = butterworth(cutoff_hz, rate_hz);
-  filterPass(f, padded);
+  filterPass(f, padded, 2 * kPad + 1);
   std::reverse(padded.begin(), padded.end());
-  filterPass(f, padded);
+  filterPass(f, padded, 2 * kPad + 1);
   std::reverse(padded.begin(), padded.end());
   return {padded.begin() + static_cast<std::ptrdiff_t>(kPad), padded.end() - static_cast<std::ptrdiff_t>(kPad)};
 }

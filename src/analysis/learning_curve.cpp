@@ -107,6 +107,34 @@ double bestRate(const std::vector<double>& n, const std::vector<double>& y, Curv
 
 double CurveFit::at(double n) const { return asymptote.estimate + amplitude.estimate * shape(law, n, rate.estimate); }
 
+LinearTrend linearTrend(const std::vector<double>& n, const std::vector<double>& y, double confidence) {
+  LinearTrend out{kNaN, kNaN, kNaN, kNaN, n.size()};
+  if (n.size() != y.size() || n.size() < 3) return out;
+  const auto m = static_cast<double>(n.size());
+  double mn = 0.0, my = 0.0;
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    mn += n[i] / m;
+    my += y[i] / m;
+  }
+  double sxx = 0.0, sxy = 0.0;
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    sxx += (n[i] - mn) * (n[i] - mn);
+    sxy += (n[i] - mn) * (y[i] - my);
+  }
+  if (!(sxx > 0.0)) return out;
+  out.slope = sxy / sxx;
+  double rss = 0.0;
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    const double r = y[i] - my - out.slope * (n[i] - mn);
+    rss += r * r;
+  }
+  out.std_error = std::sqrt(rss / (m - 2.0) / sxx);
+  const double t = boost::math::quantile(boost::math::students_t(m - 2.0), 0.5 + confidence / 2.0);
+  out.lower = out.slope - t * out.std_error;
+  out.upper = out.slope + t * out.std_error;
+  return out;
+}
+
 const char* curveLawName(CurveLaw law) { return law == CurveLaw::kExponential ? "exponential" : "power"; }
 
 CurveFit fitLearningCurve(const std::vector<double>& n, const std::vector<double>& y, CurveLaw law, double confidence) {
@@ -135,7 +163,9 @@ CurveFit fitLearningCurve(const std::vector<double>& n, const std::vector<double
   fit.rss = linear.rss;
   const auto df = static_cast<double>(n.size()) - 3.0;
   fit.sigma = df > 0.0 ? std::sqrt(linear.rss / df) : kNaN;
-  if (on_bound) {
+  if (!(linear.rss > 0.0)) {
+    fit.note = "the scores lie exactly on the curve: no residual to estimate intervals from";
+  } else if (on_bound) {
     fit.note = fmt::format("the rate is on its search bound ({} per trial): {}", c,
                            c < 1.0 ? "the scores show no curvature to fit" : "the change is all in the first trials");
   }
@@ -151,7 +181,7 @@ CurveFit fitLearningCurve(const std::vector<double>& n, const std::vector<double
   const Eigen::Matrix3d jtj = j.transpose() * j;
   const Eigen::FullPivLU<Eigen::Matrix3d> lu(jtj);
   const double t = df > 0.0 ? boost::math::quantile(boost::math::students_t(df), 0.5 + confidence / 2.0) : kNaN;
-  const bool estimable = lu.isInvertible() && df > 0.0;
+  const bool estimable = lu.isInvertible() && df > 0.0 && linear.rss > 0.0;
   const Eigen::Matrix3d cov = estimable ? Eigen::Matrix3d(fit.sigma * fit.sigma * lu.inverse()) : Eigen::Matrix3d::Constant(kNaN);
   CurveParameter* parameters[] = {&fit.asymptote, &fit.amplitude, &fit.rate};
   for (int k = 0; k < 3; ++k) {

@@ -91,6 +91,7 @@ std::vector<DesignTrialScore> analyzedTrials(const session::StudyDatabase& db, D
     s.skill = t.plan.skill;
     s.trial = t.plan.index;
     s.trial_in_phase = ++in_phase[{s.subject, s.phase, s.condition, s.skill}];
+    s.guided = t.plan.view.guidance;
     s.disturbed = t.disturbed;
     scores.push_back(std::move(s));
   }
@@ -136,6 +137,7 @@ void scoreTrials(const session::StudyDatabase& db, const AnalysisOptions& option
     for (std::size_t i = first; i < last; ++i) {
       if (const auto* known = options.scoredAlready(scores[i].trial_id)) {
         scores[i].score = *known;
+        if (options.kinematics_of_scored) scores[i].kinematics = kinematicsOf(db.trialProfile(scores[i].trial_id));
       } else {
         by_skill[scores[i].skill].push_back(i);
       }
@@ -235,6 +237,16 @@ void tabulateRetention(DesignAnalysis& a) {
       if (bs.empty() || rs.empty()) continue;
       const double b_shape = detail::meanWithCi(bs).first, b_force = detail::meanWithCi(bf).first;
       const double r_shape = detail::meanWithCi(rs).first, r_force = detail::meanWithCi(rf).first;
+      // Each subject's own scores: the block compared with (its phase), retention, the change.
+      const std::string compared = [&] {
+        for (const auto* x : mine) {
+          if (x->session == chosen.first && x->block == chosen.second) return x->phase;
+        }
+        return std::string();
+      }();
+      a.subject_scores.push_back({subject, condition, skill, compared, b_shape, b_force});
+      a.subject_scores.push_back({subject, condition, skill, std::string(session::kPhaseRetention), r_shape, r_force});
+      a.subject_scores.push_back({subject, condition, skill, "retention-change", r_shape - b_shape, r_force - b_force});
       before_shape[subject] = {b_shape};
       before_force[subject] = {b_force};
       after_shape[subject] = {r_shape};
@@ -263,6 +275,17 @@ void tabulateTransfer(DesignAnalysis& a) {
       return s.condition == condition && s.skill == skill && s.phase == session::kPhaseTransfer;
     });
     a.transfer.push_back({condition, skill, shape, force});
+    // Each subject's own transfer mean.
+    std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> by_subject;
+    for (const DesignTrialScore& s : a.scores) {
+      if (s.condition != condition || s.skill != skill || s.phase != session::kPhaseTransfer) continue;
+      by_subject[s.subject].first.push_back(s.shape());
+      by_subject[s.subject].second.push_back(s.force());
+    }
+    for (const auto& [subject, values] : by_subject) {
+      a.subject_scores.push_back({subject, condition, skill, std::string(session::kPhaseTransfer),
+                                  detail::meanWithCi(values.first).first, detail::meanWithCi(values.second).first});
+    }
   }
 }
 
@@ -309,7 +332,7 @@ void fitPhaseModels(DesignAnalysis& a) {
                                               within && replicated ? fmt::format(" + (1 | subject:{})", kind) : "");
       try {
         m.fit = analysis::fitLmm(t, formula, {.reference = {{kind, m.reference}}});
-      } catch (const InputError& e) {
+      } catch (const Error& e) {  // data the model cannot take: said, and the rest of the analysis goes on
         m.skipped = e.what();
       }
       a.models.push_back(std::move(m));
@@ -324,7 +347,7 @@ bool fitBoth(const std::vector<double>& n, const std::vector<double>& y, CurveFi
   try {
     row.exponential = analysis::fitLearningCurve(n, y, analysis::CurveLaw::kExponential);
     row.power = analysis::fitLearningCurve(n, y, analysis::CurveLaw::kPower);
-  } catch (const InputError&) {
+  } catch (const Error&) {
     return false;
   }
   return true;
@@ -444,7 +467,11 @@ DesignAnalysis analyzeDesign(const session::StudyDatabase& db, const AnalysisOpt
   std::set<std::string> subjects;
   for (const DesignTrialScore& s : a.scores) subjects.insert(s.subject);
   a.subjects = static_cast<int>(subjects.size());
+  a.paper_design = session::isPaperDesign(study);
   a.reason = chooseAnalysis(db).reason;
+  if (a.subjects == 1 && a.reason.rfind("one learner", 0) != 0) {  // the others' trials all excluded
+    a.reason = "one learner (1 subject with analyzed trials): there are no between-subject statistics";
+  }
   tabulateCurvesAndCells(a);
   tabulateRetention(a);
   tabulateTransfer(a);
@@ -503,7 +530,14 @@ nlohmann::json designAnalysisToJson(const DesignAnalysis& a) {
                        {"first", number(r.first)}, {"best", number(r.best)}, {"best_trial", r.best_trial},
                        {"latest", number(r.latest)}, {"mean", number(r.mean)}});
   }
-  return {{"design", "groups-and-sessions"}, {"analysis", a.reason}, {"subjects", a.subjects},
+  nlohmann::json subject_scores = nlohmann::json::array();
+  for (const SubjectScore& x : a.subject_scores) {
+    subject_scores.push_back({{"subject", x.subject}, {"condition", x.condition}, {"skill", x.skill}, {"score", x.score},
+                              {"shape", number(x.shape)}, {"force", number(x.force)}});
+  }
+  const char* design = a.subjects == 1 ? "one-learner" : a.paper_design ? "paper-incomplete" : "groups-and-sessions";
+  return {{"design", design}, {"analysis", a.reason}, {"subjects", a.subjects},
+          {"subject_scores", subject_scores},
           {"summary", designSummary(a)}, {"models", models}, {"curve_fits", fits}, {"learner", learner},
           {"condition_kind", a.condition_kind}, {"conditions", a.conditions},
           {"phases", a.phases}, {"trials_planned", a.trials_planned}, {"trials_pending", a.trials_pending},
@@ -588,6 +622,11 @@ void writeDesignCsv(const DesignAnalysis& a, const std::filesystem::path& dir) {
     }
   }
   io::writeTable(fits, dir / "curve_fits.csv", true);
+  io::Table subject_scores{{"subject", "condition", "skill", "score", "shape", "force"}, {}, ""};
+  for (const SubjectScore& x : a.subject_scores) {
+    subject_scores.rows.push_back({x.subject, x.condition, x.skill, x.score, cell(x.shape), cell(x.force)});
+  }
+  io::writeTable(subject_scores, dir / "subject_scores.csv", true);
 }
 
 void writeTrialsCsv(const session::StudyDatabase& db, const StudyAnalysis& balanced, AnalysisOptions options,
@@ -595,6 +634,7 @@ void writeTrialsCsv(const session::StudyDatabase& db, const StudyAnalysis& balan
   std::map<std::int64_t, analysis::TrialScore> scored;
   for (const auto& c : balanced.costs) scored[c.trial_id] = c.score;
   options.scored = &scored;
+  options.kinematics_of_scored = true;
   writeTrialsCsv(analyzeDesign(db, options).scores, file);
 }
 
@@ -689,24 +729,39 @@ std::string modelSentence(const DesignAnalysis& a, const PhaseModel& m) {
   return text;
 }
 
-/// The trend of a condition's mean cost over a phase, from its exponential fit's amplitude:
-/// falling (learning), rising (forgetting) or neither, by the amplitude's interval.
-std::string trendSentence(const CurveFitRow& f, bool guided_phase) {
-  const analysis::CurveParameter& b = f.exponential.amplitude;
-  const double first = f.exponential.at(1.0);
-  const double last = f.exponential.at(static_cast<double>(f.exponential.points));
-  if (!std::isfinite(b.lower) || !f.exponential.note.empty() || (b.lower <= 0.0 && b.upper >= 0.0)) {
-    return fmt::format("Over the {} trials with {}, the shape cost showed no trend a fit can tell from none.", f.phase,
-                       f.condition);
+/// The trend of a condition's mean cost over a phase: the least-squares slope over its trials
+/// with its 95 % interval (whatever the curve's shape), and the exponential law's level where
+/// its fit is sound. Rising costs on unguided trials are forgetting or fatigue, not learning.
+std::string trendSentence(const DesignAnalysis& a, const std::string& condition, const std::string& phase) {
+  std::vector<double> n, y;
+  for (const CurvePoint& p : a.curves) {
+    if (p.condition != condition || p.phase != phase || !std::isfinite(p.shape.mean)) continue;
+    n.push_back(p.trial_in_phase);
+    y.push_back(p.shape.mean);
   }
-  if (b.lower > 0.0) {
-    return fmt::format("Over the {} trials with {}, the shape cost fell from about {:.3g} to {:.3g}{}; the exponential "
-                       "law levels off at {:.3g} (95 % CI {:.3g} to {:.3g}).",
-                       f.phase, f.condition, first, last, guided_phase ? " (with guidance)" : ": learning",
-                       f.exponential.asymptote.estimate, f.exponential.asymptote.lower, f.exponential.asymptote.upper);
+  const analysis::LinearTrend trend = analysis::linearTrend(n, y);
+  if (!std::isfinite(trend.lower)) return "";
+  const bool guided = std::any_of(a.scores.begin(), a.scores.end(), [&](const DesignTrialScore& s) {
+    return s.condition == condition && s.phase == phase && s.guided;
+  });
+  const std::string slope = fmt::format("{:+.3g} per trial, 95 % CI {:.3g} to {:.3g}", trend.slope, trend.lower, trend.upper);
+  if (trend.lower <= 0.0 && trend.upper >= 0.0) {
+    return fmt::format("Over the {} trials with {}, the shape cost showed no trend the interval can tell from none ({}).",
+                       phase, condition, slope);
   }
-  return fmt::format("Over the {} trials with {}, the shape cost rose from about {:.3g} to {:.3g}: {}.", f.phase,
-                     f.condition, first, last, guided_phase ? "the guidance did not bring it down" : "forgetting, not learning");
+  std::string text = fmt::format("Over the {} trials with {}{}, the shape cost {} ({}){}", phase, condition,
+                                 guided ? " (guidance on)" : "", trend.slope < 0.0 ? "fell" : "rose", slope,
+                                 trend.slope < 0.0 ? "" : guided ? ": the guided writing drifted from the expert's"
+                                                                 : ": forgetting or fatigue, not learning");
+  const auto fit = std::find_if(a.fits.begin(), a.fits.end(), [&](const CurveFitRow& f) {
+    return f.subject.empty() && f.metric == "shape" && f.condition == condition && f.phase == phase;
+  });
+  if (trend.slope < 0.0 && fit != a.fits.end() && fit->exponential.note.empty() && std::isfinite(fit->exponential.asymptote.lower)) {
+    text += fmt::format("; the exponential law levels off at {:.3g} (95 % CI {:.3g} to {:.3g})",
+                        fit->exponential.asymptote.estimate, fit->exponential.asymptote.lower,
+                        fit->exponential.asymptote.upper);
+  }
+  return text + ".";
 }
 
 }  // namespace
@@ -739,10 +794,11 @@ std::vector<std::string> designSummary(const DesignAnalysis& a) {
       if (!sentence.empty()) out.push_back(sentence);
     }
   }
-  for (const CurveFitRow& f : a.fits) {
-    if (!f.subject.empty() || f.metric != "shape") continue;
-    const bool guided = f.phase == session::kPhaseTraining;
-    out.push_back(trendSentence(f, guided));
+  for (const std::string& condition : present) {
+    for (const std::string& phase : a.phases) {
+      const std::string sentence = trendSentence(a, condition, phase);
+      if (!sentence.empty()) out.push_back(sentence);
+    }
   }
   if (a.retention.empty()) {
     out.push_back("What it does not show: whether what was learned lasts, for no retention test was run.");

@@ -143,8 +143,9 @@ AnalysisChoice chooseAnalysis(const session::StudyDatabase& db) {
                                subjects.size())};
   }
   if (!session::isPaperDesign(db.study())) {
-    return {false, "the study has groups, sessions or phases beyond the paper's: each phase is compared by a linear "
-                   "mixed model of every trial (subjects random), as docs/analysis.md describes"};
+    return {false, "the study has groups, sessions or phases beyond the paper's: each phase with two conditions or "
+                   "more is compared by a linear mixed model of its trials (subjects random), as docs/analysis.md "
+                   "describes"};
   }
   StudyAnalysis probe;
   probe.analyzed_recall_trials = session::analyzedRecallTrials(db.study().protocol);

@@ -1,5 +1,7 @@
 #include "hattr/report/study_report.hpp"
 
+#include "hattr/analysis/learning_curve.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -160,13 +162,13 @@ std::vector<std::string> conclusions(const StudyAnalysis& a, double alpha) {
 
 /// The report's opening in plain words: what was compared, the mode effect with its size and
 /// the differences' intervals, the trend over recall, what the numbers do not show.
-std::vector<std::string> paperSummary(const StudyAnalysis& a, std::size_t subjects) {
+std::vector<std::string> paperSummary(const session::StudyDefinition& study, const StudyAnalysis& a,
+                                      std::size_t subjects, const std::string& reason) {
   std::vector<std::string> out;
   out.push_back(fmt::format("Compared: the training modes {}, each of {} subjects trying each, on recall trials written "
-                            "without guidance. Analysis: {}.",
+                            "{}. Analysis: {}.",
                             fmt::join(a.modes, ", "), subjects,
-                            "the paper's design, complete: the balanced two-way ANOVA of mode × subject (subjects random), "
-                            "as the paper analyzes it"));
+                            study.protocol.recall.guidance ? "with the mode's guidance" : "without guidance", reason));
   const MetricResult& m = a.trajectory;
   const analysis::AnovaRow* mode = findRow(m.overall, "mode");
   const analysis::AnovaRow* error = mode ? findRow(m.overall, mode->error_term) : nullptr;
@@ -186,14 +188,18 @@ std::vector<std::string> paperSummary(const StudyAnalysis& a, std::size_t subjec
     out.push_back(fmt::format("Differences in mean shape cost between modes (Tukey's intervals; lower is closer to the "
                               "expert): {}.", fmt::join(pairs, "; ")));
   }
+  // The trend over the recall trials: the least-squares slope of the mean cost with its interval.
   for (const std::string& mode_name : inStudyOrder(a, m)) {
     const auto means = m.mean_by_trial.find(mode_name);
-    const analysis::AnovaRow* trial = findRow(m.per_mode.at(mode_name), "trial");
-    if (means == m.mean_by_trial.end() || trial == nullptr || !(trial->p < 0.05)) continue;
-    const double slope = leastSquaresSlope(means->second);
-    out.push_back(fmt::format("With {}, the shape cost {} over the recall trials ({:+.3g} per trial, {}){}.", mode_name,
-                              slope > 0.0 ? "rose" : "fell", slope, pIs(trial->p),
-                              slope > 0.0 ? ": forgetting or fatigue, not learning" : ""));
+    if (means == m.mean_by_trial.end()) continue;
+    std::vector<double> n;
+    for (std::size_t i = 0; i < means->second.size(); ++i) n.push_back(static_cast<double>(i + 1));
+    const analysis::LinearTrend trend = analysis::linearTrend(n, means->second);
+    if (!std::isfinite(trend.lower) || (trend.lower <= 0.0 && trend.upper >= 0.0)) continue;
+    out.push_back(fmt::format("With {}, the mean shape cost {} over the analyzed recall trials ({:+.3g} per trial, 95 % CI "
+                              "{:.3g} to {:.3g}){}.",
+                              mode_name, trend.slope > 0.0 ? "rose" : "fell", trend.slope, trend.lower, trend.upper,
+                              trend.slope > 0.0 ? ": forgetting or fatigue, not learning" : ""));
   }
   out.push_back(fmt::format("What it does not show: whether what was learned lasts (no delayed retention test), nor "
                             "that modes the test cannot tell apart are equal: with {} subjects, small effects go unseen.",
@@ -209,7 +215,7 @@ std::filesystem::path writeStudyReport(const session::StudyDatabase& db, const S
   doc.heading(fmt::format("Study report: {}", study.name), 1);
   const auto subjects = db.subjects();
   doc.heading("Summary");
-  doc.list(paperSummary(a, subjects.size()));
+  doc.list(paperSummary(study, a, subjects.size(), chooseAnalysis(db).reason));
 
   // Design.
   doc.heading("Design");

@@ -51,13 +51,13 @@ TEST(Kinematics, SpeedsPeaksAndPathOfAHandComputedStroke) {
   EXPECT_DOUBLE_EQ(k.mean_speed_m_per_s, 10.0 / 6.0);
   EXPECT_EQ(k.peak_speed_m_per_s, 2.0);
   EXPECT_EQ(k.velocity_peaks, 2u);
-  EXPECT_TRUE(std::isnan(k.normalized_jerk)) << "7 samples: fewer than the 8 the jerk needs";
+  EXPECT_TRUE(std::isnan(k.normalized_jerk)) << "7 samples: fewer than the 10 the jerk needs";
 }
 
 // x = c t³ sampled every h: three successive central differences give the jerk 6c exactly
-// from sample 3 to n − 4, so ∫|j|² dt = 36 c² (n − 7) h; the stroke is straight and
-// monotonic, so L = c T³ with T = (n − 1) h, and the normalized jerk is
-// √(½ · 36 c² (n − 7) h · T⁵ / (c² T⁶)) = √(18 (n − 7) h / T).
+// from sample 3 to n − 4, and the jerk, duration and length are taken over that interval:
+// T = (n − 7) h, L = c (t₍ₙ₋₄₎³ − t₃³) (a straight, monotonic stroke), ∫|j|² dt = 36 c² T, so
+// the normalized jerk is √(½ · 36 c² T · T⁵) / L = √18 · T³ / (t₍ₙ₋₄₎³ − t₃³).
 TEST(Kinematics, NormalizedJerkOfACubicIsItsClosedForm) {
   const double c = 0.02;
   const double h = 0.001;
@@ -67,8 +67,23 @@ TEST(Kinematics, NormalizedJerkOfACubicIsItsClosedForm) {
   const TrialKinematics k = trialKinematics(profileOf(samples), kRaw);
   const double t = (n - 1) * h;
   EXPECT_NEAR(k.path_length_m, c * t * t * t, 1e-15);
-  EXPECT_NEAR(k.normalized_jerk, std::sqrt(18.0 * (n - 7) * h / t), 1e-6 * std::sqrt(18.0 * (n - 7) * h / t));
+  const double t3 = 3 * h;
+  const double tn4 = (n - 4) * h;
+  const double span = tn4 - t3;
+  const double expected = std::sqrt(18.0) * span * span * span / (tn4 * tn4 * tn4 - t3 * t3 * t3);
+  EXPECT_NEAR(k.normalized_jerk, expected, 1e-6 * expected);
   EXPECT_EQ(k.velocity_peaks, 0u) << "the speed 3ct² only rises";
+}
+
+// A stroke sampled slower than twice the cut-off (15 Hz against 10 Hz) is measured raw, not
+// refused: a study's trial is never lost to its measurement.
+TEST(Kinematics, AStrokeSampledBelowTwiceTheCutOffIsMeasuredRaw) {
+  std::vector<Sample> samples;
+  for (int i = 0; i < 30; ++i) samples.push_back(at(i / 15.0, 0.001 * i, 0.0, true));
+  const TrialKinematics filtered = trialKinematics(profileOf(samples));
+  const TrialKinematics raw = trialKinematics(profileOf(samples), kRaw);
+  EXPECT_EQ(filtered.path_length_m, raw.path_length_m);
+  EXPECT_EQ(filtered.velocity_peaks, raw.velocity_peaks);
 }
 
 // Three strokes of 5, 3 and 4 samples (pen down at t = 0…0.4, 1.0…1.2, 2.0…2.3 s), the pen

@@ -114,6 +114,18 @@ TEST(DesignAnalysis, ScoresEveryTrialAgainstItsSkillsExpertAndTabulatesTheDesign
     changes.push_back(meanOf(retention) - meanOf(post));
   }
   EXPECT_NEAR(r.shape_change.mean, meanOf(changes), 1e-12);
+  // ...and each subject's own, as subject_scores.csv has them.
+  for (std::size_t k = 0; k < 3; ++k) {
+    const std::string subject = fmt::format("A0{}", k + 1);
+    const auto own = std::find_if(a.subject_scores.begin(), a.subject_scores.end(), [&](const SubjectScore& x) {
+      return x.subject == subject && x.score == "retention-change";
+    });
+    ASSERT_NE(own, a.subject_scores.end()) << subject;
+    EXPECT_NEAR(own->shape, changes[k], 1e-12) << subject;
+  }
+  EXPECT_EQ(std::count_if(a.subject_scores.begin(), a.subject_scores.end(),
+                          [](const SubjectScore& x) { return x.score == "transfer"; }),
+            6);
   EXPECT_NEAR(r.shape_change.mean, r.shape_retention.mean - r.shape_before.mean, 1e-9);
 
   // Transfer: on the second skill.

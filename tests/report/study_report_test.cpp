@@ -12,6 +12,7 @@
 
 #include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
+#include "hattr/io/table_csv.hpp"
 #include "hattr/analysis/trial_score.hpp"
 #include "hattr/report/design_analysis.hpp"
 #include "hattr/session/study_runner.hpp"
@@ -312,20 +313,25 @@ TEST(StudyAnalysis, RefusesAnUnfinishedStudyNamingWhatIsMissing) {
 // The report's choice: a paper's study missing one recall trial cannot take the balanced ANOVA,
 // so it gets the design's analysis: each phase's strategies by a mixed model, subjects and each
 // subject's strategy random (replicated within subjects), the reason said.
+/// A paper's study in `dir` (2 modes, 2 training and 3 recall trials each, scripted subjects),
+/// run for `max_trials` trials (-1: all).
+void runSmallPapersStudy(const test::TempDir& dir, int subjects, int max_trials) {
+  writeWaveExpert(dir.path(), 40);
+  test::writeText(dir / "study.json", fmt::format(R"({{"name": "u", "skill": "c", "experts": {{"c": "expert.csv"}},
+      "modes": ["basic", "pcontrol"], "world": {{"relief": {{"kind": "flat"}}}},
+      "protocol": {{"training_trials": 2, "recall_trials": 3, "rest_s": 0, "tail_s": 0.05}},
+      "subjects": {{"count": {}, "participant": "script", "options": {{"jitter_mm": 2.0}}}}}})",
+                                                  subjects));
+  { (void)session::StudyDatabase::create(dir / "s.sqlite", session::loadStudy(dir / "study.json")); }
+  session::StudyDatabase db = session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kRunner);
+  session::RunOptions options;
+  options.max_trials = max_trials;
+  session::StudyRunner(db, session::makeScriptParticipant).run(options);
+}
+
 TEST(StudyAnalysis, AnIncompletePapersStudyIsAnalyzedByMixedModelsAndSaysWhy) {
   test::TempDir dir;
-  writeWaveExpert(dir.path(), 40);
-  test::writeText(dir / "study.json", R"({"name": "u", "skill": "c", "experts": {"c": "expert.csv"},
-      "modes": ["basic", "pcontrol"], "world": {"relief": {"kind": "flat"}},
-      "protocol": {"training_trials": 2, "recall_trials": 3, "rest_s": 0, "tail_s": 0.05},
-      "subjects": {"count": 3, "participant": "script", "options": {"jitter_mm": 2.0}}})");
-  { (void)session::StudyDatabase::create(dir / "s.sqlite", session::loadStudy(dir / "study.json")); }
-  {
-    session::StudyDatabase db = session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kRunner);
-    session::RunOptions options;
-    options.max_trials = 3 * 2 * 5 - 1;  // the last recall trial is not run
-    session::StudyRunner(db, session::makeScriptParticipant).run(options);
-  }
+  runSmallPapersStudy(dir, 3, 3 * 2 * 5 - 1);  // the last recall trial is not run
   const auto db = session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kReadOnly);
   const AnalysisChoice choice = chooseAnalysis(db);
   EXPECT_FALSE(choice.balanced);
@@ -341,6 +347,26 @@ TEST(StudyAnalysis, AnIncompletePapersStudyIsAnalyzedByMixedModelsAndSaysWhy) {
   EXPECT_EQ(recall->fit.formula, "shape ~ strategy + (1 | subject) + (1 | subject:strategy)");
   EXPECT_EQ(recall->fit.observations, 3u * 2u * 3u - 1u);
   EXPECT_EQ(recall->fit.fixed.at(1).name, "strategyPCONTROL");
+}
+
+// A complete paper's study keeps the balanced ANOVA, and its long table has every trial with
+// its kinematics, the recall trials (scored by the balanced analysis) included.
+TEST(StudyAnalysis, ACompletePapersStudysLongTableHasEveryTrialsKinematics) {
+  test::TempDir dir;
+  runSmallPapersStudy(dir, 2, -1);
+  const auto db = session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kReadOnly);
+  ASSERT_TRUE(chooseAnalysis(db).balanced) << chooseAnalysis(db).reason;
+  const StudyAnalysis balanced = analyzeStudy(db);
+  writeTrialsCsv(db, balanced, {}, dir / "trials.csv");
+  const io::Table t = io::readTable(dir / "trials.csv");
+  ASSERT_EQ(t.rows.size(), 2u * 2u * 5u);
+  const auto phases = t.text("phase");
+  const auto lifts = t.text("pen_lifts");
+  const auto shape = t.text("shape");
+  for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    EXPECT_FALSE(lifts[r].empty()) << "row " << r << " (" << phases[r] << ")";
+    EXPECT_FALSE(shape[r].empty()) << "row " << r;
+  }
 }
 
 /// A 30 ms host stall, 0.2 s into the first attempt of S01's recall trial 2 in every mode.

@@ -316,6 +316,25 @@ class StudioInputTest : public QObject {
     QCOMPARE(opened.front(), QUrl::fromLocalFile(QString::fromStdString(html.string())));
   }
 
+  // One learner's study (issue 37): no between-subject statistics, the learner's progress, and
+  // every trial's costs in the tree.
+  void theReportOfOneLearnersStudyShowsTheirProgress() {
+    MainWindow& w = window();
+    const auto folder = dir_ / "learner";
+    std::filesystem::create_directories(folder);
+    const auto db_file = test::reportStudy(folder, true, 1);
+    QVERIFY2(w.openReview(QString::fromStdString(db_file.string())), qPrintable(w.lastError()));
+    w.setUrlOpener([](const QUrl&) { return true; });
+    QVERIFY2(w.openReport(), qPrintable(w.lastError()));
+    const auto md = folder / "s-report" / "report.md";
+    QVERIFY(std::filesystem::exists(md));
+    std::ifstream in(md);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    QVERIFY2(text.find("One learner practised") != std::string::npos, text.substr(0, 400).c_str());
+    QVERIFY(text.find("The learner's progress") != std::string::npos);
+    for (const auto& [id, texts] : treeCosts(*w.reviewTab())) QVERIFY(!std::get<0>(texts).isEmpty());
+  }
+
   void theReviewTreeShowsTheStoredAnalysissCostsAndSaysWhenItCannotReadThem() {
     MainWindow& w = window();
     const auto folder = dir_ / "analyzed";

@@ -109,7 +109,7 @@ RealTimeOutcome passesUnlessTheHostStalls(const RealTimeAttempt& attempt, int tr
   return outcome;
 }
 
-std::filesystem::path reportStudy(const std::filesystem::path& dir, bool complete) {
+std::filesystem::path reportStudy(const std::filesystem::path& dir, bool complete, int subjects) {
   HapticProfile expert({.subject = "expert", .skill = "curve", .nominal_rate_hz = 100.0});
   for (int i = 0; i <= 40; ++i) {
     Sample s;
@@ -124,7 +124,7 @@ std::filesystem::path reportStudy(const std::filesystem::path& dir, bool complet
       << R"({"name": "report test", "skill": "curve", "experts": {"curve": "expert.csv"},)"
          R"("protocol": {"training_trials": 1, "recall_trials": 3, "rest_s": 0, "tail_s": 0.05},)"
          R"("world": {"relief": {"kind": "flat"}},)"
-         R"("subjects": {"count": 3, "participant": "script", "options": {"jitter_mm": 2.0}}})";
+         R"("subjects": {"count": )" << subjects << R"(, "participant": "script", "options": {"jitter_mm": 2.0}}})";
   const auto db_file = dir / "s.sqlite";
   { (void)session::StudyDatabase::create(db_file, session::loadStudy(dir / "study.json")); }
   if (complete) {

@@ -57,7 +57,7 @@ RealTimeOutcome passesUnlessTheHostStalls(const RealTimeAttempt& attempt, int tr
 /// A study database `dir`/s.sqlite for the report (3 scripted subjects, 3 modes, 1 training
 /// + 3 recall trials each, over a short expert curve), run to the end by StudyRunner when
 /// `complete`, else left with every trial to do.
-std::filesystem::path reportStudy(const std::filesystem::path& dir, bool complete);
+std::filesystem::path reportStudy(const std::filesystem::path& dir, bool complete, int subjects = 3);
 
 /// A fresh empty folder under the system's temporary folder.
 std::filesystem::path freshTempDir(const std::string& name);

@@ -35,16 +35,17 @@ struct TrialKinematics {
   double mean_speed_m_per_s = 0.0;  ///< path length / writing time
   double peak_speed_m_per_s = 0.0;  ///< the largest tangential speed while writing
   std::size_t velocity_peaks = 0;   ///< NVP: local maxima of the tangential speed inside the strokes
-  /// Teulings et al.'s normalized jerk √(½ ∫|j|² dt · T⁵ / L²), dimensionless, averaged over
-  /// the strokes of 8 samples or more; NaN when there is none.
+  /// Teulings et al.'s normalized jerk √(½ ∫|j|² dt · T⁵ / L²), dimensionless, per stroke over
+  /// the samples where the third difference is central (the 4th to the 4th-last; T and L
+  /// over the same), averaged over the strokes of 10 samples or more; NaN when there is none.
   double normalized_jerk = 0.0;
   double mean_normal_force_N = 0.0;  ///< the pen's press on the paper (−f_user z), mean over pen-down samples
   double peak_normal_force_N = 0.0;  ///< its largest value
 };
 
 /// The kinematics of a profile. A profile with nothing written gives zeros (and a NaN jerk).
-/// Throws InputError for a negative or non-finite cut-off, or one at or above half the
-/// sampling rate of a stroke.
+/// Throws InputError for a negative or non-finite cut-off only: a stroke sampled slower than
+/// twice the cut-off is measured unfiltered.
 [[nodiscard]] TrialKinematics trialKinematics(const HapticProfile& profile, const KinematicsOptions& options = {});
 
 /// The measures by name, in SI units, for JSON and tables ("duration_s", "pen_lifts", ...):
@@ -56,9 +57,10 @@ struct TrialKinematics {
 
 /// A series low-passed by a zero-phase second-order Butterworth filter (forward then
 /// backward over the series extended by an odd reflection of 9 samples at each end, as
-/// SciPy's filtfilt; each pass started in the steady state of the line through its first two
-/// samples, where filtfilt starts at a constant's, so a line passes unchanged). `rate_hz` is
-/// the sampling rate. A series of 9 samples or fewer is returned as it is. Exposed for its tests.
+/// SciPy's filtfilt; each pass started in the steady state of the least-squares line through
+/// its first 19 samples, where filtfilt starts at a constant's, so a line passes unchanged).
+/// `rate_hz` is the sampling rate. A series of 9 samples or fewer is returned as it is;
+/// otherwise throws InputError unless 0 < cutoff_hz < rate_hz / 2. Exposed for its tests.
 [[nodiscard]] std::vector<double> lowPassZeroPhase(const std::vector<double>& x, double cutoff_hz, double rate_hz);
 
 }  // namespace hattr::analysis

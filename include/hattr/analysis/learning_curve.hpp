@@ -54,6 +54,20 @@ struct CurveFit {
 [[nodiscard]] CurveFit fitLearningCurve(const std::vector<double>& n, const std::vector<double>& y, CurveLaw law,
                                         double confidence = 0.95);
 
+/// A straight line's slope by least squares, with its standard error and t interval (m − 2
+/// degrees of freedom): whether scores rose or fell over trials, whatever the curve's shape.
+struct LinearTrend {
+  double slope = 0.0;  ///< [score unit per trial]
+  double std_error = 0.0;
+  double lower = 0.0;
+  double upper = 0.0;
+  std::size_t points = 0;
+};
+
+/// The trend of y over n. Needs 3 points or more and n not all equal; else NaN throughout.
+[[nodiscard]] LinearTrend linearTrend(const std::vector<double>& n, const std::vector<double>& y,
+                                      double confidence = 0.95);
+
 [[nodiscard]] const char* curveLawName(CurveLaw law);  ///< "exponential", "power"
 [[nodiscard]] nlohmann::json toJson(const CurveFit& fit);
 

@@ -41,6 +41,7 @@ struct DesignTrialScore {
   std::string skill;
   int trial = 1;          ///< within the block, from 1
   int trial_in_phase = 1; ///< within the phase over the sessions, from 1 (the curves' x)
+  bool guided = false;    ///< the block's guidance was on
   analysis::TrialScore score;
   std::string disturbed;
   /// The trial's kinematics by name (analysis::kinematicsNames(); NaN where not a number),
@@ -76,6 +77,18 @@ struct RetentionRow {
   std::string before;  ///< "post-test" or "training": what retention is compared with
   SubjectMean shape_before, shape_retention, shape_change;
   SubjectMean force_before, force_retention, force_change;
+};
+
+/// One subject's mean shape and force cost in a phase the design's tests define: "post-test"
+/// (or "training", the block retention is compared with), "retention", "retention-change"
+/// (retention minus that block) and "transfer".
+struct SubjectScore {
+  std::string subject;
+  std::string condition;
+  std::string skill;
+  std::string score;  ///< which of the above
+  double shape = 0.0;
+  double force = 0.0;
 };
 
 /// Transfer of one condition to one skill.
@@ -143,10 +156,12 @@ struct DesignAnalysis {
   int trials_flagged = 0;               ///< disturbed, analyzed and flagged
   std::string disturbed_policy;
   int subjects = 0;                     ///< with analyzed trials
+  bool paper_design = false;            ///< the paper's design (incomplete, or one learner's)
   std::string reason;                   ///< why this analysis (chooseAnalysis), for the report
   std::vector<PhaseModel> models;       ///< per phase and metric, with two subjects or more
   std::vector<CurveFitRow> fits;        ///< per condition and phase (and per subject) of 4 trials or more
   std::vector<LearnerRow> learner;      ///< one learner only
+  std::vector<SubjectScore> subject_scores;  ///< each subject's post-test, retention and transfer
 };
 
 /// The mean of one value per subject with its interval (SubjectMean; none: NaN, 0 subjects).
@@ -164,7 +179,8 @@ nlohmann::json designAnalysisToJson(const DesignAnalysis& analysis);
 
 /// What writeDesignCsv writes.
 inline const std::vector<std::string> kDesignCsvFiles{"trials.csv", "curves.csv", "phases.csv", "retention.csv",
-                                                      "transfer.csv", "models.csv", "curve_fits.csv"};
+                                                      "transfer.csv", "models.csv", "curve_fits.csv",
+                                                      "subject_scores.csv"};
 
 /// The long table of every analyzed trial, the one an R or pandas user starts from: its place
 /// in the design, every score, every kinematic measure, disturbed (trials.csv).

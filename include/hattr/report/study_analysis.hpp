@@ -38,6 +38,9 @@ struct AnalysisOptions {
     const auto it = scored->find(trial_id);
     return it == scored->end() ? nullptr : &it->second;
   }
+  /// Read the kinematics of the trials in `scored` from their stored profiles too (the long
+  /// table of a paper's study); a power analysis's scratch store keeps no samples to read.
+  bool kinematics_of_scored = false;
   /// Called on the calling thread as the recall trials are scored: scored so far, in all.
   std::function<void(int scored, int total)> progress;
 };
