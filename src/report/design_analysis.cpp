@@ -367,12 +367,12 @@ void fitCurves(DesignAnalysis& a) {
           y.push_back(shape ? p.shape.mean : p.force.mean);
         }
         if (fitBoth(n, y, row)) a.fits.push_back(row);
+        if (a.subjects < 2) continue;  // one learner: the mean curve is theirs
         // Each subject's own curve.
         std::map<std::string, std::map<int, std::vector<double>>> by_subject;
         for (const DesignTrialScore& s : a.scores) {
           if (s.condition == condition && s.phase == phase) by_subject[s.subject][s.trial_in_phase].push_back(shape ? s.shape() : s.force());
         }
-        if (a.subjects < 2) continue;  // one learner: the mean curve is theirs
         for (const auto& [subject, trials] : by_subject) {
           CurveFitRow own{condition, phase, subject, row.metric, {}, {}};
           std::vector<double> sn, sy;

@@ -152,7 +152,8 @@ void writeModels(const DesignAnalysis& a, Document& doc) {
     }
     std::string test;
     for (const auto& term : m.fit.terms) {
-      test += fmt::format("{}: F({:g}, {:.1f}) = {}, p = {}", term.term, term.num_df, term.den_df, g(term.f), g(term.p));
+      test += fmt::format("{}{}: F({:g}, {:.1f}) = {}, p = {}", test.empty() ? "" : "; ", term.term, term.num_df,
+                          term.den_df, g(term.f), g(term.p));
     }
     std::vector<std::string> differences;
     for (const auto& c : m.fit.fixed) {
