@@ -139,7 +139,7 @@ void bindStudies(py::module_& m) {
           py::arg("band_fraction") = py::none(), py::arg("threads") = 2,
           "The study's analysis, as `hattr study analyze --json` prints it (a dict). The paper's design: "
           "recall_costs (records), and per metric ('trajectory', 'force') the ANOVAs, Tukey HSD, per-mode "
-          "statistics and each subject's best mode. Any other design: trial_scores (records), curves, "
+          "statistics and each subject's best mode. Any other design: trial_scores (records), trials_left_out, curves, "
           "phase_cells, retention, transfer and conclusions (docs/analysis.md, 'Designs'). Nothing is "
           "written. Releases the GIL.")
       .def("close", &OpenStudy::close, "Closes the database; the study can no longer be read through this object.")

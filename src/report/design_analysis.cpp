@@ -61,10 +61,14 @@ std::pair<SubjectMean, SubjectMean> shapeAndForce(const std::vector<DesignTrialS
   return {overSubjects(shape), overSubjects(force)};
 }
 
-/// The completed trials to analyze, with their places; counts what is left out.
-std::vector<DesignTrialScore> analyzedTrials(const session::StudyDatabase& db, DesignAnalysis& out) {
+/// Every completed trial with its place, and why the analysis leaves it out ("" when it takes
+/// it); counts what is left out.
+std::vector<DesignTrialScore> completedTrials(const session::StudyDatabase& db, DesignAnalysis& out) {
   const session::StudyDefinition& study = db.study();
   const bool exclude = study.protocol.disturbed == session::DisturbedPolicy::kExclude;
+  // A paper's design: its recall trials as the paper's analysis takes them (spares included).
+  const bool paper = session::isPaperDesign(study);
+  const std::map<std::int64_t, int> paper_recall = paper ? paperRecallTrials(db) : std::map<std::int64_t, int>{};
   std::vector<DesignTrialScore> scores;
   std::map<std::tuple<std::string, std::string, std::string, std::string>, int> in_phase;
   for (const session::TrialRecord& t : db.trials()) {
@@ -73,12 +77,15 @@ std::vector<DesignTrialScore> analyzedTrials(const session::StudyDatabase& db, D
       ++out.trials_pending;
       continue;
     }
+    DesignTrialScore s;
     if (!t.disturbed.empty() && exclude) {
       ++out.trials_excluded;
-      continue;
+      s.left_out = "disturbed (policy \"exclude\")";
+    } else if (paper && t.plan.phase == session::kPhaseRecall && !paper_recall.contains(t.id)) {
+      s.left_out = "not an analyzed recall trial (protocol.analyzed_recall_trials)";
+    } else {
+      out.trials_flagged += t.disturbed.empty() ? 0 : 1;
     }
-    out.trials_flagged += t.disturbed.empty() ? 0 : 1;
-    DesignTrialScore s;
     s.trial_id = t.id;
     s.subject = t.plan.subject;
     s.group = t.plan.group;
@@ -91,6 +98,8 @@ std::vector<DesignTrialScore> analyzedTrials(const session::StudyDatabase& db, D
     s.skill = t.plan.skill;
     s.trial = t.plan.index;
     s.trial_in_phase = ++in_phase[{s.subject, s.phase, s.condition, s.skill}];
+    // A spare takes the number of the recall trial it stands in for, as in the paper's analysis.
+    if (const auto place = paper_recall.find(t.id); place != paper_recall.end()) s.trial_in_phase = place->second;
     s.guided = t.plan.view.guidance;
     s.disturbed = t.disturbed;
     scores.push_back(std::move(s));
@@ -460,10 +469,13 @@ DesignAnalysis analyzeDesign(const session::StudyDatabase& db, const AnalysisOpt
   a.condition_kind = conditionKind(study);
   a.conditions = conditionsOf(study, a.condition_kind);
   a.disturbed_policy = std::string(session::disturbedPolicyName(study.protocol.disturbed));
-  a.scores = analyzedTrials(db, a);
-  HATTR_THROW_UNLESS(!a.scores.empty(), "{}: no trial of the study is completed yet ({} planned); run the study first",
+  std::vector<DesignTrialScore> completed = completedTrials(db, a);
+  HATTR_THROW_UNLESS(!completed.empty(), "{}: no trial of the study is completed yet ({} planned); run the study first",
                      db.file().string(), a.trials_planned);
-  scoreTrials(db, options, a.scores);
+  scoreTrials(db, options, completed);
+  for (DesignTrialScore& s : completed) (s.left_out.empty() ? a.scores : a.left_out).push_back(std::move(s));
+  HATTR_THROW_UNLESS(!a.scores.empty(), "{}: none of the {} completed trials is analyzed ({}, ...)", db.file().string(),
+                     a.left_out.size(), a.left_out.front().left_out);
   std::set<std::string> subjects;
   for (const DesignTrialScore& s : a.scores) subjects.insert(s.subject);
   a.subjects = static_cast<int>(subjects.size());
@@ -490,13 +502,18 @@ DesignAnalysis analyzeDesign(const session::StudyDatabase& db, const AnalysisOpt
 nlohmann::json designAnalysisToJson(const DesignAnalysis& a) {
   nlohmann::json scores = nlohmann::json::array(), curves = nlohmann::json::array(), cells = nlohmann::json::array(),
                  retention = nlohmann::json::array(), transfer = nlohmann::json::array();
-  for (const auto& s : a.scores) {
-    scores.push_back({{"trial_id", s.trial_id}, {"subject", s.subject}, {"condition", s.condition}, {"group", s.group},
-                      {"strategy", s.strategy}, {"session", s.session}, {"day", s.day}, {"block", s.block},
-                      {"phase", s.phase}, {"skill", s.skill}, {"trial", s.trial}, {"trial_in_phase", s.trial_in_phase},
-                      {"shape", s.shape()}, {"force", s.force()}, {"z", s.score.z}, {"disturbed", s.disturbed},
-                      {"kinematics", kinematicsJson(s.kinematics)}});
-  }
+  const auto trialJson = [](const DesignTrialScore& s) {
+    nlohmann::json j{{"trial_id", s.trial_id}, {"subject", s.subject}, {"condition", s.condition}, {"group", s.group},
+                     {"strategy", s.strategy}, {"session", s.session}, {"day", s.day}, {"block", s.block},
+                     {"phase", s.phase}, {"skill", s.skill}, {"trial", s.trial}, {"trial_in_phase", s.trial_in_phase},
+                     {"shape", s.shape()}, {"force", s.force()}, {"z", s.score.z}, {"disturbed", s.disturbed},
+                     {"kinematics", kinematicsJson(s.kinematics)}};
+    if (!s.left_out.empty()) j["left_out"] = s.left_out;
+    return j;
+  };
+  nlohmann::json left_out = nlohmann::json::array();
+  for (const auto& s : a.scores) scores.push_back(trialJson(s));
+  for (const auto& s : a.left_out) left_out.push_back(trialJson(s));
   for (const auto& c : a.curves) {
     curves.push_back({{"condition", c.condition}, {"phase", c.phase}, {"trial_in_phase", c.trial_in_phase},
                       {"shape", meanJson(c.shape)}, {"force", meanJson(c.force)}});
@@ -542,13 +559,13 @@ nlohmann::json designAnalysisToJson(const DesignAnalysis& a) {
           {"condition_kind", a.condition_kind}, {"conditions", a.conditions},
           {"phases", a.phases}, {"trials_planned", a.trials_planned}, {"trials_pending", a.trials_pending},
           {"trials_excluded", a.trials_excluded}, {"trials_flagged", a.trials_flagged},
-          {"disturbed_policy", a.disturbed_policy}, {"trial_scores", scores}, {"curves", curves}, {"phase_cells", cells},
+          {"disturbed_policy", a.disturbed_policy}, {"trial_scores", scores}, {"trials_left_out", left_out}, {"curves", curves}, {"phase_cells", cells},
           {"retention", retention}, {"transfer", transfer}, {"conclusions", designConclusions(a)}};
 }
 
 void writeDesignCsv(const DesignAnalysis& a, const std::filesystem::path& dir) {
   std::filesystem::create_directories(dir);
-  writeTrialsCsv(a.scores, dir / "trials.csv");
+  writeTrialsCsv(a, dir / "trials.csv");
   const auto means = [](const SubjectMean& m) {
     return std::vector<std::string>{fmt::format("{}", m.subjects), cell(m.mean), cell(m.ci)};
   };
@@ -635,17 +652,24 @@ void writeTrialsCsv(const session::StudyDatabase& db, const StudyAnalysis& balan
   for (const auto& c : balanced.costs) scored[c.trial_id] = c.score;
   options.scored = &scored;
   options.kinematics_of_scored = true;
-  writeTrialsCsv(analyzeDesign(db, options).scores, file);
+  writeTrialsCsv(analyzeDesign(db, options), file);
 }
 
-void writeTrialsCsv(const std::vector<DesignTrialScore>& scores, const std::filesystem::path& file) {
+void writeTrialsCsv(const DesignAnalysis& a, const std::filesystem::path& file) {
   std::vector<std::string> header{"trial_id", "subject", "condition", "group", "strategy", "session", "day", "block",
                                   "phase", "skill", "trial", "trial_in_phase", "x", "y", "z", "fx", "fy", "fz", "shape",
                                   "force"};
   for (const char* name : analysis::kinematicsNames()) header.emplace_back(name);
-  header.emplace_back("disturbed");
+  for (const char* name : {"disturbed", "analyzed", "left_out"}) header.emplace_back(name);
+  // Analyzed and left-out trials together, in the study's order.
+  std::vector<const DesignTrialScore*> trials;
+  for (const auto* list : {&a.scores, &a.left_out}) {
+    for (const auto& s : *list) trials.push_back(&s);
+  }
+  std::sort(trials.begin(), trials.end(), [](const auto* x, const auto* y) { return x->trial_id < y->trial_id; });
   io::Table table{header, {}, ""};
-  for (const auto& s : scores) {
+  for (const DesignTrialScore* p : trials) {
+    const DesignTrialScore& s = *p;
     const analysis::TrialScore& c = s.score;
     std::vector<std::string> row{fmt::format("{}", s.trial_id), s.subject, s.condition, s.group, s.strategy,
                                  fmt::format("{}", s.session), fmt::format("{}", s.day), fmt::format("{}", s.block), s.phase,
@@ -656,6 +680,8 @@ void writeTrialsCsv(const std::vector<DesignTrialScore>& scores, const std::file
       row.push_back(it == s.kinematics.end() ? "" : cell(it->second));
     }
     row.push_back(io::plainCell(s.disturbed));
+    row.emplace_back(s.left_out.empty() ? "1" : "0");
+    row.push_back(io::plainCell(s.left_out));
     table.rows.push_back(std::move(row));
   }
   std::filesystem::create_directories(file.parent_path());

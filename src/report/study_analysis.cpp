@@ -158,6 +158,15 @@ AnalysisChoice chooseAnalysis(const session::StudyDatabase& db) {
                 "tested against mode × subject), as the paper analyzes it"};
 }
 
+std::map<std::int64_t, int> paperRecallTrials(const session::StudyDatabase& db) {
+  StudyAnalysis probe;
+  probe.analyzed_recall_trials = session::analyzedRecallTrials(db.study().protocol);
+  (void)selectRecallTrials(db, probe);  // what is missing only makes the set smaller
+  std::map<std::int64_t, int> out;
+  for (const TrialCost& c : probe.costs) out[c.trial_id] = c.trial;
+  return out;
+}
+
 StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptions& options) {
   const session::StudyDefinition& study = db.study();
   HATTR_THROW_UNLESS(session::isPaperDesign(study),

@@ -166,3 +166,4 @@ def test_a_design_of_groups_and_sessions_runs_and_analyzes_as_the_cli_does(tmp_p
     assert mine == cli_json("study", "analyze", "--db", tmp_path / "design.sqlite")
     assert [r["condition"] for r in mine["retention"]] == ["free", "path", "force"]
     assert len(mine["trial_scores"]) == 36
+    assert mine["trials_left_out"] == []  # no disturbed trial, no paper recall trial to leave out

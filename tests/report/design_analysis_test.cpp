@@ -167,8 +167,13 @@ TEST(DesignAnalysis, DisturbedTrialsFollowThePolicyAndAStudyInProgressIsAnalyzed
     EXPECT_EQ(a.trials_flagged, policy == "flag" ? 1 : 0) << policy;
     EXPECT_EQ(a.trials_excluded, policy == "exclude" ? 1 : 0) << policy;
     EXPECT_EQ(a.scores.size(), policy == "flag" ? 48u : 47u);
+    EXPECT_EQ(a.left_out.size(), policy == "flag" ? 0u : 1u);
     writeDesignCsv(a, study.dir / "out");
-    EXPECT_EQ(io::readTable(study.dir / "out" / "trials.csv").rows.size(), a.scores.size());
+    // The long table lists every completed trial, an excluded one marked as not analyzed.
+    const io::Table t = io::readTable(study.dir / "out" / "trials.csv");
+    EXPECT_EQ(t.rows.size(), 48u);
+    const auto analyzed = t.text("analyzed");
+    EXPECT_EQ(std::count(analyzed.begin(), analyzed.end(), "0"), policy == "flag" ? 0 : 1) << policy;
   }
   // In progress: what is completed is analyzed, and the rest counted.
   session::RunOptions some;

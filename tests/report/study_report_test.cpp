@@ -339,14 +339,34 @@ TEST(StudyAnalysis, AnIncompletePapersStudyIsAnalyzedByMixedModelsAndSaysWhy) {
   EXPECT_THAT(choice.reason, HasSubstr("1 recall trial is not completed"));
   const DesignAnalysis a = analyzeDesign(db);
   EXPECT_EQ(a.condition_kind, "strategy");
-  EXPECT_EQ(a.scores.size(), 29u);
+  // 29 trials completed; the recall trials analyzed are the paper's (2 and 3 of 3), so each
+  // subject's recall trial 1 in each mode is left out of the tables and the models.
+  EXPECT_EQ(a.scores.size(), 29u - 6u);
+  ASSERT_EQ(a.left_out.size(), 6u);
+  for (const DesignTrialScore& s : a.left_out) {
+    EXPECT_EQ(s.phase, "recall");
+    EXPECT_EQ(s.trial, 1);
+    EXPECT_THAT(s.left_out, HasSubstr("analyzed_recall_trials"));
+  }
+  for (const CurvePoint& c : a.curves) EXPECT_FALSE(c.phase == "recall" && c.trial_in_phase == 1);
   const auto recall = std::find_if(a.models.begin(), a.models.end(),
                                    [](const PhaseModel& m) { return m.phase == "recall" && m.metric == "shape"; });
   ASSERT_NE(recall, a.models.end());
   ASSERT_TRUE(recall->skipped.empty()) << recall->skipped;
   EXPECT_EQ(recall->fit.formula, "shape ~ strategy + (1 | subject) + (1 | subject:strategy)");
-  EXPECT_EQ(recall->fit.observations, 3u * 2u * 3u - 1u);
+  EXPECT_EQ(recall->fit.observations, 3u * 2u * 2u - 1u);
   EXPECT_EQ(recall->fit.fixed.at(1).name, "strategyPCONTROL");
+  // The long table keeps every completed trial and says which the analysis took.
+  writeDesignCsv(a, dir / "out");
+  const io::Table t = io::readTable(dir / "out" / "trials.csv");
+  ASSERT_EQ(t.rows.size(), 29u);
+  const auto analyzed = t.text("analyzed");
+  const auto phase = t.text("phase");
+  const auto trial = t.text("trial");
+  for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    EXPECT_EQ(analyzed[r], phase[r] == "recall" && trial[r] == "1" ? "0" : "1") << "row " << r;
+  }
+  EXPECT_EQ(designAnalysisToJson(a)["trials_left_out"].size(), 6u);
 }
 
 // A complete paper's study keeps the balanced ANOVA, and its long table has every trial with
@@ -363,9 +383,13 @@ TEST(StudyAnalysis, ACompletePapersStudysLongTableHasEveryTrialsKinematics) {
   const auto phases = t.text("phase");
   const auto lifts = t.text("pen_lifts");
   const auto shape = t.text("shape");
+  const auto trial = t.text("trial");
+  const auto analyzed = t.text("analyzed");
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
     EXPECT_FALSE(lifts[r].empty()) << "row " << r << " (" << phases[r] << ")";
     EXPECT_FALSE(shape[r].empty()) << "row " << r;
+    // The balanced analysis takes recall trials 2 and 3; the first is listed, not analyzed.
+    EXPECT_EQ(analyzed[r], phases[r] == "recall" && trial[r] == "1" ? "0" : "1") << "row " << r;
   }
 }
 
@@ -491,6 +515,37 @@ TEST(DisturbedTrials, ExcludeReplacesThemWithTheSpareRecallTrial) {
     EXPECT_EQ(spare, t.plan.phase == session::kPhaseRecall && t.plan.index == 1) << t.id;
   }
   EXPECT_EQ(a.trajectory.overall.replicates, 2u);
+}
+
+// The fallback takes the recall trials the paper's analysis would: under "exclude" a disturbed
+// one is left out and the spare stands in for it, in its place on the recall curve.
+TEST(StudyAnalysis, AnIncompletePapersStudysFallbackUsesTheSpareForAnExcludedTrial) {
+  session::RunOptions options = stallInS01Recall2();
+  options.max_trials = 3 * 3 * 4 - 1;  // the last trial is not run
+  CompletedStudy study(R"("disturbed_trials": "exclude",)", options);
+  const auto db = session::StudyDatabase::open(study.dir / "s.sqlite", session::OpenMode::kReadOnly);
+  ASSERT_FALSE(chooseAnalysis(db).balanced);
+  for (const auto& t : db.trials("S01")) ASSERT_EQ(t.status, session::TrialStatus::kCompleted) << t.id;
+  const DesignAnalysis a = analyzeDesign(db);
+  EXPECT_EQ(a.trials_excluded, 3);
+  int spares = 0, excluded = 0;
+  for (const DesignTrialScore& s : a.scores) {
+    if (s.subject != "S01" || s.phase != "recall") continue;
+    EXPECT_NE(s.trial, 2) << "the disturbed trial is analyzed";
+    if (s.trial == 1) {
+      EXPECT_EQ(s.trial_in_phase, 2) << "the spare takes the place of trial 2";
+      ++spares;
+    }
+  }
+  for (const DesignTrialScore& s : a.left_out) {
+    if (s.subject == "S01" && s.phase == "recall" && s.trial == 2) {
+      EXPECT_THAT(s.left_out, HasSubstr("exclude"));
+      EXPECT_FALSE(s.disturbed.empty());
+      ++excluded;
+    }
+  }
+  EXPECT_EQ(spares, 3);
+  EXPECT_EQ(excluded, 3);
 }
 
 TEST(DisturbedTrials, ExcludeWithoutASpareSaysWhatToDo) {

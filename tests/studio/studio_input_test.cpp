@@ -22,6 +22,8 @@
 #include "core/tablet_input.hpp"
 #include "hattr/net/device_server.hpp"
 #include "hattr/core/error.hpp"
+#include "hattr/io/table_csv.hpp"
+#include "hattr/report/design_analysis.hpp"
 #include "hattr/report/study_analysis.hpp"
 #include "studio_test_support.hpp"
 #include "ui/main_window.hpp"
@@ -314,6 +316,12 @@ class StudioInputTest : public QObject {
     QVERIFY(std::filesystem::file_size(html) > 1000);
     QCOMPARE(opened.size(), 1);
     QCOMPARE(opened.front(), QUrl::fromLocalFile(QString::fromStdString(html.string())));
+    // The tables `hattr study report` writes lie beside it, the long table with every trial.
+    for (const std::string& name : report::kAnalysisCsvFiles) {
+      QVERIFY2(std::filesystem::exists(folder / "s-report" / name), name.c_str());
+    }
+    const auto db = session::StudyDatabase::open(db_file, session::OpenMode::kReadOnly);
+    QCOMPARE(io::readTable(folder / "s-report" / "trials.csv").rows.size(), db.trials().size());
   }
 
   // One learner's study (issue 37): no between-subject statistics, the learner's progress, and
@@ -333,6 +341,12 @@ class StudioInputTest : public QObject {
     QVERIFY2(text.find("One learner practised") != std::string::npos, text.substr(0, 400).c_str());
     QVERIFY(text.find("The learner's progress") != std::string::npos);
     for (const auto& [id, texts] : treeCosts(*w.reviewTab())) QVERIFY(!std::get<0>(texts).isEmpty());
+    // The design's tables lie beside it; the long table has every completed trial.
+    for (const std::string& name : report::kDesignCsvFiles) {
+      QVERIFY2(std::filesystem::exists(folder / "s-report" / name), name.c_str());
+    }
+    const auto db = session::StudyDatabase::open(db_file, session::OpenMode::kReadOnly);
+    QCOMPARE(io::readTable(folder / "s-report" / "trials.csv").rows.size(), db.trials().size());
   }
 
   void theReviewTreeShowsTheStoredAnalysissCostsAndSaysWhenItCannotReadThem() {

@@ -1,7 +1,8 @@
 #pragma once
 /// The analysis report of a study from Review: report::analyzeStudy and
-/// report::writeStudyReport (a design of groups and sessions: report::analyzeDesign and
-/// report::writeDesignReport) into a folder next to the database (<db stem>-report/).
+/// report::writeStudyReport with the CSV tables of `hattr study report` (a design of groups and
+/// sessions: report::analyzeDesign, report::writeDesignReport and its tables) into a folder
+/// next to the database (<db stem>-report/).
 /// GUI thread (it takes a moment: DTW over every recall trial); throws InputError when the
 /// study is not complete enough (the library's message names the missing trials).
 

@@ -44,6 +44,7 @@ struct DesignTrialScore {
   bool guided = false;    ///< the block's guidance was on
   analysis::TrialScore score;
   std::string disturbed;
+  std::string left_out;   ///< why the analysis leaves it out ("": analyzed); it is in trials.csv still
   /// The trial's kinematics by name (analysis::kinematicsNames(); NaN where not a number),
   /// as stored with the trial, else measured from its samples; empty when not read.
   std::map<std::string, double> kinematics;
@@ -146,6 +147,10 @@ struct DesignAnalysis {
   std::vector<std::string> conditions;  ///< in the study's order
   std::vector<std::string> phases;      ///< in the order they first come
   std::vector<DesignTrialScore> scores; ///< the analyzed trials, in the study's order
+  /// Completed trials scored but left out of every table and model (DesignTrialScore::left_out):
+  /// disturbed ones under "exclude"; of a paper's design, the recall trials the paper's
+  /// analysis does not take (paperRecallTrials). trials.csv lists them with analyzed = 0.
+  std::vector<DesignTrialScore> left_out;
   std::vector<CurvePoint> curves;
   std::vector<PhaseCell> cells;
   std::vector<RetentionRow> retention;
@@ -182,9 +187,10 @@ inline const std::vector<std::string> kDesignCsvFiles{"trials.csv", "curves.csv"
                                                       "transfer.csv", "models.csv", "curve_fits.csv",
                                                       "subject_scores.csv"};
 
-/// The long table of every analyzed trial, the one an R or pandas user starts from: its place
-/// in the design, every score, every kinematic measure, disturbed (trials.csv).
-void writeTrialsCsv(const std::vector<DesignTrialScore>& scores, const std::filesystem::path& file);
+/// The long table of every completed trial, the one an R or pandas user starts from: its
+/// place in the design, every score, every kinematic measure, disturbed, and whether the
+/// analysis takes it (analyzed, left_out), in the study's order (trials.csv).
+void writeTrialsCsv(const DesignAnalysis& analysis, const std::filesystem::path& file);
 /// The same for a paper's study analyzed by the balanced ANOVA: its recall trials as `balanced`
 /// scored them, the others (training) scored now with `options`.
 void writeTrialsCsv(const session::StudyDatabase& db, const StudyAnalysis& balanced, AnalysisOptions options,

@@ -107,6 +107,13 @@ struct AnalysisChoice {
 /// or more; the design's analysis (a mixed model per phase, or one learner's progress) otherwise.
 [[nodiscard]] AnalysisChoice chooseAnalysis(const session::StudyDatabase& db);
 
+/// The recall trials of a paper's study the paper's analysis takes, as far as they are
+/// completed: trial id -> the recall trial number it is analyzed as. The protocol's analyzed
+/// recall trials; under "exclude" a disturbed one is left out and a clean spare (a recall trial
+/// outside the analyzed set, same subject and mode) takes its number where there is one. The
+/// design's analysis of an incomplete paper's study analyzes these and no other recall trial.
+std::map<std::int64_t, int> paperRecallTrials(const session::StudyDatabase& db);
+
 /// Analyzes every completed recall trial. Throws InputError when the study is not complete
 /// enough for the balanced design (naming the missing trials).
 StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptions& options = {});
