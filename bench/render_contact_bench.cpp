@@ -9,6 +9,7 @@
 #include <benchmark/benchmark.h>
 
 #include "hattr/render/flat_paper.hpp"
+#include "hattr/core/world_renderer.hpp"
 #include "hattr/render/paper_renderer.hpp"
 
 namespace {

@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
     s.pen_down = s.in_contact = true;
     profile.append(s);
   }
-  hattr::io::writeProfileCsv(profile, argv[1], hattr::io::Overwrite::kReplace);
+  hattr::io::writeProfileCsv(profile, argv[1], hattr::Overwrite::kReplace);
 
   const hattr::HapticProfile back = hattr::io::readProfileCsv(argv[1]);
   const auto speed = back.channel(hattr::Channel::kSpeed);

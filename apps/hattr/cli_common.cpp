@@ -14,32 +14,6 @@
 
 namespace hattr::cli {
 
-nlohmann::json profileSummaryJson(const HapticProfile& profile) {
-  const ProfileMetadata& meta = profile.metadata();
-  nlohmann::json json;
-  json["samples"] = profile.size();
-  json["pen_down_samples"] = profile.penDownCount();
-  json["duration_s"] = profile.duration_s();
-  json["rate_hz"] = profile.measuredRate_hz();
-  json["nominal_rate_hz"] = meta.nominal_rate_hz;
-
-  // Every channel the profile has, with its SI unit and range.
-  nlohmann::json channels = nlohmann::json::object();
-  for (const auto& info : allChannels()) {
-    if (!profile.hasChannel(info.channel) || profile.empty()) continue;
-    const ChannelRange range = profile.range(info.channel);
-    channels[std::string(info.name)] = {{"unit", info.unit}, {"min", range.min}, {"max", range.max}};
-  }
-  json["channels"] = channels;
-
-  nlohmann::json metadata = {{"subject", meta.subject}, {"skill", meta.skill},
-                             {"device", meta.device},   {"source", meta.source},
-                             {"created_utc", meta.created_utc}};
-  for (const auto& [key, value] : meta.extra) metadata[key] = value;
-  json["metadata"] = metadata;
-  return json;
-}
-
 std::string profileSummaryText(const HapticProfile& profile) {
   const ProfileMetadata& meta = profile.metadata();
   std::string text = fmt::format(
@@ -114,7 +88,7 @@ std::optional<std::filesystem::path> keepSomewhere(const HapticProfile& profile,
   const std::filesystem::path temp = std::filesystem::temp_directory_path(ec);  // may fail: TMPDIR not a folder
   for (const auto& folder : {file.parent_path(), ec ? std::filesystem::path("/tmp") : temp}) {
     try {
-      io::writeProfileCsv(profile, folder / name, io::Overwrite::kRefuse);
+      io::writeProfileCsv(profile, folder / name, hattr::Overwrite::kRefuse);
       return folder / name;
     } catch (const std::exception&) {  // try the next place
     }
@@ -126,7 +100,7 @@ std::optional<std::filesystem::path> keepSomewhere(const HapticProfile& profile,
 
 void writeRecording(const HapticProfile& profile, const std::filesystem::path& file, bool force) {
   try {
-    io::writeProfileCsv(profile, file, force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
+    io::writeProfileCsv(profile, file, force ? hattr::Overwrite::kReplace : hattr::Overwrite::kRefuse);
   } catch (const std::exception& e) {
     const std::string why = e.what();
     if (const auto kept = keepSomewhere(profile, file)) {

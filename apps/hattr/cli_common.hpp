@@ -26,10 +26,7 @@ struct ExitQuietly {
   int code;
 };
 
-/// The profile summary that `profile info --json` prints. Stable keys: samples,
-/// duration_s, rate_hz, channels {name: {unit, min, max}}, metadata.
-nlohmann::json profileSummaryJson(const HapticProfile& profile);
-/// The same summary for people.
+/// A profile's summary for people (its JSON: ops::profileSummaryJson).
 std::string profileSummaryText(const HapticProfile& profile);
 
 /// Prints JSON (indented) to stdout.

@@ -8,8 +8,8 @@
 #include <fmt/format.h>
 
 #include "cli_common.hpp"
-#include "hattr/net/device_server.hpp"
-#include "hattr/ops/json.hpp"
+#include "hattr/ops/device_serve.hpp"
+#include "hattr/wire/keys.hpp"
 #include "hattr/wire/packet.hpp"
 
 namespace hattr::cli {
@@ -36,68 +36,35 @@ struct KeygenOptions {
 volatile std::sig_atomic_t g_stop_signal = 0;
 extern "C" void onStopSignal(int signal_number) { g_stop_signal = signal_number; }
 
-nlohmann::json statsJson(const net::DeviceServerStats& s) {
-  const nlohmann::json drops = ops::dropsJson(s.drops);
-  return {{"sessions", s.sessions},         {"session_timeouts", s.session_timeouts},
-          {"byes", s.byes},                 {"busy_refusals", s.busy_refusals},
-          {"commands_applied", s.commands_applied}, {"command_timeouts", s.command_timeouts},
-          {"states_sent", s.states_sent},   {"drops", drops},
-          {"ticks", s.ticks},               {"overruns", s.overruns},
-          {"stalls", s.stalls},             {"faults", s.faults}};
-}
-
 // Serves until SIGINT/SIGTERM (or --seconds), then prints what happened.
 void runServe(const ServeOptions& opt) {
-  net::DeviceServerConfig config;
-  config.device_uri = opt.device;
-  config.listen = opt.listen;
-  config.key = wire::readKeyFile(opt.key);
-  config.rate_hz = opt.rate_hz;
-  config.command_timeout = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.command_timeout_ms * 1e6));
-  config.session_timeout = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.session_timeout_ms * 1e6));
-  config.realtime = {.policy = servo::parseRealtimePolicy(opt.realtime), .cpu = opt.cpu};
-  net::DeviceServer server(config);
-
   struct sigaction action {};
   action.sa_handler = onStopSignal;
   sigemptyset(&action.sa_mask);
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
-
-  server.start();
-  std::cout << "listening on " << server.endpoint().text() << std::endl;
-  const auto start = std::chrono::steady_clock::now();
-  const auto limit = std::chrono::duration<double>(opt.seconds);
-  // Say on stderr when a client's session opens and ends (stdout stays the report).
-  std::uint64_t sessions_told = 0;
-  bool live_told = false;
-  while (g_stop_signal == 0 && (opt.seconds <= 0.0 || std::chrono::steady_clock::now() - start < limit)) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    const bool live = server.sessionLive();
-    const std::uint64_t sessions = server.stats().sessions;
-    if (sessions != sessions_told && live) std::cerr << fmt::format("hattr: session {} opened", sessions) << std::endl;
-    if (live_told && !live) std::cerr << "hattr: session ended" << std::endl;
-    sessions_told = live ? sessions : sessions_told;
-    live_told = live;
-  }
-  server.stop();
-
-  const net::DeviceServerStats s = server.stats();
-  const double rate_hz = 1e9 / static_cast<double>(server.loop().period().count());
-  if (opt.json) {
-    nlohmann::json json = statsJson(s);
-    json["device"] = opt.device;
-    json["listen"] = server.endpoint().text();
-    json["rate_hz"] = rate_hz;
-    printJson(json);
-    return;
-  }
+  // Sessions opening and ending are said on stderr (stdout stays the report).
+  const ops::DeviceServeResult served = ops::serveDevice(
+      {.device = opt.device,
+       .listen = opt.listen,
+       .key_file = opt.key,
+       .rate_hz = opt.rate_hz,
+       .command_timeout_s = opt.command_timeout_ms * 1e-3,
+       .session_timeout_s = opt.session_timeout_ms * 1e-3,
+       .realtime = {.policy = servo::parseRealtimePolicy(opt.realtime), .cpu = opt.cpu},
+       .seconds = opt.seconds,
+       .listening = [](const std::string& endpoint) { std::cout << "listening on " << endpoint << std::endl; },
+       .session_opened = [](std::uint64_t n) { std::cerr << fmt::format("hattr: session {} opened", n) << std::endl; },
+       .session_ended = [] { std::cerr << "hattr: session ended" << std::endl; },
+       .stop_requested = [] { return g_stop_signal != 0; }});
+  if (opt.json) return printJson(served.toJson());
+  const net::DeviceServerStats& s = served.stats;
   std::string drops;
   for (std::size_t r = 0; r < wire::kDropReasonCount; ++r) {
     drops += fmt::format("{}{} {}", drops.empty() ? "" : ", ",
                          wire::dropReasonName(static_cast<wire::DropReason>(r)), s.drops[r]);
   }
-  std::cout << fmt::format("served {} at {} Hz on {}\n", opt.device, rate_hz, server.endpoint().text())
+  std::cout << fmt::format("served {} at {} Hz on {}\n", opt.device, served.rate_hz, served.listen)
             << fmt::format("sessions {} (ended: {} by bye, {} by silence), busy refusals {}\n", s.sessions, s.byes,
                            s.session_timeouts, s.busy_refusals)
             << fmt::format("commands applied {}, command timeouts {}, states sent {}\n", s.commands_applied,

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "hattr/ops/json.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/io/tablet_import.hpp"
 
@@ -31,10 +32,10 @@ void runImport(TabletFormat format, const ImportOptions& opt) {
                                                            : io::importSusig(opt.input, calibration);
   if (!opt.subject.empty()) profile.metadata().subject = opt.subject;
   if (!opt.skill.empty()) profile.metadata().skill = opt.skill;
-  io::writeProfileCsv(profile, opt.output, opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
+  io::writeProfileCsv(profile, opt.output, opt.force ? hattr::Overwrite::kReplace : hattr::Overwrite::kRefuse);
 
   if (opt.json) {
-    nlohmann::json json = profileSummaryJson(profile);
+    nlohmann::json json = ops::profileSummaryJson(profile);
     json["file"] = opt.output;
     json["input"] = opt.input;
     printJson(json);

@@ -12,9 +12,9 @@
 #include "cli_common.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
-#include "hattr/net/link_watch.hpp"
 #include "hattr/net/mentor_station.hpp"
 #include "hattr/ops/json.hpp"
+#include "hattr/ops/mentor_station_run.hpp"
 #include "hattr/sim/expert.hpp"
 #include "hattr/sim/glyph.hpp"
 
@@ -41,43 +41,6 @@ struct MentorOptions {
   bool json = false;
 };
 
-/// What one session did, for the summary.
-struct SessionSummary {
-  std::size_t samples = 0;
-  net::MentorStats stats;
-  std::string failure;
-  std::string file;
-};
-
-/// The loop time of the station's newest sample [s].
-double loopTime(net::MentorStation& station) {
-  Sample s;
-  (void)station.loop().latest().read(s);
-  return s.t_s;
-}
-
-// Waits for the other station (net::LinkWatch, as the studio's Mentor tab); true once linked,
-// false when it refused, nobody came in time or we were interrupted.
-bool waitForLink(net::MentorStation& station, net::LinkWatch& watch) {
-  while (watch.phase() == net::LinkPhase::kWaiting && !g_mentor_stop) {
-    if (watch.observe(station.coupling().stats(), net::LinkWatch::Clock::now())) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  return false;
-}
-
-// A linked session: until the time is up, the other station says goodbye, the link stays down
-// too long (lost), or we are interrupted. Returns the failure ("" for a normal end).
-std::string runLinkedSession(net::MentorStation& station, net::LinkWatch& watch, double duration_s) {
-  const auto end = net::LinkWatch::Clock::now() + std::chrono::duration<double>(duration_s);
-  while (net::LinkWatch::Clock::now() < end && !g_mentor_stop && watch.phase() != net::LinkPhase::kEnded) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-    (void)watch.observe(station.coupling().stats(), net::LinkWatch::Clock::now());
-  }
-  watch.end();
-  return watch.failure();
-}
-
 /// Where session `number` (from 1) is written: --record for one session, else
 /// --record-dir/session-NNN.csv; empty when neither is given.
 std::string recordPath(const MentorOptions& opt, int number) {
@@ -85,37 +48,8 @@ std::string recordPath(const MentorOptions& opt, int number) {
   return opt.record;
 }
 
-nlohmann::json summaryJson(const SessionSummary& summary) {
-  const net::MentorStats& s = summary.stats;
-  const nlohmann::json drops = ops::dropsJson(s.drops);
-  return {{"samples", summary.samples},
-          {"peers_received", s.peers_received},
-          {"peers_sent", s.peers_sent}, {"peers_withheld", s.peers_withheld},
-          {"lost", s.lost},
-          {"link_faults", s.link_faults},
-          {"busy_refusals", s.busy_refusals},
-          {"drops", drops},
-          {"energy_in_J", s.energy_in_J},
-          {"energy_out_J", s.energy_out_J},
-          {"dissipated_J", s.dissipated_J},
-          {"rtt_ms", s.rtt_s * 1e3},
-          {"file", summary.file},
-          {"failure", summary.failure}};
-}
-
-// One station, live: wait for the other, release the hand, record, stop on a lost link; a lead
-// with --sessions other than 1 then waits for the next follower (a study's next trial).
-void runStation(const MentorOptions& opt, net::MentorRole role) {
-  net::MentorConfig mentor{.role = role, .coupling = net::parseCoupling(opt.coupling), .passivity = !opt.no_passivity,
-                           .key = wire::readKeyFile(opt.key), .deadband = opt.deadband};
-  // The leader listens for any follower; the follower's socket is connected to its leader, so
-  // the kernel delivers only the leader's datagrams.
-  if (role == net::MentorRole::kFollower) mentor.leader = wire::parseUdpEndpoint(opt.address, "--connect");
-  wire::UdpDatagramLink link(role == net::MentorRole::kLeader
-                                 ? wire::UdpSocket::bound(wire::parseUdpEndpoint(opt.address, "--listen", 0))
-                                 : wire::UdpSocket::connected(mentor.leader),
-                             wire::UdpDatagramLink::Clock::kLoop);
-  const bool serving = role == net::MentorRole::kLeader && opt.sessions != 1;
+/// Checks the recording options before anything runs.
+void checkRecordOptions(const MentorOptions& opt, bool serving) {
   HATTR_THROW_UNLESS(!serving || opt.record.empty(), "--record: with --sessions {} each session is its own file: use "
                      "--record-dir DIR", opt.sessions);
   if (!opt.record.empty()) checkOutputFiles({opt.record}, opt.force);
@@ -123,105 +57,111 @@ void runStation(const MentorOptions& opt, net::MentorRole role) {
     checkOutputFolder(opt.record_dir, {"session-001.csv"}, opt.force);  // sessions are numbered from 1
     std::filesystem::create_directories(opt.record_dir);
   }
+}
 
+/// Waits for the other station (polling the run's link watch); true once linked, false when it
+/// refused, nobody came in time or we were interrupted.
+bool waitForLink(ops::MentorStationRun& run) {
+  while (!run.ended() && !g_mentor_stop) {
+    if (run.poll(ops::MentorStationRun::Clock::now())) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return false;
+}
+
+/// A linked session: until the time is up, the other station says goodbye, the link stays down
+/// too long (lost), or we are interrupted.
+void runLinkedSession(ops::MentorStationRun& run, double duration_s) {
+  const auto end = ops::MentorStationRun::Clock::now() + std::chrono::duration<double>(duration_s);
+  while (ops::MentorStationRun::Clock::now() < end && !g_mentor_stop && !run.ended()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    (void)run.poll(ops::MentorStationRun::Clock::now());
+  }
+  run.endNow();
+}
+
+/// Writes a session's recording where it goes; a failure to write is said and added to the
+/// session's (the station goes on). Returns the session's JSON with its file.
+nlohmann::json keepSession(const MentorOptions& opt, int number, net::MentorRole role, ops::MentorSessionOutcome& outcome) {
+  std::string file = outcome.recording.empty() ? "" : recordPath(opt, number);
+  std::string failure = outcome.failure;
+  if (!file.empty()) {
+    try {
+      writeRecording(outcome.recording, file, opt.force);
+    } catch (const std::exception& e) {  // kept elsewhere (or not at all): said, and the station goes on
+      std::cerr << "hattr: " << e.what() << '\n';
+      failure += (failure.empty() ? "" : "; ") + std::string(e.what());
+      file.clear();
+    }
+  }
+  const net::MentorStats& s = outcome.stats;
+  if (!opt.json) {
+    std::cout << fmt::format("{}: {} samples recorded, {} packets in, {} out, {} lost, {} link faults, energy in {:.4f} J "
+                             "out {:.4f} J{}{}\n",
+                             net::roleName(role), outcome.recording.size(), s.peers_received, s.peers_sent, s.lost,
+                             s.link_faults, s.energy_in_J, s.energy_out_J, file.empty() ? "" : "; written to " + file,
+                             outcome.failure.empty() ? "" : "; failed: " + outcome.failure)
+              << std::flush;
+  }
+  nlohmann::json json = ops::mentorSessionJson(outcome);
+  json["file"] = file;
+  json["failure"] = failure;
+  return json;
+}
+
+// One station, live (ops::MentorStationRun): wait for the other, release the hand, record, stop
+// on a lost link; a lead with --sessions other than 1 then waits for the next follower (a
+// study's next trial).
+void runStation(const MentorOptions& opt, net::MentorRole role) {
+  const bool serving = role == net::MentorRole::kLeader && opt.sessions != 1;
+  checkRecordOptions(opt, serving);
   // The simulated hand (if any) waits, lifted, until both stations are linked.
   std::optional<HapticProfile> script;
   std::unique_ptr<device::ProfileHandScript> script_hand;
-  std::unique_ptr<net::HeldHand> hand;
   if (!opt.hand.empty()) {
     script = io::readProfileCsv(opt.hand);
     script_hand = std::make_unique<device::ProfileHandScript>(*script);
-    hand = std::make_unique<net::HeldHand>(*script_hand);
   }
-  net::StationConfig config{.device_uri = opt.device, .mentor = mentor};
-  config.metadata.subject = role == net::MentorRole::kLeader ? "expert" : "trainee";
-  net::MentorStation station(config, link, hand.get());
-  for (const auto& c : station.clamps()) std::cerr << "hattr: clamped: " << c << '\n';
-
+  // A lead serving sessions waits for each without limit.
+  ops::MentorStationRun run({.role = role, .address = opt.address, .key_file = opt.key,
+                             .coupling = net::parseCoupling(opt.coupling), .passivity = !opt.no_passivity,
+                             .deadband = opt.deadband, .device_uri = opt.device, .wait_s = serving ? -1.0 : opt.wait_s,
+                             .listen_what = "--listen", .connect_what = "--connect", .key_what = "--key"},
+                            script_hand.get(), ops::MentorStationRun::HandStart::kHeldUntilLinked);
+  for (const auto& c : run.station().clamps()) std::cerr << "hattr: clamped: " << c << '\n';
   std::signal(SIGINT, onMentorStop);
   std::signal(SIGTERM, onMentorStop);
-  station.loop().requireConsumer(&station.recorder().consumerTime());
-  station.recorder().startThread();
-  station.loop().start();
-  if (role == net::MentorRole::kLeader) {
-    std::cout << "listening on " << link.localEndpoint().text() << std::endl;
-  } else {
-    std::cout << "connecting to " << opt.address << std::endl;
-  }
+  std::cout << run.where() << std::endl;
 
   // Session after session (one for a follower): the hands start together once linked (after
   // the coupling's fade-in), both sides record; whatever was recorded is kept, failure or not.
-  std::vector<SessionSummary> summaries;
+  nlohmann::json sessions = nlohmann::json::array();
   std::string first_failure;
-  net::MentorStats before_session{};  // each session's figures are its own
-  // The link watch the studio uses too: a lead serving sessions waits for each without limit.
-  net::LinkWatch watch({.wait_s = serving ? -1.0 : opt.wait_s, .leader_address = opt.address}, mentor,
-                       net::LinkWatch::Clock::now());
   for (int number = 1; !g_mentor_stop && (opt.sessions == 0 || number <= opt.sessions); ++number) {
-    watch.restart(net::LinkWatch::Clock::now(), station.coupling().stats());
-    const bool linked = waitForLink(station, watch);
+    if (number > 1) run.nextSession(ops::MentorStationRun::Clock::now());
+    const bool linked = waitForLink(run);
     if (!linked && g_mentor_stop) break;
-    std::string failure = watch.failure();
     if (linked) {
       std::cout << "linked: coupling "
                 << (role == net::MentorRole::kFollower ? opt.coupling : std::string("as the follower asks"))
                 << (serving ? fmt::format(" (session {})", number) : "") << std::endl;
-      if (hand) hand->release(loopTime(station) + mentor.ramp_s);
-      station.recorder().start();
-      const double duration_s =
-          opt.seconds > 0.0 ? opt.seconds : (script && !serving ? script->duration_s() + mentor.ramp_s + 0.5 : 1e9);
-      failure = runLinkedSession(station, watch, duration_s);
+      const double duration_s = opt.seconds > 0.0 ? opt.seconds
+                                : (script && !serving ? script->duration_s() + run.mentor().ramp_s + 0.5 : 1e9);
+      runLinkedSession(run, duration_s);
     }
-    // The session ends here: everything the loop published before now is the session's, however
-    // far behind the recorder's thread is (the loop runs on for the next follower).
-    station.recorder().stopBefore(station.loop().counters().ticks.load(std::memory_order_acquire));
-    station.recorder().stopThread();
-    SessionSummary summary;
-    HapticProfile recorded = station.takeRecording();
-    const net::MentorStats after_session = station.coupling().stats();
-    summary.stats = net::statsSince(after_session, before_session);
-    before_session = after_session;
-    summary.failure = failure;
-    summary.samples = recorded.size();
-    if (!failure.empty()) recorded.metadata().extra["failed"] = failure;
-    summary.file = recorded.empty() ? "" : recordPath(opt, number);
-    if (!summary.file.empty()) {
-      try {
-        writeRecording(recorded, summary.file, opt.force);
-      } catch (const std::exception& e) {  // kept elsewhere (or not at all): said, and the station goes on
-        std::cerr << "hattr: " << e.what() << '\n';
-        summary.failure += (summary.failure.empty() ? "" : "; ") + std::string(e.what());
-        summary.file.clear();
-      }
-    }
-    if (!opt.json) {
-      std::cout << fmt::format("{}: {} samples recorded, {} packets in, {} out, {} lost, {} link faults, energy in {:.4f} J "
-                               "out {:.4f} J{}{}\n",
-                               net::roleName(role), recorded.size(), summary.stats.peers_received, summary.stats.peers_sent,
-                               summary.stats.lost, summary.stats.link_faults, summary.stats.energy_in_J,
-                               summary.stats.energy_out_J, summary.file.empty() ? "" : "; written to " + summary.file,
-                               failure.empty() ? "" : "; failed: " + failure)
-                << std::flush;
-    }
-    summaries.push_back(summary);
-    if (first_failure.empty()) first_failure = failure;
+    ops::MentorSessionOutcome outcome = run.takeSession();
+    if (first_failure.empty()) first_failure = outcome.failure;
+    sessions.push_back(keepSession(opt, number, role, outcome));
     if (!serving) break;
-    // Ready for the next follower: the hand lifted and rewound, a fresh recording.
-    if (hand) hand->hold();
-    station.newRecording();
-    station.recorder().startThread();
   }
-  station.loop().stop();
-  station.recorder().stopThread();
-  station.coupling().close(static_cast<std::int64_t>(loopTime(station) * 1e9));
+  run.close();
 
   if (opt.json) {
     nlohmann::json out = {{"role", std::string(net::roleName(role))}, {"coupling", opt.coupling}};
     if (serving) {
-      out["sessions"] = nlohmann::json::array();
-      for (const auto& summary : summaries) out["sessions"].push_back(summaryJson(summary));
-    } else if (!summaries.empty()) {
-      out.update(summaryJson(summaries.front()));
+      out["sessions"] = sessions;
+    } else if (!sessions.empty()) {
+      out.update(sessions.front());
     }
     printJson(out);
   }

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "cli_common.hpp"
+#include "hattr/ops/json.hpp"
 #include "hattr/io/profile_csv.hpp"
 
 namespace hattr::cli {
@@ -47,7 +48,7 @@ HapticProfile converted(const HapticProfile& profile, double factor, bool centre
 void runProfileInfo(const ProfileInfoOptions& opt) {
   const HapticProfile profile = io::readProfileCsv(opt.file);
   if (opt.json) {
-    nlohmann::json json = profileSummaryJson(profile);
+    nlohmann::json json = ops::profileSummaryJson(profile);
     json["file"] = opt.file;
     printJson(json);
   } else {
@@ -59,7 +60,7 @@ void runProfileConvert(const ProfileConvertOptions& opt) {
   checkOutputFiles({opt.output}, opt.force);
   HapticProfile profile = io::readProfileCsv(opt.input);
   if (opt.scale_force != 1.0 || opt.centre) profile = converted(profile, opt.scale_force, opt.centre);
-  io::writeProfileCsv(profile, opt.output, opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
+  io::writeProfileCsv(profile, opt.output, opt.force ? hattr::Overwrite::kReplace : hattr::Overwrite::kRefuse);
   std::cout << "wrote " << opt.output << " (" << profile.size() << " samples, SI units"
             << (opt.scale_force != 1.0 ? fmt::format(", forces scaled by {}", opt.scale_force) : std::string())
             << (opt.centre ? fmt::format(", centred on the paper: placed_shift_m {}", profile.metadata().extra.at("placed_shift_m"))

@@ -7,11 +7,10 @@
 
 #include "cli_common.hpp"
 #include "hattr/guidance/strategy_catalog.hpp"
-#include "hattr/session/trial_physics.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/ops/json.hpp"
-#include "hattr/session/trial.hpp"
+#include "hattr/ops/trial_run.hpp"
 
 namespace hattr::cli {
 namespace {
@@ -77,48 +76,34 @@ void addCommonOptions(CLI::App& cmd, TrialOptions& opt) {
                "way");
 }
 
-// The physical events for --json: each kind with its count, first time [s] and worst value.
-nlohmann::json physicalEventsJson(const session::PhysicalEvents& events) {
-  const auto one = [](const session::PhysicalEvent& e, const char* worst_name) {
-    return nlohmann::json{{"count", e.count}, {"first_s", e.first_s}, {worst_name, e.worst}};
-  };
-  return {{"penetration", one(events.penetration, "deepest_m")},
-          {"force_saturation", one(events.saturation, "longest_s")},
-          {"workspace", one(events.workspace, "farthest_m")}};
-}
-
 void runTrialCommand(const TrialOptions& opt, bool training) {
   checkOutputFiles({opt.output}, opt.force);  // before the trial: a recording is never left unwritable
-  const HapticProfile script = io::readProfileCsv(opt.hand);
-  device::ProfileHandScript hand(script);
-  session::TrialEnvironment env(opt.device, worldConfigOrDefault(opt.world), opt.rate_hz);
-
-  session::ScriptedTrialOptions scripted{.rate_hz = opt.rate_hz,
-                                         .tail_s = opt.tail_s,
-                                         .pen_up_end_s = opt.pen_up_end_s,
-                                         .max_duration_s = opt.max_duration_s,
-                                         .clock = session::parseClock(opt.clock),
-                                         .subject = opt.subject,
-                                         .skill = opt.skill,
-                                         .hand_label = opt.hand};
-  HapticProfile expert;
+  ops::ScriptedTrialRun run{.device = opt.device,
+                            .world = worldConfigOrDefault(opt.world),
+                            .hand = io::readProfileCsv(opt.hand),
+                            .reference = {},
+                            .options = {.rate_hz = opt.rate_hz,
+                                        .tail_s = opt.tail_s,
+                                        .pen_up_end_s = opt.pen_up_end_s,
+                                        .max_duration_s = opt.max_duration_s,
+                                        .clock = session::parseClock(opt.clock),
+                                        .subject = opt.subject,
+                                        .skill = opt.skill,
+                                        .hand_label = opt.hand},
+                            .hand_what = "--hand",
+                            .reference_what = "--reference"};
   if (training) {
-    expert = io::readProfileCsv(opt.reference);
-    // A reference or a hand script the device cannot render is refused before the trial
-    // (issue 38); `record` keeps any hand script: it records what happens, and marks it.
-    session::checkRenderable(expert, env.limits(), "--reference " + opt.reference);
-    session::checkRenderable(script, env.limits(), "--hand " + opt.hand);
-    scripted.expert = &expert;
-    scripted.reference_label = opt.reference;
-    scripted.mode = guidance::parseMode(opt.mode);
-    scripted.indexing = guidance::parseIndexing(opt.indexing);
-    scripted.speed = opt.speed;
-    scripted.trial = opt.trial;
-    for (const auto& setting : opt.params) scripted.parameters.push_back(guidance::parseStrategySetting(setting));
-    scripted.seed = opt.seed;
+    run.reference = io::readProfileCsv(opt.reference);
+    run.options.reference_label = opt.reference;
+    run.options.mode = guidance::parseMode(opt.mode);
+    run.options.indexing = guidance::parseIndexing(opt.indexing);
+    run.options.speed = opt.speed;
+    run.options.trial = opt.trial;
+    for (const auto& setting : opt.params) run.options.parameters.push_back(guidance::parseStrategySetting(setting));
+    run.options.seed = opt.seed;
   }
-  const session::TrialSetup setup = session::scriptedTrialSetup(hand, script, scripted);
-  const session::TrialResult result = session::runTrial(env, setup, hand);
+  const ops::ScriptedTrialResult outcome = ops::runScriptedTrial(std::move(run));
+  const session::TrialResult& result = outcome.trial;
   for (const auto& c : result.clamps) std::cerr << "hattr: clamped: " << c << '\n';
   // A trial the device broke off keeps what it recorded (marked failed) and exits 1.
   if (!result.failure.empty()) {
@@ -128,35 +113,23 @@ void runTrialCommand(const TrialOptions& opt, bool training) {
                             result.profile.duration_s(), result.failure, opt.output));
   }
   writeRecording(result.profile, opt.output, opt.force);
-  const std::string disturbed = session::disturbanceOf(result);
 
   if (opt.json) {
-    nlohmann::json json = profileSummaryJson(result.profile);
+    nlohmann::json json = outcome.toJson();
     json["file"] = opt.output;
-    json["clamps"] = result.clamps;
-    json["missed_samples"] = result.missed_samples;
-    json["overruns"] = result.overruns;
-    json["faults"] = result.faults;
-    json["link_faults"] = result.link_faults;
-    json["stalls"] = result.stalls;
-    json["clock"] = result.clock;
-    json["end_reason"] = result.end_reason;
-    json["physical_events"] = physicalEventsJson(result.physics);
-    json["disturbed"] = disturbed;
     printJson(json);
   } else {
     std::cout << fmt::format("{} {} -> {}: {} samples, {:.3f} s, {} missed, {} overruns, {} stalls, {} faults, {} clock\n",
-                             training ? "trained" : "recorded",
-                             training ? std::string(guidance::modeName(setup.guidance.mode)) : std::string("expert"),
-                             opt.output, result.profile.size(), result.profile.duration_s(), result.missed_samples,
-                             result.overruns, result.stalls, result.faults, result.clock);
+                             training ? "trained" : "recorded", outcome.mode, opt.output, result.profile.size(),
+                             result.profile.duration_s(), result.missed_samples, result.overruns, result.stalls,
+                             result.faults, result.clock);
   }
   // A disturbed trial is written, marked in its metadata (`disturbed`), and fails the command
   // unless it was asked to keep it.
-  if (!disturbed.empty() && !opt.keep_disturbed) {
+  if (!outcome.disturbed.empty() && !opt.keep_disturbed) {
     throw Error(fmt::format("the trial was disturbed: {}; it is kept in {}, marked `disturbed` in its metadata "
                             "(--keep-disturbed exits 0 for it)",
-                            disturbed, opt.output));
+                            outcome.disturbed, opt.output));
   }
 }
 

@@ -49,7 +49,7 @@ void runExpert(const SimOptions& opt) {
   const HapticProfile script = sim::expertScript(glyph);
   session::TrialEnvironment env("sim://pen", render::WorldConfig{}, 1000.0);
   const HapticProfile expert = sim::recordExpert(env, script, {.subject = "expert", .skill = glyph.name, .source = "sim:expert"});
-  const auto overwrite = opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse;
+  const auto overwrite = opt.force ? hattr::Overwrite::kReplace : hattr::Overwrite::kRefuse;
   io::writeProfileCsv(expert, opt.output, overwrite);
   if (!opt.script_output.empty()) io::writeProfileCsv(script, opt.script_output, overwrite);
   std::cout << fmt::format("expert '{}' -> {}: {} samples, {:.2f} s{}\n", glyph.name, opt.output, expert.size(),

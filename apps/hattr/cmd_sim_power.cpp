@@ -15,7 +15,8 @@
 
 #include "cli_common.hpp"
 #include "hattr/core/error.hpp"
-#include "hattr/io/profile_csv.hpp"
+#include "hattr/core/atomic_file.hpp"
+#include "hattr/ops/power_run.hpp"
 #include "hattr/report/power.hpp"
 #include "hattr/sim/power.hpp"
 #include "mpi_world.hpp"
@@ -105,13 +106,12 @@ void printTable(const report::PowerTable& table, const PowerCliOptions& opt, con
   if (!opt.html.empty()) std::cout << "page: " << opt.html << "\n";
 }
 
-/// This process's replicates, its threads' worth at once.
+/// This process's replicates (ops::runPowerPart), drawing progress on rank 0.
 std::vector<report::ReplicateOutcome> runMine(const sim::PowerStudy& study, int part, int parts, bool draw) {
-  std::vector<int> mine;
-  for (int r = part; r < study.plan().replicates; r += parts) mine.push_back(r);
-  Progress progress("power", draw ? static_cast<double>(mine.size()) : 0.0, "studies");
-  std::vector<report::ReplicateOutcome> outcomes = study.runReplicates(mine, [&](double done) {
-    if (draw) progress.update(done, fmt::format("power: {} studies", mine.size()));
+  const int count = std::max(0, (study.plan().replicates - part + parts - 1) / parts);
+  Progress progress("power", draw ? static_cast<double>(count) : 0.0, "studies");
+  std::vector<report::ReplicateOutcome> outcomes = ops::runPowerPart(study, part, parts, [&](double done, int of) {
+    if (draw) progress.update(done, fmt::format("power: {} studies", of));
   });
   progress.finish();
   return outcomes;
@@ -206,8 +206,8 @@ void runPower(const PowerCliOptions& opt) {
     std::vector<report::ReplicateOutcome> outcomes = runMine(*study, part, parts, world.rank() == 0);
     const report::PowerPlan& plan = study->plan();
     if (!opt.shard.empty()) {
-      io::writeFileAtomically(opt.out, report::powerShardToJson(plan, shard.first, shard.second, outcomes).dump(1) + "\n",
-                              opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
+      hattr::writeFileAtomically(opt.out, report::powerShardToJson(plan, shard.first, shard.second, outcomes).dump(1) + "\n",
+                              opt.force ? hattr::Overwrite::kReplace : hattr::Overwrite::kRefuse);
       std::cout << fmt::format("shard {}/{}: {} studies -> {} (merge the shards: hattr sim power merge FILES)\n",
                                shard.first, shard.second, outcomes.size(), opt.out);
       return;
@@ -224,13 +224,11 @@ void runPower(const PowerCliOptions& opt) {
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     if (!opt.out.empty()) {
-      io::writeFileAtomically(opt.out, report::powerShardToJson(plan, 0, 1, outcomes).dump(1) + "\n",
-                              opt.force ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
+      hattr::writeFileAtomically(opt.out, report::powerShardToJson(plan, 0, 1, outcomes).dump(1) + "\n",
+                              opt.force ? hattr::Overwrite::kReplace : hattr::Overwrite::kRefuse);
     }
     const report::PowerTable table = report::summarizePower(plan, std::move(outcomes));
-    printTable(table, opt,
-               {{"studies", plan.replicates}, {"seconds", seconds}, {"processes", world.size()},
-                {"threads_per_process", threads}, {"studies_per_second", plan.replicates / seconds}});
+    printTable(table, opt, ops::powerRunJson(plan.replicates, seconds, world.size(), threads));
   } catch (...) {
     if (world.size() == 1) throw;
     printFailure(std::current_exception(), world);

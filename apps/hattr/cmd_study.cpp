@@ -1,6 +1,7 @@
 // hattr study init|run|status|export|import|push|analyze|report|example: training studies in a crash-safe database.
 
 #include <iostream>
+#include <memory>
 
 #include <fmt/format.h>
 
@@ -252,13 +253,8 @@ void runImport(const StudyOptions& opt) {
   std::cout << fmt::format("imported {} trials into {}\n", n, opt.db);
 }
 
-}  // namespace
-
-void registerStudyCommands(CLI::App& app) {
-  auto* study = app.add_subcommand("study", "Training studies: the paper's protocol in a crash-safe study database");
-  study->require_subcommand(1);
-  auto opt = std::make_shared<StudyOptions>();
-
+// study init and study run: create a study database, run its unfinished trials.
+void addStudyRunCommands(CLI::App* study, const std::shared_ptr<StudyOptions>& opt) {
   auto* init = study->add_subcommand("init", "Create a study database from a study file (see `hattr study example`)");
   init->add_option("STUDY", opt->study_file, "Study definition (JSON)")->required();
   init->add_option("--db", opt->db, "Study database to create: a file, or an empty PostgreSQL database "
@@ -291,7 +287,10 @@ void registerStudyCommands(CLI::App& app) {
   run->add_flag("--quiet", opt->quiet, "No progress line");
   run->add_flag("--json", opt->json, "Print the status as JSON when done");
   run->callback([opt] { runRun(*opt); });
+}
 
+// study status, export, import and push: what a study database holds, and moving it.
+void addStudyDataCommands(CLI::App* study, const std::shared_ptr<StudyOptions>& opt) {
   auto* status = study->add_subcommand("status", "Trials completed and interrupted, and each subject's next trial");
   status->add_option("--db", opt->db, "Study database")->required();
   status->add_flag("--json", opt->json,
@@ -316,7 +315,10 @@ void registerStudyCommands(CLI::App& app) {
       ->required();
   push->add_flag("--json", opt->json, "Print JSON: pushed, subjects, already_there");
   push->callback([opt] { runPush(*opt); });
+}
 
+// study analyze, report and example: the analysis, the report, the shipped designs.
+void addStudyAnalysisCommands(CLI::App* study, const std::shared_ptr<StudyOptions>& opt) {
   auto* analyze = study->add_subcommand(
       "analyze", "The paper's design: DTW costs of every recall trial against the expert, ANOVAs, Tukey HSD and Table 1. "
                  "Any other design: every completed trial's costs, learning curves, retention and transfer. Stored in "
@@ -347,6 +349,17 @@ void registerStudyCommands(CLI::App& app) {
     }
     std::cout << (opt->design.empty() ? session::exampleStudyJson() : std::string(session::exampleDesign(opt->design).json));
   });
+}
+
+}  // namespace
+
+void registerStudyCommands(CLI::App& app) {
+  auto* study = app.add_subcommand("study", "Training studies: the paper's protocol in a crash-safe study database");
+  study->require_subcommand(1);
+  auto opt = std::make_shared<StudyOptions>();
+  addStudyRunCommands(study, opt);
+  addStudyDataCommands(study, opt);
+  addStudyAnalysisCommands(study, opt);
 }
 
 }  // namespace hattr::cli

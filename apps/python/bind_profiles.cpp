@@ -204,12 +204,9 @@ io::TabletCalibration calibrationOf(const CalibrationOverrides& overrides, const
   return io::loadCalibration(std::get<std::filesystem::path>(*overrides), defaults);
 }
 
-}  // namespace
-
-void bindProfiles(py::module_& m) {
-  py::class_<HapticProfile>(m, "HapticProfile",
-                            "One person performing one task: servo-rate samples (SI units, world frame W) and "
-                            "metadata. Channels are float64 NumPy arrays; stored ones are read-only views.")
+/// HapticProfile: building one, its metadata, its size and rates.
+void bindProfileBasics(py::class_<HapticProfile>& profile) {
+  profile
       .def_static("from_arrays", &profileFromArrays, py::arg("t_s"), py::arg("p_WT_m"), py::kw_only(),
                   py::arg("v_WT_m_per_s") = py::none(), py::arg("f_user_W_N") = py::none(),
                   py::arg("pen_down") = py::none(), py::arg("metadata") = py::none(),
@@ -245,7 +242,12 @@ void bindProfiles(py::module_& m) {
           "Which raw device channels the profile carries: {'pressure': bool, 'tilt': bool}.")
       .def_property_readonly("duration_s", &HapticProfile::duration_s, "Last time minus first [s].")
       .def_property_readonly("measured_rate_hz", &HapticProfile::measuredRate_hz, "(samples − 1) / duration [Hz].")
-      .def_property_readonly("pen_down_count", &HapticProfile::penDownCount, "Samples with the pen down.")
+      .def_property_readonly("pen_down_count", &HapticProfile::penDownCount, "Samples with the pen down.");
+}
+
+/// HapticProfile: its channels as NumPy arrays (views of stored ones, copies of the rest).
+void bindProfileChannels(py::class_<HapticProfile>& profile) {
+  profile
       .def_property_readonly("channel_names", &channelNames, "The channels this profile carries, in file order.")
       .def("channel", &channelArray, py::arg("name"),
            "One channel by name ('t', 'x', 'fz', '|f|', 'pen_down', ...), SI units, shape (n,). Stored "
@@ -287,14 +289,26 @@ void bindProfiles(py::module_& m) {
           },
           "(begin, end) [s]: first pen-down to last pen-up when the trial recorded them, else the whole "
           "profile; the span the paper's scores use.");
+}
 
+/// The class hattr.HapticProfile.
+void bindProfileClass(py::module_& m) {
+  py::class_<HapticProfile> profile(m, "HapticProfile",
+                                    "One person performing one task: servo-rate samples (SI units, world frame W) and "
+                                    "metadata. Channels are float64 NumPy arrays; stored ones are read-only views.");
+  bindProfileBasics(profile);
+  bindProfileChannels(profile);
+}
+
+/// Reading and writing profile files, importing SVC2004 and SUSIG.
+void bindProfileFunctions(py::module_& m) {
   m.def("read_profile", py::overload_cast<const std::filesystem::path&>(&io::readProfileCsv), py::arg("path"),
         "Reads a hattr profile CSV file (docs/file-formats.md); millimetre and millisecond columns become SI. "
         "InputError naming file, line and column for anything wrong.");
   m.def(
       "write_profile",
       [](const HapticProfile& profile, const std::filesystem::path& path, bool overwrite) {
-        io::writeProfileCsv(profile, path, overwrite ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
+        io::writeProfileCsv(profile, path, overwrite ? hattr::Overwrite::kReplace : hattr::Overwrite::kRefuse);
       },
       py::arg("profile"), py::arg("path"), py::kw_only(), py::arg("overwrite") = false,
       "Writes a profile CSV (SI units, reads back bit for bit), atomically. An existing file is kept and "
@@ -314,6 +328,13 @@ void bindProfiles(py::module_& m) {
       },
       py::arg("path"), py::kw_only(), py::arg("calibration") = py::none(),
       "Imports a SUSIG recording as a profile in SI units; calibration as for import_svc2004.");
+}
+
+}  // namespace
+
+void bindProfiles(py::module_& m) {
+  bindProfileClass(m);
+  bindProfileFunctions(m);
 }
 
 }  // namespace hattr::python

@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 #include <variant>
+#include <vector>
 
 #include <fmt/format.h>
 #include <pybind11/stl.h>
@@ -18,9 +19,10 @@
 #include "hattr/guidance/strategy_catalog.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/ops/json.hpp"
+#include "hattr/ops/power_run.hpp"
+#include "hattr/ops/trial_run.hpp"
 #include "hattr/report/study_analysis.hpp"
 #include "hattr/session/trial.hpp"
-#include "hattr/session/trial_physics.hpp"
 #include "hattr/sim/in_silico.hpp"
 
 namespace hattr::python {
@@ -55,9 +57,8 @@ py::dict trialRecord(session::TrialResult result) {
                   py::arg("failure") = result.failure, py::arg("disturbed") = disturbed);
 }
 
-}  // namespace
-
-void bindSimulation(py::module_& m) {
+/// run_trial: one trial on the simulated pen, as `hattr record` and `hattr train` run it.
+void bindRunTrial(py::module_& m) {
   m.def(
       "run_trial",
       [](const ProfileSource& hand, const std::optional<ProfileSource>& reference, const std::string& mode,
@@ -76,28 +77,17 @@ void bindSimulation(py::module_& m) {
                                                     ? fmt::format("{}", std::get<double>(value))
                                                     : std::get<std::string>(value));
         }
-        const HapticProfile script = profileOf(hand, options.hand_label);
-        std::optional<HapticProfile> expert;
-        if (reference) {
-          expert = profileOf(*reference, options.reference_label);
-          options.expert = &*expert;
-        }
-        render::WorldConfig world_config = worldOf(world);
+        ops::ScriptedTrialRun run;
+        run.device = device;
+        run.hand = profileOf(hand, options.hand_label);
+        if (reference) run.reference = profileOf(*reference, options.reference_label);
+        run.world = worldOf(world);
+        run.options = std::move(options);
         session::TrialResult result;
         {
-          py::gil_scoped_release unlocked;
-          device::ProfileHandScript hand_script(script);
-          session::TrialEnvironment environment(device, std::move(world_config), rate_hz);
           // As `hattr train`: a reference or a hand the device cannot render is refused first.
-          if (expert) {
-            const auto named = [](const char* what, const std::string& file) {
-              return file.empty() ? std::string(what) : fmt::format("{} {}", what, file);
-            };
-            session::checkRenderable(*expert, environment.limits(), named("reference", options.reference_label));
-            session::checkRenderable(script, environment.limits(), named("hand", options.hand_label));
-          }
-          const session::TrialSetup setup = session::scriptedTrialSetup(hand_script, script, options);
-          result = session::runTrial(environment, setup, hand_script);
+          py::gil_scoped_release unlocked;
+          result = ops::runScriptedTrial(std::move(run)).trial;
         }
         return trialRecord(std::move(result));
       },
@@ -119,13 +109,19 @@ void bindSimulation(py::module_& m) {
       "disturbed (stalls, missed samples, the pen through the paper, the device at its force limit, ...), \"\" when clean. "
       "With a reference, a reference or hand the device cannot render (too strong, outside its workspace) raises "
       "InputError with the numbers and the remedy. Releases the GIL.");
+}
 
+/// strategies: the training strategies and their parameters.
+void bindStrategies(py::module_& m) {
   m.def(
       "strategies", [] { return toPython(ops::strategiesJson()); },
       "The training strategies, as `hattr strategies --json` lists them: [{name, plain_name, description, source, "
       "mentored, scheduled, parameters [{name, unit, default, min, max, meaning} or {name, default, choices, "
       "meaning}]}].");
+}
 
+/// simulate_study: the paper's study in silico, as `hattr demo` runs it.
+void bindSimulateStudy(py::module_& m) {
   m.def(
       "simulate_study",
       [](const std::filesystem::path& out_dir, int subjects, std::uint64_t seed, int training_trials,
@@ -152,6 +148,43 @@ void bindSimulation(py::module_& m) {
       "simulated trainees through the real pipeline, the analysis and (write_report) the report, all in out_dir "
       "(an existing study there is kept under a new name). guidance=False is the A/A check. Returns {database, "
       "report_html, trials, servo_ticks, analysis}. Releases the GIL.");
+}
+
+/// hattr.power_analysis: `hattr sim power` in this process (ops::runPowerAnalysis).
+void bindPowerAnalysis(py::module_& m) {
+  m.def(
+      "power_analysis",
+      [](const std::optional<std::filesystem::path>& study, const std::string& glyph, int trials,
+         const std::vector<int>& subjects, int replicates, std::uint64_t seed, double alpha, int threads,
+         const std::string& phase, const std::string& hypothesis) {
+        const sim::PowerOptions options{.study = study.value_or(std::filesystem::path()), .glyph = glyph,
+                                        .training_trials = trials, .recall_trials = trials, .subject_counts = subjects,
+                                        .replicates = replicates, .seed = seed, .alpha = alpha, .threads = threads,
+                                        .phase = phase, .hypothesis = hypothesis};
+        nlohmann::json json;
+        {
+          py::gil_scoped_release unlocked;
+          json = ops::runPowerAnalysis(options).toJson();
+        }
+        return toPython(json);
+      },
+      py::arg("study") = py::none(), py::kw_only(), py::arg("glyph") = "na", py::arg("trials") = 11,
+      py::arg("subjects") = std::vector<int>{6, 10, 20, 40}, py::arg("replicates") = 200, py::arg("seed") = 1,
+      py::arg("alpha") = 0.05, py::arg("threads") = 2, py::arg("phase") = "", py::arg("hypothesis") = "",
+      "A power analysis as `hattr sim power --json` prints it (one process): `replicates` simulated studies "
+      "of each number of subjects in `subjects`, each analyzed as its design says, and the share that finds "
+      "the difference at `alpha`. study: a study file whose subjects are simulated (None: the paper's study "
+      "in silico, with `glyph` and `trials` training and recall trials per mode); phase: a design's phase to "
+      "compare; hypothesis: a learning hypothesis for every subject. Releases the GIL.");
+}
+
+}  // namespace
+
+void bindSimulation(py::module_& m) {
+  bindRunTrial(m);
+  bindStrategies(m);
+  bindSimulateStudy(m);
+  bindPowerAnalysis(m);
 }
 
 }  // namespace hattr::python

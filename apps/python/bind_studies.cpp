@@ -73,12 +73,9 @@ class OpenStudy {
   std::optional<StudyDatabase> db_;
 };
 
-}  // namespace
-
-void bindStudies(py::module_& m) {
-  py::class_<OpenStudy>(m, "Study",
-                        "A study database opened read-only: its definition, subjects, trials and recordings. "
-                        "Another process may run the study meanwhile. close() (or a `with` block) closes it.")
+/// Study: opening one, its definition, subjects, trials and recordings.
+void bindStudyRecords(py::class_<OpenStudy>& study) {
+  study
       .def_static(
           "open", [](const std::filesystem::path& path) { return OpenStudy(path); }, py::arg("path"),
           "Opens a study database (a file `hattr study init` or `hattr demo` made) read-only. InputError for a file "
@@ -116,7 +113,12 @@ void bindStudies(py::module_& m) {
           [](const OpenStudy& s, const std::optional<std::string>& skill) {
             return s.db().expert(skill.value_or(s.db().study().skill));
           },
-          py::arg("skill") = py::none(), "The expert reference of a skill (default: the study's).")
+          py::arg("skill") = py::none(), "The expert reference of a skill (default: the study's).");
+}
+
+/// Study: the paper's analysis (or the design's), closing, `with` blocks.
+void bindStudyAnalysis(py::class_<OpenStudy>& study) {
+  study
       .def(
           "analyze",
           [](const OpenStudy& s, const std::string& normalization, const std::string& cost,
@@ -148,7 +150,19 @@ void bindStudies(py::module_& m) {
         s.close();
         return false;
       });
+}
 
+/// The class hattr.Study.
+void bindStudyClass(py::module_& m) {
+  py::class_<OpenStudy> study(m, "Study",
+                              "A study database opened read-only: its definition, subjects, trials and recordings. "
+                              "Another process may run the study meanwhile. close() (or a `with` block) closes it.");
+  bindStudyRecords(study);
+  bindStudyAnalysis(study);
+}
+
+/// Creating a study and running its unattended subjects.
+void bindStudyFunctions(py::module_& m) {
   m.def(
       "create_study",
       [](const std::filesystem::path& path, const StudySource& study, const std::filesystem::path& base_dir) {
@@ -175,6 +189,13 @@ void bindStudies(py::module_& m) {
       "Runs a study's unfinished trials of simulated and scripted subjects in simulated time, resuming where it "
       "stopped, as `hattr study run` (mentored modes too: the study file's mentor block is the expert's station); "
       "returns the number of trials run. People run from the studio. Releases the GIL.");
+}
+
+}  // namespace
+
+void bindStudies(py::module_& m) {
+  bindStudyClass(m);
+  bindStudyFunctions(m);
 }
 
 }  // namespace hattr::python

@@ -123,7 +123,7 @@ class ReplayDevice final : public Device {
       }
       kept.metadata().extra["forces_dropped"] = fmt::format("{}", dropped_.load());
       kept.metadata().extra["forces_not_after_previous"] = fmt::format("{}", skipped);
-      if (!kept.empty()) io::writeProfileCsv(kept, forces_out_, io::Overwrite::kRefuse);
+      if (!kept.empty()) io::writeProfileCsv(kept, forces_out_, hattr::Overwrite::kRefuse);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "replay plugin: could not write %s: %s\n", forces_out_.c_str(), e.what());
     }

@@ -69,6 +69,35 @@ HWY_INLINE DiagonalRange diagonalRange(Index k, Index n, Index m, Index r) {
   return {lo, hi};
 }
 
+// Padded copies for diagonalKernel: a as is, b reversed (so b[k - i] is contiguous in i), each
+// channel followed by `lanes` zeros that the last, partial vector of a diagonal may read.
+inline std::pair<std::vector<double>, std::vector<double>> padForDiagonals(const KernelProblem& p, Index lanes) {
+  const Index n = static_cast<Index>(p.n);
+  const Index m = static_cast<Index>(p.m);
+  const Index a_stride = n + lanes;
+  const Index b_stride = m + lanes;
+  std::vector<double> a_pad(p.count * a_stride, 0.0);
+  std::vector<double> b_rev(p.count * b_stride, 0.0);
+  for (std::size_t c = 0; c < p.count; ++c) {
+    std::copy(p.a[c], p.a[c] + n, a_pad.begin() + c * a_stride);
+    std::reverse_copy(p.b[c], p.b[c] + m, b_rev.begin() + c * b_stride);
+  }
+  return {std::move(a_pad), std::move(b_rev)};
+}
+
+// The local cost of one vector of a diagonal's cells (diagonalKernel): `count` channels
+// summed, each `a_stride` (`b_stride`) after the last (kSingle: exactly one channel).
+template <DtwCost kCost, bool kSingle>
+HWY_INLINE Vd diagonalCost(Tag d, const double* a, const double* b, std::size_t count, Index a_stride, Index b_stride) {
+  Vd cost = localCost<kCost>(hn::LoadU(d, a), hn::LoadU(d, b));
+  if constexpr (!kSingle) {
+    for (std::size_t c = 1; c < count; ++c) {
+      cost = hn::Add(cost, localCost<kCost>(hn::LoadU(d, a + c * a_stride), hn::LoadU(d, b + c * b_stride)));
+    }
+  }
+  return cost;
+}
+
 // One pair, `count` channels summed per cell (kSingle: exactly one channel).
 // Anti-diagonal k is stored by row i at position i - lo_k + 1 of its buffer; positions
 // 0 and len + 1 hold +inf so that neighbours outside the matrix or band read as +inf.
@@ -82,16 +111,9 @@ double diagonalKernel(const KernelProblem& p) {
   const Index r = p.radius >= std::max(p.n, p.m) ? std::max(n, m) : static_cast<Index>(p.radius);
   const std::size_t count = p.count;
 
-  // Padded copies: a as is, b reversed (so b[k - i] is contiguous in i), each channel
-  // followed by `lanes` zeros that the last, partial vector of a diagonal may read.
   const Index a_stride = n + lanes;
   const Index b_stride = m + lanes;
-  std::vector<double> a_pad(count * a_stride, 0.0);
-  std::vector<double> b_rev(count * b_stride, 0.0);
-  for (std::size_t c = 0; c < count; ++c) {
-    std::copy(p.a[c], p.a[c] + n, a_pad.begin() + c * a_stride);
-    std::reverse_copy(p.b[c], p.b[c] + m, b_rev.begin() + c * b_stride);
-  }
+  const auto [a_pad, b_rev] = padForDiagonals(p, lanes);
 
   // Three rotating anti-diagonal buffers, long enough for the longest diagonal, the two
   // sentinels and a partial vector's overrun.
@@ -123,13 +145,7 @@ double diagonalKernel(const KernelProblem& p) {
       const double* b0 = b_rev.data() + (m - 1 - k + range.lo);
       Vd vmin = inf;
       for (Index t = 0; t < len; t += lanes) {
-        Vd cost = localCost<kCost>(hn::LoadU(d, a0 + t), hn::LoadU(d, b0 + t));
-        if constexpr (!kSingle) {
-          for (std::size_t c = 1; c < count; ++c) {
-            cost = hn::Add(cost, localCost<kCost>(hn::LoadU(d, a0 + c * a_stride + t),
-                                                  hn::LoadU(d, b0 + c * b_stride + t)));
-          }
-        }
+        const Vd cost = diagonalCost<kCost, kSingle>(d, a0 + t, b0 + t, count, a_stride, b_stride);
         const Vd best =
             hn::Min(hn::Min(hn::LoadU(d, up + t), hn::LoadU(d, left + t)), hn::LoadU(d, diag + t));
         const Vd value = hn::Add(cost, best);
@@ -260,20 +276,176 @@ void tightenThresholds(const KernelProblem& p, std::size_t block, std::size_t wi
   }
 }
 
+// One block of batchKernel: its interleaved series, the full-width row of D (the last row of
+// the strip above), the strip's rows' D(i, j-1), the pairs' thresholds, and the sizes.
+struct BatchBlock {
+  std::size_t n = 0;
+  std::size_t m = 0;
+  std::size_t r = 0;      // the band's radius
+  std::size_t width = 0;  // pairs in the block: kBatchGroups vectors
+  const double* a_int = nullptr;
+  const double* b_int = nullptr;
+  double* row = nullptr;
+  double* left = nullptr;
+  const double* threshold = nullptr;
+};
+
+// The columns [first, last] of the row above a strip that were computed; the others are above
+// every threshold. Above the first strip: only D(-1, -1) = 0.
+struct ComputedColumns {
+  std::size_t first = 0;
+  std::size_t last = 0;
+};
+
+// One column j of a strip, down its `rows` rows from i0: each cell from its up, diagonal and
+// left, or +inf outside the band; with kTrack also the column's smallest cells (to find where
+// the strip may stop).
+template <DtwCost kCost, bool kTrack>
+HWY_INLINE void stripColumn(Tag d, const BatchBlock& blk, std::size_t i0, std::size_t rows, std::size_t j, Vd b0, Vd b1,
+                            Vd b2, Vd b3, Vd& up0, Vd& up1, Vd& up2, Vd& up3, Vd& diag0, Vd& diag1, Vd& diag2,
+                            Vd& diag3, Vd& column0, Vd& column1, Vd& column2, Vd& column3) {
+  const std::size_t lanes = hn::Lanes(d);
+  const std::size_t width = blk.width;
+  for (std::size_t k = 0; k < rows; ++k) {
+    const std::size_t i = i0 + k;
+    double* l = blk.left + k * width;
+    if (j + blk.r >= i && j <= i + blk.r) {  // |i - j| <= r
+      const double* a_i = blk.a_int + i * width;
+      up0 = stripCell<kCost>(d, hn::LoadU(d, a_i), b0, up0, diag0, l);
+      up1 = stripCell<kCost>(d, hn::LoadU(d, a_i + lanes), b1, up1, diag1, l + lanes);
+      up2 = stripCell<kCost>(d, hn::LoadU(d, a_i + 2 * lanes), b2, up2, diag2, l + 2 * lanes);
+      up3 = stripCell<kCost>(d, hn::LoadU(d, a_i + 3 * lanes), b3, up3, diag3, l + 3 * lanes);
+    } else {
+      up0 = stripCellOutside(d, diag0, l);
+      up1 = stripCellOutside(d, diag1, l + lanes);
+      up2 = stripCellOutside(d, diag2, l + 2 * lanes);
+      up3 = stripCellOutside(d, diag3, l + 3 * lanes);
+    }
+    if constexpr (kTrack) {
+      column0 = hn::Min(column0, up0);
+      column1 = hn::Min(column1, up1);
+      column2 = hn::Min(column2, up2);
+      column3 = hn::Min(column3, up3);
+    }
+  }
+}
+
+// The strip's first column and the last column of the row above with a cell within a
+// threshold: from its first row's band, and from the first column where the row above has a
+// cell within a threshold (left of them every row's D(i, j-1) is outside the band or above the
+// thresholds: +inf). The strip may stop once it is right of that last column.
+HWY_INLINE std::pair<std::size_t, std::size_t> stripStart(Tag d, const BatchBlock& blk, std::size_t i0, bool first_strip,
+                                                          const ComputedColumns& above) {
+  const std::size_t width = blk.width;
+  std::size_t j_first = i0 > blk.r ? i0 - blk.r : 0;
+  std::size_t above_within_last = 0;
+  if (!first_strip) {
+    std::size_t start = above.first;
+    while (start < above.last && !anyWithin(d, blk.row + start * width, blk.threshold)) ++start;
+    j_first = std::max(j_first, start);
+    above_within_last = above.last;
+    while (above_within_last > start && !anyWithin(d, blk.row + above_within_last * width, blk.threshold)) {
+      --above_within_last;
+    }
+  }
+  return {j_first, above_within_last};
+}
+
+// One strip of kStripRows rows from i0, column by column (batchKernel); `above` becomes its own
+// computed columns. Returns whether every lane's strip row exceeds the bound (kAbandon).
+template <DtwCost kCost, bool kAbandon>
+HWY_INLINE bool computeStrip(Tag d, const BatchBlock& blk, double bound, std::size_t i0, bool first_strip,
+                             ComputedColumns& above) {
+  const std::size_t lanes = hn::Lanes(d);
+  const std::size_t width = blk.width;
+  const Vd inf = hn::Set(d, kInf);
+  const Vd th0 = hn::LoadU(d, blk.threshold), th1 = hn::LoadU(d, blk.threshold + lanes);
+  const Vd th2 = hn::LoadU(d, blk.threshold + 2 * lanes), th3 = hn::LoadU(d, blk.threshold + 3 * lanes);
+  const std::size_t rows = std::min(kStripRows, blk.n - i0);
+  const std::size_t i_last = i0 + rows - 1;
+  const auto [j_first, above_within_last] = stripStart(d, blk, i0, first_strip, above);
+  const std::size_t j_last = std::min(blk.m - 1, i_last + blk.r);
+  std::fill(blk.left, blk.left + rows * width, kInf);
+  // D(i0-1, j_first-1), the first row's diagonal: D(-1, -1) = 0 on row 0; +inf left of
+  // column 0 and where the row above was not computed.
+  Vd top0 = first_strip && j_first == 0 ? hn::Zero(d) : inf;
+  Vd top1 = top0, top2 = top0, top3 = top0;
+  if (!first_strip && j_first > above.first && j_first - 1 <= above.last) {
+    const double* c = blk.row + (j_first - 1) * width;
+    top0 = hn::LoadU(d, c), top1 = hn::LoadU(d, c + lanes);
+    top2 = hn::LoadU(d, c + 2 * lanes), top3 = hn::LoadU(d, c + 3 * lanes);
+  }
+  Vd min0 = inf, min1 = inf, min2 = inf, min3 = inf;
+  std::size_t j = j_first;
+  for (; j <= j_last; ++j) {
+    const double* b_j = blk.b_int + j * width;
+    // Down the column: up starts as D(i0-1, j) from the row above the strip (+inf where
+    // it was not computed).
+    double* cell = blk.row + j * width;
+    const bool above_computed = !first_strip && j >= above.first && j <= above.last;
+    Vd up0 = above_computed ? hn::LoadU(d, cell) : inf;
+    Vd up1 = above_computed ? hn::LoadU(d, cell + lanes) : inf;
+    Vd up2 = above_computed ? hn::LoadU(d, cell + 2 * lanes) : inf;
+    Vd up3 = above_computed ? hn::LoadU(d, cell + 3 * lanes) : inf;
+    Vd diag0 = top0, diag1 = top1, diag2 = top2, diag3 = top3;
+    top0 = up0;
+    top1 = up1;
+    top2 = up2;
+    top3 = up3;
+    // Down the strip; right of the row above's last cell within a threshold, also the
+    // column's smallest cells, to find where the strip may stop.
+    Vd column0 = inf, column1 = inf, column2 = inf, column3 = inf;
+    const bool right_of_above = first_strip || j > above_within_last;
+    const Vd b0 = hn::LoadU(d, b_j), b1 = hn::LoadU(d, b_j + lanes);
+    const Vd b2 = hn::LoadU(d, b_j + 2 * lanes), b3 = hn::LoadU(d, b_j + 3 * lanes);
+    if (right_of_above) {
+      stripColumn<kCost, true>(d, blk, i0, rows, j, b0, b1, b2, b3, up0, up1, up2, up3, diag0, diag1, diag2, diag3,
+                               column0, column1, column2, column3);
+    } else {
+      stripColumn<kCost, false>(d, blk, i0, rows, j, b0, b1, b2, b3, up0, up1, up2, up3, diag0, diag1, diag2, diag3,
+                                column0, column1, column2, column3);
+    }
+    // The strip's last row becomes the row above the next strip.
+    hn::StoreU(up0, d, cell);
+    hn::StoreU(up1, d, cell + lanes);
+    hn::StoreU(up2, d, cell + 2 * lanes);
+    hn::StoreU(up3, d, cell + 3 * lanes);
+    if constexpr (kAbandon) {
+      min0 = hn::Min(min0, up0);
+      min1 = hn::Min(min1, up1);
+      min2 = hn::Min(min2, up2);
+      min3 = hn::Min(min3, up3);
+    }
+    // There, a column wholly above the thresholds ends the strip: the next column's up,
+    // diagonal and left are all above them.
+    if (right_of_above) {
+      const auto within = hn::Or(hn::Or(hn::Le(column0, th0), hn::Le(column1, th1)),
+                                 hn::Or(hn::Le(column2, th2), hn::Le(column3, th3)));
+      if (hn::AllFalse(d, within)) break;
+    }
+  }
+  above = {j_first, std::min(j, j_last)};
+  // Every path crosses the strip's last row: stop when all lanes' rows exceed the bound.
+  if constexpr (kAbandon) {
+    const Vd all = hn::Min(hn::Min(min0, min1), hn::Min(min2, min3));
+    return hn::GetLane(hn::MinOfLanes(d, all)) > bound;
+  }
+  return false;
+}
+
 template <DtwCost kCost, bool kAbandon>
 void batchKernel(const KernelProblem& p, double* out) {
   const Tag d;
-  const std::size_t lanes = hn::Lanes(d);
-  const std::size_t width = kBatchGroups * lanes;
+  const std::size_t width = kBatchGroups * hn::Lanes(d);
   const std::size_t n = p.n;
   const std::size_t m = p.m;
-  const std::size_t r = std::min(p.radius, std::max(n, m));
   std::vector<double> a_int(n * width);
   std::vector<double> b_int(m * width);
   std::vector<double> row(m * width);
   std::vector<double> left(kStripRows * width);
   std::vector<double> threshold(width);
-  const Vd inf = hn::Set(d, kInf);
+  const BatchBlock blk{.n = n, .m = m, .r = std::min(p.radius, std::max(n, m)), .width = width, .a_int = a_int.data(),
+                       .b_int = b_int.data(), .row = row.data(), .left = left.data(), .threshold = threshold.data()};
 
   for (std::size_t block = 0; block < p.count; block += width) {
     // Interleave the block's pairs; lanes past the last pair repeat it (results dropped).
@@ -284,135 +456,19 @@ void batchKernel(const KernelProblem& p, double* out) {
       threshold[s] = pathBound<kCost>(p.a[pair], p.b[pair], n, m);
     }
     tightenThresholds<kCost>(p, block, width, threshold.data());
-    const Vd th0 = hn::LoadU(d, threshold.data());
-    const Vd th1 = hn::LoadU(d, threshold.data() + lanes);
-    const Vd th2 = hn::LoadU(d, threshold.data() + 2 * lanes);
-    const Vd th3 = hn::LoadU(d, threshold.data() + 3 * lanes);
 
-    // The columns [above_first, above_last] of the row above the strip that were computed;
-    // the others are above every threshold. Above the first strip: only D(-1, -1) = 0.
-    std::size_t above_first = 0;
-    std::size_t above_last = 0;
+    ComputedColumns above;
     bool first_strip = true;
     bool abandoned = false;
     for (std::size_t i0 = 0; i0 < n && !abandoned; i0 += kStripRows, first_strip = false) {
-      const std::size_t rows = std::min(kStripRows, n - i0);
-      const std::size_t i_last = i0 + rows - 1;
-      // The strip's columns: from its first row's band to its last row's, and from the first
-      // column where the row above has a cell within a threshold. Left of them every row's
-      // D(i, j-1) is outside the band or above the thresholds: +inf.
-      // The strip may stop once it is right of the row above's last cell within a threshold.
-      std::size_t j_first = i0 > r ? i0 - r : 0;
-      std::size_t above_within_last = 0;
-      if (!first_strip) {
-        std::size_t start = above_first;
-        while (start < above_last && !anyWithin(d, row.data() + start * width, threshold.data())) ++start;
-        j_first = std::max(j_first, start);
-        above_within_last = above_last;
-        while (above_within_last > start && !anyWithin(d, row.data() + above_within_last * width, threshold.data())) {
-          --above_within_last;
-        }
-      }
-      const std::size_t j_last = std::min(m - 1, i_last + r);
-      std::fill(left.begin(), left.begin() + static_cast<std::ptrdiff_t>(rows * width), kInf);
-      // D(i0-1, j_first-1), the first row's diagonal: D(-1, -1) = 0 on row 0; +inf left of
-      // column 0 and where the row above was not computed.
-      Vd top0 = first_strip && j_first == 0 ? hn::Zero(d) : inf;
-      Vd top1 = top0, top2 = top0, top3 = top0;
-      if (!first_strip && j_first > above_first && j_first - 1 <= above_last) {
-        const double* c = row.data() + (j_first - 1) * width;
-        top0 = hn::LoadU(d, c);
-        top1 = hn::LoadU(d, c + lanes);
-        top2 = hn::LoadU(d, c + 2 * lanes);
-        top3 = hn::LoadU(d, c + 3 * lanes);
-      }
-      Vd min0 = inf, min1 = inf, min2 = inf, min3 = inf;
-      std::size_t j = j_first;
-      for (; j <= j_last; ++j) {
-        const double* b_j = b_int.data() + j * width;
-        const Vd b0 = hn::LoadU(d, b_j);
-        const Vd b1 = hn::LoadU(d, b_j + lanes);
-        const Vd b2 = hn::LoadU(d, b_j + 2 * lanes);
-        const Vd b3 = hn::LoadU(d, b_j + 3 * lanes);
-        // Down the column: up starts as D(i0-1, j) from the row above the strip (+inf where
-        // it was not computed).
-        double* cell = row.data() + j * width;
-        const bool above_computed = !first_strip && j >= above_first && j <= above_last;
-        Vd up0 = above_computed ? hn::LoadU(d, cell) : inf;
-        Vd up1 = above_computed ? hn::LoadU(d, cell + lanes) : inf;
-        Vd up2 = above_computed ? hn::LoadU(d, cell + 2 * lanes) : inf;
-        Vd up3 = above_computed ? hn::LoadU(d, cell + 3 * lanes) : inf;
-        Vd diag0 = top0, diag1 = top1, diag2 = top2, diag3 = top3;
-        top0 = up0;
-        top1 = up1;
-        top2 = up2;
-        top3 = up3;
-        // Down the strip; right of the row above's last cell within a threshold, also the
-        // column's smallest cells (kTrack), to find where the strip may stop.
-        Vd column0 = inf, column1 = inf, column2 = inf, column3 = inf;
-        const auto down = [&](auto track) {
-          for (std::size_t k = 0; k < rows; ++k) {
-            const std::size_t i = i0 + k;
-            double* l = left.data() + k * width;
-            if (j + r >= i && j <= i + r) {  // |i - j| <= r
-              const double* a_i = a_int.data() + i * width;
-              up0 = stripCell<kCost>(d, hn::LoadU(d, a_i), b0, up0, diag0, l);
-              up1 = stripCell<kCost>(d, hn::LoadU(d, a_i + lanes), b1, up1, diag1, l + lanes);
-              up2 = stripCell<kCost>(d, hn::LoadU(d, a_i + 2 * lanes), b2, up2, diag2, l + 2 * lanes);
-              up3 = stripCell<kCost>(d, hn::LoadU(d, a_i + 3 * lanes), b3, up3, diag3, l + 3 * lanes);
-            } else {
-              up0 = stripCellOutside(d, diag0, l);
-              up1 = stripCellOutside(d, diag1, l + lanes);
-              up2 = stripCellOutside(d, diag2, l + 2 * lanes);
-              up3 = stripCellOutside(d, diag3, l + 3 * lanes);
-            }
-            if constexpr (decltype(track)::value) {
-              column0 = hn::Min(column0, up0);
-              column1 = hn::Min(column1, up1);
-              column2 = hn::Min(column2, up2);
-              column3 = hn::Min(column3, up3);
-            }
-          }
-        };
-        const bool right_of_above = first_strip || j > above_within_last;
-        if (right_of_above) {
-          down(std::true_type{});
-        } else {
-          down(std::false_type{});
-        }
-        // The strip's last row becomes the row above the next strip.
-        hn::StoreU(up0, d, cell);
-        hn::StoreU(up1, d, cell + lanes);
-        hn::StoreU(up2, d, cell + 2 * lanes);
-        hn::StoreU(up3, d, cell + 3 * lanes);
-        if constexpr (kAbandon) {
-          min0 = hn::Min(min0, up0);
-          min1 = hn::Min(min1, up1);
-          min2 = hn::Min(min2, up2);
-          min3 = hn::Min(min3, up3);
-        }
-        // There, a column wholly above the thresholds ends the strip: the next column's up,
-        // diagonal and left are all above them.
-        if (right_of_above) {
-          const auto within = hn::Or(hn::Or(hn::Le(column0, th0), hn::Le(column1, th1)),
-                                     hn::Or(hn::Le(column2, th2), hn::Le(column3, th3)));
-          if (hn::AllFalse(d, within)) break;
-        }
-      }
-      above_first = j_first;
-      above_last = std::min(j, j_last);
-      // Every path crosses the strip's last row: stop when all lanes' rows exceed the bound.
-      if constexpr (kAbandon) {
-        const Vd all = hn::Min(hn::Min(min0, min1), hn::Min(min2, min3));
-        abandoned = hn::GetLane(hn::MinOfLanes(d, all)) > p.bound;
-      }
+      abandoned = computeStrip<kCost, kAbandon>(d, blk, p.bound, i0, first_strip, above);
     }
 
     // The corner was computed unless the last strip stopped before it (then it is above
     // every threshold, which no pair's cost is: unreachable, but never read stale).
     const double* last = row.data() + (m - 1) * width;
     for (std::size_t s = 0; s < width && block + s < p.count; ++s) {
-      const bool corner_computed = above_last == m - 1;
+      const bool corner_computed = above.last == m - 1;
       out[block + s] = abandoned || !corner_computed || last[s] > p.bound ? kInf : last[s];
     }
   }

@@ -8,7 +8,7 @@
 
 #include "hattr/core/error.hpp"
 #include "hattr/wire/datagram_link.hpp"
-#include "hattr/wire/session.hpp"
+#include "hattr/wire/link_session.hpp"
 
 namespace hattr::device {
 namespace {
@@ -64,7 +64,7 @@ UdpDeviceParams udpDeviceParams(const DeviceUri& uri) {
   return params;
 }
 
-/// The client's state behind UdpDevice: the session (wire::InitiatorSession) and what the
+/// The client's state behind UdpDevice: the session (wire::InitiatorLinkSession) and what the
 /// link did.
 class UdpDevice::Impl {
  public:
@@ -91,7 +91,7 @@ class UdpDevice::Impl {
   HandScript* hand_;
   std::int64_t hold_ns_;
   wire::UdpDatagramLink link_;
-  wire::InitiatorSession session_;
+  wire::InitiatorLinkSession session_;
   wire::WelcomePayload device_;  // the first session's WELCOME: the device this side was sized for
 
   // The newest state and the link's timing (servo thread after the handshake).
@@ -138,8 +138,8 @@ bool sameDevice(const wire::WelcomePayload& a, const wire::WelcomePayload& b) no
          a.rate_hz == b.rate_hz;
 }
 
-wire::SessionTiming clientTiming() {
-  wire::SessionTiming timing;
+wire::LinkSessionTiming clientTiming() {
+  wire::LinkSessionTiming timing;
   timing.hello_retry_ns = kHelloRetryNs;
   timing.drain_budget_ns = kDrainBudgetNs;
   return timing;
@@ -165,7 +165,7 @@ void UdpDevice::Impl::handshake() {
   std::int64_t next_command = start;
   for (std::int64_t now = start; now < deadline && state_arrival_ns_ < 0; now = wire::monotonicNs()) {
     session_.pump(now);
-    HATTR_THROW_UNLESS(session_.state() != wire::InitiatorSession::State::kRefused,
+    HATTR_THROW_UNLESS(session_.state() != wire::InitiatorLinkSession::State::kRefused,
                        "{}: the device server at {} already serves another client", where, params_.server.text());
     takeState();
     // Welcomed: a zero force proves the session; the server streams states only after one.
@@ -176,7 +176,7 @@ void UdpDevice::Impl::handshake() {
     const std::int64_t wake = std::min({deadline, session_.live() ? next_command : session_.lastHello_ns() + kHelloRetryNs});
     (void)link_.waitReadable(std::max<std::int64_t>(0, wake - wire::monotonicNs()));
   }
-  const wire::SessionStats stats = session_.stats();
+  const wire::LinkSessionStats stats = session_.stats();
   HATTR_THROW_UNLESS(stats.drops[static_cast<std::size_t>(wire::DropReason::kBadVersion)] == 0 || session_.live(),
                      "{}: the device server at {} speaks another version of the hattr protocol (this client speaks "
                      "version {}); run the same hattr release on both machines",
@@ -257,7 +257,7 @@ DeviceStatus UdpDevice::Impl::read(std::chrono::nanoseconds now, PenState& out) 
   out = state_.pen;
   out.t_s = loop_time_s_;
   // How the session ended (a BYE, a BUSY to a new hello) holds until a new one opens.
-  using State = wire::InitiatorSession::State;
+  using State = wire::InitiatorLinkSession::State;
   const State state = session_.state();
   if (state == State::kRefused) ended_by_ = Fault::kServerBusy;
   if (state == State::kClosed) ended_by_ = Fault::kServerClosed;
@@ -354,7 +354,7 @@ std::string UdpDevice::faultReason() const {
 
 LinkStats UdpDevice::linkStats() const {
   const Impl& i = *impl_;
-  const wire::SessionStats session = i.session_.stats();
+  const wire::LinkSessionStats session = i.session_.stats();
   LinkStats s;
   s.rtt = i.rtt_;
   s.state_age = i.state_age_;

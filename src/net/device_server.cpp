@@ -6,7 +6,7 @@
 #include "hattr/device/device_uri.hpp"
 #include "hattr/device/hand.hpp"
 #include "hattr/wire/datagram_link.hpp"
-#include "hattr/wire/session.hpp"
+#include "hattr/wire/link_session.hpp"
 
 namespace hattr::net {
 namespace {
@@ -100,8 +100,8 @@ wire::WelcomePayload offerOf(const DeviceServerConfig& config, const device::Dev
 }
 
 /// The drain budget of a tick: a quarter of the period, at most a quarter millisecond.
-wire::SessionTiming timingOf(const DeviceServerConfig& config, const servo::ServoLoop& loop) {
-  wire::SessionTiming timing;
+wire::LinkSessionTiming timingOf(const DeviceServerConfig& config, const servo::ServoLoop& loop) {
+  wire::LinkSessionTiming timing;
   timing.session_timeout_ns = config.session_timeout.count();
   timing.drain_budget_ns = std::min<std::int64_t>(timing.drain_budget_ns, loop.period().count() / 4);
   return timing;
@@ -110,7 +110,7 @@ wire::SessionTiming timingOf(const DeviceServerConfig& config, const servo::Serv
 }  // namespace
 
 /// The server's stage in its own servo loop: network in, STATE out, the client's force back.
-/// The session itself (handshake, checks, timeouts) is wire::ResponderSession's.
+/// The session itself (handshake, checks, timeouts) is wire::ResponderLinkSession's.
 class DeviceServer::Impl final : public GuidanceController {
  public:
   explicit Impl(DeviceServerConfig config)
@@ -139,7 +139,7 @@ class DeviceServer::Impl final : public GuidanceController {
   ServedDevice served_;
   servo::ServoLoop loop_;
   wire::UdpDatagramLink link_;
-  wire::ResponderSession session_;
+  wire::ResponderLinkSession session_;
 
   // The client's newest command (servo thread).
   std::uint64_t generation_ = 0;  // the session the command state belongs to
@@ -260,7 +260,7 @@ void DeviceServer::stop() { impl_->stop(); }
 
 DeviceServerStats DeviceServer::stats() const {
   const Impl& i = *impl_;
-  const wire::SessionStats session = i.session_.stats();
+  const wire::LinkSessionStats session = i.session_.stats();
   DeviceServerStats s;
   s.sessions = session.sessions;
   s.session_timeouts = session.timeouts;

@@ -6,7 +6,7 @@
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
-#include "hattr/wire/session.hpp"
+#include "hattr/wire/link_session.hpp"
 
 namespace hattr::net {
 namespace {
@@ -111,8 +111,8 @@ class MentorCoupling::Impl {
   static void bump(std::atomic<std::uint64_t>& counter) noexcept { counter.fetch_add(1, std::memory_order_relaxed); }
 
   MentorConfig config_;
-  std::unique_ptr<wire::Session> session_;
-  wire::InitiatorSession* initiator_ = nullptr;  // the follower's session (null for the leader)
+  std::unique_ptr<wire::LinkSession> session_;
+  wire::InitiatorLinkSession* initiator_ = nullptr;  // the follower's session (null for the leader)
   std::uint64_t generation_ = 0;
   std::uint64_t busy_seen_ = 0;
   std::uint64_t byes_seen_ = 0;
@@ -155,8 +155,8 @@ class MentorCoupling::Impl {
 
 namespace {
 
-wire::SessionTiming mentorTiming(const MentorConfig& config) {
-  wire::SessionTiming timing;
+wire::LinkSessionTiming mentorTiming(const MentorConfig& config) {
+  wire::LinkSessionTiming timing;
   timing.session_timeout_ns = toNs(config.session_timeout_s);
   timing.hello_retry_ns = toNs(config.hello_interval_s);
   return timing;
@@ -177,10 +177,10 @@ wire::WelcomePayload leaderOffer(const MentorConfig& config) {
 MentorCoupling::Impl::Impl(const MentorConfig& config, wire::DatagramLink& link) : config_(config) {
   config_.validate();
   if (config_.role == MentorRole::kLeader) {
-    session_ = std::make_unique<wire::ResponderSession>(config_.key, wire::PacketType::kPeer, link,
+    session_ = std::make_unique<wire::ResponderLinkSession>(config_.key, wire::PacketType::kPeer, link,
                                                         leaderOffer(config_), mentorTiming(config_));
   } else {
-    auto follower = std::make_unique<wire::InitiatorSession>(config_.key, wire::PacketType::kPeer, link,
+    auto follower = std::make_unique<wire::InitiatorLinkSession>(config_.key, wire::PacketType::kPeer, link,
                                                              config_.leader, mentorTiming(config_));
     initiator_ = follower.get();
     session_ = std::move(follower);
@@ -209,7 +209,7 @@ void MentorCoupling::Impl::followSession(std::int64_t now_ns) noexcept {
     busy_seen_ = busy;
     refused_.store(true, std::memory_order_relaxed);
   }
-  using State = wire::InitiatorSession::State;
+  using State = wire::InitiatorLinkSession::State;
   if (!session_->live() && initiator_->state() != State::kConnecting &&
       (initiator_->lastHello_ns() == 0 || now_ns - initiator_->lastHello_ns() >= toNs(config_.hello_interval_s))) {
     initiator_->connect(now_ns);
@@ -379,7 +379,7 @@ bool MentorCoupling::Impl::worthSending(const wire::PeerPayload& out, std::int64
 
 MentorStats MentorCoupling::stats() const noexcept {
   const Impl& i = *impl_;
-  const wire::SessionStats session = i.session_->stats();
+  const wire::LinkSessionStats session = i.session_->stats();
   MentorStats s;
   s.session = i.session_->live();
   s.link_up = i.link_flag_.load(std::memory_order_relaxed);
@@ -411,7 +411,7 @@ MentorStats statsSince(const MentorStats& now, const MentorStats& before) noexce
   d.peers_sent -= before.peers_sent;
   d.peers_withheld -= before.peers_withheld;
   d.lost -= before.lost;
-  for (std::size_t i = 0; i < d.drops.size(); ++i) d.drops[i] -= before.drops[i];
+  d.drops = wire::dropsSince(now.drops, before.drops);
   d.energy_in_J -= before.energy_in_J;
   d.energy_out_J -= before.energy_out_J;
   d.dissipated_J -= before.dissipated_J;

@@ -6,6 +6,41 @@
 
 namespace hattr::ops {
 
+nlohmann::json profileSummaryJson(const HapticProfile& profile) {
+  const ProfileMetadata& meta = profile.metadata();
+  nlohmann::json json;
+  json["samples"] = profile.size();
+  json["pen_down_samples"] = profile.penDownCount();
+  json["duration_s"] = profile.duration_s();
+  json["rate_hz"] = profile.measuredRate_hz();
+  json["nominal_rate_hz"] = meta.nominal_rate_hz;
+
+  // Every channel the profile has, with its SI unit and range.
+  nlohmann::json channels = nlohmann::json::object();
+  for (const auto& info : allChannels()) {
+    if (!profile.hasChannel(info.channel) || profile.empty()) continue;
+    const ChannelRange range = profile.range(info.channel);
+    channels[std::string(info.name)] = {{"unit", info.unit}, {"min", range.min}, {"max", range.max}};
+  }
+  json["channels"] = channels;
+
+  nlohmann::json metadata = {{"subject", meta.subject}, {"skill", meta.skill},
+                             {"device", meta.device},   {"source", meta.source},
+                             {"created_utc", meta.created_utc}};
+  for (const auto& [key, value] : meta.extra) metadata[key] = value;
+  json["metadata"] = metadata;
+  return json;
+}
+
+nlohmann::json physicalEventsJson(const session::PhysicalEvents& events) {
+  const auto one = [](const session::PhysicalEvent& e, const char* worst_name) {
+    return nlohmann::json{{"count", e.count}, {"first_s", e.first_s}, {worst_name, e.worst}};
+  };
+  return {{"penetration", one(events.penetration, "deepest_m")},
+          {"force_saturation", one(events.saturation, "longest_s")},
+          {"workspace", one(events.workspace, "farthest_m")}};
+}
+
 nlohmann::json percentilesUsJson(const DurationHistogram& histogram) {
   const auto us = [](std::int64_t ns) { return static_cast<double>(ns) * 1e-3; };
   return {{"p50", us(histogram.percentile_ns(0.50))},
@@ -15,7 +50,7 @@ nlohmann::json percentilesUsJson(const DurationHistogram& histogram) {
           {"count", histogram.count()}};
 }
 
-nlohmann::json dropsJson(const std::array<std::uint64_t, wire::kDropReasonCount>& drops) {
+nlohmann::json dropsJson(const wire::DropCounts& drops) {
   nlohmann::json json = nlohmann::json::object();
   for (std::size_t r = 0; r < drops.size(); ++r) {
     json[std::string(wire::dropReasonName(static_cast<wire::DropReason>(r)))] = drops[r];

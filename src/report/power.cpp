@@ -315,7 +315,7 @@ void writePowerPage(const PowerTable& table, const std::filesystem::path& file) 
       "fraction of studies in which the paper's analysis (mode × subject ANOVA, subject random) finds the mode "
       "effect; the interval is Clopper–Pearson's.</p>\n<table>{}\n{}</table>\n{}</body></html>\n",
       plan.replicates, plan.seed, plan.alpha, escape(plan.study.value("name", std::string("?"))), head, rows, body);
-  io::writeFileAtomically(file, html, io::Overwrite::kReplace);
+  hattr::writeFileAtomically(file, html, hattr::Overwrite::kReplace);
 }
 
 }  // namespace hattr::report

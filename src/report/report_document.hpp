@@ -103,15 +103,15 @@ class Document {
 inline void writeReportFiles(const std::filesystem::path& out, const std::string& title, const Document& doc,
                              const std::map<std::string, std::string>& files) {
   std::filesystem::create_directories(out / "figures");
-  for (const auto& [name, text] : files) io::writeFileAtomically(out / name, text, io::Overwrite::kReplace);
-  io::writeFileAtomically(out / "report.md", doc.markdown(), io::Overwrite::kReplace);
+  for (const auto& [name, text] : files) hattr::writeFileAtomically(out / name, text, hattr::Overwrite::kReplace);
+  hattr::writeFileAtomically(out / "report.md", doc.markdown(), hattr::Overwrite::kReplace);
   const std::string html = fmt::format(
       "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title>\n<style>"
       "body{{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}} table{{border-collapse:collapse;margin:0.5em 0}}"
       "td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}} th{{background:#f2f2f2}} figure{{margin:1em 0}}"
       "figcaption{{color:#555;font-size:0.9em}}</style></head><body>\n{}</body></html>\n",
       escape(title), doc.html());
-  io::writeFileAtomically(out / "report.html", html, io::Overwrite::kReplace);
+  hattr::writeFileAtomically(out / "report.html", html, hattr::Overwrite::kReplace);
 }
 
 }  // namespace hattr::report::detail

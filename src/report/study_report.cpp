@@ -207,17 +207,12 @@ std::vector<std::string> paperSummary(const session::StudyDefinition& study, con
   return out;
 }
 
-std::filesystem::path writeStudyReport(const session::StudyDatabase& db, const StudyAnalysis& a,
-                                       const std::filesystem::path& out) {
-  const session::StudyDefinition& study = db.study();
-  std::map<std::string, std::string> files;
-  Document doc;
-  doc.heading(fmt::format("Study report: {}", study.name), 1);
-  const auto subjects = db.subjects();
-  doc.heading("Summary");
-  doc.list(paperSummary(study, a, subjects.size(), chooseAnalysis(db).reason));
+namespace {
 
-  // Design.
+/// The design section: what was compared and how, each subject's order of modes, which recall
+/// trials went in, and the trials the loop disturbed.
+void writeDesignSection(const session::StudyDefinition& study, const std::vector<session::SubjectRecord>& subjects,
+                        const StudyAnalysis& a, Document& doc) {
   doc.heading("Design");
   doc.paragraph(fmt::format(
       "{} subjects learned the skill \"{}\" in {} modes. Per mode: {} training trials ({}), then {} recall trials ({}). "
@@ -261,13 +256,13 @@ std::filesystem::path writeStudyReport(const session::StudyDatabase& db, const S
                               a.spares_used.size(), a.spares_used.size() == 1 ? "" : "s"));
     doc.table(flagged);
   }
+}
 
-  // Conclusions first, then the numbers behind them.
-  doc.heading("Conclusions");
-  doc.list(conclusions(a));
-
-  // The paper's findings beside this study's.
-  const PaperComparison paper = compareWithPaper(study, subjects.size(), a);
+/// The paper's findings beside this study's, point by point (nothing when the comparison does
+/// not apply to the study).
+void writePaperComparison(const session::StudyDefinition& study, std::size_t subject_count, const StudyAnalysis& a,
+                          Document& doc) {
+  const PaperComparison paper = compareWithPaper(study, subject_count, a);
   if (paper.applicable) {
     doc.heading("The paper next to this study");
     doc.paragraph(fmt::format(
@@ -285,115 +280,135 @@ std::filesystem::path writeStudyReport(const session::StudyDatabase& db, const S
     for (const auto& r : paper.rows) t.rows.push_back({r.point, r.source, r.paper, r.hattr, std::string(agreementName(r.agreement))});
     doc.table(t);
   }
+}
 
-  // Table 1.
+/// Table 1: each subject's best mode on both metrics.
+void writeBestModeTable(const StudyAnalysis& a, Document& doc) {
   doc.heading("Table 1: each subject's best mode");
   Table table1{{"subject", "best mode, trajectory", "best mode, force profile"}, {}};
   for (const auto& [subject, mode] : a.trajectory.best_mode) table1.rows.push_back({subject, mode, a.force.best_mode.at(subject)});
   doc.table(table1);
+}
 
-  // Per metric: ANOVA tables and figures 5/6, modes in the study's order.
+/// A metric's ANOVA tables: mode × subject (with Tukey's intervals between the modes), then
+/// trial × subject per mode, modes in the study's order.
+void writeMetricTables(const StudyAnalysis& a, const MetricResult& m, const std::string& title, Document& doc) {
   const std::vector<std::string>& order = a.modes;
-  for (const MetricResult* m : {&a.trajectory, &a.force}) {
-    const std::string title = m->metric == "trajectory" ? "Trajectory" : "Haptic profile (force)";
-    doc.heading(fmt::format("{}: mode × subject ANOVA (subject random)", title));
-    doc.table(anovaTable(m->overall));
-    if (m->tukey) {
-      Table t{{"comparison", "difference", "95 % lower", "95 % upper", "p adjusted"}, {}};
-      for (const auto& c : m->tukey->comparisons) t.rows.push_back({c.comparison, g(c.diff), g(c.lower), g(c.upper), p(c.p_adjusted)});
-      doc.paragraph(fmt::format("Tukey HSD between modes (error term {}):", m->tukey->error_term));
-      doc.table(t);
-    }
-    doc.heading(fmt::format("{}: per mode, trial × subject ANOVA (effect of training, difference between subjects)", title), 3);
-    for (const std::string& mode : order) {
-      if (const auto table = m->per_mode.find(mode); table != m->per_mode.end()) {
-        doc.paragraph(mode + ":");
-        doc.table(anovaTable(table->second));
-      }
-    }
-
-    // Figure: mean cost per recall trial, per mode, with the 95 % confidence interval over
-    // subjects at each trial.
-    SvgPlot means(fmt::format("{}: mean recall cost per trial", title), "recall trial", metricUnit(m->metric), 600);
-    means.integerX();
-    for (const std::string& mode : order) {
-      std::map<int, std::vector<double>> by_trial;
-      for (const TrialCost& c : a.costs) {
-        if (c.mode == mode) by_trial[c.trial].push_back(costOf(c, m->metric));
-      }
-      Series s{mode, modeColour(mode), {}, 2.0, false, true};
-      for (const auto& [trial, values] : by_trial) {
-        const auto [mean, ci] = meanWithCi(values);
-        s.points.emplace_back(static_cast<double>(trial), mean);
-        s.errors.push_back(ci);
-      }
-      if (!s.points.empty()) means.add(s);
-    }
-    doc.figure(m->metric + "_mean_by_trial", means.svg(),
-               fmt::format("Mean {} cost over subjects for each recall trial, per mode, with 95 % confidence intervals "
-                           "over subjects (the paper's figures 5 and 6). The axis starts where the data do, not at zero.",
-                           m->metric),
-               files);
-    // Figure: mean per mode with the 95 % confidence interval of the subjects' means (subjects
-    // are the random factor, so they are the unit of replication), and the inter-subject variance.
-    std::vector<detail::Bar> mean_bars, var_bars;
-    for (const std::string& mode : order) {
-      std::vector<double> subject_means;
-      for (const auto& [subject, mean] : subjectMeans(a.costs, mode, m->metric)) subject_means.push_back(mean);
-      if (subject_means.empty()) continue;
-      const auto [mean, ci] = meanWithCi(subject_means);
-      mean_bars.push_back({mode, modeColour(mode), mean, ci});
-    }
-    // Figure: the mode × subject interaction, each subject's mean per mode (x: the modes in
-    // order), over the modes' means.
-    std::string legend;
-    for (std::size_t k = 0; k < order.size(); ++k) legend += fmt::format("{}{} = {}", k == 0 ? "" : ", ", k + 1, order[k]);
-    SvgPlot interaction(fmt::format("{}: each subject's mean per mode", title), fmt::format("mode ({})", legend),
-                        metricUnit(m->metric), 600);
-    interaction.integerX();
-    std::map<std::string, Series> by_subject_line;
-    Series mode_means{"mean of the subjects", "#000000", {}, 3.0, false, true};
-    for (std::size_t k = 0; k < order.size(); ++k) {
-      std::vector<double> subject_means;
-      for (const auto& [subject, mean] : subjectMeans(a.costs, order[k], m->metric)) {
-        subject_means.push_back(mean);
-        auto& line = by_subject_line.try_emplace(subject, Series{"a subject", "#9a9a9a", {}, 1.0, false, true}).first->second;
-        line.points.emplace_back(static_cast<double>(k + 1), mean);
-      }
-      if (!subject_means.empty()) mode_means.points.emplace_back(static_cast<double>(k + 1), meanWithCi(subject_means).first);
-    }
-    for (auto& [subject, line] : by_subject_line) interaction.add(std::move(line));
-    interaction.add(mode_means);
-    for (const auto& v : m->inter_subject) var_bars.push_back({v.level, modeColour(v.level), v.variance});
-    std::sort(var_bars.begin(), var_bars.end(),
-              [&order](const auto& x, const auto& y) { return modeRank(order, x.label) < modeRank(order, y.label); });
-    SvgPlot mean_plot(fmt::format("{}: mean recall cost per mode", title), "mode", metricUnit(m->metric), 420, 300);
-    mean_plot.bars(mean_bars);
-    doc.figure(m->metric + "_mean_per_mode", mean_plot.svg(),
-               fmt::format("Mean {} cost per mode over all recall trials, with the 95 % confidence interval of the "
-                           "subjects' means (Student's t, subjects − 1 degrees of freedom).",
-                           m->metric),
-               files);
-    doc.figure(m->metric + "_mode_by_subject", interaction.svg(),
-               fmt::format("The mode × subject interaction on the {} metric: each subject's mean recall cost in each "
-                           "mode (grey), and the mean over subjects (black). Lines that cross are the interaction.",
-                           m->metric),
-               files);
-    SvgPlot var_plot(fmt::format("{}: inter-subject variance per mode", title), "mode", "variance of subject means", 420, 300);
-    var_plot.bars(var_bars);
-    doc.figure(m->metric + "_variance_per_mode", var_plot.svg(),
-               fmt::format("Variance over subjects of each subject's mean {} cost, per mode.", m->metric), files);
+  doc.heading(fmt::format("{}: mode × subject ANOVA (subject random)", title));
+  doc.table(anovaTable(m.overall));
+  if (m.tukey) {
+    Table t{{"comparison", "difference", "95 % lower", "95 % upper", "p adjusted"}, {}};
+    for (const auto& c : m.tukey->comparisons) t.rows.push_back({c.comparison, g(c.diff), g(c.lower), g(c.upper), p(c.p_adjusted)});
+    doc.paragraph(fmt::format("Tukey HSD between modes (error term {}):", m.tukey->error_term));
+    doc.table(t);
   }
+  doc.heading(fmt::format("{}: per mode, trial × subject ANOVA (effect of training, difference between subjects)", title), 3);
+  for (const std::string& mode : order) {
+    if (const auto table = m.per_mode.find(mode); table != m.per_mode.end()) {
+      doc.paragraph(mode + ":");
+      doc.table(anovaTable(table->second));
+    }
+  }
+}
 
-  // Figure 3: haptic profiles over time; and trajectories over the expert's.
-  const HapticProfile expert = db.expert(study.skill);
+/// Figure: mean cost per recall trial, per mode, with the 95 % confidence interval over
+/// subjects at each trial.
+void writeMeanByTrialFigure(const StudyAnalysis& a, const MetricResult& m, const std::string& title, Document& doc,
+                            std::map<std::string, std::string>& files) {
+  const std::vector<std::string>& order = a.modes;
+  SvgPlot means(fmt::format("{}: mean recall cost per trial", title), "recall trial", metricUnit(m.metric), 600);
+  means.integerX();
+  for (const std::string& mode : order) {
+    std::map<int, std::vector<double>> by_trial;
+    for (const TrialCost& c : a.costs) {
+      if (c.mode == mode) by_trial[c.trial].push_back(costOf(c, m.metric));
+    }
+    Series s{mode, modeColour(mode), {}, 2.0, false, true};
+    for (const auto& [trial, values] : by_trial) {
+      const auto [mean, ci] = meanWithCi(values);
+      s.points.emplace_back(static_cast<double>(trial), mean);
+      s.errors.push_back(ci);
+    }
+    if (!s.points.empty()) means.add(s);
+  }
+  doc.figure(m.metric + "_mean_by_trial", means.svg(),
+             fmt::format("Mean {} cost over subjects for each recall trial, per mode, with 95 % confidence intervals "
+                         "over subjects (the paper's figures 5 and 6). The axis starts where the data do, not at zero.",
+                         m.metric),
+             files);
+}
+
+/// A metric's figures per mode: the mean per mode, the mode × subject interaction and the
+/// inter-subject variance, modes in the study's order.
+void writeModeFigures(const StudyAnalysis& a, const MetricResult& m, const std::string& title, Document& doc,
+                      std::map<std::string, std::string>& files) {
+  const std::vector<std::string>& order = a.modes;
+  // Figure: mean per mode with the 95 % confidence interval of the subjects' means (subjects
+  // are the random factor, so they are the unit of replication), and the inter-subject variance.
+  std::vector<detail::Bar> mean_bars, var_bars;
+  for (const std::string& mode : order) {
+    std::vector<double> subject_means;
+    for (const auto& [subject, mean] : subjectMeans(a.costs, mode, m.metric)) subject_means.push_back(mean);
+    if (subject_means.empty()) continue;
+    const auto [mean, ci] = meanWithCi(subject_means);
+    mean_bars.push_back({mode, modeColour(mode), mean, ci});
+  }
+  // Figure: the mode × subject interaction, each subject's mean per mode (x: the modes in
+  // order), over the modes' means.
+  std::string legend;
+  for (std::size_t k = 0; k < order.size(); ++k) legend += fmt::format("{}{} = {}", k == 0 ? "" : ", ", k + 1, order[k]);
+  SvgPlot interaction(fmt::format("{}: each subject's mean per mode", title), fmt::format("mode ({})", legend),
+                      metricUnit(m.metric), 600);
+  interaction.integerX();
+  std::map<std::string, Series> by_subject_line;
+  Series mode_means{"mean of the subjects", "#000000", {}, 3.0, false, true};
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    std::vector<double> subject_means;
+    for (const auto& [subject, mean] : subjectMeans(a.costs, order[k], m.metric)) {
+      subject_means.push_back(mean);
+      auto& line = by_subject_line.try_emplace(subject, Series{"a subject", "#9a9a9a", {}, 1.0, false, true}).first->second;
+      line.points.emplace_back(static_cast<double>(k + 1), mean);
+    }
+    if (!subject_means.empty()) mode_means.points.emplace_back(static_cast<double>(k + 1), meanWithCi(subject_means).first);
+  }
+  for (auto& [subject, line] : by_subject_line) interaction.add(std::move(line));
+  interaction.add(mode_means);
+  for (const auto& v : m.inter_subject) var_bars.push_back({v.level, modeColour(v.level), v.variance});
+  std::sort(var_bars.begin(), var_bars.end(),
+            [&order](const auto& x, const auto& y) { return modeRank(order, x.label) < modeRank(order, y.label); });
+  SvgPlot mean_plot(fmt::format("{}: mean recall cost per mode", title), "mode", metricUnit(m.metric), 420, 300);
+  mean_plot.bars(mean_bars);
+  doc.figure(m.metric + "_mean_per_mode", mean_plot.svg(),
+             fmt::format("Mean {} cost per mode over all recall trials, with the 95 % confidence interval of the "
+                         "subjects' means (Student's t, subjects − 1 degrees of freedom).",
+                         m.metric),
+             files);
+  doc.figure(m.metric + "_mode_by_subject", interaction.svg(),
+             fmt::format("The mode × subject interaction on the {} metric: each subject's mean recall cost in each "
+                         "mode (grey), and the mean over subjects (black). Lines that cross are the interaction.",
+                         m.metric),
+             files);
+  SvgPlot var_plot(fmt::format("{}: inter-subject variance per mode", title), "mode", "variance of subject means", 420, 300);
+  var_plot.bars(var_bars);
+  doc.figure(m.metric + "_variance_per_mode", var_plot.svg(),
+             fmt::format("Variance over subjects of each subject's mean {} cost, per mode.", m.metric), files);
+}
+
+/// Each subject's last recall trial in each mode: "subject/mode" -> its last recall trial.
+std::map<std::string, const TrialCost*> lastRecallTrials(const StudyAnalysis& a) {
   std::map<std::string, const TrialCost*> last_recall;  // "subject/mode" -> its last recall trial
   for (const auto& c : a.costs) {
     auto& slot = last_recall[c.subject + "/" + c.mode];
     if (!slot || c.trial > slot->trial) slot = &c;
   }
-  const std::string first_subject = subjects.empty() ? "" : subjects.front().id;
-  doc.heading("Haptic profiles and trajectories");
+  return last_recall;
+}
+
+/// Figure 3: the expert's force on each axis over time, and one subject's last recall trial in
+/// each mode (modes in `order`).
+void writeProfileFigures(const session::StudyDatabase& db, const std::vector<std::string>& order,
+                         const HapticProfile& expert, const std::map<std::string, const TrialCost*>& last_recall,
+                         const std::string& first_subject, Document& doc, std::map<std::string, std::string>& files) {
   const char* axes[] = {"fx", "fy", "fz"};
   for (int k = 0; k < 3; ++k) {
     SvgPlot plot(fmt::format("Force {} over time: expert and {}'s last recall trials", axes[k], first_subject), "time [s]",
@@ -414,8 +429,13 @@ std::filesystem::path writeStudyReport(const session::StudyDatabase& db, const S
                fmt::format("The expert's {} and one subject's last recall trial in each mode (the paper's figure 3).", axes[k]),
                files);
   }
-  // The paper's figure 3: one subject's haptic profile on two occasions (there a week apart;
-  // here the subject's first and last analyzed recall trial of the first mode), and the expert's.
+}
+
+/// The paper's figure 3: one subject's haptic profile on two occasions (there a week apart;
+/// here the subject's first and last analyzed recall trial of the first mode), and the expert's.
+void writeTwoOccasionsFigure(const session::StudyDatabase& db, const StudyAnalysis& a, const HapticProfile& expert,
+                             const std::string& first_subject, Document& doc, std::map<std::string, std::string>& files) {
+  const std::vector<std::string>& order = a.modes;
   const TrialCost* first_occasion = nullptr;
   const TrialCost* last_occasion = nullptr;
   for (const TrialCost& c : a.costs) {
@@ -442,7 +462,13 @@ std::filesystem::path writeStudyReport(const session::StudyDatabase& db, const S
                            order.front()),
                files);
   }
-  for (const auto mode : study.modes) {
+}
+
+/// Per mode of the study: every subject's last recall trajectory (pen down) over the expert's.
+void writeTrajectoryFigures(const session::StudyDatabase& db, const HapticProfile& expert,
+                            const std::map<std::string, const TrialCost*>& last_recall, Document& doc,
+                            std::map<std::string, std::string>& files) {
+  for (const auto mode : db.study().modes) {
     const std::string name(guidance::modeName(mode));
     SvgPlot plot(fmt::format("Recall trajectories after {} training", name), "x [mm]", "y [mm]", 560, 420);
     plot.equalAspect();
@@ -463,6 +489,49 @@ std::filesystem::path writeStudyReport(const session::StudyDatabase& db, const S
     doc.figure(fmt::format("trajectories_{}", name), plot.svg(),
                fmt::format("Every subject's last recall trajectory after {} training (pen down), over the expert's.", name), files);
   }
+}
+
+}  // namespace
+
+std::filesystem::path writeStudyReport(const session::StudyDatabase& db, const StudyAnalysis& a,
+                                       const std::filesystem::path& out) {
+  const session::StudyDefinition& study = db.study();
+  std::map<std::string, std::string> files;
+  Document doc;
+  doc.heading(fmt::format("Study report: {}", study.name), 1);
+  const auto subjects = db.subjects();
+  doc.heading("Summary");
+  doc.list(paperSummary(study, a, subjects.size(), chooseAnalysis(db).reason));
+
+  // Design.
+  writeDesignSection(study, subjects, a, doc);
+
+  // Conclusions first, then the numbers behind them.
+  doc.heading("Conclusions");
+  doc.list(conclusions(a));
+
+  // The paper's findings beside this study's.
+  writePaperComparison(study, subjects.size(), a, doc);
+
+  // Table 1.
+  writeBestModeTable(a, doc);
+
+  // Per metric: ANOVA tables and figures 5/6, modes in the study's order.
+  for (const MetricResult* m : {&a.trajectory, &a.force}) {
+    const std::string title = m->metric == "trajectory" ? "Trajectory" : "Haptic profile (force)";
+    writeMetricTables(a, *m, title, doc);
+    writeMeanByTrialFigure(a, *m, title, doc, files);
+    writeModeFigures(a, *m, title, doc, files);
+  }
+
+  // Figure 3: haptic profiles over time; and trajectories over the expert's.
+  const HapticProfile expert = db.expert(study.skill);
+  const std::map<std::string, const TrialCost*> last_recall = lastRecallTrials(a);
+  const std::string first_subject = subjects.empty() ? "" : subjects.front().id;
+  doc.heading("Haptic profiles and trajectories");
+  writeProfileFigures(db, a.modes, expert, last_recall, first_subject, doc, files);
+  writeTwoOccasionsFigure(db, a, expert, first_subject, doc, files);
+  writeTrajectoryFigures(db, expert, last_recall, doc, files);
 
   // Write the files.
   writeReportFiles(out, study.name, doc, files);

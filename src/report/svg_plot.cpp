@@ -67,7 +67,18 @@ std::string escape(const std::string& text) {
 SvgPlot::SvgPlot(std::string title, std::string x_label, std::string y_label, int width, int height)
     : title_(std::move(title)), x_label_(std::move(x_label)), y_label_(std::move(y_label)), width_(width), height_(height) {}
 
-std::string SvgPlot::svg() const {
+/// The plot area inside the margins [px], the data range it shows and the scale between them.
+struct SvgPlot::Area {
+  double left, top, pw, ph;  ///< left and top edges, width and height of the plot area [px]
+  double x0, x1, y0, y1;     ///< the data range shown
+  double sx, sy;             ///< pixels per data unit along x and y
+  /// A data point's position in pixels.
+  [[nodiscard]] double xPixel(double x) const { return left + (x - x0) * sx; }
+  [[nodiscard]] double yPixel(double y) const { return top + ph - (y - y0) * sy; }
+};
+
+/// Where the plot area lies and which data range it shows (the series', the bars', or yRange).
+SvgPlot::Area SvgPlot::layout() const {
   // Plot area inside margins for the title, labels and legend.
   const double left = 70, right = bars_.empty() ? 190 : 20, top = 34, bottom = 50;
   const double pw = width_ - left - right, ph = height_ - top - bottom;
@@ -102,27 +113,35 @@ std::string SvgPlot::svg() const {
     const double s = std::min(sx, sy);
     x1 = x0 + pw / s, y1 = y0 + ph / s, sx = sy = s;
   }
-  const auto X = [&](double x) { return left + (x - x0) * sx; };
-  const auto Y = [&](double y) { return top + ph - (y - y0) * sy; };
+  return {left, top, pw, ph, x0, x1, y0, y1, sx, sy};
+}
 
+/// The SVG's opening tag, its white background and the title.
+std::string SvgPlot::openingSvg() const {
   // The title from the left edge, smaller when it would not fit (about 0.6 em per character).
   const double title_chars = static_cast<double>(
       std::count_if(title_.begin(), title_.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
   const double title_size = std::clamp((width_ - 20.0) / (0.6 * std::max(1.0, title_chars)), 8.0, 13.0);
-  std::string out = fmt::format(
+  return fmt::format(
       "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" viewBox=\"0 0 {} {}\" "
       "font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
       "<text x=\"10\" y=\"18\" font-size=\"{:.1f}\" font-weight=\"bold\">{}</text>\n",
       width_, height_, width_, height_, title_size, escape(title_));
+}
 
-  // Axes, ticks and grid.
-  for (const double t : ticks(y0, y1)) {
+/// Axes, ticks and grid, the plot area's frame and the axis labels.
+std::string SvgPlot::axesSvg(const Area& area) const {
+  const double left = area.left, top = area.top, pw = area.pw, ph = area.ph;
+  const auto X = [&area](double x) { return area.xPixel(x); };
+  const auto Y = [&area](double y) { return area.yPixel(y); };
+  std::string out;
+  for (const double t : ticks(area.y0, area.y1)) {
     out += fmt::format("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#e4e4e4\"/>"
                        "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"end\">{}</text>\n",
                        left, Y(t), left + pw, Y(t), left - 6, Y(t) + 4, number(t));
   }
   if (bars_.empty()) {
-    for (const double t : ticks(x0, x1, integer_x_)) {
+    for (const double t : ticks(area.x0, area.x1, integer_x_)) {
       out += fmt::format("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#e4e4e4\"/>"
                          "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n",
                          X(t), top, X(t), top + ph, X(t), top + ph + 16, number(t));
@@ -133,8 +152,15 @@ std::string SvgPlot::svg() const {
                      escape(x_label_));
   out += fmt::format("<text transform=\"translate(16,{:.1f}) rotate(-90)\" text-anchor=\"middle\">{}</text>\n",
                      top + ph / 2, escape(y_label_));
+  return out;
+}
 
-  // Bars.
+/// Bars, each with its category under it, its value over it and its error bar ("" without bars).
+std::string SvgPlot::barsSvg(const Area& area) const {
+  const double top = area.top, ph = area.ph, sx = area.sx;
+  const auto X = [&area](double x) { return area.xPixel(x); };
+  const auto Y = [&area](double y) { return area.yPixel(y); };
+  std::string out;
   for (std::size_t i = 0; i < bars_.size(); ++i) {
     const double x = static_cast<double>(i);
     const double y_top = Y(std::max(bars_[i].value, 0.0)), y_base = Y(std::min(bars_[i].value, 0.0));
@@ -146,15 +172,22 @@ std::string SvgPlot::svg() const {
                        number(bars_[i].value));
     if (std::isfinite(bars_[i].error)) out += whisker(X(x), Y(bars_[i].value - bars_[i].error), Y(bars_[i].value + bars_[i].error));
   }
+  return out;
+}
 
+/// The series: lines, error bars and markers, inside a clip path.
+std::string SvgPlot::seriesSvg(const Area& area) const {
+  const double left = area.left, top = area.top, pw = area.pw, ph = area.ph;
+  const auto X = [&area](double x) { return area.xPixel(x); };
+  const auto Y = [&area](double y) { return area.yPixel(y); };
   // Lines and markers, clipped to the plot area widened by a marker's radius (a marker on the
-  // frame stays whole). The clip path's id is set below from the figure's content: pages hold
+  // frame stays whole). The clip path's id is set by svg() from the figure's content: pages hold
   // many figures inline, and a shared id would clip every figure with the first one's rectangle.
   constexpr double kMarkerRoom = 3.0;
-  out += fmt::format("<clipPath id=\"{}\"><rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"/></clipPath>"
-                     "<g clip-path=\"url(#{})\">\n",
-                     kClipIdPlaceholder, left - kMarkerRoom, top - kMarkerRoom, pw + 2 * kMarkerRoom,
-                     ph + 2 * kMarkerRoom, kClipIdPlaceholder);
+  std::string out = fmt::format("<clipPath id=\"{}\"><rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"/></clipPath>"
+                                "<g clip-path=\"url(#{})\">\n",
+                                kClipIdPlaceholder, left - kMarkerRoom, top - kMarkerRoom, pw + 2 * kMarkerRoom,
+                                ph + 2 * kMarkerRoom, kClipIdPlaceholder);
   for (const auto& s : series_) {
     std::string points;
     for (const auto& [x, y] : s.points) {
@@ -178,8 +211,13 @@ std::string SvgPlot::svg() const {
     }
   }
   out += "</g>\n";
+  return out;
+}
 
-  // Legend, one entry per distinct label.
+/// Legend, one entry per distinct label, right of the plot area.
+std::string SvgPlot::legendSvg(const Area& area) const {
+  const double left = area.left, top = area.top, pw = area.pw;
+  std::string out;
   std::vector<std::string> seen;
   double ly = top + 8;
   for (const auto& s : series_) {
@@ -191,6 +229,20 @@ std::string SvgPlot::svg() const {
                        left + pw + 38, ly + 4, escape(s.label));
     ly += 16;
   }
+  return out;
+}
+
+std::string SvgPlot::svg() const {
+  const Area area = layout();
+  std::string out = openingSvg();
+  // Axes, ticks and grid.
+  out += axesSvg(area);
+  // Bars.
+  out += barsSvg(area);
+  // Lines and markers, in a clip path whose id is made from the figure itself (withClipId).
+  out += seriesSvg(area);
+  // Legend, one entry per distinct label.
+  out += legendSvg(area);
   out += "</svg>\n";
   return withClipId(out);
 }

@@ -43,6 +43,15 @@ class SvgPlot {
   [[nodiscard]] std::string svg() const;
 
  private:
+  /// The plot area in pixels and the data range it shows (svg_plot.cpp).
+  struct Area;
+  [[nodiscard]] Area layout() const;
+  [[nodiscard]] std::string openingSvg() const;
+  [[nodiscard]] std::string axesSvg(const Area& area) const;
+  [[nodiscard]] std::string barsSvg(const Area& area) const;
+  [[nodiscard]] std::string seriesSvg(const Area& area) const;
+  [[nodiscard]] std::string legendSvg(const Area& area) const;
+
   std::string title_, x_label_, y_label_;
   int width_, height_;
   bool equal_aspect_ = false;

@@ -58,27 +58,9 @@ void ServoLoop::drainCommands() noexcept {
   }
 }
 
-TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
-  // The tick's compute time, on a real clock only: simulated time runs as fast as it can, the
-  // figure would say nothing, and reading the clock is a twentieth of a simulated tick.
-  const bool timed = clock_.load(std::memory_order_relaxed) != LoopClock::kSimulated;
-  const auto compute_start = timed ? monotonicNow() : std::chrono::nanoseconds{};
-  TickStatus status = TickStatus::kRunning;
-
-  // Measured period; a gap beyond the threshold is a stall: zero force, ramp in again.
-  const std::chrono::nanoseconds dt = last_now_.count() < 0 ? period_ : now - last_now_;
-  const bool stalled = last_now_.count() >= 0 && dt > config_.stall_threshold;
-  if (stalled) {
-    bump(counters_.stalls);
-    status = TickStatus::kStalled;
-  }
-  last_now_ = now;
-  const double dt_s = seconds(dt);
-  drainCommands();
-
-  // Read the pen, render the paper, add guidance. A device fault latches; a lost link (or an
-  // unplugged device) zeroes the force while it lasts and ramps in again when it returns.
-  PenState pen;
+bool ServoLoop::readPen(std::chrono::nanoseconds now, PenState& pen, TickStatus& status) noexcept {
+  // A device fault latches; a lost link (or an unplugged device) zeroes the force while it
+  // lasts and ramps in again when it returns.
   const device::DeviceStatus read_status = device_.read(now, pen);
   // A failed read holds the last good position, at rest, at this tick's time: a device need
   // not fill the state it could not read, and the tick's sample (zero command) must still
@@ -99,27 +81,10 @@ TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
   }
   link_down_ = disconnected;
   counters_.disconnected.store(disconnected, std::memory_order_relaxed);
-  ContactForces contact;
-  if (world_) world_->render(pen, dt_s, contact);
-  const Vec3 guide = guidance_ ? guidance_->compute(pen, contact, dt_s) : Vec3(Vec3::Zero());
+  return disconnected;
+}
 
-  // A consumer the loop depends on has stopped taking samples.
-  const bool consumer_stalled =
-      consumer_time_s_ && pen.t_s - consumer_time_s_->load(std::memory_order_acquire) > seconds(config_.stall_threshold);
-  if (consumer_stalled) bump(counters_.consumer_stalls);
-
-  // Every force passes the safety path; a stall zeroes it outright.
-  Vec3 command = Vec3::Zero();
-  if (stalled || consumer_stalled || disconnected) {
-    safety_.restartRamp();
-  } else {
-    command = safety_.filter(contact.f_on_pen_W, guide, pen.p_WT, dt_s);
-  }
-  const device::DeviceStatus write_status = device_.write(command);
-  if (write_status == device::DeviceStatus::kFault) safety_.latchFault(SafetyFault::kDeviceError);
-  if (safety_.fault() != SafetyFault::kNone) status = TickStatus::kFaulted;
-
-  // Publish the sample.
+void ServoLoop::publish(const PenState& pen, const ContactForces& contact, const Vec3& command, const Vec3& guide) noexcept {
   Sample sample;
   sample.t_s = pen.t_s;
   sample.p_WT = pen.p_WT;
@@ -142,6 +107,50 @@ TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
   // A fault is published after its tick is counted and its sample is in the ring: whoever
   // sees the fault (acquire) and ends the recording at the tick count keeps the faulting tick.
   counters_.faults.store(safety_.faultCount(), std::memory_order_release);
+}
+
+TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
+  // The tick's compute time, on a real clock only: simulated time runs as fast as it can, the
+  // figure would say nothing, and reading the clock is a twentieth of a simulated tick.
+  const bool timed = clock_.load(std::memory_order_relaxed) != LoopClock::kSimulated;
+  const auto compute_start = timed ? monotonicNow() : std::chrono::nanoseconds{};
+  TickStatus status = TickStatus::kRunning;
+
+  // Measured period; a gap beyond the threshold is a stall: zero force, ramp in again.
+  const std::chrono::nanoseconds dt = last_now_.count() < 0 ? period_ : now - last_now_;
+  const bool stalled = last_now_.count() >= 0 && dt > config_.stall_threshold;
+  if (stalled) {
+    bump(counters_.stalls);
+    status = TickStatus::kStalled;
+  }
+  last_now_ = now;
+  const double dt_s = seconds(dt);
+  drainCommands();
+
+  // Read the pen, render the paper, add guidance.
+  PenState pen;
+  const bool disconnected = readPen(now, pen, status);
+  ContactForces contact;
+  if (world_) world_->render(pen, dt_s, contact);
+  const Vec3 guide = guidance_ ? guidance_->compute(pen, contact, dt_s) : Vec3(Vec3::Zero());
+
+  // A consumer the loop depends on has stopped taking samples.
+  const bool consumer_stalled =
+      consumer_time_s_ && pen.t_s - consumer_time_s_->load(std::memory_order_acquire) > seconds(config_.stall_threshold);
+  if (consumer_stalled) bump(counters_.consumer_stalls);
+
+  // Every force passes the safety path; a stall zeroes it outright.
+  Vec3 command = Vec3::Zero();
+  if (stalled || consumer_stalled || disconnected) {
+    safety_.restartRamp();
+  } else {
+    command = safety_.filter(contact.f_on_pen_W, guide, pen.p_WT, dt_s);
+  }
+  const device::DeviceStatus write_status = device_.write(command);
+  if (write_status == device::DeviceStatus::kFault) safety_.latchFault(SafetyFault::kDeviceError);
+  if (safety_.fault() != SafetyFault::kNone) status = TickStatus::kFaulted;
+
+  publish(pen, contact, command, guide);
   if (timed) tick_compute_.record((monotonicNow() - compute_start).count());
   return status;
 }

@@ -3,7 +3,8 @@
 // PostgreSQL (a server, many stations). The study's queries are written once, in the SQL both
 // engines accept: `?` placeholders (PostgreSQL's connection numbers them), `ON CONFLICT` for
 // upserts, `RETURNING` for new ids. What differs (schema creation, locking and leases) is
-// chosen by dialect() in study_database.cpp. Internal to the session module.
+// chosen by dialect() in study_database.cpp, and lives in study_sqlite.cpp and
+// study_postgres.cpp. Internal to the session module.
 
 #include <cstdint>
 #include <memory>

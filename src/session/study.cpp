@@ -221,11 +221,8 @@ std::string lowerExtension(std::string_view value) {
   return extension;
 }
 
-StudyDefinition parseStudyObject(const json& root, std::string_view source, const std::filesystem::path& base_dir,
-                                 bool check_files) {
-  Problems problems(source);
-  StudyDefinition study;
-
+/// The top-level keys: every one known, and the format this build reads.
+void checkTopLevelKeys(const json& root, Problems& problems) {
   static const std::set<std::string> kKeys{"format",   "name",    "skill",    "experts",  "modes",
                                            "protocol", "order",   "device",   "world",    "rate_hz",
                                            "indexing", "subjects", "mentor",  "storage",  "groups",
@@ -236,8 +233,10 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
   if (const auto f = root.find("format"); f != root.end() && *f != "hattr-study/1") {
     problems.add(fmt::format("format: expected \"hattr-study/1\", got {}", jsonExcerpt(*f)));
   }
+}
 
-  // Name, skill, experts.
+/// name and skill (required) and device, each a non-empty string.
+void readNames(const json& root, StudyDefinition& study, Problems& problems) {
   const auto text = [&](const char* key, std::string& out, bool required) {
     const auto it = root.find(key);
     if (it == root.end()) {
@@ -251,6 +250,12 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
   text("name", study.name, true);
   text("skill", study.skill, true);
   text("device", study.device, false);
+}
+
+/// experts {"SKILL": file, glyph file, built-in glyph's name or character, ...}, with one for
+/// the study's skill (read first).
+void readExperts(const json& root, const std::filesystem::path& base_dir, bool check_files, StudyDefinition& study,
+                 Problems& problems) {
   if (const auto it = root.find("experts"); it == root.end() || !it->is_object() || it->empty()) {
     problems.add("experts: expected an object {\"skill\": \"expert.csv\", ...} with at least one entry");
   } else {
@@ -288,8 +293,10 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
       problems.add(fmt::format("skill \"{}\": no expert reference for it in experts", study.skill));
     }
   }
+}
 
-  // Protocol.
+/// The protocol block {"training_trials", "recall_trials", "rest_s", ...} into study.protocol.
+void readProtocol(const json& root, StudyDefinition& study, Problems& problems) {
   if (const auto it = root.find("protocol"); it != root.end()) {
     if (!it->is_object()) {
       problems.add("protocol: expected an object");
@@ -321,11 +328,10 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
       readBool(*it, "show_scores", p.show_scores, "protocol.", problems);
     }
   }
+}
 
-  // Who mentors the mentored modes.
-  readMentor(root, base_dir, check_files, study, problems);
-
-  // Order, rate, indexing, world.
+/// order {"kind", "seed"}, rate_hz, indexing and world.
+void readOrderRateIndexingWorld(const json& root, StudyDefinition& study, Problems& problems) {
   if (const auto it = root.find("order"); it != root.end()) {
     const std::string kind = it->is_object() && it->contains("kind") && (*it)["kind"].is_string() ? (*it)["kind"].get<std::string>() : "";
     if (kind == "latin-square") study.order = OrderKind::kLatinSquare;
@@ -346,8 +352,10 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
     if (!it->is_object()) problems.add("world: expected a world configuration object (docs/rendering.md)");
     else study.world = *it;
   }
+}
 
-  // How the samples are stored: lossless, or at a declared resolution.
+/// storage {"resolution": ...}: how the samples are stored.
+void readStorage(const json& root, StudyDefinition& study, Problems& problems) {
   if (const auto it = root.find("storage"); it != root.end()) {
     if (!it->is_object()) {
       problems.add(fmt::format("storage: expected {{\"resolution\": ...}}, got {}", jsonExcerpt(*it)));
@@ -364,12 +372,10 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
       }
     }
   }
+}
 
-  readStrategyParameters(root, study, problems);
-
-  // Groups, subjects and the schedule (or the paper's modes, protocol and subjects).
-  detail::readDesign(root, study, problems);
-
+/// The subjects' ids and the skills as file names, and each subject's participant kind.
+void checkNamesAndParticipants(const StudyDefinition& study, bool check_files, Problems& problems) {
   // Subject ids and skills become file names (an export's trials/<id>/, experts/<skill>.csv):
   // a new study file's must be safe ones; a stored study keeps what it was created with (the
   // export's writer refuses only what would leave its folder).
@@ -388,6 +394,39 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
       problems.add(fmt::format("subject {}: participant \"{}\": expected simulated, script or person", s.id, s.participant));
     }
   }
+}
+
+/// A study definition from its JSON object, each section read by its own function above;
+/// every problem found is reported at once.
+StudyDefinition parseStudyObject(const json& root, std::string_view source, const std::filesystem::path& base_dir,
+                                 bool check_files) {
+  Problems problems(source);
+  StudyDefinition study;
+  checkTopLevelKeys(root, problems);
+
+  // Name, skill, experts.
+  readNames(root, study, problems);
+  readExperts(root, base_dir, check_files, study, problems);
+
+  // Protocol.
+  readProtocol(root, study, problems);
+
+  // Who mentors the mentored modes.
+  readMentor(root, base_dir, check_files, study, problems);
+
+  // Order, rate, indexing, world.
+  readOrderRateIndexingWorld(root, study, problems);
+
+  // How the samples are stored: lossless, or at a declared resolution.
+  readStorage(root, study, problems);
+
+  readStrategyParameters(root, study, problems);
+
+  // Groups, subjects and the schedule (or the paper's modes, protocol and subjects).
+  detail::readDesign(root, study, problems);
+
+  // Subject ids and skills as file names; participants.
+  checkNamesAndParticipants(study, check_files, problems);
   problems.throwIfAny();
   return study;
 }

@@ -1,16 +1,14 @@
+// The study store's queries, the same on both engines (sql_connection.hpp): creating and
+// opening a study (each engine's own side is in study_sqlite.cpp and study_postgres.cpp),
+// reading its definition, subjects and trials, and writing what a run does to them.
+
 #include "hattr/session/study_database.hpp"
 
-#include <fcntl.h>
-#include <sqlite3.h>
-#include <sys/file.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <bit>
-#include <cerrno>
-#include <cstring>
-#include <limits>
 #include <sstream>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -18,6 +16,7 @@
 #include "hattr/core/text_file.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "sql_connection.hpp"
+#include "study_database_internal.hpp"
 #include "study_postgres.hpp"
 
 namespace hattr::session {
@@ -31,179 +30,12 @@ using detail::SqlDialect;
 using detail::Statement;
 using detail::Transaction;
 
-// ---- Schema -----------------------------------------------------------------------------
-
-/// Version 1, as first released: kept verbatim so migrations start from it.
-constexpr std::string_view kSchemaV1 = R"(
-CREATE TABLE study (id INTEGER PRIMARY KEY CHECK (id = 1), name TEXT NOT NULL, definition TEXT NOT NULL,
-                    created_utc TEXT NOT NULL);
-CREATE TABLE experts (skill TEXT PRIMARY KEY, profile_csv TEXT NOT NULL);
-CREATE TABLE subjects (id TEXT PRIMARY KEY, position INTEGER NOT NULL, mode_order TEXT NOT NULL, spec TEXT NOT NULL);
-CREATE TABLE sessions (id INTEGER PRIMARY KEY, subject TEXT NOT NULL REFERENCES subjects(id), started_utc TEXT NOT NULL,
-                       ended_utc TEXT, pid INTEGER NOT NULL, host TEXT NOT NULL);
-CREATE TABLE trials (id INTEGER PRIMARY KEY, subject TEXT NOT NULL REFERENCES subjects(id), sequence INTEGER NOT NULL,
-                     mode TEXT NOT NULL, phase TEXT NOT NULL, trial_index INTEGER NOT NULL,
-                     show_reference INTEGER NOT NULL, guidance INTEGER NOT NULL,
-                     status TEXT NOT NULL DEFAULT 'pending', attempts INTEGER NOT NULL DEFAULT 0,
-                     session INTEGER REFERENCES sessions(id), started_utc TEXT, ended_utc TEXT, outcome TEXT,
-                     metadata TEXT, UNIQUE (subject, sequence));
-CREATE TABLE samples (trial INTEGER PRIMARY KEY REFERENCES trials(id), raw_pressure INTEGER NOT NULL,
-                      raw_tilt INTEGER NOT NULL, sample_count INTEGER NOT NULL, data BLOB NOT NULL);
-)";
-
-/// Migration 1 -> 2: interrupted attempts are counted per trial, and analyses get a table.
-constexpr std::string_view kMigrationV1ToV2 = R"(
-ALTER TABLE trials ADD COLUMN interruptions INTEGER NOT NULL DEFAULT 0;
-CREATE TABLE results (key TEXT PRIMARY KEY, value TEXT NOT NULL, updated_utc TEXT NOT NULL);
-)";
-
-/// Migration 2 -> 3: a trial the loop disturbed says how; a disturbed attempt that was run
-/// again is kept whole.
-constexpr std::string_view kMigrationV2ToV3 = R"(
-ALTER TABLE trials ADD COLUMN disturbed TEXT;
-CREATE TABLE disturbed_attempts (id INTEGER PRIMARY KEY, trial INTEGER NOT NULL REFERENCES trials(id),
-                                 reason TEXT NOT NULL, ended_utc TEXT NOT NULL, metadata TEXT NOT NULL,
-                                 raw_pressure INTEGER NOT NULL, raw_tilt INTEGER NOT NULL,
-                                 sample_count INTEGER NOT NULL, data BLOB NOT NULL);
-)";
-
-/// Migration 3 -> 4: each block of samples says its encoding; those of schema 3 (rows of
-/// doubles) are rewritten in the compact encoding by compactStoredSamples, losslessly.
-constexpr std::string_view kMigrationV3ToV4 = R"(
-ALTER TABLE samples ADD COLUMN encoding TEXT NOT NULL DEFAULT 'f64-rows';
-ALTER TABLE disturbed_attempts ADD COLUMN encoding TEXT NOT NULL DEFAULT 'f64-rows';
-)";
-
-/// Migration 4 -> 5: each trial says its place in the design (skill, session of the schedule,
-/// its day, block) and each subject its group; filled in for the studies before designs by
-/// fillDesignColumns.
-constexpr std::string_view kMigrationV4ToV5 = R"(
-ALTER TABLE trials ADD COLUMN skill TEXT;
-ALTER TABLE trials ADD COLUMN schedule_session INTEGER NOT NULL DEFAULT 0;
-ALTER TABLE trials ADD COLUMN day INTEGER NOT NULL DEFAULT 0;
-ALTER TABLE trials ADD COLUMN block INTEGER NOT NULL DEFAULT 0;
-ALTER TABLE subjects ADD COLUMN group_name TEXT NOT NULL DEFAULT 'all';
-)";
-
-constexpr std::string_view kMigrations[] = {kMigrationV1ToV2, kMigrationV2ToV3, kMigrationV3ToV4};
-
-void compactStoredSamples(SqlConnection& db);
-
-/// An SQLite study brought from `from_version` up to this build's schema, a step at a time.
-void migrate(SqlConnection& db, int from_version) {
-  for (int v = from_version; v < kStudySchemaVersion; ++v) {
-    Transaction t(db);
-    // Another writer may have taken this step while we waited for the lock.
-    if (scalar(db, "PRAGMA user_version") > v) continue;
-    if (v + 1 == 5) {
-      detail::migrateToDesigns(db);
-    } else {
-      db.exec(kMigrations[v - 1]);
-    }
-    if (v + 1 == 4) compactStoredSamples(db);
-    db.exec(fmt::format("PRAGMA user_version = {}", v + 1));
-    t.commit();
-  }
-}
-
-sqlite3* openSqliteFile(const std::filesystem::path& file, int flags) {
-  sqlite3* db = nullptr;
-  if (sqlite3_open_v2(file.c_str(), &db, flags, nullptr) != SQLITE_OK) {
-    const std::string message = db ? sqlite3_errmsg(db) : "out of memory";
-    sqlite3_close(db);
-    throw InputError(fmt::format("{}: cannot open the study database: {}", file.string(), message));
-  }
-  sqlite3_busy_timeout(db, 5000);
-  return db;
-}
-
-/// Whether a runner holds the study's lock (a shared-lock probe that is released at once).
-bool runnerLockHeld(const std::filesystem::path& file) {
-  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return false;
-  const bool held = ::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
-  ::close(fd);
-  return held;
-}
-
-/// Opens a study for reading only. A study in a folder this process cannot write (a shared,
-/// read-only copy) is opened immutable, since SQLite could not create the WAL's shared-memory
-/// file there; immutable means the file is read alone, so a study whose write-ahead log still
-/// holds changes, or that a runner (another user) is writing, is refused, not read stale.
-sqlite3* openForReading(const std::filesystem::path& file) {
-  const std::filesystem::path folder = file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
-  if (::access(folder.c_str(), W_OK) == 0) {
-    // A writable study is read through a query-only read-write connection: SQLite's WAL and
-    // shared-memory files go away when it closes, as they do not after a read-only one.
-    if (::access(file.c_str(), W_OK) != 0) return openSqliteFile(file, SQLITE_OPEN_READONLY);
-    sqlite3* db = openSqliteFile(file, SQLITE_OPEN_READWRITE);
-    sqlite3_exec(db, "PRAGMA query_only = 1", nullptr, nullptr, nullptr);
-    return db;
-  }
-  std::error_code ec;
-  const std::filesystem::path wal(file.string() + "-wal");
-  HATTR_THROW_UNLESS(!std::filesystem::exists(wal, ec) || std::filesystem::file_size(wal, ec) == 0,
-                     "{}: its write-ahead log {} holds changes not yet in the file, and this user cannot write the "
-                     "folder: copy the study with its -wal file to a writable folder and read it there",
-                     file.string(), wal.string());
-  HATTR_THROW_UNLESS(!runnerLockHeld(file), "{}: a runner is writing this study and this user cannot write its "
-                     "folder: read it when the run is over", file.string());
-  std::string uri = "file:";
-  for (const char c : std::filesystem::absolute(file).string()) {
-    if (c == '%' || c == '?' || c == '#') {
-      uri += fmt::format("%{:02X}", static_cast<unsigned char>(c));
-    } else {
-      uri += c;
-    }
-  }
-  uri += "?immutable=1";
-  sqlite3* db = nullptr;
-  if (sqlite3_open_v2(uri.c_str(), &db, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, nullptr) != SQLITE_OK) {
-    const std::string message = db ? sqlite3_errmsg(db) : "out of memory";
-    sqlite3_close(db);
-    throw InputError(fmt::format("{}: cannot open the study database: {}", file.string(), message));
-  }
-  return db;
-}
-
-/// The exclusive runner lock: flock on the database file itself (independent of SQLite's
-/// own POSIX locks on Linux). Returns the descriptor, or throws naming the holder.
-int takeRunnerLock(const std::filesystem::path& file, SqlConnection& db) {
-  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw Error(fmt::format("{}: cannot open for locking: {}", file.string(), std::strerror(errno)));
-  // A reader's probe (runnerLockHeld) holds a shared lock for an instant: try a few times.
-  bool locked = false;
-  for (int attempt = 0; attempt < 5 && !locked; ++attempt) {
-    locked = ::flock(fd, LOCK_EX | LOCK_NB) == 0;
-    if (!locked) ::usleep(20'000);
-  }
-  if (!locked) {
-    ::close(fd);
-    std::string holder = "another process";
-    try {
-      Statement s(db, "SELECT pid, host FROM sessions WHERE ended_utc IS NULL ORDER BY id DESC LIMIT 1");
-      if (s.step()) holder = fmt::format("process {} on {}", s.integer(0), s.text(1));
-    } catch (const Error&) {
-    }
-    throw InputError(fmt::format("{}: the study is being run by {}; wait for it to finish or stop it first",
-                                 file.string(), holder));
-  }
-  return fd;
-}
-
+/// A trial's status as the trials table stores it ("pending" for anything unknown).
 TrialStatus parseStatus(const std::string& text) {
   if (text == "running") return TrialStatus::kRunning;
   if (text == "completed") return TrialStatus::kCompleted;
   if (text == "interrupted") return TrialStatus::kInterrupted;
   return TrialStatus::kPending;
-}
-
-std::vector<Channel> storedChannels(const RawChannels& raw) {
-  std::vector<Channel> channels;
-  for (const auto& info : allChannels()) {
-    if (!info.derived && !needsRawChannel(info.channel, raw)) channels.push_back(info.channel);
-  }
-  return channels;
 }
 
 }  // namespace
@@ -216,151 +48,6 @@ std::string_view trialStatusName(TrialStatus status) {
     case TrialStatus::kInterrupted: return "interrupted";
   }
   return "?";
-}
-
-// ---- Sample packing -------------------------------------------------------------------------
-
-namespace {
-
-/// Whether the profile's times stay strictly increasing in whole steps of `step`.
-bool timesStayIncreasing(const HapticProfile& profile, double step) {
-  long long last = std::numeric_limits<long long>::min();
-  for (const Sample& s : profile.samples()) {
-    const long long k = std::llround(s.t_s / step);
-    if (k <= last) return false;
-    last = k;
-  }
-  return true;
-}
-
-}  // namespace
-
-std::string encodeTrialSamples(const HapticProfile& profile, const io::ChannelResolution& resolution) {
-  const auto channels = storedChannels(profile.rawChannels());
-  // At the declared resolution, unless a value lies beyond its range or two samples' times
-  // would fall on one step: then losslessly (the block says which), so nothing is lost and
-  // every stored profile reads back.
-  if (!resolution.empty() && timesStayIncreasing(profile, resolution.at(Channel::kTime))) {
-    try {
-      return io::encodeSamples(profile.samples(), channels, resolution);
-    } catch (const InputError&) {
-    }
-  }
-  return io::encodeSamples(profile.samples(), channels);
-}
-
-namespace {
-
-/// Schema 3's rows of little-endian doubles, one row per sample.
-std::vector<Sample> decodeRowSamples(std::string_view bytes, const RawChannels& raw, std::size_t count) {
-  static_assert(std::endian::native == std::endian::little, "the samples table stores little-endian doubles");
-  const auto channels = storedChannels(raw);
-  HATTR_THROW_UNLESS(count <= bytes.size() && bytes.size() == count * channels.size() * sizeof(double),
-                     "samples: {} bytes stored, expected {} samples × {} channels × 8", bytes.size(), count,
-                     channels.size());
-  std::vector<Sample> samples(count);
-  const char* in = bytes.data();
-  for (Sample& s : samples) {
-    for (const Channel c : channels) {
-      double v = 0.0;
-      std::memcpy(&v, in, sizeof v);
-      in += sizeof v;
-      setChannelValue(s, c, v);
-    }
-  }
-  return samples;
-}
-
-}  // namespace
-
-std::vector<Sample> decodeTrialSamples(std::string_view bytes, std::string_view encoding, const RawChannels& raw,
-                                       std::size_t count) {
-  if (encoding == kCompactSamples || encoding == kCompactSamplesV1) {
-    // The block says its revision too: the two must agree.
-    const std::string_view starts_as = io::sampleEncodingOf(bytes);
-    HATTR_THROW_UNLESS(starts_as == encoding, "samples: a block marked {} starts as {} (damaged)", encoding,
-                       starts_as.empty() ? "neither hsc1 nor hsc2" : starts_as);
-    return io::decodeSamples(bytes, storedChannels(raw), count);
-  }
-  if (encoding == kRowSamples) return decodeRowSamples(bytes, raw, count);
-  throw InputError(fmt::format("samples: encoding \"{}\": expected {}, {} or {}", encoding, kCompactSamples,
-                               kCompactSamplesV1, kRowSamples));
-}
-
-namespace {
-
-/// Every block of samples still in schema 3's rows, rewritten in the compact encoding
-/// (lossless), in the caller's transaction; each is decoded again and compared bit for bit
-/// with the rows before it replaces them. A block that does not decode is left as it is.
-void compactTable(SqlConnection& db, std::string_view table, std::string_view key) {
-  // The rows to rewrite first (a cursor must not walk rows its own connection updates).
-  std::vector<std::int64_t> ids;
-  {
-    Statement list(db, fmt::format("SELECT {} FROM {} WHERE encoding = '{}'", key, table, kRowSamples));
-    while (list.step()) ids.push_back(list.integer(0));
-  }
-  for (const std::int64_t id : ids) {
-    Statement rows(db, fmt::format("SELECT raw_pressure, raw_tilt, sample_count, data FROM {} WHERE {} = ?", table, key));
-    rows.bind(1, id);
-    HATTR_DEMAND(rows.step(), "a row listed for the migration is gone");
-    const RawChannels raw{rows.integer(0) != 0, rows.integer(1) != 0};
-    const auto count = static_cast<std::size_t>(std::max<std::int64_t>(rows.integer(2), 0));
-    const auto channels = storedChannels(raw);
-    // A damaged block stays as it was: it is reported when it is read, as before, and the
-    // rest of the study migrates.
-    std::vector<Sample> samples;
-    try {
-      samples = decodeRowSamples(rows.blob(3), raw, count);
-    } catch (const InputError&) {
-      continue;
-    }
-    const std::string compact = io::encodeSamples(samples, channels);
-    const auto back = io::decodeSamples(compact, channels, count);
-    for (std::size_t i = 0; i < count; ++i) {
-      for (const Channel c : channels) {
-        HATTR_DEMAND(std::bit_cast<std::uint64_t>(channelValue(back[i], c)) ==
-                         std::bit_cast<std::uint64_t>(channelValue(samples[i], c)),
-                     "the compact encoding did not give back every sample of a stored trial");
-      }
-    }
-    Statement update(db, fmt::format("UPDATE {} SET data = ?, encoding = ? WHERE {} = ?", table, key));
-    update.bindBlob(1, compact).bind(2, std::string(kCompactSamples)).bind(3, id).run();
-  }
-}
-
-void compactStoredSamples(SqlConnection& db) {
-  compactTable(db, "samples", "trial");
-  compactTable(db, "disturbed_attempts", "id");
-}
-
-}  // namespace
-
-void detail::migrateToDesigns(SqlConnection& db) {
-  db.exec(kMigrationV4ToV5);
-  // Every study before designs is of the paper's form: its plan, from the stored definition
-  // and each subject's stored order, says each trial's place (one session, day 0).
-  Statement definition(db, "SELECT definition FROM study WHERE id = 1");
-  if (!definition.step()) return;  // a new study: its trials are written with their places
-  const StudyDefinition study = parseStudy(definition.text(0), db.location() + ":study", "", false);
-  std::vector<std::pair<std::string, std::string>> subjects;  // id, mode order
-  {
-    Statement list(db, "SELECT id, mode_order FROM subjects ORDER BY position");
-    while (list.step()) subjects.emplace_back(list.text(0), list.text(1));
-  }
-  for (const auto& [id, order_json] : subjects) {
-    const auto spec = std::find_if(study.subjects.begin(), study.subjects.end(), [&](const auto& s) { return s.id == id; });
-    HATTR_THROW_UNLESS(spec != study.subjects.end(), "{}: subject {} is not in the study's definition", db.location(),
-                       textExcerpt(id));
-    std::vector<guidance::TrainingMode> order;
-    for (const auto& m : json::parse(order_json)) order.push_back(guidance::parseMode(m.get<std::string>()));
-    for (const TrialPlan& p : planTrials(study, *spec, order)) {
-      Statement u(db, "UPDATE trials SET skill = ?, schedule_session = ?, day = ?, block = ? WHERE subject = ? AND "
-                      "sequence = ?");
-      u.bind(1, p.skill).bind(2, p.session).bind(3, p.day).bind(4, p.block).bind(5, id).bind(6, p.sequence).run();
-    }
-    Statement g(db, "UPDATE subjects SET group_name = ? WHERE id = ?");
-    g.bind(1, spec->group).bind(2, id).run();
-  }
 }
 
 // ---- Opening -------------------------------------------------------------------------------
@@ -402,29 +89,6 @@ StudyDatabase::~StudyDatabase() {
 
 bool StudyDatabase::onPostgres() const noexcept { return db_ && db_->dialect() == SqlDialect::kPostgres; }
 
-namespace {
-
-/// Removes a database file and SQLite's companions (journal, WAL, shared memory); quiet.
-void removeDatabaseFiles(const std::filesystem::path& file) noexcept {
-  std::error_code ignored;
-  for (const char* suffix : {"", "-journal", "-wal", "-shm"}) {
-    std::filesystem::remove(std::filesystem::path(file.string() + suffix), ignored);
-  }
-}
-
-/// Moves a finished database into place without ever replacing a file: link, then unlink.
-void publishDatabase(const std::filesystem::path& from, const std::filesystem::path& to) {
-  if (::link(from.c_str(), to.c_str()) != 0) {
-    const int error = errno;
-    if (error == EEXIST) throw InputError(fmt::format("{}: already exists; refusing to overwrite a study database", to.string()));
-    throw Error(fmt::format("{}: cannot create the study database: {}", to.string(), std::strerror(error)));
-  }
-  std::error_code ignored;
-  std::filesystem::remove(from, ignored);
-}
-
-}  // namespace
-
 StudyDatabase StudyDatabase::create(const std::filesystem::path& file, const StudyDefinition& study,
                                     const std::function<void(StudyDatabase&)>& fill) {
   const bool postgres = isPostgresStudy(file.string());
@@ -448,47 +112,6 @@ StudyDatabase StudyDatabase::create(const std::filesystem::path& file, const Stu
     expert_csv[skill] = text.str();
   }
   return postgres ? createPostgres(file.string(), study, expert_csv, fill) : createSqlite(file, study, expert_csv, fill);
-}
-
-StudyDatabase StudyDatabase::createSqlite(const std::filesystem::path& file, const StudyDefinition& study,
-                                          const std::map<std::string, std::string>& expert_csv,
-                                          const std::function<void(StudyDatabase&)>& fill) {
-  // Built under a hidden name beside the file and linked into place only when complete, so a
-  // kill, a full disk or a failed fill leaves no stub that blocks the next attempt.
-  const std::filesystem::path building =
-      file.parent_path() / fmt::format(".{}.creating-{}", file.filename().string(), ::getpid());
-  removeDatabaseFiles(building);
-  try {
-    {
-      StudyDatabase database(building, detail::makeSqliteConnection(openSqliteFile(building, SQLITE_OPEN_READWRITE |
-                                                                                         SQLITE_OPEN_CREATE),
-                                                                    building.string()));
-      SqlConnection& db = *database.db_;
-      db.exec("PRAGMA journal_mode = WAL");
-      db.exec("PRAGMA synchronous = FULL");
-      db.exec("PRAGMA foreign_keys = ON");
-      {
-        Transaction t(db);
-        db.exec(fmt::format("PRAGMA application_id = {}", kStudyApplicationId));
-        db.exec(kSchemaV1);
-        db.exec("PRAGMA user_version = 1");
-        t.commit();
-      }
-      migrate(db, 1);
-      {
-        Transaction t(db);
-        database.writeNewStudy(study, expert_csv);
-        t.commit();
-      }
-      if (fill) fill(database);
-      db.exec("PRAGMA wal_checkpoint(TRUNCATE)");
-    }  // closed: the WAL is checked in and removed
-    publishDatabase(building, file);
-  } catch (...) {
-    removeDatabaseFiles(building);
-    throw;
-  }
-  return open(file, OpenMode::kReadWrite);
 }
 
 void StudyDatabase::writeNewStudy(const StudyDefinition& study, const std::map<std::string, std::string>& expert_csv) {
@@ -526,55 +149,6 @@ void StudyDatabase::writeNewStudy(const StudyDefinition& study, const std::map<s
 StudyDatabase StudyDatabase::open(const std::filesystem::path& file, OpenMode mode, const StoreOptions& options) {
   if (isPostgresStudy(file.string())) return openPostgres(file.string(), mode, options);
   return openSqlite(file, mode, options);
-}
-
-StudyDatabase StudyDatabase::openSqlite(const std::filesystem::path& file, OpenMode mode, const StoreOptions& options) {
-  HATTR_THROW_UNLESS(std::filesystem::is_regular_file(file), "{}: no such study database (create one with `hattr study init`)",
-                     file.string());
-  sqlite3* handle = mode == OpenMode::kReadOnly ? openForReading(file) : openSqliteFile(file, SQLITE_OPEN_READWRITE);
-  StudyDatabase database(file, detail::makeSqliteConnection(handle, file.string()));
-  SqlConnection& db = *database.db_;
-
-  // Is this a hattr study, and one we can read?
-  std::int64_t app_id = 0, version = 0;
-  try {
-    app_id = scalar(db, "PRAGMA application_id");
-    version = scalar(db, "PRAGMA user_version");
-  } catch (const Error&) {
-    const int code = sqlite3_errcode(handle) & 0xff;
-    if (code == SQLITE_NOTADB) {
-      throw InputError(fmt::format("{}: not a hattr study database (not an SQLite file)", file.string()));
-    }
-    if (code == SQLITE_CORRUPT) throw InputError(fmt::format("{}: the study database is damaged: {}", file.string(), sqlite3_errmsg(handle)));
-    throw Error(fmt::format("{}: cannot read the study database: {}", file.string(), sqlite3_errmsg(handle)));
-  }
-  HATTR_THROW_UNLESS(app_id == kStudyApplicationId,
-                     "{}: not a hattr study database (SQLite application id {:#x}, expected {:#x})", file.string(),
-                     app_id, kStudyApplicationId);
-  HATTR_THROW_UNLESS(version >= 1 && version <= kStudySchemaVersion,
-                     "{}: study schema version {} is {} this build of hattr reads (1 to {}); {}", file.string(), version,
-                     version > kStudySchemaVersion ? "newer than" : "not one", kStudySchemaVersion,
-                     version > kStudySchemaVersion ? "use a newer hattr" : "the file is damaged");
-  HATTR_THROW_UNLESS(mode != OpenMode::kReadOnly || version == kStudySchemaVersion,
-                     "{}: study schema version {} is older than this build's {}; it is brought up to date when it is "
-                     "opened for writing (`hattr study run` or `hattr study analyze`), and cannot be read as it is",
-                     file.string(), version, kStudySchemaVersion);
-  if (mode != OpenMode::kReadOnly) {
-    db.exec(options.scratch ? "PRAGMA synchronous = OFF" : "PRAGMA synchronous = FULL");
-    db.exec("PRAGMA foreign_keys = ON");
-  }
-  database.options_ = options;
-  if (mode == OpenMode::kRunner) database.lock_fd_ = takeRunnerLock(file, db);
-  if (mode != OpenMode::kReadOnly && version < kStudySchemaVersion) migrate(db, static_cast<int>(version));
-  if (mode == OpenMode::kRunner) {
-    // We hold the runner lock: anything still marked running died with its process.
-    Transaction t(db);
-    db.exec("UPDATE trials SET status = 'interrupted', interruptions = interruptions + 1 WHERE status = 'running'");
-    db.exec(fmt::format("UPDATE sessions SET ended_utc = '{}' WHERE ended_utc IS NULL", utcNowIso8601()));
-    t.commit();
-  }
-  database.loadDefinition();
-  return database;
 }
 
 void StudyDatabase::loadDefinition() {
@@ -732,7 +306,7 @@ void StudyDatabase::endSession(std::int64_t session_id) {
 
 bool StudyDatabase::runnerActive() const {
   if (onPostgres()) return scalar(*db_, "SELECT COUNT(*) FROM subject_leases WHERE expires_at > clock_timestamp()") > 0;
-  return lock_fd_ >= 0 || runnerLockHeld(file_);
+  return lock_fd_ >= 0 || detail::runnerLockHeld(file_);
 }
 
 void StudyDatabase::holdLease(std::int64_t trial_id) {

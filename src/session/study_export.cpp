@@ -53,7 +53,7 @@ std::size_t writeExport(const StudyDatabase& db, StudyDefinition study, const st
     path = fs::path("experts") / (skill + ".csv");
   }
   study.named_experts.clear();  // an expert named by its glyph is a file in the export too
-  io::writeFileAtomically(out / "study.json", studyToJson(study).dump(2) + "\n");
+  hattr::writeFileAtomically(out / "study.json", studyToJson(study).dump(2) + "\n");
 
   // The trials table and a profile per completed trial.
   std::string table = std::string(kTrialsHeader) + "\n";
@@ -72,7 +72,7 @@ std::size_t writeExport(const StudyDatabase& db, StudyDefinition study, const st
                          t.attempts, t.interruptions, t.started_utc, t.ended_utc, t.sample_count, file, t.plan.skill,
                          t.plan.group, t.plan.session + 1, t.plan.day, t.plan.block + 1);
   }
-  io::writeFileAtomically(out / "trials.csv", table);
+  hattr::writeFileAtomically(out / "trials.csv", table);
   return written;
 }
 

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
+#include "study_database_internal.hpp"
 
 namespace hattr::session {
 namespace detail {

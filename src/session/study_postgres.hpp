@@ -20,10 +20,6 @@ void createPostgresSchema(SqlConnection& db);
 /// what it holds instead. An older schema is migrated when `writable`, refused otherwise.
 void checkPostgresStudy(SqlConnection& db, bool writable);
 
-/// Migration 4 -> 5 on either store (study_database.cpp): the trials' places in the design
-/// and the subjects' groups, filled in from the stored definition; in the caller's transaction.
-void migrateToDesigns(SqlConnection& db);
-
 /// This machine's name (sessions and leases record it for people).
 std::string hostName();
 

@@ -101,18 +101,17 @@ void validateExpertConfig(const ExpertConfig& c) {
   checkRange(c.azimuth_rad, -2.0 * std::numbers::pi, 2.0 * std::numbers::pi, "azimuth_rad", "rad");
 }
 
-HapticProfile expertScript(const Glyph& glyph, const ExpertConfig& config) {
-  validateExpertConfig(config);
-  HATTR_THROW_UNLESS(!glyph.strokes.empty(), "expert script for glyph \"{}\": expected at least one stroke, got none",
-                     glyph.name);
-  const double beta = config.isochrony_exponent;
-  const double lift = config.lift_height_m;
+namespace {
 
-  // Every stroke's sub-movements, each a minimum-jerk path on normalized time [0, 1].
-  struct Movement {
-    std::shared_ptr<const MinimumJerkSpline> path;
-    double length_m;
-  };
+/// One sub-movement of a stroke: a minimum-jerk path on normalized time [0, 1].
+struct Movement {
+  std::shared_ptr<const MinimumJerkSpline> path;
+  double length_m;
+};
+
+/// Every stroke's sub-movements, and the duration scale c in T = c·L^β, set by the fastest.
+std::pair<std::vector<std::vector<Movement>>, double> planMovements(const Glyph& glyph, const ExpertConfig& config) {
+  const double beta = config.isochrony_exponent;
   std::vector<std::vector<Movement>> strokes;
   double c = 0.0;  // duration scale in T = c·L^β, set by the fastest movement
   for (std::size_t s = 0; s < glyph.strokes.size(); ++s) {
@@ -129,10 +128,22 @@ HapticProfile expertScript(const Glyph& glyph, const ExpertConfig& config) {
       movements.push_back({std::move(path), length});
     }
   }
+  return {std::move(strokes), c};
+}
 
-  // The timeline.
+/// The script's timeline: its pieces in order, and each stroke's pen-down interval.
+struct Timeline {
   std::vector<Piece> pieces;
   std::vector<ForceInterval> force_intervals;
+  double total_s = 0.0;
+};
+
+Timeline buildTimeline(const Glyph& glyph, const ExpertConfig& config,
+                       const std::vector<std::vector<Movement>>& strokes, double c) {
+  const double beta = config.isochrony_exponent;
+  const double lift = config.lift_height_m;
+  Timeline timeline;
+  std::vector<Piece>& pieces = timeline.pieces;
   double now = 0.0;
   const auto add = [&](Piece piece) {
     piece.start_s = now;
@@ -157,7 +168,7 @@ HapticProfile expertScript(const Glyph& glyph, const ExpertConfig& config) {
     }
     add({.kind = Piece::Kind::kHold, .duration_s = config.lift_off_s, .pen_down = true, .from = points.back()});
     interval.up_s = now;
-    force_intervals.push_back(interval);
+    timeline.force_intervals.push_back(interval);
     if (s + 1 == strokes.size()) break;
     // Pen up to the next stroke's start: the same timing rule, never faster than the peak.
     const Vec2 to = glyph.strokes[s + 1].points.front();
@@ -172,7 +183,50 @@ HapticProfile expertScript(const Glyph& glyph, const ExpertConfig& config) {
   const Vec2 last = glyph.strokes.back().points.back();
   vertical(last, 0.0, lift, config.retreat_s);
   if (config.lead_out_s > 0.0) add({.kind = Piece::Kind::kHold, .duration_s = config.lead_out_s, .from = last, .z_from_m = lift});
-  const double total_s = now;
+  timeline.total_s = now;
+  return timeline;
+}
+
+/// The pen's position and velocity at normalized time s of a piece.
+void placeOnPiece(const Piece& piece, double s, Sample& sample) {
+  switch (piece.kind) {
+    case Piece::Kind::kHold:
+      sample.p_WT = Vec3(piece.from.x(), piece.from.y(), piece.z_from_m);
+      break;
+    case Piece::Kind::kVertical: {
+      const double dz = piece.z_to_m - piece.z_from_m;
+      sample.p_WT = Vec3(piece.from.x(), piece.from.y(), piece.z_from_m + dz * minimumJerkBlend(s));
+      sample.v_WT = Vec3(0.0, 0.0, dz * minimumJerkBlendRate(s) / piece.duration_s);
+      break;
+    }
+    case Piece::Kind::kMove: {
+      const Vec2 p = piece.path->position(s);
+      const Vec2 v = piece.path->velocity(s) / piece.duration_s;
+      sample.p_WT = Vec3(p.x(), p.y(), 0.0);
+      sample.v_WT = Vec3(v.x(), v.y(), 0.0);
+      break;
+    }
+    case Piece::Kind::kTransit: {
+      const Vec2 d = piece.to - piece.from;
+      const Vec2 p = piece.from + d * minimumJerkBlend(s);
+      const Vec2 v = d * minimumJerkBlendRate(s) / piece.duration_s;
+      sample.p_WT = Vec3(p.x(), p.y(), piece.lift_m * liftBump(s));
+      sample.v_WT = Vec3(v.x(), v.y(), piece.lift_m * liftBumpRate(s) / piece.duration_s);
+      break;
+    }
+  }
+}
+
+}  // namespace
+
+HapticProfile expertScript(const Glyph& glyph, const ExpertConfig& config) {
+  validateExpertConfig(config);
+  HATTR_THROW_UNLESS(!glyph.strokes.empty(), "expert script for glyph \"{}\": expected at least one stroke, got none",
+                     glyph.name);
+  const auto [strokes, c] = planMovements(glyph, config);
+  const Timeline timeline = buildTimeline(glyph, config, strokes, c);
+  const std::vector<Piece>& pieces = timeline.pieces;
+  const std::vector<ForceInterval>& force_intervals = timeline.force_intervals;
 
   // Sample it.
   ProfileMetadata metadata{.subject = "expert", .skill = glyph.name, .source = "sim:expert-script",
@@ -181,7 +235,7 @@ HapticProfile expertScript(const Glyph& glyph, const ExpertConfig& config) {
   metadata.extra["peak_speed_m_per_s"] = fmt::format("{}", config.peak_speed_m_per_s);
   metadata.extra["axial_force_N"] = fmt::format("{}", config.axial_force_N);
   HapticProfile script(metadata, RawChannels{.tilt = true});
-  const auto count = static_cast<std::size_t>(std::floor(total_s * config.rate_hz + 1e-9)) + 1;
+  const auto count = static_cast<std::size_t>(std::floor(timeline.total_s * config.rate_hz + 1e-9)) + 1;
   script.reserve(count);
   const double normal_share = std::sin(config.altitude_rad);
   std::size_t piece_index = 0;
@@ -191,35 +245,9 @@ HapticProfile expertScript(const Glyph& glyph, const ExpertConfig& config) {
     while (piece_index + 1 < pieces.size() && t >= pieces[piece_index + 1].start_s) ++piece_index;
     const Piece& piece = pieces[piece_index];
     const double local = std::clamp(t - piece.start_s, 0.0, piece.duration_s);
-    const double s = local / piece.duration_s;
     Sample sample;
     sample.t_s = t;
-    switch (piece.kind) {
-      case Piece::Kind::kHold:
-        sample.p_WT = Vec3(piece.from.x(), piece.from.y(), piece.z_from_m);
-        break;
-      case Piece::Kind::kVertical: {
-        const double dz = piece.z_to_m - piece.z_from_m;
-        sample.p_WT = Vec3(piece.from.x(), piece.from.y(), piece.z_from_m + dz * minimumJerkBlend(s));
-        sample.v_WT = Vec3(0.0, 0.0, dz * minimumJerkBlendRate(s) / piece.duration_s);
-        break;
-      }
-      case Piece::Kind::kMove: {
-        const Vec2 p = piece.path->position(s);
-        const Vec2 v = piece.path->velocity(s) / piece.duration_s;
-        sample.p_WT = Vec3(p.x(), p.y(), 0.0);
-        sample.v_WT = Vec3(v.x(), v.y(), 0.0);
-        break;
-      }
-      case Piece::Kind::kTransit: {
-        const Vec2 d = piece.to - piece.from;
-        const Vec2 p = piece.from + d * minimumJerkBlend(s);
-        const Vec2 v = d * minimumJerkBlendRate(s) / piece.duration_s;
-        sample.p_WT = Vec3(p.x(), p.y(), piece.lift_m * liftBump(s));
-        sample.v_WT = Vec3(v.x(), v.y(), piece.lift_m * liftBumpRate(s) / piece.duration_s);
-        break;
-      }
-    }
+    placeOnPiece(piece, local / piece.duration_s, sample);
     sample.pen_down = piece.pen_down;
     sample.in_contact = piece.pen_down;
     if (piece.pen_down) {

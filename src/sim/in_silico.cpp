@@ -90,8 +90,8 @@ session::StudyDefinition writePaperStudy(const std::filesystem::path& dir, const
   session::TrialEnvironment environment("sim://pen", render::WorldConfig{}, 1000.0);
   const HapticProfile expert = recordExpert(environment, script,
                                             {.subject = "expert", .skill = glyph.name, .source = "sim:expert"});
-  io::writeProfileCsv(script, dir / "expert-script.csv", io::Overwrite::kReplace);
-  io::writeProfileCsv(expert, dir / "expert.csv", io::Overwrite::kReplace);
+  io::writeProfileCsv(script, dir / "expert-script.csv", hattr::Overwrite::kReplace);
+  io::writeProfileCsv(expert, dir / "expert.csv", hattr::Overwrite::kReplace);
   // The study: the paper's protocol, counterbalanced, simulated subjects.
   session::StudyDefinition study;
   study.name = fmt::format("{} in silico: three training modes{}", glyph.name, o.guidance ? "" : " (A/A: no guidance)");
@@ -114,7 +114,7 @@ InSilicoResult runInSilicoStudy(const InSilicoOptions& o) {
   namespace fs = std::filesystem;
   const fs::path dir = fs::absolute(o.out_dir);
   const session::StudyDefinition study = writePaperStudy(dir, o);
-  io::writeFileAtomically(dir / "study.json", session::studyToJson(study).dump(2) + "\n", io::Overwrite::kReplace);
+  hattr::writeFileAtomically(dir / "study.json", session::studyToJson(study).dump(2) + "\n", hattr::Overwrite::kReplace);
   keepAside(dir / "study.sqlite");
   { (void)session::StudyDatabase::create(dir / "study.sqlite", study); }
 

@@ -120,47 +120,12 @@ double MinimumJerkSpline::jerkCost() const noexcept {
   return cost;
 }
 
-MinimumJerkSpline MinimumJerkSpline::withOptimalTimes(const std::vector<Vec2>& points, double duration) {
-  HATTR_DEMAND(points.size() >= 2 && duration > 0.0, "{} points, duration {}", points.size(), duration);
-  const auto segments = static_cast<Eigen::Index>(points.size() - 1);
-  // The via times as a softmax of free parameters θ (θ_0 = 0): every gap stays positive and
-  // the gaps always add up to the duration.
-  const auto timesOf = [&](const Eigen::VectorXd& theta) {
-    Eigen::VectorXd gaps(segments);
-    gaps(0) = 0.0;
-    gaps.tail(segments - 1) = theta;
-    gaps = (gaps.array() - gaps.maxCoeff()).exp();
-    gaps *= duration / gaps.sum();
-    std::vector<double> times(points.size(), 0.0);
-    for (Eigen::Index i = 0; i < segments; ++i) times[static_cast<std::size_t>(i + 1)] = times[static_cast<std::size_t>(i)] + gaps(i);
-    times.back() = duration;
-    return times;
-  };
-  // No gap below 2 % of the mean: beyond that the system grows ill-conditioned, and no writer
-  // crosses a via segment that much faster than the others.
-  const double min_gap = 0.02 * duration / static_cast<double>(segments);
-  // Start from gaps proportional to the chord lengths, each at least 3 % of the mean (so the
-  // start satisfies the 2 % bound).
-  std::vector<double> chords;
-  double total = 0.0;
-  for (std::size_t i = 1; i < points.size(); ++i) total += chords.emplace_back((points[i] - points[i - 1]).norm());
-  const double floor = 0.03 * total / static_cast<double>(segments);
-  Eigen::VectorXd theta(segments - 1);
-  for (Eigen::Index i = 1; i < segments; ++i) {
-    theta(i - 1) = std::log(std::max(chords[static_cast<std::size_t>(i)], floor) / std::max(chords[0], floor));
-  }
-  if (segments == 1) return {points, timesOf(theta)};
+namespace {
 
-  // Quasi-Newton (BFGS) descent of the squared jerk over θ, with central-difference gradients
-  // and a backtracking line search.
-  const auto cost = [&](const Eigen::VectorXd& th) {
-    const std::vector<double> times = timesOf(th);
-    for (std::size_t i = 1; i < times.size(); ++i) {
-      if (times[i] - times[i - 1] < min_gap) return std::numeric_limits<double>::infinity();
-    }
-    const auto spline = tryFit(points, times);
-    return spline ? spline->jerkCost() : std::numeric_limits<double>::infinity();
-  };
+/// Quasi-Newton (BFGS) descent of `cost` from `theta`, with central-difference gradients and a
+/// backtracking line search; at most 200 iterations.
+template <class Cost>
+Eigen::VectorXd minimizeBfgs(const Cost& cost, Eigen::VectorXd theta) {
   const auto gradient = [&](const Eigen::VectorXd& th) {
     constexpr double kStep = 1e-6;
     Eigen::VectorXd g(th.size());
@@ -202,6 +167,52 @@ MinimumJerkSpline MinimumJerkSpline::withOptimalTimes(const std::vector<Vec2>& p
     g = g_new;
     if (converged) break;
   }
+  return theta;
+}
+
+}  // namespace
+
+MinimumJerkSpline MinimumJerkSpline::withOptimalTimes(const std::vector<Vec2>& points, double duration) {
+  HATTR_DEMAND(points.size() >= 2 && duration > 0.0, "{} points, duration {}", points.size(), duration);
+  const auto segments = static_cast<Eigen::Index>(points.size() - 1);
+  // The via times as a softmax of free parameters θ (θ_0 = 0): every gap stays positive and
+  // the gaps always add up to the duration.
+  const auto timesOf = [&](const Eigen::VectorXd& theta) {
+    Eigen::VectorXd gaps(segments);
+    gaps(0) = 0.0;
+    gaps.tail(segments - 1) = theta;
+    gaps = (gaps.array() - gaps.maxCoeff()).exp();
+    gaps *= duration / gaps.sum();
+    std::vector<double> times(points.size(), 0.0);
+    for (Eigen::Index i = 0; i < segments; ++i) times[static_cast<std::size_t>(i + 1)] = times[static_cast<std::size_t>(i)] + gaps(i);
+    times.back() = duration;
+    return times;
+  };
+  // No gap below 2 % of the mean: beyond that the system grows ill-conditioned, and no writer
+  // crosses a via segment that much faster than the others.
+  const double min_gap = 0.02 * duration / static_cast<double>(segments);
+  // Start from gaps proportional to the chord lengths, each at least 3 % of the mean (so the
+  // start satisfies the 2 % bound).
+  std::vector<double> chords;
+  double total = 0.0;
+  for (std::size_t i = 1; i < points.size(); ++i) total += chords.emplace_back((points[i] - points[i - 1]).norm());
+  const double floor = 0.03 * total / static_cast<double>(segments);
+  Eigen::VectorXd theta(segments - 1);
+  for (Eigen::Index i = 1; i < segments; ++i) {
+    theta(i - 1) = std::log(std::max(chords[static_cast<std::size_t>(i)], floor) / std::max(chords[0], floor));
+  }
+  if (segments == 1) return {points, timesOf(theta)};
+
+  // The squared jerk over θ, descended by BFGS.
+  const auto cost = [&](const Eigen::VectorXd& th) {
+    const std::vector<double> times = timesOf(th);
+    for (std::size_t i = 1; i < times.size(); ++i) {
+      if (times[i] - times[i - 1] < min_gap) return std::numeric_limits<double>::infinity();
+    }
+    const auto spline = tryFit(points, times);
+    return spline ? spline->jerkCost() : std::numeric_limits<double>::infinity();
+  };
+  theta = minimizeBfgs(cost, theta);
   return {points, timesOf(theta)};
 }
 

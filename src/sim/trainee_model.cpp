@@ -102,6 +102,45 @@ bool isSource(const std::string& text) {
   return false;
 }
 
+/// A parameter's per_subject object: its distribution, and its kind as written (for messages).
+std::pair<SubjectDistribution, std::string> parseSubjectDistribution(const json& item, const std::string& where) {
+  const json* per_subject = find(item, "per_subject");
+  HATTR_THROW_UNLESS(per_subject && per_subject->is_object(),
+                     "{}.per_subject: expected an object {{\"kind\": ...}}, got {}", where, shown(per_subject));
+  const json* kind = find(*per_subject, "kind");
+  const std::string kind_text = kind && kind->is_string() ? kind->get<std::string>() : std::string();
+  SubjectDistribution d;
+  const char* spread_key = nullptr;
+  if (kind_text == "fixed") {
+    d.kind = SubjectDistribution::Kind::kFixed;
+  } else if (kind_text == "normal") {
+    d.kind = SubjectDistribution::Kind::kNormal;
+    spread_key = "sd";
+  } else if (kind_text == "lognormal") {
+    d.kind = SubjectDistribution::Kind::kLogNormal;
+    spread_key = "sigma_log";
+  } else if (kind_text == "lognormal_complement") {
+    d.kind = SubjectDistribution::Kind::kLogNormalComplement;
+    spread_key = "sigma_log";
+  } else {
+    throw InputError(fmt::format("{}.per_subject.kind: expected one of fixed, normal, lognormal, "
+                                 "lognormal_complement, got {}",
+                                 where, shown(kind)));
+  }
+  for (const auto& field : per_subject->items()) {
+    HATTR_THROW_UNLESS(field.key() == "kind" || (spread_key && field.key() == spread_key),
+                       "{}.per_subject: unknown field \"{}\" for kind {}: expected {}", where, field.key(), kind_text,
+                       spread_key ? fmt::format("kind, {}", spread_key) : std::string("kind"));
+  }
+  if (spread_key) {
+    const json* spread = find(*per_subject, spread_key);
+    HATTR_THROW_UNLESS(isFiniteNumber(spread) && spread->get<double>() >= 0.0 && spread->get<double>() <= 10.0,
+                       "{}.per_subject.{}: expected a number in [0, 10], got {}", where, spread_key, shown(spread));
+    d.spread = spread->get<double>();
+  }
+  return {d, kind_text};
+}
+
 ModelParameter parseParameter(const json& item, const ParameterSpec& spec, std::string_view source) {
   const std::string where = fmt::format("{}: parameters.{}", source, spec.key);
   HATTR_THROW_UNLESS(item.is_object(), "{}: expected an object with value, unit, range, source, per_subject, got {}",
@@ -140,40 +179,8 @@ ModelParameter parseParameter(const json& item, const ParameterSpec& spec, std::
                      "{}.source: expected \"Author year, short title\" or \"assumption: <reason>\", got {}", where,
                      shown(text));
 
-  const json* per_subject = find(item, "per_subject");
-  HATTR_THROW_UNLESS(per_subject && per_subject->is_object(),
-                     "{}.per_subject: expected an object {{\"kind\": ...}}, got {}", where, shown(per_subject));
-  const json* kind = find(*per_subject, "kind");
-  const std::string kind_text = kind && kind->is_string() ? kind->get<std::string>() : std::string();
-  SubjectDistribution d;
-  const char* spread_key = nullptr;
-  if (kind_text == "fixed") {
-    d.kind = SubjectDistribution::Kind::kFixed;
-  } else if (kind_text == "normal") {
-    d.kind = SubjectDistribution::Kind::kNormal;
-    spread_key = "sd";
-  } else if (kind_text == "lognormal") {
-    d.kind = SubjectDistribution::Kind::kLogNormal;
-    spread_key = "sigma_log";
-  } else if (kind_text == "lognormal_complement") {
-    d.kind = SubjectDistribution::Kind::kLogNormalComplement;
-    spread_key = "sigma_log";
-  } else {
-    throw InputError(fmt::format("{}.per_subject.kind: expected one of fixed, normal, lognormal, "
-                                 "lognormal_complement, got {}",
-                                 where, shown(kind)));
-  }
-  for (const auto& field : per_subject->items()) {
-    HATTR_THROW_UNLESS(field.key() == "kind" || (spread_key && field.key() == spread_key),
-                       "{}.per_subject: unknown field \"{}\" for kind {}: expected {}", where, field.key(), kind_text,
-                       spread_key ? fmt::format("kind, {}", spread_key) : std::string("kind"));
-  }
-  if (spread_key) {
-    const json* spread = find(*per_subject, spread_key);
-    HATTR_THROW_UNLESS(isFiniteNumber(spread) && spread->get<double>() >= 0.0 && spread->get<double>() <= 10.0,
-                       "{}.per_subject.{}: expected a number in [0, 10], got {}", where, spread_key, shown(spread));
-    d.spread = spread->get<double>();
-  }
+  const auto [d_read, kind_text] = parseSubjectDistribution(item, where);
+  SubjectDistribution d = d_read;
   HATTR_THROW_UNLESS(!spec.structural || d.kind == SubjectDistribution::Kind::kFixed,
                      "{}.per_subject.kind: expected fixed (the basis is the same for every subject), got \"{}\"", where,
                      kind_text);

@@ -185,6 +185,93 @@ void writePayload(Writer& w, const PeerPayload& p) noexcept {
 
 bool inRange(std::int64_t v, std::int64_t lo, std::int64_t hi) noexcept { return v >= lo && v <= hi; }
 
+/// A WELCOME: the rate, timeouts, capabilities and the device's limits.
+bool readWelcome(Reader& r, Payload& out) noexcept {
+  WelcomePayload p;
+  r.bytes(p.nonce.data(), kNonceSize);
+  p.rate_hz = r.f64();
+  p.session_timeout_ns = r.i64();
+  p.command_timeout_ns = r.i64();
+  const std::uint32_t caps = r.u32();
+  p.capabilities = {.force_sensor = (caps & kCapForceSensor) != 0, .pressure = (caps & kCapPressure) != 0,
+                    .tilt = (caps & kCapTilt) != 0};
+  const std::uint32_t dof = r.u32();
+  p.limits.degrees_of_freedom = static_cast<int>(dof);
+  p.limits.workspace_min_m = r.vec3();
+  p.limits.workspace_max_m = r.vec3();
+  p.limits.peak_force_N = r.f64();
+  p.limits.continuous_force_N = r.f64();
+  p.limits.max_stiffness_N_per_m = r.f64();
+  p.limits.max_damping_N_s_per_m = r.f64();
+  p.limits.nominal_rate_hz = r.f64();
+  p.limits.mass_kg = r.f64();
+  p.limits.damping_N_s_per_m = r.f64();
+  out = p;
+  return dof >= 1 && dof <= 6 && p.rate_hz > 0.0 && p.session_timeout_ns > 0 &&
+         p.session_timeout_ns <= kMaxTimeoutNs && p.command_timeout_ns > 0 && p.command_timeout_ns <= kMaxTimeoutNs;
+}
+
+/// A STATE: the pen, the force applied, echo and hold times, status.
+bool readState(Reader& r, Payload& out) noexcept {
+  StatePayload p;
+  p.pen.t_s = r.f64();
+  p.pen.p_WT = r.vec3();
+  p.pen.v_WT = r.vec3();
+  p.pen.f_measured_W = r.vec3();
+  p.pen.pressure_raw = r.f64();
+  p.pen.azimuth_rad = r.f64();
+  p.pen.altitude_rad = r.f64();
+  p.f_applied_W = r.vec3();
+  p.echo_sender_time_ns = r.i64();
+  p.hold_ns = r.i64();
+  p.echo_sequence = r.u64();
+  p.pen.buttons = r.u32();
+  const std::uint32_t flags = r.u32();
+  p.pen.has_force = (flags & kPenHasForce) != 0;
+  p.pen.has_pressure = (flags & kPenHasPressure) != 0;
+  p.pen.has_tilt = (flags & kPenHasTilt) != 0;
+  const std::uint32_t status = r.u32();
+  p.device_status = status == 0 ? DeviceStatus::kOk : status == 1 ? DeviceStatus::kFault : DeviceStatus::kDisconnected;
+  p.server_flags = r.u32();
+  out = p;
+  return status <= 2 && inRange(p.hold_ns, 0, kMaxHoldNs) && p.echo_sender_time_ns >= 0;
+}
+
+/// A PEER: the other station's pen, coupling force and energy.
+bool readPeer(Reader& r, Payload& out) noexcept {
+  PeerPayload p;
+  p.t_s = r.f64();
+  p.p_WT = r.vec3();
+  p.v_WT = r.vec3();
+  p.f_user_W = r.vec3();
+  p.f_coupling_W = r.vec3();
+  p.energy_in_J = r.f64();
+  p.energy_out_J = r.f64();
+  p.echo_sender_time_ns = r.i64();
+  p.hold_ns = r.i64();
+  p.coupling = r.u32();
+  p.flags = r.u32();
+  out = p;
+  return p.energy_in_J >= 0.0 && p.energy_out_J >= 0.0 && inRange(p.hold_ns, 0, kMaxHoldNs) &&
+         p.echo_sender_time_ns >= 0 && p.coupling <= 3;
+}
+
+/// A COMMAND: the force on the pen, and the simulated hand's.
+bool readCommand(Reader& r, Payload& out) noexcept {
+  CommandPayload p;
+  p.f_on_pen_W = r.vec3();
+  p.hand.p_target_W = r.vec3();
+  p.hand.v_target_W = r.vec3();
+  p.hand.press_N = r.f64();
+  p.hand.azimuth_rad = r.f64();
+  p.hand.altitude_rad = r.f64();
+  const std::uint32_t flags = r.u32();
+  p.has_hand = (flags & kCommandHasHand) != 0;
+  p.hand.pen_down = (flags & kCommandPenDown) != 0;
+  out = p;
+  return true;
+}
+
 // Payload readers; false for a value out of range (non-finite numbers are checked by the caller).
 bool readPayload(Reader& r, PacketType type, Payload& out) noexcept {
   switch (type) {
@@ -202,85 +289,10 @@ bool readPayload(Reader& r, PacketType type, Payload& out) noexcept {
       out = p;
       return true;
     }
-    case PacketType::kWelcome: {
-      WelcomePayload p;
-      r.bytes(p.nonce.data(), kNonceSize);
-      p.rate_hz = r.f64();
-      p.session_timeout_ns = r.i64();
-      p.command_timeout_ns = r.i64();
-      const std::uint32_t caps = r.u32();
-      p.capabilities = {.force_sensor = (caps & kCapForceSensor) != 0, .pressure = (caps & kCapPressure) != 0,
-                        .tilt = (caps & kCapTilt) != 0};
-      const std::uint32_t dof = r.u32();
-      p.limits.degrees_of_freedom = static_cast<int>(dof);
-      p.limits.workspace_min_m = r.vec3();
-      p.limits.workspace_max_m = r.vec3();
-      p.limits.peak_force_N = r.f64();
-      p.limits.continuous_force_N = r.f64();
-      p.limits.max_stiffness_N_per_m = r.f64();
-      p.limits.max_damping_N_s_per_m = r.f64();
-      p.limits.nominal_rate_hz = r.f64();
-      p.limits.mass_kg = r.f64();
-      p.limits.damping_N_s_per_m = r.f64();
-      out = p;
-      return dof >= 1 && dof <= 6 && p.rate_hz > 0.0 && p.session_timeout_ns > 0 &&
-             p.session_timeout_ns <= kMaxTimeoutNs && p.command_timeout_ns > 0 && p.command_timeout_ns <= kMaxTimeoutNs;
-    }
-    case PacketType::kState: {
-      StatePayload p;
-      p.pen.t_s = r.f64();
-      p.pen.p_WT = r.vec3();
-      p.pen.v_WT = r.vec3();
-      p.pen.f_measured_W = r.vec3();
-      p.pen.pressure_raw = r.f64();
-      p.pen.azimuth_rad = r.f64();
-      p.pen.altitude_rad = r.f64();
-      p.f_applied_W = r.vec3();
-      p.echo_sender_time_ns = r.i64();
-      p.hold_ns = r.i64();
-      p.echo_sequence = r.u64();
-      p.pen.buttons = r.u32();
-      const std::uint32_t flags = r.u32();
-      p.pen.has_force = (flags & kPenHasForce) != 0;
-      p.pen.has_pressure = (flags & kPenHasPressure) != 0;
-      p.pen.has_tilt = (flags & kPenHasTilt) != 0;
-      const std::uint32_t status = r.u32();
-      p.device_status = status == 0 ? DeviceStatus::kOk : status == 1 ? DeviceStatus::kFault : DeviceStatus::kDisconnected;
-      p.server_flags = r.u32();
-      out = p;
-      return status <= 2 && inRange(p.hold_ns, 0, kMaxHoldNs) && p.echo_sender_time_ns >= 0;
-    }
-    case PacketType::kPeer: {
-      PeerPayload p;
-      p.t_s = r.f64();
-      p.p_WT = r.vec3();
-      p.v_WT = r.vec3();
-      p.f_user_W = r.vec3();
-      p.f_coupling_W = r.vec3();
-      p.energy_in_J = r.f64();
-      p.energy_out_J = r.f64();
-      p.echo_sender_time_ns = r.i64();
-      p.hold_ns = r.i64();
-      p.coupling = r.u32();
-      p.flags = r.u32();
-      out = p;
-      return p.energy_in_J >= 0.0 && p.energy_out_J >= 0.0 && inRange(p.hold_ns, 0, kMaxHoldNs) &&
-             p.echo_sender_time_ns >= 0 && p.coupling <= 3;
-    }
-    case PacketType::kCommand: {
-      CommandPayload p;
-      p.f_on_pen_W = r.vec3();
-      p.hand.p_target_W = r.vec3();
-      p.hand.v_target_W = r.vec3();
-      p.hand.press_N = r.f64();
-      p.hand.azimuth_rad = r.f64();
-      p.hand.altitude_rad = r.f64();
-      const std::uint32_t flags = r.u32();
-      p.has_hand = (flags & kCommandHasHand) != 0;
-      p.hand.pen_down = (flags & kCommandPenDown) != 0;
-      out = p;
-      return true;
-    }
+    case PacketType::kWelcome: return readWelcome(r, out);
+    case PacketType::kState: return readState(r, out);
+    case PacketType::kPeer: return readPeer(r, out);
+    case PacketType::kCommand: return readCommand(r, out);
   }
   return false;
 }
@@ -404,8 +416,14 @@ bool SequenceCheck::accept(std::uint64_t sequence, DropReason& why) noexcept {
   return false;
 }
 
-std::array<std::uint64_t, kDropReasonCount> DropCounters::snapshot() const noexcept {
-  std::array<std::uint64_t, kDropReasonCount> out{};
+DropCounts dropsSince(const DropCounts& now, const DropCounts& before) noexcept {
+  DropCounts out{};
+  for (std::size_t i = 0; i < kDropReasonCount; ++i) out[i] = now[i] - before[i];
+  return out;
+}
+
+DropCounts DropCounters::snapshot() const noexcept {
+  DropCounts out{};
   for (std::size_t i = 0; i < kDropReasonCount; ++i) out[i] = counts_[i].load(std::memory_order_relaxed);
   return out;
 }

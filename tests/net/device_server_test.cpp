@@ -12,7 +12,7 @@
 
 #include "hattr/core/error.hpp"
 #include "hattr/device/udp_device.hpp"
-#include "hattr/wire/session.hpp"
+#include "hattr/wire/link_session.hpp"
 #include "support/host_stalls.hpp"
 #include "support/thread_sanitizer.hpp"
 #include "support/no_allocation.hpp"
@@ -305,7 +305,7 @@ TEST(DeviceServer, HostilePacketsAreDroppedCountedByReasonAndChangeNothing) {
 
 // Issue 40, items 1 and 6: no answer is larger than the packet that asked; a recorded HELLO
 // opens nothing once its cookie's two seconds are over. (More recorded sessions than the
-// responder remembers nonces of: tests/wire/session_test.cpp, on a simulated clock.)
+// responder remembers nonces of: tests/wire/link_session_test.cpp, on a simulated clock.)
 TEST(DeviceServer, NoAnswerIsLargerThanItsHelloAndRecordedHellosCannotKeepAClientOut) {
   Rig rig;
   DeviceServer server(rig.config());

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import hattr
-from conftest import run_cli
+from conftest import cli_json, run_cli
 
 # Metadata that differs between two runs of one trial: when it was made.
 VOLATILE = {"created_utc"}
@@ -115,3 +115,16 @@ def test_a_reference_or_hand_the_pen_cannot_render_is_refused_with_the_remedy(tm
         hattr.run_trial(str(script), hattr.read_profile(heavy), "alpha")
     # Recording keeps any hand: it records what happens, and marks it.
     assert "under the paper" in hattr.run_trial(str(heavy))["disturbed"]
+
+
+def test_a_power_analysis_through_python_equals_the_clis():
+    """hattr.power_analysis runs ops::runPowerAnalysis, as `hattr sim power` does: the same table
+    to the bit (each replicate is, wherever it runs); only the run's timing differs."""
+    mine = hattr.power_analysis(subjects=[3], replicates=2, trials=2, seed=3)
+    theirs = cli_json("sim", "power", "--subjects", "3", "--replicates", "2", "--trials", "2", "--seed", "3")
+    assert mine["run"]["studies"] == 2 and mine["run"]["processes"] == 1
+    mine.pop("run")
+    theirs.pop("run")
+    assert mine == theirs
+    with pytest.raises(hattr.InputError, match="subject"):
+        hattr.power_analysis(subjects=[1], replicates=2, trials=2)

@@ -19,7 +19,7 @@ inline void writeExpert(const std::filesystem::path& file) {
     s.pen_down = true;
     p.append(s);
   }
-  io::writeProfileCsv(p, file, io::Overwrite::kReplace);
+  io::writeProfileCsv(p, file, hattr::Overwrite::kReplace);
 }
 
 /// SQL that turns a study file of this build back into schema 4's tables (what migration 4 -> 5

@@ -295,7 +295,7 @@ TEST(PowerStudy, RefusesDesignsItCannotAnalyzeNamingTheOption) {
     const std::string text = fmt::format(R"({{"name": "t", "skill": "na", "experts": {{"na": "{}"}},
       "modes": ["BASIC", "ALPHA"], "device": "{}", "subjects": [{{"id": "P1", "participant": "{}"}}]}})",
                                          (dir / "expert.csv").string(), device, participant);
-    io::writeFileAtomically(file, text, io::Overwrite::kReplace);
+    hattr::writeFileAtomically(file, text, hattr::Overwrite::kReplace);
     return file;
   };
   (void)writePaperStudy(dir.path(), {.subjects = 3});  // writes expert.csv
@@ -403,8 +403,8 @@ TEST(PowerShards, MergedShardsEqualTheWholeRunAndForeignOrMissingShardsAreRefuse
     std::vector<report::ReplicateOutcome> mine;
     for (int r = shard; r < plan.replicates; r += 3) mine.push_back(all[static_cast<std::size_t>(r)]);
     files.push_back(dir / fmt::format("shard-{}.json", shard));
-    io::writeFileAtomically(files.back(), report::powerShardToJson(plan, shard, 3, mine).dump(1),
-                            io::Overwrite::kReplace);
+    hattr::writeFileAtomically(files.back(), report::powerShardToJson(plan, shard, 3, mine).dump(1),
+                            hattr::Overwrite::kReplace);
   }
   EXPECT_EQ(report::powerTableToJson(report::mergePowerShards(files)).dump(), whole.dump());
 
@@ -429,9 +429,9 @@ TEST(PowerShards, MergedShardsEqualTheWholeRunAndForeignOrMissingShardsAreRefuse
   EXPECT_THAT(message({files[0], files[1], files[1]}), HasSubstr("shard-1.json: replicate 1 is also in"));
   report::PowerPlan other = plan;
   other.alpha = 0.01;
-  io::writeFileAtomically(dir / "other.json", report::powerShardToJson(other, 0, 1, {}).dump(), io::Overwrite::kReplace);
+  hattr::writeFileAtomically(dir / "other.json", report::powerShardToJson(other, 0, 1, {}).dump(), hattr::Overwrite::kReplace);
   EXPECT_THAT(message({files[0], dir / "other.json"}), HasSubstr("other.json: another power analysis than"));
-  io::writeFileAtomically(dir / "study.json", "{\"name\": \"x\"}", io::Overwrite::kReplace);
+  hattr::writeFileAtomically(dir / "study.json", "{\"name\": \"x\"}", hattr::Overwrite::kReplace);
   EXPECT_THAT(message({dir / "study.json"}), HasSubstr("study.json: not a power shard"));
 }
 

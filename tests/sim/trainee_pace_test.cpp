@@ -61,7 +61,7 @@ TEST(SimulatedTraineePace, EachTrialHasItsOwnPaceDrawnFromItsSeed) {
 /// model has `pace_cv`, each ending by the end rule.
 std::vector<double> studyTrialDurations(double pace_cv) {
   test::TempDir dir;
-  io::writeProfileCsv(loopScript(), dir / "expert.csv", io::Overwrite::kReplace);
+  io::writeProfileCsv(loopScript(), dir / "expert.csv", hattr::Overwrite::kReplace);
   test::writeText(dir / "study.json", R"({"name": "pace", "skill": "loop", "experts": {"loop": "expert.csv"},
     "modes": ["basic"], "protocol": {"training_trials": 2, "recall_trials": 2, "rest_s": 0,
     "trial_end": {"pen_up_s": 0.2}}, "world": {"relief": {"kind": "flat"}},

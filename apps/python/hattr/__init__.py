@@ -21,6 +21,6 @@ __all__ = [
     "TrialScorer", "AnovaTable", "TukeyResult", "two_way_anova", "tukey_hsd", "describe_groups",
     "lmm", "compare_lmm", "kinematics", "fit_learning_curve",
     "Study", "create_study", "run_study",
-    "run_trial", "strategies", "simulate_study",
+    "run_trial", "strategies", "simulate_study", "power_analysis",
     "servo_check", "check_device",
 ]

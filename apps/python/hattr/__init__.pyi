@@ -242,6 +242,9 @@ def simulate_study(out_dir: _Path, *, subjects: int = ..., seed: int = ..., trai
                    recall_trials: int = ..., guidance: bool = ..., glyph: str = ...,
                    write_report: bool = ...) -> _SimulatedStudy: ...
 
+def power_analysis(study: _Path | None = ..., *, glyph: str = ..., trials: int = ..., subjects: Sequence[int] = ...,
+                   replicates: int = ..., seed: int = ..., alpha: float = ..., threads: int = ..., phase: str = ...,
+                   hypothesis: str = ...) -> dict[str, Any]: ...
 def servo_check(device: str = ..., *, rate_hz: float = ..., seconds: float = ..., world: _Path | None = ...,
                 realtime: str = ..., cpu: int = ..., spin_us: float = ...) -> dict[str, Any]: ...
 

@@ -27,8 +27,8 @@
 #include "core/series.hpp"
 #include "hattr/core/haptic_profile.hpp"
 #include "hattr/device/hand.hpp"
-#include "hattr/net/link_watch.hpp"
 #include "hattr/net/mentor_station.hpp"
+#include "hattr/ops/mentor_station_run.hpp"
 #include "hattr/render/world_config.hpp"
 #include "hattr/session/trial.hpp"
 
@@ -37,33 +37,12 @@ namespace hattr::studio {
 /// Where a leader listens unless told otherwise (docs/mentoring.md's examples).
 inline constexpr const char* kDefaultListenAddress = "0.0.0.0:7400";
 
-/// What the person chose in the Mentor tab, and the studio's device.
-struct MentorSettings {
-  net::MentorRole role = net::MentorRole::kLeader;
-  /// Leader: ADDR:PORT to listen on (port 0: any free port). Follower: the leader's HOST:PORT.
-  std::string address = kDefaultListenAddress;
-  std::filesystem::path key_file;                    ///< made by `hattr device keygen`
-  net::Coupling coupling = net::Coupling::kObserve;  ///< the follower's; a leader runs its follower's
-  bool passivity = true;                             ///< the passivity observer/controller (bilateral)
-  double deadband = 0.0;                             ///< perceptual deadband, a Weber fraction (0: off)
-  std::string device_uri = "sim://pen";              ///< the studio's current device
-  render::WorldConfig world{};                       ///< and its paper
-  double rate_hz = 1000.0;
-  std::string subject;       ///< recorded as the subject; empty: "expert" (leader) or "trainee"
-  double wait_s = 30.0;      ///< give up when the other station has not linked within this [s]
-  double give_up_s = 0.25;   ///< end the session when the link stays down this long [s] (net::LinkWatch)
-};
-
-/// The coupling's configuration and the socket's address, checked.
-struct MentorSetup {
-  net::MentorConfig mentor;       ///< role, coupling, key, leader's address, passivity, deadband
-  wire::UdpEndpoint bind;  ///< where a leader's socket is bound (a follower's is connected to mentor.leader)
-};
-
-/// Reads the key file and parses the address as start() does, opening nothing: the library's
-/// messages (wire::readKeyFile, wire::parseUdpEndpoint, MentorConfig::validate).
-/// Throws InputError.
-MentorSetup mentorSetupFor(const MentorSettings& settings);
+/// What the person chose in the Mentor tab, and the studio's device (the library's options:
+/// the address, key file, coupling, passivity, deadband, device, world, rate, subject, wait and
+/// give-up times), and their check, opening nothing (ops::mentorSetupFor).
+using MentorSettings = ops::MentorStationOptions;
+using ops::MentorSetup;
+using ops::mentorSetupFor;
 
 enum class MentorPhase {
   kIdle,     ///< no session yet
@@ -116,7 +95,7 @@ class MentorSession {
   void stop();
 
   /// A session runs (waiting or linked).
-  [[nodiscard]] bool active() const noexcept { return station_ != nullptr; }
+  [[nodiscard]] bool active() const noexcept { return run_ != nullptr; }
   [[nodiscard]] MentorSnapshot snapshot() const;
   /// This station's pen as last read by poll() (nullopt before the first sample).
   [[nodiscard]] const std::optional<Sample>& ownPen() const noexcept { return own_; }
@@ -145,24 +124,19 @@ class MentorSession {
   void discardRecording();
 
  private:
-  using Clock = std::chrono::steady_clock;
-  void watchLink(const net::MentorStats& stats, Clock::time_point now);
-  void end(const std::string& failure, bool by_other = false);
+  using Clock = ops::MentorStationRun::Clock;
+  void end();
   void copyCounters(MentorSnapshot& out) const;
 
   MentorSettings settings_;
-  std::unique_ptr<wire::UdpDatagramLink> link_;
-  std::unique_ptr<session::SettlingHand> settling_;  // the hand, lifted while the forces ramp in
-  std::unique_ptr<net::MentorStation> station_;      // after link_ and settling_: destroyed first
+  // The station, its link watch and recorder hand-over: the one `hattr mentor` uses too.
+  std::unique_ptr<ops::MentorStationRun> run_;
   MentorPhase phase_ = MentorPhase::kIdle;
   std::string where_;
   std::string failure_;
   std::vector<std::string> clamps_;
   net::MentorStats last_stats_;
   MentorSnapshot final_counters_;  // the loop's counters when the session ended
-
-  // The link watch (GUI thread): the one `hattr mentor` uses too.
-  std::optional<net::LinkWatch> watch_;
   bool ended_by_other_ = false;
 
   // What the display shows.

@@ -35,7 +35,7 @@ SaveOutcome saveProfile(const HapticProfile& profile, const std::filesystem::pat
   std::error_code ec;
   if (!replace_confirmed && std::filesystem::exists(file, ec)) return SaveOutcome::kNeedsConfirmation;
   // kRefuse still guards the race where the file appears after the check.
-  io::writeProfileCsv(profile, file, replace_confirmed ? io::Overwrite::kReplace : io::Overwrite::kRefuse);
+  io::writeProfileCsv(profile, file, replace_confirmed ? hattr::Overwrite::kReplace : hattr::Overwrite::kRefuse);
   return SaveOutcome::kSaved;
 }
 

@@ -127,6 +127,14 @@ void MainWindow::buildUi() {
   setCentralWidget(splitter_);
 
   // Tool bar: how hard the hand presses, the force arrows.
+  buildToolBar();
+
+  // Status bar: the input, the loop, the activity; always visible.
+  buildStatusBar();
+}
+
+// Tool bar: how hard the hand presses, the force arrows, the 3-D view.
+void MainWindow::buildToolBar() {
   auto* tools = addToolBar(tr("Input"));
   tools->setObjectName("input_toolbar");
   tools->addWidget(new QLabel(tr(" Press ")));
@@ -165,8 +173,10 @@ void MainWindow::buildUi() {
     if (on) view_splitter_->setSizes({room - room * 2 / 5, room * 2 / 5});
   });
   tools->addWidget(scene_check_);
+}
 
-  // Status bar: the input, the loop, the activity; always visible.
+// Status bar: the input, the loop, the activity; always visible.
+void MainWindow::buildStatusBar() {
   status_input_ = new QLabel;
   status_loop_ = new QLabel;
   status_activity_ = new QLabel;

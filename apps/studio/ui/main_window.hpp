@@ -143,6 +143,8 @@ class MainWindow final : public QMainWindow {
  private:
   // Construction (main_window.cpp).
   void buildUi();
+  void buildToolBar();
+  void buildStatusBar();
   void buildWriteTab();
   void buildRecordTab();
   void buildTrainTab();
@@ -150,6 +152,10 @@ class MainWindow final : public QMainWindow {
   void buildReviewTab();
   void buildMentorTab();
   void buildActions();
+  void buildFileMenu();
+  void buildActionsMenu();
+  void buildViewMenu();
+  void buildHelpMenu();
   void loadSettings();
   void saveSettings();
 

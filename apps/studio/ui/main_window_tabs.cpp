@@ -23,6 +23,22 @@
 #include "ui/ui_text.hpp"
 
 namespace hattr::studio {
+namespace {
+
+// An action in `menu` and on `window` (so its shortcut works anywhere in the window) that
+// calls `slot`.
+template <class Slot>
+QAction* addMenuAction(MainWindow* window, QMenu* menu, const QString& text, const QKeySequence& keys, Slot slot) {
+  auto* action = new QAction(text, window);
+  action->setShortcut(keys);
+  action->setShortcutContext(Qt::WindowShortcut);
+  QObject::connect(action, &QAction::triggered, window, slot);
+  menu->addAction(action);
+  window->addAction(action);
+  return action;
+}
+
+}  // namespace
 
 // The Record tab records on the window's rig, paper and plot (RecordHost).
 void MainWindow::buildRecordTab() {
@@ -214,14 +230,16 @@ void MainWindow::buildMentorTab() {
 }
 
 void MainWindow::buildActions() {
+  buildFileMenu();
+  buildActionsMenu();
+  buildViewMenu();
+  buildHelpMenu();
+}
+
+// File: references, worlds, studies, the report, the device, saving, quitting.
+void MainWindow::buildFileMenu() {
   const auto add = [this](QMenu* menu, const QString& text, const QKeySequence& keys, auto slot) {
-    auto* action = new QAction(text, this);
-    action->setShortcut(keys);
-    action->setShortcutContext(Qt::WindowShortcut);
-    connect(action, &QAction::triggered, this, slot);
-    menu->addAction(action);
-    addAction(action);
-    return action;
+    return addMenuAction(this, menu, text, keys, slot);
   };
   QMenu* file = menuBar()->addMenu(tr("&File"));
   add(file, tr("Open reference…"), QKeySequence(Qt::CTRL | Qt::Key_O), [this] {
@@ -254,7 +272,13 @@ void MainWindow::buildActions() {
       [this] { train_tab_->widgets().save->click(); });
   file->addSeparator();
   add(file, tr("Quit"), QKeySequence(Qt::CTRL | Qt::Key_Q), [this] { close(); });
+}
 
+// Actions: the tab's main action, trials, recording, playback, the modes, the press force.
+void MainWindow::buildActionsMenu() {
+  const auto add = [this](QMenu* menu, const QString& text, const QKeySequence& keys, auto slot) {
+    return addMenuAction(this, menu, text, keys, slot);
+  };
   QMenu* act = menuBar()->addMenu(tr("&Actions"));
   add(act, tr("Start / stop (the tab's main action)"), QKeySequence(Qt::Key_Space), [this] { primaryAction(); });
   add(act, tr("Stop trial (keep it)"), QKeySequence(Qt::CTRL | Qt::Key_Period), [this] { stopTrial(); });
@@ -280,13 +304,21 @@ void MainWindow::buildActions() {
       [this] { press_slider_->setValue(press_slider_->value() + 1); });
   add(act, tr("Press lighter"), QKeySequence(Qt::Key_Minus),
       [this] { press_slider_->setValue(press_slider_->value() - 1); });
+}
+
+// View: a shortcut per tab (Ctrl+1…).
+void MainWindow::buildViewMenu() {
   QMenu* view = menuBar()->addMenu(tr("&View"));
   for (int tab = 0; tab < tabs_->count(); ++tab) {
-    add(view, tabs_->tabText(tab), QKeySequence(Qt::CTRL | static_cast<Qt::Key>(Qt::Key_1 + tab)),
-        [this, tab] { tabs_->setCurrentIndex(tab); });
+    addMenuAction(this, view, tabs_->tabText(tab), QKeySequence(Qt::CTRL | static_cast<Qt::Key>(Qt::Key_1 + tab)),
+                  [this, tab] { tabs_->setCurrentIndex(tab); });
   }
+}
+
+// Help: the table of shortcuts.
+void MainWindow::buildHelpMenu() {
   QMenu* help = menuBar()->addMenu(tr("&Help"));
-  add(help, tr("Shortcuts"), QKeySequence(Qt::Key_F1), [this] {
+  addMenuAction(this, help, tr("Shortcuts"), QKeySequence(Qt::Key_F1), [this] {
     QMessageBox::information(
         this, tr("hattr studio: shortcuts"),
         tr("<table>"

@@ -72,6 +72,14 @@ void MentorTab::buildUi() {
          "Your pen is the studio's device, held by the mouse or tablet.")));
 
   // What the person chooses.
+  buildChoices(layout);
+
+  // Start, stop, save.
+  buildControls(layout);
+}
+
+// What the person chooses: role, address, coupling, key file, passivity, deadband, wait.
+void MentorTab::buildChoices(QVBoxLayout* layout) {
   auto* form = new QFormLayout;
   w_.role = new QComboBox;
   w_.role->addItem(tr("Lead (expert: listen)"));
@@ -118,8 +126,10 @@ void MentorTab::buildUi() {
   form->addRow(tr("Wait"), w_.wait);
   layout->addLayout(form);
   connect(w_.role, &QComboBox::activated, this, [this] { onRoleChanged(); });
+}
 
-  // Start, stop, save.
+// Start, stop, save: the buttons and the labels that show the session.
+void MentorTab::buildControls(QVBoxLayout* layout) {
   auto* row = new QHBoxLayout;
   w_.connect = new QPushButton;
   connect(w_.connect, &QPushButton::clicked, this, [this] { (void)connectSession(); });

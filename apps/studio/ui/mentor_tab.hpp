@@ -22,6 +22,7 @@ class QLabel;
 class QLineEdit;
 class QPushButton;
 class QSettings;
+class QVBoxLayout;
 
 namespace hattr::session {
 class TrialEnvironment;
@@ -101,6 +102,8 @@ class MentorTab final : public QWidget {
 
  private:
   void buildUi();
+  void buildChoices(QVBoxLayout* layout);
+  void buildControls(QVBoxLayout* layout);
   void loadSettings();
   void saveSettings();
   void onRoleChanged();

@@ -140,14 +140,9 @@ void PaperView::drawPeerPen(QPainter& painter) const {
   }
 }
 
-void PaperView::paintEvent(QPaintEvent*) {
-  QPainter painter(this);
-  painter.setRenderHint(QPainter::Antialiasing);
-  painter.setRenderHint(QPainter::SmoothPixmapTransform);
-
-  // The desk and the paper with its grain.
+// The desk and the paper with its grain; a scale bar of 10 mm.
+void PaperView::drawPaper(QPainter& painter, const QRectF& paper) const {
   painter.fillRect(rect(), QColor(66, 70, 78));
-  const QRectF paper = mapping_.paperRectPx();
   if (relief_image_.isNull()) {
     painter.fillRect(paper, paperColour());
   } else {
@@ -163,6 +158,94 @@ void PaperView::paintEvent(QPaintEvent*) {
   painter.drawLine(bar_end - QPointF(bar_px, 0.0), bar_end);
   painter.drawText(QRectF(bar_end.x() - bar_px, bar_end.y() - 20.0, bar_px, 16.0), Qt::AlignCenter | Qt::TextDontClip,
                    tr("10 mm"));
+}
+
+// The pen: filled on the paper, a ring growing with its height above it; its forces.
+void PaperView::drawPen(QPainter& painter) const {
+  if (!pen_) return;
+  const QPointF at = mapping_.toWidget(pen_->p_WT);
+  if (arrows_shown_) {
+    drawArrow(painter, at, pen_->f_user_W.head<2>(), PaperColours::userForce());
+    drawArrow(painter, at, pen_->f_guide_W.head<2>(), PaperColours::guideForce());
+  }
+  const double lift_px = std::clamp(pen_->p_WT.z() * 1000.0, 0.0, 10.0) * 1.5;
+  if (pen_->in_contact) {
+    painter.setPen(QPen(Qt::white, 1.5));
+    painter.setBrush(PaperColours::ink());
+    painter.drawEllipse(at, kPenRadius_px, kPenRadius_px);
+  } else {
+    painter.setPen(QPen(PaperColours::ink(), 1.5));
+    painter.setBrush(Qt::NoBrush);
+    painter.drawEllipse(at, kPenRadius_px + lift_px, kPenRadius_px + lift_px);
+  }
+  painter.setBrush(Qt::NoBrush);
+}
+
+// Read-outs (millimetres and newtons for people), in a smaller font that the legend keeps.
+void PaperView::drawReadouts(QPainter& painter, const QRectF& paper) const {
+  painter.setPen(QColor(40, 40, 40));
+  QFont small = font();
+  small.setPointSizeF(small.pointSizeF() * 0.9);
+  painter.setFont(small);
+  const QRectF info(paper.left() + 8.0, paper.top() + 6.0, paper.width() - 16.0, 18.0);
+  if (pen_) {
+    painter.drawText(info, Qt::AlignLeft | Qt::AlignVCenter,
+                     tr("pen z %1 mm · fz %2 N · guidance %3 N")
+                         .arg(pen_->p_WT.z() * 1000.0, 0, 'f', 2)
+                         .arg(pen_->f_user_W.z(), 0, 'f', 2)
+                         .arg(pen_->f_guide_W.norm(), 0, 'f', 2));
+  }
+  if (hand_ != nullptr) {
+    painter.drawText(info, Qt::AlignRight | Qt::AlignVCenter,
+                     tr("press %1 N (wheel)").arg(hand_->input().press_N, 0, 'f', 1));
+  }
+}
+
+// The legend along the paper's bottom edge.
+void PaperView::drawLegend(QPainter& painter, const QRectF& paper) const {
+  const QPointF legend(paper.left() + 10.0, paper.bottom() - 12.0);
+  struct LegendItem {
+    QColor colour;
+    QString text;
+  };
+  std::vector<LegendItem> items = {{PaperColours::reference(), tr("reference")},
+                                   {PaperColours::ink(), tr("pen trail")},
+                                   {PaperColours::overlay(), tr("reviewed trial")},
+                                   {PaperColours::userForce(), tr("your force")},
+                                   {PaperColours::guideForce(), tr("guidance")}};
+  if (peer_trail_ != nullptr) items.push_back({PaperColours::peer(), tr("other station's pen")});
+  double x = legend.x();
+  for (const auto& item : items) {
+    painter.setPen(QPen(item.colour, 3.0));
+    painter.drawLine(QPointF(x, legend.y() - 4.0), QPointF(x + 14.0, legend.y() - 4.0));
+    painter.setPen(QColor(60, 60, 60));
+    const double text_w = painter.fontMetrics().horizontalAdvance(item.text);
+    painter.drawText(QPointF(x + 18.0, legend.y()), item.text);
+    x += 30.0 + text_w;
+  }
+}
+
+// The banner (prompts, countdowns), when there is one.
+void PaperView::drawBanner(QPainter& painter) const {
+  if (banner_.isEmpty()) return;
+  const BannerLayout banner = bannerLayout();
+  painter.setFont(banner.font);
+  painter.setPen(Qt::NoPen);
+  painter.setBrush(QColor(30, 34, 44, 200));
+  painter.drawRoundedRect(banner.box, 8.0, 8.0);
+  painter.setPen(Qt::white);
+  painter.drawText(banner.box.adjusted(kBannerMargin_px, 0.0, -kBannerMargin_px, 0.0),
+                   Qt::AlignCenter | Qt::TextWordWrap, banner_);
+}
+
+void PaperView::paintEvent(QPaintEvent*) {
+  QPainter painter(this);
+  painter.setRenderHint(QPainter::Antialiasing);
+  painter.setRenderHint(QPainter::SmoothPixmapTransform);
+
+  // The desk and the paper with its grain.
+  const QRectF paper = mapping_.paperRectPx();
+  drawPaper(painter, paper);
 
   // Reference, reviewed trial, the pen's trail.
   if (reference_shown_) drawTrail(painter, reference_, PaperColours::reference(), 3.0);
@@ -184,78 +267,14 @@ void PaperView::paintEvent(QPaintEvent*) {
     painter.drawLine(target - QPointF(0, 5), target + QPointF(0, 5));
   }
 
-  // The pen: filled on the paper, a ring growing with its height above it; its forces.
-  if (pen_) {
-    const QPointF at = mapping_.toWidget(pen_->p_WT);
-    if (arrows_shown_) {
-      drawArrow(painter, at, pen_->f_user_W.head<2>(), PaperColours::userForce());
-      drawArrow(painter, at, pen_->f_guide_W.head<2>(), PaperColours::guideForce());
-    }
-    const double lift_px = std::clamp(pen_->p_WT.z() * 1000.0, 0.0, 10.0) * 1.5;
-    if (pen_->in_contact) {
-      painter.setPen(QPen(Qt::white, 1.5));
-      painter.setBrush(PaperColours::ink());
-      painter.drawEllipse(at, kPenRadius_px, kPenRadius_px);
-    } else {
-      painter.setPen(QPen(PaperColours::ink(), 1.5));
-      painter.setBrush(Qt::NoBrush);
-      painter.drawEllipse(at, kPenRadius_px + lift_px, kPenRadius_px + lift_px);
-    }
-    painter.setBrush(Qt::NoBrush);
-  }
+  // The pen and its forces, then the other station's pen.
+  drawPen(painter);
   drawPeerPen(painter);
 
-  // Read-outs (millimetres and newtons for people).
-  painter.setPen(QColor(40, 40, 40));
-  QFont small = font();
-  small.setPointSizeF(small.pointSizeF() * 0.9);
-  painter.setFont(small);
-  const QRectF info(paper.left() + 8.0, paper.top() + 6.0, paper.width() - 16.0, 18.0);
-  if (pen_) {
-    painter.drawText(info, Qt::AlignLeft | Qt::AlignVCenter,
-                     tr("pen z %1 mm · fz %2 N · guidance %3 N")
-                         .arg(pen_->p_WT.z() * 1000.0, 0, 'f', 2)
-                         .arg(pen_->f_user_W.z(), 0, 'f', 2)
-                         .arg(pen_->f_guide_W.norm(), 0, 'f', 2));
-  }
-  if (hand_ != nullptr) {
-    painter.drawText(info, Qt::AlignRight | Qt::AlignVCenter,
-                     tr("press %1 N (wheel)").arg(hand_->input().press_N, 0, 'f', 1));
-  }
-
-  // Legend.
-  const QPointF legend(paper.left() + 10.0, paper.bottom() - 12.0);
-  struct LegendItem {
-    QColor colour;
-    QString text;
-  };
-  std::vector<LegendItem> items = {{PaperColours::reference(), tr("reference")},
-                                   {PaperColours::ink(), tr("pen trail")},
-                                   {PaperColours::overlay(), tr("reviewed trial")},
-                                   {PaperColours::userForce(), tr("your force")},
-                                   {PaperColours::guideForce(), tr("guidance")}};
-  if (peer_trail_ != nullptr) items.push_back({PaperColours::peer(), tr("other station's pen")});
-  double x = legend.x();
-  for (const auto& item : items) {
-    painter.setPen(QPen(item.colour, 3.0));
-    painter.drawLine(QPointF(x, legend.y() - 4.0), QPointF(x + 14.0, legend.y() - 4.0));
-    painter.setPen(QColor(60, 60, 60));
-    const double text_w = painter.fontMetrics().horizontalAdvance(item.text);
-    painter.drawText(QPointF(x + 18.0, legend.y()), item.text);
-    x += 30.0 + text_w;
-  }
-
-  // The banner.
-  if (!banner_.isEmpty()) {
-    const BannerLayout banner = bannerLayout();
-    painter.setFont(banner.font);
-    painter.setPen(Qt::NoPen);
-    painter.setBrush(QColor(30, 34, 44, 200));
-    painter.drawRoundedRect(banner.box, 8.0, 8.0);
-    painter.setPen(Qt::white);
-    painter.drawText(banner.box.adjusted(kBannerMargin_px, 0.0, -kBannerMargin_px, 0.0),
-                     Qt::AlignCenter | Qt::TextWordWrap, banner_);
-  }
+  // Read-outs, legend, banner.
+  drawReadouts(painter, paper);
+  drawLegend(painter, paper);
+  drawBanner(painter);
 }
 
 PaperView::BannerLayout PaperView::bannerLayout() const {

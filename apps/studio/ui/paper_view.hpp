@@ -107,6 +107,11 @@ class PaperView final : public QWidget {
   void drawTrail(QPainter& painter, const Trail& trail, const QColor& colour, double width_px) const;
   void drawArrow(QPainter& painter, const QPointF& from, const Eigen::Vector2d& f_N, const QColor& colour) const;
   void drawPeerPen(QPainter& painter) const;
+  void drawPaper(QPainter& painter, const QRectF& paper) const;
+  void drawPen(QPainter& painter) const;
+  void drawReadouts(QPainter& painter, const QRectF& paper) const;
+  void drawLegend(QPainter& painter, const QRectF& paper) const;
+  void drawBanner(QPainter& painter) const;
 
   MouseHand* hand_ = nullptr;
   PaperMapping mapping_;

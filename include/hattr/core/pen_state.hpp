@@ -1,6 +1,7 @@
 #pragma once
-/// What the servo loop reads from a device once per tick, and what the world and the
-/// guidance compute from it. SI units, frame W (docs/units_and_frames.md).
+/// What the servo loop reads from a device once per tick (the world and the guidance compute
+/// from it: world_renderer.hpp, guidance_controller.hpp). SI units, frame W
+/// (docs/units_and_frames.md).
 
 #include <cstdint>
 
@@ -21,37 +22,6 @@ struct PenState {
   bool has_tilt = false;              ///< azimuth and altitude are meaningful
   double azimuth_rad = 0.0;           ///< clockwise from +y to the barrel's projection [rad]
   double altitude_rad = 0.0;          ///< pen axis above the paper [rad]
-};
-
-/// The world's (the paper's) response to the pen at one tick.
-struct ContactForces {
-  Vec3 f_on_pen_W = Vec3::Zero();     ///< force the paper exerts on the pen [N]
-  Vec3 f_on_paper_W = Vec3::Zero();   ///< force the pen exerts on the paper: the user's force [N]
-  bool in_contact = false;            ///< the tip touches the paper
-};
-
-/// Renders the world the pen touches. Runs on the servo thread: noexcept, no allocation,
-/// no locks, no I/O. Implemented by the render module.
-class WorldRenderer {
- public:
-  virtual ~WorldRenderer() = default;
-  /// Computes the contact forces for the pen at this tick; dt_s is the measured period.
-  virtual void render(const PenState& pen, double dt_s, ContactForces& out) noexcept = 0;
-  /// Forgets contact history (proxy, filters) before a new trial. Not on the servo thread.
-  virtual void reset() noexcept {}
-};
-
-/// Computes an assistance force. Same rules as WorldRenderer. Implemented by the guidance
-/// module (the training modes).
-class GuidanceController {
- public:
-  virtual ~GuidanceController() = default;
-  /// Guidance force on the pen [N] for this tick (pen.t_s is the loop time).
-  virtual Vec3 compute(const PenState& pen, const ContactForces& contact, double dt_s) noexcept = 0;
-  /// Handles a parameter command from the mailbox (see servo::ServoCommand); returns false
-  /// if it does not know the parameter.
-  virtual bool setParameter(int /*parameter*/, double /*value*/) noexcept { return false; }
-  virtual void reset() noexcept {}
 };
 
 }  // namespace hattr

@@ -5,7 +5,7 @@
 /// (and, for a simulated pen, the simulated hand's command) once per tick and reads the
 /// newest pen state. Protocol: docs/protocol.md (include/hattr/wire/).
 ///
-/// The session (handshake, checks) is wire::InitiatorSession, the one the mentoring follower
+/// The session (handshake, checks) is wire::InitiatorLinkSession, the one the mentoring follower
 /// uses too.
 ///
 /// Threads: the constructor (handshake) blocks up to timeout_s and throws; read() and

@@ -32,6 +32,7 @@
 
 #include "hattr/core/device_limits.hpp"
 #include "hattr/core/pen_state.hpp"
+#include "hattr/core/guidance_controller.hpp"
 #include "hattr/core/units.hpp"
 #include "hattr/guidance/reference.hpp"
 

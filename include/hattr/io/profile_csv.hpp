@@ -9,15 +9,13 @@
 #include <ostream>
 #include <string_view>
 
+#include "hattr/core/atomic_file.hpp"
 #include "hattr/core/haptic_profile.hpp"
 
 namespace hattr::io {
 
 /// The value of the `format` metadata line this version writes and reads.
 inline constexpr std::string_view kProfileFormat = "hattr-profile/1";
-
-/// What to do when the output file already exists.
-enum class Overwrite { kRefuse, kReplace };
 
 /// Reads a profile file. Columns may be in millimetres or milliseconds (converted to SI).
 HapticProfile readProfileCsv(const std::filesystem::path& file);
@@ -31,10 +29,5 @@ void writeProfileCsv(const HapticProfile& profile, std::ostream& out);
 /// (kRefuse: throws InputError) or replaced whole, never left half-written.
 void writeProfileCsv(const HapticProfile& profile, const std::filesystem::path& file,
                      Overwrite overwrite = Overwrite::kRefuse);
-
-/// Writes `text` to `file` atomically (temporary file, fsync, rename). Shared by every
-/// hattr file writer.
-void writeFileAtomically(const std::filesystem::path& file, std::string_view text,
-                         Overwrite overwrite = Overwrite::kRefuse);
 
 }  // namespace hattr::io

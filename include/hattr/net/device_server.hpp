@@ -4,7 +4,7 @@
 /// to one client at a time and applies the forces that client commands (udp:// devices,
 /// hattr::device::UdpDevice). Protocol, handshake and timeouts: docs/protocol.md.
 ///
-/// The session (handshake, checks, timeouts) is wire::ResponderSession, the one the mentoring
+/// The session (handshake, checks, timeouts) is wire::ResponderLinkSession, the one the mentoring
 /// leader uses too. A fault the server's safety path latched (a device error) stays latched
 /// across sessions: no client can clear it; restart the server.
 ///
@@ -19,6 +19,7 @@
 #include <string>
 
 #include "hattr/device/device.hpp"
+#include "hattr/core/guidance_controller.hpp"
 #include "hattr/wire/keys.hpp"
 #include "hattr/wire/packet.hpp"
 #include "hattr/wire/udp_socket.hpp"
@@ -45,12 +46,12 @@ struct DeviceServerStats {
   std::uint64_t cookies_sent = 0;      ///< HELLOs answered with a COOKIE (no valid cookie yet)
   std::uint64_t commands_applied = 0;  ///< COMMANDs accepted (the newest of each tick is applied)
   std::uint64_t command_timeouts = 0;  ///< times the force went to zero for want of a COMMAND
-  std::uint64_t states_sent = 0;
-  std::array<std::uint64_t, wire::kDropReasonCount> drops{};  ///< by wire::DropReason
-  std::uint64_t ticks = 0;
-  std::uint64_t overruns = 0;
+  std::uint64_t states_sent = 0;       ///< STATE packets sent (one a tick while a session lives)
+  wire::DropCounts drops{};            ///< datagrams dropped, by wire::DropReason
+  std::uint64_t ticks = 0;             ///< the server's servo loop (servo::LiveCounters)
+  std::uint64_t overruns = 0;          ///< ticks that missed their deadline
   std::uint64_t stalls = 0;  ///< gaps in the loop's ticks beyond its watchdog (a host that held it up)
-  std::uint64_t faults = 0;
+  std::uint64_t faults = 0;            ///< safety faults the loop latched
 };
 
 class DeviceServer {

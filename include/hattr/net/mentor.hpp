@@ -31,6 +31,7 @@
 #include <string_view>
 
 #include "hattr/core/pen_state.hpp"
+#include "hattr/core/guidance_controller.hpp"
 #include "hattr/core/triple_buffer.hpp"
 #include "hattr/wire/datagram_link.hpp"
 #include "hattr/wire/keys.hpp"
@@ -116,16 +117,16 @@ struct MentorConfig {
 struct MentorStats {
   bool session = false;              ///< a session with the other station exists
   bool link_up = false;              ///< and its PEER packets are fresh
-  std::uint64_t sessions = 0;
+  std::uint64_t sessions = 0;        ///< sessions opened with the other station
   std::uint64_t busy_refusals = 0;   ///< HELLOs refused: a second follower (leader)
   bool refused_busy = false;         ///< this follower was refused (the leader serves another)
   std::uint64_t link_faults = 0;     ///< times the link went down with a session (not by a goodbye)
   std::uint64_t goodbyes_received = 0;  ///< sessions the other station ended (BYE heard)
-  std::uint64_t peers_received = 0;
-  std::uint64_t peers_sent = 0;
+  std::uint64_t peers_received = 0;  ///< authentic PEER packets of the live session accepted
+  std::uint64_t peers_sent = 0;      ///< PEER packets sent
   std::uint64_t peers_withheld = 0;  ///< PEERs the deadband did not send
   std::uint64_t lost = 0;            ///< PEER sequence gaps (all sessions)
-  std::array<std::uint64_t, wire::kDropReasonCount> drops{};
+  wire::DropCounts drops{};          ///< datagrams dropped, by wire::DropReason
   double energy_in_J = 0.0;          ///< energy this station's person put into the coupling
   double energy_out_J = 0.0;         ///< energy the coupling gave this station's person
   double peer_energy_in_J = 0.0;     ///< the other station's energy in, as last heard
@@ -148,8 +149,8 @@ struct PeerView {
 };
 
 /// The coupling stage of one station (see the file comment). The session (handshake, checks,
-/// timeouts) is the wire protocol's: the leader a wire::ResponderSession, the follower a
-/// wire::InitiatorSession, the same the device server and the udp:// client use.
+/// timeouts) is the wire protocol's: the leader a wire::ResponderLinkSession, the follower a
+/// wire::InitiatorLinkSession, the same the device server and the udp:// client use.
 class MentorCoupling final : public GuidanceController {
  public:
   /// `link` must outlive the coupling. Throws InputError for a bad configuration.

@@ -8,19 +8,29 @@
 
 #include <nlohmann/json.hpp>
 
+#include "hattr/core/haptic_profile.hpp"
 #include "hattr/core/histogram.hpp"
 #include "hattr/device/link_stats.hpp"
 #include "hattr/servo/loop_verdict.hpp"
 #include "hattr/servo/realtime.hpp"
+#include "hattr/session/trial_physics.hpp"
 #include "hattr/wire/packet.hpp"
 
 namespace hattr::ops {
+
+/// A profile's summary, as `hattr profile info --json` prints it: samples, pen_down_samples,
+/// duration_s, rate_hz, nominal_rate_hz, channels {name: {unit, min, max}}, metadata.
+nlohmann::json profileSummaryJson(const HapticProfile& profile);
+
+/// A trial's physical events: each kind {count, first_s, and its worst value} (penetration
+/// deepest_m, force_saturation longest_s, workspace farthest_m).
+nlohmann::json physicalEventsJson(const session::PhysicalEvents& events);
 
 /// {p50, p99, p99_9, max, count} of a histogram, in µs (count: samples).
 nlohmann::json percentilesUsJson(const DurationHistogram& histogram);
 
 /// {reason: count} for every wire::DropReason, zeros included (a fixed schema).
-nlohmann::json dropsJson(const std::array<std::uint64_t, wire::kDropReasonCount>& drops);
+nlohmann::json dropsJson(const wire::DropCounts& drops);
 
 /// A udp:// device's link: round trip, state age, clock offset, packets, loss, late, held and
 /// disconnected reads, reconnects, drops.

@@ -4,6 +4,7 @@
 /// paper. No friction, texture or relief: those are the full paper renderer's.
 
 #include "hattr/core/pen_state.hpp"
+#include "hattr/core/world_renderer.hpp"
 
 namespace hattr::render {
 

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "hattr/core/pen_state.hpp"
+#include "hattr/core/world_renderer.hpp"
 #include "hattr/core/device_limits.hpp"
 #include "hattr/core/passivity.hpp"
 #include "hattr/render/flat_paper.hpp"

@@ -12,6 +12,7 @@
 
 #include "hattr/core/histogram.hpp"
 #include "hattr/core/pen_state.hpp"
+#include "hattr/core/guidance_controller.hpp"
 #include "hattr/core/sample.hpp"
 #include "hattr/core/spsc_ring.hpp"
 #include "hattr/core/triple_buffer.hpp"
@@ -53,14 +54,14 @@ enum class LoopClock : std::uint8_t {
 };
 std::string_view loopClockName(LoopClock clock) noexcept;
 
-/// Counters readable from any thread while the loop runs.
+/// Counters readable from any thread while the loop runs, each only ever counted up.
 struct LiveCounters {
-  std::atomic<std::uint64_t> ticks{0};
-  std::atomic<std::uint64_t> overruns{0};
-  std::atomic<std::uint64_t> dropped_samples{0};
-  std::atomic<std::uint64_t> faults{0};
-  std::atomic<std::uint64_t> stalls{0};
-  std::atomic<std::uint64_t> consumer_stalls{0};
+  std::atomic<std::uint64_t> ticks{0};            ///< ticks run (published after the tick's sample is in the ring)
+  std::atomic<std::uint64_t> overruns{0};         ///< ticks that ended past the next deadline (real time, device clock)
+  std::atomic<std::uint64_t> dropped_samples{0};  ///< samples the ring had no room for (its consumer fell behind)
+  std::atomic<std::uint64_t> faults{0};           ///< safety faults latched (published after their tick)
+  std::atomic<std::uint64_t> stalls{0};           ///< gaps between ticks beyond the stall threshold (zero force, ramp again)
+  std::atomic<std::uint64_t> consumer_stalls{0};  ///< ticks with a required consumer stopped taking samples
   std::atomic<std::uint64_t> link_faults{0};  ///< times the device went from connected to disconnected
   std::atomic<std::uint64_t> disconnected_ticks{0};  ///< ticks with the device disconnected (zero force)
   std::atomic<bool> disconnected{false};             ///< the device is disconnected now
@@ -126,6 +127,11 @@ class ServoLoop {
 
  private:
   void drainCommands() noexcept;
+  /// The device's pen at `now` (the last good one where the read failed); counts a lost link.
+  /// Returns whether the device is disconnected; `status` becomes kDeviceError then.
+  bool readPen(std::chrono::nanoseconds now, PenState& pen, TickStatus& status) noexcept;
+  /// The tick's sample into the ring and the triple buffer, then the tick and fault counts.
+  void publish(const PenState& pen, const ContactForces& contact, const Vec3& command, const Vec3& guide) noexcept;
   void runRealtime();
   void startDeviceClock();
   static void deviceTick(void* context, std::chrono::nanoseconds now) noexcept;

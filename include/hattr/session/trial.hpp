@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "hattr/core/haptic_profile.hpp"
+#include "hattr/core/guidance_controller.hpp"
 #include "hattr/device/device.hpp"
 #include "hattr/device/hand.hpp"
 #include "hattr/guidance/strategy_catalog.hpp"

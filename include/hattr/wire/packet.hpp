@@ -77,6 +77,14 @@ inline constexpr std::size_t kDropReasonCount = static_cast<std::size_t>(DropRea
 /// snake_case name for JSON and messages ("bad_mac").
 [[nodiscard]] std::string_view dropReasonName(DropReason reason) noexcept;
 
+/// Drops by reason (index: DropReason), a snapshot of plain numbers: the one counters type
+/// every statistics struct that counts drops carries (wire::LinkSessionStats, net::MentorStats,
+/// net::DeviceServerStats, device::LinkStats), each reason documented above, written to JSON
+/// by ops::dropsJson with every reason, zeros included.
+using DropCounts = std::array<std::uint64_t, kDropReasonCount>;
+/// Each reason's count of `now` minus that of `before` (taken first).
+[[nodiscard]] DropCounts dropsSince(const DropCounts& now, const DropCounts& before) noexcept;
+
 using Nonce = std::array<std::uint8_t, kNonceSize>;
 using Cookie = std::array<std::uint8_t, kCookieSize>;
 
@@ -173,7 +181,7 @@ std::size_t encodePacket(const Packet& packet, const AuthKey& key, PacketBuffer&
 /// Checks and decodes a datagram: readHeader, then the MAC under `key` (the other side's
 /// direction key), and only then the payload (non-finite numbers and fields out of range →
 /// kBadValue). On success fills `out` and returns true; otherwise sets `why` and leaves `out`
-/// unspecified. Session and sequence checks are the session's (wire/session.hpp).
+/// unspecified. Session and sequence checks are the session's (wire/link_session.hpp).
 [[nodiscard]] bool decodePacket(std::span<const std::uint8_t> datagram, const AuthKey& key, Packet& out,
                                 DropReason& why) noexcept;
 
@@ -207,7 +215,7 @@ class DropCounters {
   }
   [[nodiscard]] std::uint64_t total() const noexcept;
   /// A snapshot, indexed by DropReason.
-  [[nodiscard]] std::array<std::uint64_t, kDropReasonCount> snapshot() const noexcept;
+  [[nodiscard]] DropCounts snapshot() const noexcept;
 
  private:
   std::array<std::atomic<std::uint64_t>, kDropReasonCount> counts_{};

@@ -5,7 +5,7 @@
 // answers no larger than what asked for them. A key holder's own packets stand in for the
 // recorded ones.
 
-#include "hattr/wire/session.hpp"
+#include "hattr/wire/link_session.hpp"
 
 #include <deque>
 #include <vector>
@@ -72,12 +72,12 @@ class MemoryNetwork {
 struct Pair {
   AuthKey key = randomKey();
   MemoryNetwork network;
-  std::unique_ptr<ResponderSession> responder =
-      std::make_unique<ResponderSession>(key, PacketType::kPeer, network.end(0), WelcomePayload{.rate_hz = 1.0,
+  std::unique_ptr<ResponderLinkSession> responder =
+      std::make_unique<ResponderLinkSession>(key, PacketType::kPeer, network.end(0), WelcomePayload{.rate_hz = 1.0,
                                                                                                 .session_timeout_ns = 500 * kMs,
                                                                                                 .command_timeout_ns = 10 * kMs},
-                                         SessionTiming{});
-  InitiatorSession initiator{key, PacketType::kPeer, network.end(1), MemoryNetwork::address(0), SessionTiming{}};
+                                         LinkSessionTiming{});
+  InitiatorLinkSession initiator{key, PacketType::kPeer, network.end(1), MemoryNetwork::address(0), LinkSessionTiming{}};
   std::int64_t now = 1'000 * kMs;
 
   /// One tick of both ends, 1 ms apart; each sends a PEER when it has a session.
@@ -109,7 +109,7 @@ TEST(WireSession, TheHandshakeTakesACookieAndTheResponderStreamsOnlyAfterTheInit
   p.initiator.connect(p.now);
   p.tick(false, true);  // HELLO → COOKIE → HELLO → WELCOME: the initiator is live, the responder waits
   p.tick(false, true);
-  ASSERT_EQ(p.initiator.state(), InitiatorSession::State::kLive);
+  ASSERT_EQ(p.initiator.state(), InitiatorLinkSession::State::kLive);
   EXPECT_TRUE(p.responder->live());
   EXPECT_FALSE(p.responder->confirmed());
   EXPECT_EQ(p.responder->stats().cookies, 1u);
@@ -131,7 +131,7 @@ TEST(WireSession, RecordedHellosOpenNothingAfterRestartsAndMoreSessionsThanTheRe
   for (int n = 0; n < static_cast<int>(kNonceMemory) + 36; ++n) {  // 100 sessions, 0.1 s apart
     p.initiator.connect(p.now);
     p.ticks(3);
-    ASSERT_EQ(p.initiator.state(), InitiatorSession::State::kLive) << "session " << n;
+    ASSERT_EQ(p.initiator.state(), InitiatorLinkSession::State::kLive) << "session " << n;
     recorded.push_back(p.openingHello());
     p.initiator.close(p.now);
     p.now += 100 * kMs;
@@ -151,11 +151,11 @@ TEST(WireSession, RecordedHellosOpenNothingAfterRestartsAndMoreSessionsThanTheRe
     p.network.inject(0, half_second % 2 == 0 ? a : b, MemoryNetwork::address(1));
     if (half_second == 60) p.initiator.connect(p.now);
     p.ticks(5);
-    real_connected = real_connected || p.initiator.state() == InitiatorSession::State::kLive;
+    real_connected = real_connected || p.initiator.state() == InitiatorLinkSession::State::kLive;
     p.now += 495 * kMs;
     if (half_second == 60) {
       EXPECT_TRUE(p.responder->live());
-      EXPECT_EQ(p.initiator.state(), InitiatorSession::State::kLive);
+      EXPECT_EQ(p.initiator.state(), InitiatorLinkSession::State::kLive);
       p.initiator.close(p.now);
     }
   }
@@ -164,10 +164,10 @@ TEST(WireSession, RecordedHellosOpenNothingAfterRestartsAndMoreSessionsThanTheRe
   EXPECT_EQ(p.responder->stats().busy, 0u) << "a replay held the responder so a real initiator was refused";
 
   // A restarted responder (a new cookie secret) answers every recorded HELLO with a COOKIE only.
-  p.responder = std::make_unique<ResponderSession>(p.key, PacketType::kPeer, p.network.end(0), WelcomePayload{.rate_hz = 1.0,
+  p.responder = std::make_unique<ResponderLinkSession>(p.key, PacketType::kPeer, p.network.end(0), WelcomePayload{.rate_hz = 1.0,
                                                                                                               .session_timeout_ns = 1,
                                                                                                               .command_timeout_ns = 1},
-                                                   SessionTiming{});
+                                                   LinkSessionTiming{});
   for (std::size_t i = 0; i < 8; ++i) {
     p.network.inject(0, recorded[i], MemoryNetwork::address(1));
     p.now += kMs;
@@ -259,10 +259,10 @@ TEST(WireSession, AFloodOfHandshakesIsVerifiedOnlyAFewAPump) {
   Pair p;
   // The drain budget is real time: on a slow host (ThreadSanitizer, clean-clone run 20) it cut
   // this pump short after 94 datagrams. The rate limit is what is tested: a budget no host reaches.
-  p.responder = std::make_unique<ResponderSession>(
+  p.responder = std::make_unique<ResponderLinkSession>(
       p.key, PacketType::kPeer, p.network.end(0),
       WelcomePayload{.rate_hz = 1.0, .session_timeout_ns = 500 * kMs, .command_timeout_ns = 10 * kMs},
-      SessionTiming{.drain_budget_ns = 60'000'000'000});
+      LinkSessionTiming{.drain_budget_ns = 60'000'000'000});
   p.initiator.connect(p.now);
   p.ticks(5);
   PacketBuffer buffer{};

@@ -1,4 +1,4 @@
-#include "hattr/wire/session.hpp"
+#include "hattr/wire/link_session.hpp"
 
 #include <sodium.h>
 
@@ -16,13 +16,13 @@ constexpr std::size_t kCookieInputSize = 4 + 2 + kNonceSize + 8;
 
 }  // namespace
 
-// ---- Session: what both ends share ----------------------------------------------------------
+// ---- LinkSession: what both ends share ----------------------------------------------------------
 
-Session::Session(const AuthKey& shared, Role role, PacketType data_in, DatagramLink& link, const SessionTiming& timing)
+LinkSession::LinkSession(const AuthKey& shared, Role role, PacketType data_in, DatagramLink& link, const LinkSessionTiming& timing)
     : keys_(directionKeys(shared, role)), link_(link), timing_(timing), data_in_(data_in) {}
 
 // Everything waiting, within the budget; then the session's timeout.
-void Session::pump(std::int64_t now_ns) noexcept {
+void LinkSession::pump(std::int64_t now_ns) noexcept {
   const std::int64_t started = monotonicNs();
   handshakes_this_pump_ = 0;
   Received rx;
@@ -41,7 +41,7 @@ void Session::pump(std::int64_t now_ns) noexcept {
 
 // The checks, cheapest first: size and header, the type this end takes, then (for a session
 // packet) its session and sender before the MAC, the MAC and the values, the sequence.
-void Session::receive(const Received& rx, std::int64_t now_ns) noexcept {
+void LinkSession::receive(const Received& rx, std::int64_t now_ns) noexcept {
   if (rx.size > rx_buffer_.size()) {
     drops_.count(DropReason::kBadSize);
     return;
@@ -94,7 +94,7 @@ void Session::receive(const Received& rx, std::int64_t now_ns) noexcept {
   bump(data_received_);
 }
 
-bool Session::takeData(Packet& out, std::int64_t& arrival_ns) noexcept {
+bool LinkSession::takeData(Packet& out, std::int64_t& arrival_ns) noexcept {
   if (!fresh_) return false;
   fresh_ = false;
   out = newest_;
@@ -102,19 +102,19 @@ bool Session::takeData(Packet& out, std::int64_t& arrival_ns) noexcept {
   return true;
 }
 
-bool Session::send(const Payload& payload, std::int64_t now_ns) noexcept {
+bool LinkSession::send(const Payload& payload, std::int64_t now_ns) noexcept {
   if (!live_) return false;
   sendPacket({{.session_id = id_, .sequence = nextSequence(), .sender_time_ns = now_ns}, payload}, peer_, now_ns);
   return true;
 }
 
-void Session::close(std::int64_t now_ns) noexcept {
+void LinkSession::close(std::int64_t now_ns) noexcept {
   if (!live_) return;
   (void)send(ByePayload{}, now_ns);
   end();
 }
 
-void Session::open(std::uint64_t id, const UdpEndpoint& peer, std::int64_t now_ns) noexcept {
+void LinkSession::open(std::uint64_t id, const UdpEndpoint& peer, std::int64_t now_ns) noexcept {
   id_ = id;
   peer_ = peer;
   lost_before_ += received_.lost();
@@ -128,7 +128,7 @@ void Session::open(std::uint64_t id, const UdpEndpoint& peer, std::int64_t now_n
   sessions_.fetch_add(1, std::memory_order_acq_rel);
 }
 
-void Session::end() noexcept {
+void LinkSession::end() noexcept {
   live_ = false;
   confirmed_ = false;
   fresh_ = false;
@@ -136,13 +136,13 @@ void Session::end() noexcept {
   onEnded();
 }
 
-void Session::sendPacket(const Packet& packet, const UdpEndpoint& to, std::int64_t now_ns) noexcept {
+void LinkSession::sendPacket(const Packet& packet, const UdpEndpoint& to, std::int64_t now_ns) noexcept {
   const std::size_t size = encodePacket(packet, keys_.send, tx_buffer_);
   (void)link_.send(now_ns, std::span(tx_buffer_.data(), size), to);
 }
 
-SessionStats Session::stats() const noexcept {
-  SessionStats s;
+LinkSessionStats LinkSession::stats() const noexcept {
+  LinkSessionStats s;
   s.sessions = sessions_.load(std::memory_order_relaxed);
   s.timeouts = timeouts_.load(std::memory_order_relaxed);
   s.byes_received = byes_.load(std::memory_order_relaxed);
@@ -154,15 +154,15 @@ SessionStats Session::stats() const noexcept {
   return s;
 }
 
-// ---- InitiatorSession -----------------------------------------------------------------------
+// ---- InitiatorLinkSession -----------------------------------------------------------------------
 
-InitiatorSession::InitiatorSession(const AuthKey& shared, PacketType data_in, DatagramLink& link,
-                                   const UdpEndpoint& responder, const SessionTiming& timing)
-    : Session(shared, Role::kInitiator, data_in, link, timing) {
+InitiatorLinkSession::InitiatorLinkSession(const AuthKey& shared, PacketType data_in, DatagramLink& link,
+                                   const UdpEndpoint& responder, const LinkSessionTiming& timing)
+    : LinkSession(shared, Role::kInitiator, data_in, link, timing) {
   peer_ = responder;
 }
 
-void InitiatorSession::connect(std::int64_t now_ns) noexcept {
+void InitiatorLinkSession::connect(std::int64_t now_ns) noexcept {
   random_.fill(nonce_);
   cookie_.fill(0);
   attempting_ = true;
@@ -170,23 +170,23 @@ void InitiatorSession::connect(std::int64_t now_ns) noexcept {
   sayHello(now_ns);
 }
 
-void InitiatorSession::sayHello(std::int64_t now_ns) noexcept {
+void InitiatorLinkSession::sayHello(std::int64_t now_ns) noexcept {
   last_hello_ns_ = now_ns;
   sendPacket({{.session_id = 0, .sequence = 0, .sender_time_ns = now_ns}, HelloPayload{nonce_, cookie_}}, peer_, now_ns);
 }
 
-void InitiatorSession::afterDrain(std::int64_t now_ns, bool went_silent) noexcept {
+void InitiatorLinkSession::afterDrain(std::int64_t now_ns, bool went_silent) noexcept {
   if (went_silent) setState(State::kSilent);
   // An attempt under way says HELLO again until it is answered.
   if (attempting_ && now_ns - last_hello_ns_ >= timing_.hello_retry_ns) sayHello(now_ns);
 }
 
-bool InitiatorSession::isHandshake(PacketType type) const noexcept {
+bool InitiatorLinkSession::isHandshake(PacketType type) const noexcept {
   return type == PacketType::kWelcome || type == PacketType::kCookie || type == PacketType::kBusy;
 }
 
 // Answers to the attempt under way only: its nonce, from the responder.
-void InitiatorSession::onHandshake(const Packet& packet, const Received& rx, std::int64_t now_ns) noexcept {
+void InitiatorLinkSession::onHandshake(const Packet& packet, const Received& rx, std::int64_t now_ns) noexcept {
   const auto nonceOf = [](const Payload& p) -> const Nonce& {
     if (const auto* w = std::get_if<WelcomePayload>(&p)) return w->nonce;
     if (const auto* c = std::get_if<CookiePayload>(&p)) return c->nonce;
@@ -225,11 +225,11 @@ void InitiatorSession::onHandshake(const Packet& packet, const Received& rx, std
   }
 }
 
-// ---- ResponderSession -----------------------------------------------------------------------
+// ---- ResponderLinkSession -----------------------------------------------------------------------
 
-ResponderSession::ResponderSession(const AuthKey& shared, PacketType data_in, DatagramLink& link,
-                                   const WelcomePayload& offer, const SessionTiming& timing)
-    : Session(shared, Role::kResponder, data_in, link, timing), offer_(offer) {
+ResponderLinkSession::ResponderLinkSession(const AuthKey& shared, PacketType data_in, DatagramLink& link,
+                                   const WelcomePayload& offer, const LinkSessionTiming& timing)
+    : LinkSession(shared, Role::kResponder, data_in, link, timing), offer_(offer) {
   std::array<std::uint8_t, kKeySize> secret{};
   random_.fill(secret);
   cookie_secret_ = AuthKey(secret);
@@ -238,7 +238,7 @@ ResponderSession::ResponderSession(const AuthKey& shared, PacketType data_in, Da
 
 // The cookie: a MAC of the initiator's address, its nonce and the epoch under a secret only
 // this responder knows (new at every start), cut to 16 bytes. Nothing is stored.
-Cookie ResponderSession::cookieFor(const UdpEndpoint& from, const Nonce& nonce, std::int64_t epoch) const noexcept {
+Cookie ResponderLinkSession::cookieFor(const UdpEndpoint& from, const Nonce& nonce, std::int64_t epoch) const noexcept {
   std::array<std::uint8_t, kCookieInputSize> input{};
   for (int i = 0; i < 4; ++i) input[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(from.address >> (8 * i));
   input[4] = static_cast<std::uint8_t>(from.port);
@@ -255,7 +255,7 @@ Cookie ResponderSession::cookieFor(const UdpEndpoint& from, const Nonce& nonce, 
 }
 
 // Good in the epoch it was made and the next.
-bool ResponderSession::cookieValid(const HelloPayload& hello, const UdpEndpoint& from, std::int64_t now_ns) const noexcept {
+bool ResponderLinkSession::cookieValid(const HelloPayload& hello, const UdpEndpoint& from, std::int64_t now_ns) const noexcept {
   const std::int64_t epoch = now_ns / kCookieEpochNs;
   for (const std::int64_t e : {epoch, epoch - 1}) {
     const Cookie expected = cookieFor(from, hello.nonce, e);
@@ -264,25 +264,25 @@ bool ResponderSession::cookieValid(const HelloPayload& hello, const UdpEndpoint&
   return false;
 }
 
-bool ResponderSession::remembered(const Nonce& nonce, std::int64_t now_ns) const noexcept {
+bool ResponderLinkSession::remembered(const Nonce& nonce, std::int64_t now_ns) const noexcept {
   return std::any_of(nonces_.begin(), nonces_.end(), [&](const Remembered& r) {
     return r.used && now_ns - r.opened_ns < 2 * kCookieEpochNs && r.nonce == nonce;
   });
 }
 
-bool ResponderSession::roomToRemember(std::int64_t now_ns) const noexcept {
+bool ResponderLinkSession::roomToRemember(std::int64_t now_ns) const noexcept {
   const Remembered& slot = nonces_[next_slot_];
   return !slot.used || now_ns - slot.opened_ns >= 2 * kCookieEpochNs;
 }
 
-void ResponderSession::refuse(const Nonce& nonce, const UdpEndpoint& to, std::int64_t now_ns) noexcept {
+void ResponderLinkSession::refuse(const Nonce& nonce, const UdpEndpoint& to, std::int64_t now_ns) noexcept {
   // Counted before the answer: an initiator that has read it sees the count.
   bump(busy_);
   drops_.count(DropReason::kBusy);
   sendPacket({{.session_id = 0, .sequence = 0, .sender_time_ns = now_ns}, BusyPayload{nonce}}, to, now_ns);
 }
 
-void ResponderSession::sendWelcome(std::int64_t now_ns) noexcept {
+void ResponderLinkSession::sendWelcome(std::int64_t now_ns) noexcept {
   WelcomePayload welcome = offer_;
   welcome.nonce = nonce_;
   sendPacket({{.session_id = id_, .sequence = nextSequence(), .sender_time_ns = now_ns}, welcome}, peer_, now_ns);
@@ -292,7 +292,7 @@ void ResponderSession::sendWelcome(std::int64_t now_ns) noexcept {
 // retried one of the live, unconfirmed session its WELCOME again; a nonce already used is a
 // replay; another initiator while a session is live gets BUSY; otherwise a new session (also
 // the same initiator starting over).
-void ResponderSession::onHandshake(const Packet& packet, const Received& rx, std::int64_t now_ns) noexcept {
+void ResponderLinkSession::onHandshake(const Packet& packet, const Received& rx, std::int64_t now_ns) noexcept {
   const auto& hello = std::get<HelloPayload>(packet.payload);
   if (!cookieValid(hello, rx.from, now_ns)) {
     bump(cookies_);

@@ -1,5 +1,6 @@
 #pragma once
-/// The one implementation of the wire protocol's sessions (docs/protocol.md): the handshake,
+/// The one implementation of the wire protocol's link sessions (docs/protocol.md; "link
+/// session" beside a study's sessions and the study store's tables): the handshake,
 /// the session rules and the checks every received datagram passes, for the three roles that
 /// speak it. The initiator (the udp:// client, the mentoring follower) says HELLO; the
 /// responder (the device server, the mentoring leader) answers with a stateless COOKIE, then
@@ -24,7 +25,7 @@
 namespace hattr::wire {
 
 /// The times a session keeps [ns].
-struct SessionTiming {
+struct LinkSessionTiming {
   std::int64_t session_timeout_ns = 500'000'000;  ///< a session silent this long is over
   std::int64_t hello_retry_ns = 100'000'000;      ///< the initiator says HELLO again while unanswered
   /// A pump stops reading after this much work (real time) and leaves the rest for the next
@@ -45,7 +46,7 @@ inline constexpr int kMaxHandshakesPerPump = 4;
 inline constexpr std::size_t kNonceMemory = 64;
 
 /// What one end of a session did. A snapshot of plain numbers.
-struct SessionStats {
+struct LinkSessionStats {
   std::uint64_t sessions = 0;        ///< sessions opened
   std::uint64_t timeouts = 0;        ///< sessions ended by silence
   std::uint64_t byes_received = 0;   ///< sessions the other side ended
@@ -53,15 +54,15 @@ struct SessionStats {
   std::uint64_t cookies = 0;         ///< responder: COOKIEs sent; initiator: COOKIEs received
   std::uint64_t data_received = 0;   ///< authentic data packets of a live session accepted
   std::uint64_t data_lost = 0;       ///< gaps in their sequence, over all sessions
-  std::array<std::uint64_t, kDropReasonCount> drops{};  ///< by DropReason
+  DropCounts drops{};                ///< datagrams dropped, by DropReason
 };
 
 /// What the two ends share: the data path, the checks, the counters.
-class Session {
+class LinkSession {
  public:
-  Session(const Session&) = delete;
-  Session& operator=(const Session&) = delete;
-  virtual ~Session() = default;
+  LinkSession(const LinkSession&) = delete;
+  LinkSession& operator=(const LinkSession&) = delete;
+  virtual ~LinkSession() = default;
 
   /// Reads what has arrived (within the drain budget), runs the handshake, keeps the newest
   /// authentic data packet, and ends a session silent for the session timeout.
@@ -83,7 +84,7 @@ class Session {
   [[nodiscard]] std::int64_t lastHeard_ns() const noexcept { return last_heard_ns_; }
   /// The other side's address (the responder's, or the live session's initiator).
   [[nodiscard]] const UdpEndpoint& peer() const noexcept { return peer_; }
-  [[nodiscard]] SessionStats stats() const noexcept;
+  [[nodiscard]] LinkSessionStats stats() const noexcept;
   /// Sessions the other side ended with a BYE (any thread; cheaper than stats() on a tick).
   [[nodiscard]] std::uint64_t byesReceived() const noexcept { return byes_.load(std::memory_order_relaxed); }
   /// Responder: HELLOs refused with BUSY; initiator: BUSYs received (any thread).
@@ -92,7 +93,7 @@ class Session {
   void countDrop(DropReason reason) noexcept { drops_.count(reason); }
 
  protected:
-  Session(const AuthKey& shared, Role role, PacketType data_in, DatagramLink& link, const SessionTiming& timing);
+  LinkSession(const AuthKey& shared, Role role, PacketType data_in, DatagramLink& link, const LinkSessionTiming& timing);
 
   /// A handshake packet (authentic, of a type this end's role takes) arrived.
   virtual void onHandshake(const Packet& packet, const Received& rx, std::int64_t now_ns) noexcept = 0;
@@ -116,7 +117,7 @@ class Session {
 
   DirectionKeys keys_;
   DatagramLink& link_;
-  SessionTiming timing_;
+  LinkSessionTiming timing_;
   RandomStream random_;
   DropCounters drops_;
   bool live_ = false;
@@ -152,7 +153,7 @@ class Session {
 };
 
 /// The end that says HELLO: the udp:// client (data in: STATE) and the mentoring follower (PEER).
-class InitiatorSession final : public Session {
+class InitiatorLinkSession final : public LinkSession {
  public:
   enum class State : int {
     kIdle,        ///< no session, no attempt
@@ -164,8 +165,8 @@ class InitiatorSession final : public Session {
   };
 
   /// Throws hattr::Error if libsodium cannot start.
-  InitiatorSession(const AuthKey& shared, PacketType data_in, DatagramLink& link, const UdpEndpoint& responder,
-                   const SessionTiming& timing);
+  InitiatorLinkSession(const AuthKey& shared, PacketType data_in, DatagramLink& link, const UdpEndpoint& responder,
+                   const LinkSessionTiming& timing);
 
   /// A new attempt: a fresh nonce, HELLO now and again every hello_retry until answered. A
   /// live session stays usable until the new one is welcomed.
@@ -195,12 +196,12 @@ class InitiatorSession final : public Session {
 
 /// The end that answers: the device server (data in: COMMAND) and the mentoring leader (PEER).
 /// One session at a time; another initiator is answered BUSY while it is live.
-class ResponderSession final : public Session {
+class ResponderLinkSession final : public LinkSession {
  public:
   /// `offer`: what each WELCOME says besides the nonce (rate, timeouts, capabilities, limits).
   /// Throws hattr::Error if libsodium cannot start.
-  ResponderSession(const AuthKey& shared, PacketType data_in, DatagramLink& link, const WelcomePayload& offer,
-                   const SessionTiming& timing);
+  ResponderLinkSession(const AuthKey& shared, PacketType data_in, DatagramLink& link, const WelcomePayload& offer,
+                   const LinkSessionTiming& timing);
 
  private:
   struct Remembered {

@@ -1,0 +1,51 @@
+#include "hattr/ops/trial_run.hpp"
+
+#include <fmt/format.h>
+
+#include "hattr/device/hand.hpp"
+#include "hattr/guidance/strategy_catalog.hpp"
+#include "hattr/ops/json.hpp"
+#include "hattr/session/trial_physics.hpp"
+
+namespace hattr::ops {
+
+nlohmann::json ScriptedTrialResult::toJson() const {
+  nlohmann::json json = profileSummaryJson(trial.profile);
+  json["clamps"] = trial.clamps;
+  json["missed_samples"] = trial.missed_samples;
+  json["overruns"] = trial.overruns;
+  json["faults"] = trial.faults;
+  json["link_faults"] = trial.link_faults;
+  json["stalls"] = trial.stalls;
+  json["clock"] = trial.clock;
+  json["end_reason"] = trial.end_reason;
+  json["physical_events"] = physicalEventsJson(trial.physics);
+  json["disturbed"] = disturbed;
+  return json;
+}
+
+ScriptedTrialResult runScriptedTrial(ScriptedTrialRun run) {
+  device::ProfileHandScript hand(run.hand);
+  session::TrialEnvironment environment(run.device, std::move(run.world), run.options.rate_hz);
+  const bool training = run.reference.has_value();
+  if (training) {
+    // A reference or a hand script the device cannot render is refused before the trial
+    // (issue 38); a recording keeps any hand script: it records what happens, and marks it.
+    const auto named = [](const std::string& what, const std::string& file) {
+      return file.empty() ? what : fmt::format("{} {}", what, file);
+    };
+    session::checkRenderable(*run.reference, environment.limits(), named(run.reference_what, run.options.reference_label));
+    session::checkRenderable(run.hand, environment.limits(), named(run.hand_what, run.options.hand_label));
+    run.options.expert = &*run.reference;
+  } else {
+    run.options.expert = nullptr;
+  }
+  const session::TrialSetup setup = session::scriptedTrialSetup(hand, run.hand, run.options);
+  ScriptedTrialResult result;
+  result.trial = session::runTrial(environment, setup, hand);
+  result.disturbed = session::disturbanceOf(result.trial);
+  result.mode = training ? std::string(guidance::modeName(setup.guidance.mode)) : std::string("expert");
+  return result;
+}
+
+}  // namespace hattr::ops
