@@ -38,11 +38,14 @@ extern "C" void onStopSignal(int signal_number) { g_stop_signal = signal_number;
 
 // Serves until SIGINT/SIGTERM (or --seconds), then prints what happened.
 void runServe(const ServeOptions& opt) {
-  struct sigaction action {};
-  action.sa_handler = onStopSignal;
-  sigemptyset(&action.sa_mask);
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
+  // SIGINT/SIGTERM stop the server once it serves (during the set-up they end the process).
+  const auto catchStopSignals = [] {
+    struct sigaction action {};
+    action.sa_handler = onStopSignal;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGINT, &action, nullptr);
+    sigaction(SIGTERM, &action, nullptr);
+  };
   // Sessions opening and ending are said on stderr (stdout stays the report).
   const ops::DeviceServeResult served = ops::serveDevice(
       {.device = opt.device,
@@ -53,7 +56,11 @@ void runServe(const ServeOptions& opt) {
        .session_timeout_s = opt.session_timeout_ms * 1e-3,
        .realtime = {.policy = servo::parseRealtimePolicy(opt.realtime), .cpu = opt.cpu},
        .seconds = opt.seconds,
-       .listening = [](const std::string& endpoint) { std::cout << "listening on " << endpoint << std::endl; },
+       .listening =
+           [&](const std::string& endpoint) {
+             catchStopSignals();
+             std::cout << "listening on " << endpoint << std::endl;
+           },
        .session_opened = [](std::uint64_t n) { std::cerr << fmt::format("hattr: session {} opened", n) << std::endl; },
        .session_ended = [] { std::cerr << "hattr: session ended" << std::endl; },
        .stop_requested = [] { return g_stop_signal != 0; }});

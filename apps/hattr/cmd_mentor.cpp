@@ -103,7 +103,7 @@ nlohmann::json keepSession(const MentorOptions& opt, int number, net::MentorRole
                              outcome.failure.empty() ? "" : "; failed: " + outcome.failure)
               << std::flush;
   }
-  nlohmann::json json = ops::mentorSessionJson(outcome);
+  nlohmann::json json = outcome.toJson();
   json["file"] = file;
   json["failure"] = failure;
   return json;
@@ -114,7 +114,6 @@ nlohmann::json keepSession(const MentorOptions& opt, int number, net::MentorRole
 // study's next trial).
 void runStation(const MentorOptions& opt, net::MentorRole role) {
   const bool serving = role == net::MentorRole::kLeader && opt.sessions != 1;
-  checkRecordOptions(opt, serving);
   // The simulated hand (if any) waits, lifted, until both stations are linked.
   std::optional<HapticProfile> script;
   std::unique_ptr<device::ProfileHandScript> script_hand;
@@ -128,6 +127,7 @@ void runStation(const MentorOptions& opt, net::MentorRole role) {
                              .deadband = opt.deadband, .device_uri = opt.device, .wait_s = serving ? -1.0 : opt.wait_s,
                              .listen_what = "--listen", .connect_what = "--connect", .key_what = "--key"},
                             script_hand.get(), ops::MentorStationRun::HandStart::kHeldUntilLinked);
+  checkRecordOptions(opt, serving);  // after the key, the address and the port: nothing made for a station that cannot run
   for (const auto& c : run.station().clamps()) std::cerr << "hattr: clamped: " << c << '\n';
   std::signal(SIGINT, onMentorStop);
   std::signal(SIGTERM, onMentorStop);
@@ -152,7 +152,7 @@ void runStation(const MentorOptions& opt, net::MentorRole role) {
     ops::MentorSessionOutcome outcome = run.takeSession();
     if (first_failure.empty()) first_failure = outcome.failure;
     sessions.push_back(keepSession(opt, number, role, outcome));
-    if (!serving) break;
+    if (!serving || run.loopStopped()) break;
   }
   run.close();
 

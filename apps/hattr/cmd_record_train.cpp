@@ -78,9 +78,10 @@ void addCommonOptions(CLI::App& cmd, TrialOptions& opt) {
 
 void runTrialCommand(const TrialOptions& opt, bool training) {
   checkOutputFiles({opt.output}, opt.force);  // before the trial: a recording is never left unwritable
+  HapticProfile hand = io::readProfileCsv(opt.hand);  // the hand script first, then the world
   ops::ScriptedTrialRun run{.device = opt.device,
                             .world = worldConfigOrDefault(opt.world),
-                            .hand = io::readProfileCsv(opt.hand),
+                            .hand = std::move(hand),
                             .reference = {},
                             .options = {.rate_hz = opt.rate_hz,
                                         .tail_s = opt.tail_s,

@@ -154,11 +154,19 @@ void bindSimulateStudy(py::module_& m) {
 void bindPowerAnalysis(py::module_& m) {
   m.def(
       "power_analysis",
-      [](const std::optional<std::filesystem::path>& study, const std::string& glyph, int trials,
-         const std::vector<int>& subjects, int replicates, std::uint64_t seed, double alpha, int threads,
-         const std::string& phase, const std::string& hypothesis) {
-        const sim::PowerOptions options{.study = study.value_or(std::filesystem::path()), .glyph = glyph,
-                                        .training_trials = trials, .recall_trials = trials, .subject_counts = subjects,
+      [](const std::optional<std::filesystem::path>& study, const std::optional<std::string>& glyph,
+         const std::optional<int> trials, const std::vector<int>& subjects, int replicates, std::uint64_t seed,
+         double alpha, int threads, const std::string& phase, const std::string& hypothesis) {
+        // As `hattr sim power`: glyph and trials are the paper's study's; a study file has its own.
+        HATTR_THROW_UNLESS(!study || (!glyph && !trials),
+                           "power_analysis: glyph and trials are the paper's study's; the study file {} has its own",
+                           study ? study->string() : "");
+        HATTR_THROW_UNLESS(!trials || (*trials >= 2 && *trials <= 50),
+                           "power_analysis: trials: expected 2 to 50 training and recall trials per mode, got {}",
+                           trials.value_or(0));
+        const sim::PowerOptions options{.study = study.value_or(std::filesystem::path()), .glyph = glyph.value_or("na"),
+                                        .training_trials = trials.value_or(11), .recall_trials = trials.value_or(11),
+                                        .subject_counts = subjects,
                                         .replicates = replicates, .seed = seed, .alpha = alpha, .threads = threads,
                                         .phase = phase, .hypothesis = hypothesis};
         nlohmann::json json;
@@ -168,14 +176,15 @@ void bindPowerAnalysis(py::module_& m) {
         }
         return toPython(json);
       },
-      py::arg("study") = py::none(), py::kw_only(), py::arg("glyph") = "na", py::arg("trials") = 11,
+      py::arg("study") = py::none(), py::kw_only(), py::arg("glyph") = py::none(), py::arg("trials") = py::none(),
       py::arg("subjects") = std::vector<int>{6, 10, 20, 40}, py::arg("replicates") = 200, py::arg("seed") = 1,
       py::arg("alpha") = 0.05, py::arg("threads") = 2, py::arg("phase") = "", py::arg("hypothesis") = "",
       "A power analysis as `hattr sim power --json` prints it (one process): `replicates` simulated studies "
       "of each number of subjects in `subjects`, each analyzed as its design says, and the share that finds "
       "the difference at `alpha`. study: a study file whose subjects are simulated (None: the paper's study "
-      "in silico, with `glyph` and `trials` training and recall trials per mode); phase: a design's phase to "
-      "compare; hypothesis: a learning hypothesis for every subject. Releases the GIL.");
+      "in silico, with `glyph` (default 'na') and `trials` training and recall trials per mode, 2 to 50, default "
+      "11); phase: a design's phase to compare; hypothesis: a learning hypothesis for every subject; threads: "
+      "subjects simulated at once. Releases the GIL.");
 }
 
 }  // namespace

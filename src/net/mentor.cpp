@@ -178,10 +178,10 @@ MentorCoupling::Impl::Impl(const MentorConfig& config, wire::DatagramLink& link)
   config_.validate();
   if (config_.role == MentorRole::kLeader) {
     session_ = std::make_unique<wire::ResponderLinkSession>(config_.key, wire::PacketType::kPeer, link,
-                                                        leaderOffer(config_), mentorTiming(config_));
+                                                            leaderOffer(config_), mentorTiming(config_));
   } else {
     auto follower = std::make_unique<wire::InitiatorLinkSession>(config_.key, wire::PacketType::kPeer, link,
-                                                             config_.leader, mentorTiming(config_));
+                                                                 config_.leader, mentorTiming(config_));
     initiator_ = follower.get();
     session_ = std::move(follower);
   }

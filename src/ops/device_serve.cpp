@@ -33,8 +33,8 @@ DeviceServeResult serveDevice(const DeviceServeOptions& options) {
   config.listen = options.listen;
   config.key = wire::readKeyFile(options.key_file);
   config.rate_hz = options.rate_hz;
-  config.command_timeout = std::chrono::nanoseconds(static_cast<std::int64_t>(options.command_timeout_s * 1e9));
-  config.session_timeout = std::chrono::nanoseconds(static_cast<std::int64_t>(options.session_timeout_s * 1e9));
+  config.command_timeout = std::chrono::round<std::chrono::nanoseconds>(std::chrono::duration<double>(options.command_timeout_s));
+  config.session_timeout = std::chrono::round<std::chrono::nanoseconds>(std::chrono::duration<double>(options.session_timeout_s));
   config.realtime = options.realtime;
   net::DeviceServer server(config);
   server.start();

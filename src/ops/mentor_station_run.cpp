@@ -22,7 +22,8 @@ bool isLeader(const MentorStationOptions& options) { return options.role == net:
 
 MentorSetup mentorSetupFor(const MentorStationOptions& options) {
   HATTR_THROW_UNLESS(std::isfinite(options.wait_s) && (options.wait_s < 0.0 || (options.wait_s >= 0.1 && options.wait_s <= 3600.0)),
-                     "wait for the other station: expected [0.1, 3600] s, got {}", options.wait_s);
+                     "wait for the other station: expected [0.1, 3600] s (or below 0: without limit), got {}",
+                     options.wait_s);
   MentorSetup setup;
   net::MentorConfig& mentor = setup.mentor;
   mentor.role = options.role;
@@ -43,9 +44,9 @@ MentorSetup mentorSetupFor(const MentorStationOptions& options) {
   return setup;
 }
 
-nlohmann::json mentorSessionJson(const MentorSessionOutcome& outcome) {
-  const net::MentorStats& s = outcome.stats;
-  return {{"samples", outcome.recording.size()},
+nlohmann::json MentorSessionOutcome::toJson() const {
+  const net::MentorStats& s = stats;
+  return {{"samples", recording.size()},
           {"peers_received", s.peers_received},
           {"peers_sent", s.peers_sent},
           {"peers_withheld", s.peers_withheld},
@@ -57,12 +58,11 @@ nlohmann::json mentorSessionJson(const MentorSessionOutcome& outcome) {
           {"energy_out_J", s.energy_out_J},
           {"dissipated_J", s.dissipated_J},
           {"rtt_ms", s.rtt_s * 1e3},
-          {"failure", outcome.failure}};
+          {"failure", failure}};
 }
 
 MentorStationRun::MentorStationRun(const MentorStationOptions& options, device::HandScript* hand, HandStart start)
-    : options_(options),
-      setup_(mentorSetupFor(options)),
+    : setup_(mentorSetupFor(options)),
       watch_({.wait_s = options.wait_s, .give_up_s = options.give_up_s, .leader_address = options.address},
              setup_.mentor, Clock::now()) {
   // A follower's socket is connected to its leader: the kernel delivers only the leader's datagrams.
@@ -137,11 +137,13 @@ MentorSessionOutcome MentorStationRun::takeSession() {
 }
 
 void MentorStationRun::nextSession(Clock::time_point now) {
-  // Ready for the next follower: the hand lifted and rewound, a fresh recording.
+  HATTR_DEMAND(!closed_ && !loop_stopped_, "nextSession() on a station whose loop has stopped");
+  // Ready for the next follower: the hand lifted and rewound, a fresh recording (the recorder's
+  // thread stopped first, whether or not takeSession() stopped it).
+  station_->recorder().stopThread();
   if (held_) held_->hold();
   station_->newRecording();
   station_->recorder().startThread();
-  loop_stopped_ = false;
   watch_.restart(now, station_->coupling().stats());
 }
 

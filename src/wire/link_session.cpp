@@ -16,9 +16,10 @@ constexpr std::size_t kCookieInputSize = 4 + 2 + kNonceSize + 8;
 
 }  // namespace
 
-// ---- LinkSession: what both ends share ----------------------------------------------------------
+// ---- LinkSession: what both ends share ------------------------------------------------------
 
-LinkSession::LinkSession(const AuthKey& shared, Role role, PacketType data_in, DatagramLink& link, const LinkSessionTiming& timing)
+LinkSession::LinkSession(const AuthKey& shared, Role role, PacketType data_in, DatagramLink& link,
+                         const LinkSessionTiming& timing)
     : keys_(directionKeys(shared, role)), link_(link), timing_(timing), data_in_(data_in) {}
 
 // Everything waiting, within the budget; then the session's timeout.
@@ -154,10 +155,10 @@ LinkSessionStats LinkSession::stats() const noexcept {
   return s;
 }
 
-// ---- InitiatorLinkSession -----------------------------------------------------------------------
+// ---- InitiatorLinkSession -------------------------------------------------------------------
 
 InitiatorLinkSession::InitiatorLinkSession(const AuthKey& shared, PacketType data_in, DatagramLink& link,
-                                   const UdpEndpoint& responder, const LinkSessionTiming& timing)
+                                           const UdpEndpoint& responder, const LinkSessionTiming& timing)
     : LinkSession(shared, Role::kInitiator, data_in, link, timing) {
   peer_ = responder;
 }
@@ -225,10 +226,10 @@ void InitiatorLinkSession::onHandshake(const Packet& packet, const Received& rx,
   }
 }
 
-// ---- ResponderLinkSession -----------------------------------------------------------------------
+// ---- ResponderLinkSession -------------------------------------------------------------------
 
 ResponderLinkSession::ResponderLinkSession(const AuthKey& shared, PacketType data_in, DatagramLink& link,
-                                   const WelcomePayload& offer, const LinkSessionTiming& timing)
+                                           const WelcomePayload& offer, const LinkSessionTiming& timing)
     : LinkSession(shared, Role::kResponder, data_in, link, timing), offer_(offer) {
   std::array<std::uint8_t, kKeySize> secret{};
   random_.fill(secret);

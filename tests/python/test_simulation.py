@@ -128,3 +128,5 @@ def test_a_power_analysis_through_python_equals_the_clis():
     assert mine == theirs
     with pytest.raises(hattr.InputError, match="subject"):
         hattr.power_analysis(subjects=[1], replicates=2, trials=2)
+    with pytest.raises(hattr.InputError, match="expected 2 to 50"):
+        hattr.power_analysis(subjects=[3], replicates=2, trials=1)

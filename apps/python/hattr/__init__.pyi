@@ -242,7 +242,7 @@ def simulate_study(out_dir: _Path, *, subjects: int = ..., seed: int = ..., trai
                    recall_trials: int = ..., guidance: bool = ..., glyph: str = ...,
                    write_report: bool = ...) -> _SimulatedStudy: ...
 
-def power_analysis(study: _Path | None = ..., *, glyph: str = ..., trials: int = ..., subjects: Sequence[int] = ...,
+def power_analysis(study: _Path | None = ..., *, glyph: str | None = ..., trials: int | None = ..., subjects: Sequence[int] = ...,
                    replicates: int = ..., seed: int = ..., alpha: float = ..., threads: int = ..., phase: str = ...,
                    hypothesis: str = ...) -> dict[str, Any]: ...
 def servo_check(device: str = ..., *, rate_hz: float = ..., seconds: float = ..., world: _Path | None = ...,

@@ -65,12 +65,11 @@ struct MentorSessionOutcome {
   net::MentorStats stats;      ///< the session's own figures (net::statsSince)
   std::string failure;         ///< "" for a normal end (a goodbye, the time up, stopped)
   bool ended_by_other = false; ///< the other station said goodbye
+  /// The session's figures as `hattr mentor --json` prints them: samples, peers_received,
+  /// peers_sent, peers_withheld, lost, link_faults, busy_refusals, drops, energy_in_J,
+  /// energy_out_J, dissipated_J, rtt_ms, failure (the caller adds the file it wrote).
+  [[nodiscard]] nlohmann::json toJson() const;
 };
-
-/// The session's figures as `hattr mentor --json` prints them: samples, peers_received,
-/// peers_sent, peers_withheld, lost, link_faults, busy_refusals, drops, energy_in_J,
-/// energy_out_J, dissipated_J, rtt_ms, failure (the caller adds the file it wrote).
-nlohmann::json mentorSessionJson(const MentorSessionOutcome& outcome);
 
 class MentorStationRun {
  public:
@@ -101,6 +100,8 @@ class MentorStationRun {
   [[nodiscard]] bool ended() const noexcept { return watch_.phase() == net::LinkPhase::kEnded; }
   /// Why the session ended: "" for a normal end; "the servo loop stopped" when the loop did.
   [[nodiscard]] std::string failure() const { return loop_stopped_ ? "the servo loop stopped" : watch_.failure(); }
+  /// The station's servo loop has stopped by itself: no next session can run.
+  [[nodiscard]] bool loopStopped() const noexcept { return loop_stopped_; }
   /// The loop time of the station's newest sample [s].
   [[nodiscard]] double loopTime();
 
@@ -112,13 +113,13 @@ class MentorStationRun {
   /// The session is over: hands over its recording (what the loop published before now) and
   /// its figures. The loop runs on, for the next session.
   MentorSessionOutcome takeSession();
-  /// Ready for the next follower: the hand lifted and rewound, a fresh recording, the wait from now.
+  /// Ready for the next follower: the hand lifted and rewound, a fresh recording, the wait from
+  /// now. After takeSession(); not once the loop stopped (loopStopped()).
   void nextSession(Clock::time_point now);
   /// Stops the loop and the recorder, says goodbye to the other station. Idempotent.
   void close();
 
  private:
-  MentorStationOptions options_;
   MentorSetup setup_;
   std::string where_;
   std::unique_ptr<net::HeldHand> held_;

@@ -54,7 +54,8 @@ enum class LoopClock : std::uint8_t {
 };
 std::string_view loopClockName(LoopClock clock) noexcept;
 
-/// Counters readable from any thread while the loop runs, each only ever counted up.
+/// Counters readable from any thread while the loop runs: the counts only ever go up;
+/// `disconnected` is the device's state now.
 struct LiveCounters {
   std::atomic<std::uint64_t> ticks{0};            ///< ticks run (published after the tick's sample is in the ring)
   std::atomic<std::uint64_t> overruns{0};         ///< ticks that ended past the next deadline (real time, device clock)

@@ -45,7 +45,7 @@ inline constexpr int kMaxHandshakesPerPump = 4;
 /// with that many opened within two epochs, it refuses more with BUSY until one ages out.
 inline constexpr std::size_t kNonceMemory = 64;
 
-/// What one end of a session did. A snapshot of plain numbers.
+/// What one end of a link session did. A snapshot of plain numbers.
 struct LinkSessionStats {
   std::uint64_t sessions = 0;        ///< sessions opened
   std::uint64_t timeouts = 0;        ///< sessions ended by silence
@@ -166,7 +166,7 @@ class InitiatorLinkSession final : public LinkSession {
 
   /// Throws hattr::Error if libsodium cannot start.
   InitiatorLinkSession(const AuthKey& shared, PacketType data_in, DatagramLink& link, const UdpEndpoint& responder,
-                   const LinkSessionTiming& timing);
+                       const LinkSessionTiming& timing);
 
   /// A new attempt: a fresh nonce, HELLO now and again every hello_retry until answered. A
   /// live session stays usable until the new one is welcomed.
@@ -201,7 +201,7 @@ class ResponderLinkSession final : public LinkSession {
   /// `offer`: what each WELCOME says besides the nonce (rate, timeouts, capabilities, limits).
   /// Throws hattr::Error if libsodium cannot start.
   ResponderLinkSession(const AuthKey& shared, PacketType data_in, DatagramLink& link, const WelcomePayload& offer,
-                   const LinkSessionTiming& timing);
+                       const LinkSessionTiming& timing);
 
  private:
   struct Remembered {
