@@ -12,6 +12,7 @@
 #include "hattr/analysis/trial_score.hpp"
 #include "hattr/analysis/preprocess.hpp"
 #include "hattr/core/error.hpp"
+#include "hattr/core/text_file.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/io/table_csv.hpp"
 
@@ -117,11 +118,10 @@ void runAnova(const AnovaCommandOptions& opt) {
                                   table.numbers(opt.response)};
   const analysis::AnovaOptions options{.b_random = !opt.random.empty()};
   const analysis::AnovaTable anova = analysis::twoWayAnova(data, options);
-  const auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   nlohmann::json rows = nlohmann::json::array();
   for (const auto& r : anova.rows) {
-    rows.push_back({{"source", r.source}, {"df", r.df}, {"ss", r.sum_sq}, {"ms", r.mean_sq}, {"f", number(r.f)},
-                    {"p", number(r.p)}, {"partial_eta_sq", number(r.partial_eta_sq)}, {"error_term", r.error_term}});
+    rows.push_back({{"source", r.source}, {"df", r.df}, {"ss", r.sum_sq}, {"ms", r.mean_sq}, {"f", jsonNumber(r.f)},
+                    {"p", jsonNumber(r.p)}, {"partial_eta_sq", jsonNumber(r.partial_eta_sq)}, {"error_term", r.error_term}});
   }
   nlohmann::json json = {{"file", opt.file}, {"response", opt.response}, {"replicates", anova.replicates}, {"rows", rows},
                          {"random", opt.random.empty() ? nlohmann::json(nullptr) : nlohmann::json(opt.random)}};

@@ -16,7 +16,7 @@
 namespace hattr::cli {
 namespace {
 
-struct CompareOptions {
+struct HypothesesOptions {
   std::string hypotheses = "position-plan,force-plan,guidance-dependent";
   int subjects = 10;
   int trials = 11;
@@ -54,7 +54,7 @@ std::vector<sim::LearningHypothesis> parseHypothesisList(const std::string& text
 double modeP(const report::MetricResult& metric) { return metric.overall.row("mode").p; }
 
 /// Runs the paper's study and the A/A studies of one hypothesis; `studies_done` counts studies.
-HypothesisResult runHypothesis(const CompareOptions& o, sim::LearningHypothesis h, Progress& progress, int& studies_done) {
+HypothesisResult runHypothesis(const HypothesesOptions& o, sim::LearningHypothesis h, Progress& progress, int& studies_done) {
   const std::string name(sim::hypothesisName(h));
   const auto within = [&progress, &studies_done](std::string_view stage, int done, int total) {
     if (stage == "trials" && total > 0) progress.update(studies_done + static_cast<double>(done) / total);
@@ -86,7 +86,7 @@ HypothesisResult runHypothesis(const CompareOptions& o, sim::LearningHypothesis 
   return result;
 }
 
-nlohmann::json toJson(const CompareOptions& o, const std::vector<HypothesisResult>& results) {
+nlohmann::json toJson(const HypothesesOptions& o, const std::vector<HypothesisResult>& results) {
   nlohmann::json hypotheses = nlohmann::json::array();
   for (const auto& r : results) {
     nlohmann::json points = nlohmann::json::array();
@@ -123,7 +123,7 @@ std::string cut(const std::string& text, std::size_t width) {
 }
 
 /// The table: one row per point of the paper, one column per hypothesis.
-void printTable(const CompareOptions& o, const std::vector<HypothesisResult>& results) {
+void printTable(const HypothesesOptions& o, const std::vector<HypothesisResult>& results) {
   std::cout << fmt::format("The paper's study under each learning hypothesis ({} subjects, {}+{} trials per mode, "
                            "seed {}; a point agrees when the study reaches the paper's statement at α = 0.05):\n\n",
                            o.subjects, o.trials, o.trials, o.seed);
@@ -152,7 +152,7 @@ void printTable(const CompareOptions& o, const std::vector<HypothesisResult>& re
   });
 }
 
-void runCompare(const CompareOptions& o) {
+void runHypotheses(const HypothesesOptions& o) {
   const auto hypotheses = parseHypothesisList(o.hypotheses);
   const int studies = static_cast<int>(hypotheses.size()) * (1 + o.aa_seeds);
   Progress progress("hypotheses", studies, "studies");
@@ -168,7 +168,7 @@ void runCompare(const CompareOptions& o) {
 }  // namespace
 
 void registerHypothesisCommands(CLI::App& sim) {
-  auto o = std::make_shared<CompareOptions>();
+  auto o = std::make_shared<HypothesesOptions>();
   auto* cmd = sim.add_subcommand("compare-hypotheses",
                                  "Run the paper's study under each learning hypothesis: which of the paper's findings "
                                  "each reproduces, with an A/A check per hypothesis");
@@ -189,7 +189,7 @@ void registerHypothesisCommands(CLI::App& sim) {
   cmd->add_flag("--json", o->json, "Print JSON: hypotheses [{hypothesis, agrees, differs, p_mode_trajectory, "
                                    "p_mode_force, aa {seeds, significant_trajectory, significant_force, p_mode_trajectory, "
                                    "p_mode_force}, points [{point, source, paper, hattr, agreement}]}]");
-  cmd->callback([o] { runCompare(*o); });
+  cmd->callback([o] { runHypotheses(*o); });
 }
 
 }  // namespace hattr::cli

@@ -16,7 +16,7 @@
 namespace hattr::cli {
 namespace {
 
-struct CompareOptions {
+struct StrategiesOptions {
   std::string strategies;  // empty: every strategy that is not mentored
   std::string hypotheses = "position-plan,force-plan,guidance-dependent";
   std::string design = "groups-retention";
@@ -82,7 +82,7 @@ void printTable(const sim::StrategyComparison& c) {
   }
 }
 
-void runCompare(const CompareOptions& o) {
+void runStrategies(const StrategiesOptions& o) {
   sim::StrategyComparisonOptions options{.study = o.study, .design = o.design, .subjects = o.subjects,
                                          .max_trials = o.trials, .seed = o.seed, .aa_seeds = o.aa_seeds,
                                          .threads = o.threads};
@@ -104,7 +104,7 @@ void runCompare(const CompareOptions& o) {
 }  // namespace
 
 void registerStrategyComparisonCommand(CLI::App& sim) {
-  auto o = std::make_shared<CompareOptions>();
+  auto o = std::make_shared<StrategiesOptions>();
   auto* cmd = sim.add_subcommand("compare-strategies",
                                  "Run one design under each training strategy (a group each) and learning hypothesis: "
                                  "each phase's outcome per strategy, with an A/A check");
@@ -131,7 +131,7 @@ void registerStrategyComparisonCommand(CLI::App& sim) {
   cmd->add_flag("--json", o->json, "Print JSON: {design, subjects, seed, aa_seeds, alpha, strategies, hypotheses "
                                    "[{hypothesis, phases [{phase, skill, p_shape, p_force, aa {significant_shape, "
                                    "significant_force}, strategies [{strategy, shape {subjects, mean, ci}, force}]}]}]}");
-  cmd->callback([o] { runCompare(*o); });
+  cmd->callback([o] { runStrategies(*o); });
 }
 
 }  // namespace hattr::cli

@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "hattr/core/error.hpp"
+#include "hattr/core/text_file.hpp"
 
 namespace hattr::analysis {
 namespace {
@@ -235,19 +236,18 @@ const std::vector<const char*>& kinematicsNames() {
 }
 
 nlohmann::json toJson(const TrialKinematics& k) {
-  const auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
-  return nlohmann::json{{"duration_s", number(k.duration_s)},
-                        {"writing_time_s", number(k.writing_time_s)},
-                        {"in_air_time_s", number(k.in_air_time_s)},
+  return nlohmann::json{{"duration_s", jsonNumber(k.duration_s)},
+                        {"writing_time_s", jsonNumber(k.writing_time_s)},
+                        {"in_air_time_s", jsonNumber(k.in_air_time_s)},
                         {"strokes", k.strokes},
                         {"pen_lifts", k.pen_lifts},
-                        {"path_length_m", number(k.path_length_m)},
-                        {"mean_speed_m_per_s", number(k.mean_speed_m_per_s)},
-                        {"peak_speed_m_per_s", number(k.peak_speed_m_per_s)},
+                        {"path_length_m", jsonNumber(k.path_length_m)},
+                        {"mean_speed_m_per_s", jsonNumber(k.mean_speed_m_per_s)},
+                        {"peak_speed_m_per_s", jsonNumber(k.peak_speed_m_per_s)},
                         {"velocity_peaks", k.velocity_peaks},
-                        {"normalized_jerk", number(k.normalized_jerk)},
-                        {"mean_normal_force_N", number(k.mean_normal_force_N)},
-                        {"peak_normal_force_N", number(k.peak_normal_force_N)}};
+                        {"normalized_jerk", jsonNumber(k.normalized_jerk)},
+                        {"mean_normal_force_N", jsonNumber(k.mean_normal_force_N)},
+                        {"peak_normal_force_N", jsonNumber(k.peak_normal_force_N)}};
 }
 
 }  // namespace hattr::analysis

@@ -10,6 +10,7 @@
 #include <boost/math/distributions/students_t.hpp>
 
 #include "hattr/core/error.hpp"
+#include "hattr/core/text_file.hpp"
 
 namespace hattr::analysis {
 namespace {
@@ -194,14 +195,13 @@ CurveFit fitLearningCurve(const std::vector<double>& n, const std::vector<double
 }
 
 nlohmann::json toJson(const CurveFit& fit) {
-  const auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   const auto parameter = [&](const CurveParameter& p) {
-    return nlohmann::json{{"estimate", number(p.estimate)}, {"std_error", number(p.std_error)},
-                          {"lower", number(p.lower)}, {"upper", number(p.upper)}};
+    return nlohmann::json{{"estimate", jsonNumber(p.estimate)}, {"std_error", jsonNumber(p.std_error)},
+                          {"lower", jsonNumber(p.lower)}, {"upper", jsonNumber(p.upper)}};
   };
   return {{"law", curveLawName(fit.law)},        {"asymptote", parameter(fit.asymptote)},
           {"amplitude", parameter(fit.amplitude)}, {"rate", parameter(fit.rate)},
-          {"rss", number(fit.rss)},                {"sigma", number(fit.sigma)},
+          {"rss", jsonNumber(fit.rss)},                {"sigma", jsonNumber(fit.sigma)},
           {"points", fit.points},                  {"confidence", fit.confidence},
           {"note", fit.note}};
 }

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/core/text_file.hpp"
 #include "lmm_model.hpp"
 
 namespace hattr::analysis {
@@ -408,7 +409,6 @@ void flagSingularity(const Model& m, const Eigen::VectorXd& theta, LmmFit& fit) 
   }
 }
 
-nlohmann::json number(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
 
 }  // namespace
 
@@ -523,24 +523,24 @@ std::vector<LikelihoodRatioTest> compareLmms(const DataTable& data, const std::v
 nlohmann::json toJson(const LmmFit& fit) {
   nlohmann::json fixed = nlohmann::json::array();
   for (const LmmCoefficient& c : fit.fixed) {
-    fixed.push_back({{"name", c.name}, {"estimate", number(c.estimate)}, {"std_error", number(c.std_error)},
-                     {"df", number(c.df)}, {"t", number(c.t)}, {"p", number(c.p)},
-                     {"lower", number(c.lower)}, {"upper", number(c.upper)}});
+    fixed.push_back({{"name", c.name}, {"estimate", jsonNumber(c.estimate)}, {"std_error", jsonNumber(c.std_error)},
+                     {"df", jsonNumber(c.df)}, {"t", jsonNumber(c.t)}, {"p", jsonNumber(c.p)},
+                     {"lower", jsonNumber(c.lower)}, {"upper", jsonNumber(c.upper)}});
   }
   nlohmann::json terms = nlohmann::json::array();
   for (const LmmTermTest& t : fit.terms) {
-    terms.push_back({{"term", t.term}, {"num_df", number(t.num_df)}, {"den_df", number(t.den_df)}, {"f", number(t.f)},
-                     {"p", number(t.p)}});
+    terms.push_back({{"term", t.term}, {"num_df", jsonNumber(t.num_df)}, {"den_df", jsonNumber(t.den_df)}, {"f", jsonNumber(t.f)},
+                     {"p", jsonNumber(t.p)}});
   }
   nlohmann::json variances = nlohmann::json::array();
   for (const LmmVarianceComponent& v : fit.variances) {
     nlohmann::json row = {{"group", v.group}, {"effect", v.effect}};
     if (v.other.empty()) {
-      row["std_dev"] = number(v.value);
-      row["variance"] = number(v.value * v.value);
+      row["std_dev"] = jsonNumber(v.value);
+      row["variance"] = jsonNumber(v.value * v.value);
     } else {
       row["with"] = v.other;
-      row["correlation"] = number(v.value);
+      row["correlation"] = jsonNumber(v.value);
     }
     variances.push_back(row);
   }
@@ -548,14 +548,14 @@ nlohmann::json toJson(const LmmFit& fit) {
   for (const LmmGroup& g : fit.groups) groups.push_back({{"name", g.name}, {"levels", g.levels}});
   return {{"formula", fit.formula}, {"response", fit.response}, {"method", fit.reml ? "REML" : "ML"},
           {"observations", fit.observations}, {"groups", groups}, {"fixed_effects", fixed}, {"terms", terms},
-          {"random_effects", variances}, {"sigma", number(fit.sigma)}, {"theta", fit.theta},
-          {fit.reml ? "reml_criterion" : "deviance", number(fit.criterion)}, {"log_likelihood", number(fit.log_likelihood)},
-          {"aic", number(fit.aic)}, {"bic", number(fit.bic)}, {"parameters", fit.parameters}, {"singular", fit.singular},
+          {"random_effects", variances}, {"sigma", jsonNumber(fit.sigma)}, {"theta", fit.theta},
+          {fit.reml ? "reml_criterion" : "deviance", jsonNumber(fit.criterion)}, {"log_likelihood", jsonNumber(fit.log_likelihood)},
+          {"aic", jsonNumber(fit.aic)}, {"bic", jsonNumber(fit.bic)}, {"parameters", fit.parameters}, {"singular", fit.singular},
           {"warnings", fit.warnings}, {"evaluations", fit.evaluations}, {"df_method", "Satterthwaite"}};
 }
 
 nlohmann::json toJson(const LikelihoodRatioTest& t) {
-  return {{"smaller", t.smaller}, {"larger", t.larger}, {"chi_sq", number(t.chi_sq)}, {"df", t.df}, {"p", number(t.p)}};
+  return {{"smaller", t.smaller}, {"larger", t.larger}, {"chi_sq", jsonNumber(t.chi_sq)}, {"df", t.df}, {"p", jsonNumber(t.p)}};
 }
 
 }  // namespace hattr::analysis

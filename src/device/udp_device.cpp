@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/core/units.hpp"
 #include "hattr/wire/datagram_link.hpp"
 #include "hattr/wire/link_session.hpp"
 
@@ -151,7 +152,7 @@ UdpDevice::Impl::Impl(const UdpDeviceParams& params, std::string uri_text, HandS
     : params_(params),
       uri_(std::move(uri_text)),
       hand_(hand),
-      hold_ns_(static_cast<std::int64_t>(std::llround(params.hold_s * 1e9))),
+      hold_ns_(units::secondsToNanoseconds(params.hold_s)),
       link_(wire::UdpSocket::connected(params.server), wire::UdpDatagramLink::Clock::kMonotonic),
       session_(wire::readKeyFile(params.key_file), wire::PacketType::kState, link_, params.server, clientTiming()) {}
 
@@ -160,7 +161,7 @@ UdpDevice::Impl::Impl(const UdpDeviceParams& params, std::string uri_text, HandS
 void UdpDevice::Impl::handshake() {
   const std::string where = fmt::format("udp://{}", params_.server.text());
   const std::int64_t start = wire::monotonicNs();
-  const std::int64_t deadline = start + static_cast<std::int64_t>(std::llround(params_.handshake_timeout_s * 1e9));
+  const std::int64_t deadline = start + units::secondsToNanoseconds(params_.handshake_timeout_s);
   session_.connect(start);
   std::int64_t next_command = start;
   for (std::int64_t now = start; now < deadline && state_arrival_ns_ < 0; now = wire::monotonicNs()) {

@@ -9,7 +9,9 @@
 #include "hattr/wire/link_session.hpp"
 
 namespace hattr::net {
-namespace {
+// Named, not anonymous: DeviceServer::Impl holds these, and a class with external linkage may
+// not hold types of an anonymous namespace when the file is compiled in a unity batch.
+namespace server_parts {
 
 constexpr double kLiftHeight_m = 0.003;   // a released hand holds the pen at least this high
 
@@ -107,7 +109,7 @@ wire::LinkSessionTiming timingOf(const DeviceServerConfig& config, const servo::
   return timing;
 }
 
-}  // namespace
+}  // namespace server_parts
 
 /// The server's stage in its own servo loop: network in, STATE out, the client's force back.
 /// The session itself (handshake, checks, timeouts) is wire::ResponderLinkSession's.
@@ -116,13 +118,13 @@ class DeviceServer::Impl final : public GuidanceController {
   explicit Impl(DeviceServerConfig config)
       : config_(std::move(config)),
         served_(device::openDevice(config_.device_uri, &hand_)),
-        loop_(served_, servo::ServoConfig{.rate_hz = rateFor(config_, served_),
+        loop_(served_, servo::ServoConfig{.rate_hz = server_parts::rateFor(config_, served_),
                                           .realtime = config_.realtime,
                                           .sample_ring_capacity = 1024}),
         link_(wire::UdpSocket::bound(wire::parseUdpEndpoint(config_.listen, "device server --listen", 0)),
               wire::UdpDatagramLink::Clock::kMonotonic),
-        session_(checkedKey(config_), wire::PacketType::kCommand, link_, offerOf(config_, served_, loop_),
-                 timingOf(config_, loop_)) {
+        session_(checkedKey(config_), wire::PacketType::kCommand, link_, server_parts::offerOf(config_, served_, loop_),
+                 server_parts::timingOf(config_, loop_)) {
     loop_.setGuidance(this);
   }
 
@@ -135,8 +137,8 @@ class DeviceServer::Impl final : public GuidanceController {
   }
 
   DeviceServerConfig config_;
-  RemoteHand hand_;
-  ServedDevice served_;
+  server_parts::RemoteHand hand_;
+  server_parts::ServedDevice served_;
   servo::ServoLoop loop_;
   wire::UdpDatagramLink link_;
   wire::ResponderLinkSession session_;
@@ -152,7 +154,7 @@ class DeviceServer::Impl final : public GuidanceController {
   std::uint64_t command_sequence_ = 0;
 
   // Readable from any thread.
-  AtomicVec3 commanded_;
+  server_parts::AtomicVec3 commanded_;
   std::atomic<std::uint64_t> command_timeouts_{0};
   std::atomic<std::uint64_t> states_sent_{0};
 

@@ -6,11 +6,11 @@
 #include <limits>
 
 #include "hattr/core/error.hpp"
+#include "hattr/core/units.hpp"
 
 namespace hattr::net {
 namespace {
 
-std::int64_t toNs(double seconds) noexcept { return static_cast<std::int64_t>(std::llround(seconds * 1e9)); }
 
 }  // namespace
 
@@ -63,11 +63,11 @@ void LinkEmulator::send(std::span<const std::uint8_t> datagram, std::int64_t now
     ++stats_.lost;
     return;
   }
-  const std::int64_t due = now_ns + toNs(conditions_.delay_s + jitter + (held_back ? conditions_.reorder_extra_s : 0.0));
+  const std::int64_t due = now_ns + units::secondsToNanoseconds(conditions_.delay_s + jitter + (held_back ? conditions_.reorder_extra_s : 0.0));
   enqueue(datagram, due, order);
   if (duplicated) {
     ++stats_.duplicated;
-    enqueue(datagram, due + toNs(second_jitter), order);
+    enqueue(datagram, due + units::secondsToNanoseconds(second_jitter), order);
   }
 }
 

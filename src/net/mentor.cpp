@@ -6,14 +6,13 @@
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/core/units.hpp"
 #include "hattr/wire/link_session.hpp"
 
 namespace hattr::net {
 namespace {
 
 constexpr double kPi = 3.141592653589793;
-
-std::int64_t toNs(double seconds) noexcept { return static_cast<std::int64_t>(std::llround(seconds * 1e9)); }
 
 /// Only the paper plane: the person keeps the pen's height and pressure.
 Vec3 inPlane(const Vec3& v) noexcept { return {v.x(), v.y(), 0.0}; }
@@ -157,8 +156,8 @@ namespace {
 
 wire::LinkSessionTiming mentorTiming(const MentorConfig& config) {
   wire::LinkSessionTiming timing;
-  timing.session_timeout_ns = toNs(config.session_timeout_s);
-  timing.hello_retry_ns = toNs(config.hello_interval_s);
+  timing.session_timeout_ns = units::secondsToNanoseconds(config.session_timeout_s);
+  timing.hello_retry_ns = units::secondsToNanoseconds(config.hello_interval_s);
   return timing;
 }
 
@@ -167,8 +166,8 @@ wire::LinkSessionTiming mentorTiming(const MentorConfig& config) {
 wire::WelcomePayload leaderOffer(const MentorConfig& config) {
   wire::WelcomePayload offer;
   offer.rate_hz = 1.0;
-  offer.session_timeout_ns = toNs(config.session_timeout_s);
-  offer.command_timeout_ns = toNs(config.hold_s);
+  offer.session_timeout_ns = units::secondsToNanoseconds(config.session_timeout_s);
+  offer.command_timeout_ns = units::secondsToNanoseconds(config.hold_s);
   return offer;
 }
 
@@ -211,7 +210,7 @@ void MentorCoupling::Impl::followSession(std::int64_t now_ns) noexcept {
   }
   using State = wire::InitiatorLinkSession::State;
   if (!session_->live() && initiator_->state() != State::kConnecting &&
-      (initiator_->lastHello_ns() == 0 || now_ns - initiator_->lastHello_ns() >= toNs(config_.hello_interval_s))) {
+      (initiator_->lastHello_ns() == 0 || now_ns - initiator_->lastHello_ns() >= units::secondsToNanoseconds(config_.hello_interval_s))) {
     initiator_->connect(now_ns);
   }
 }
@@ -275,13 +274,13 @@ Vec3 MentorCoupling::Impl::passive(const Vec3& force, const Vec3& v_WT, double d
 }
 
 Vec3 MentorCoupling::Impl::compute(const PenState& pen, const ContactForces& contact, double dt_s) noexcept {
-  const std::int64_t now_ns = toNs(pen.t_s);
+  const std::int64_t now_ns = units::secondsToNanoseconds(pen.t_s);
   session_->pump(now_ns);
   followSession(now_ns);
   takePeer(now_ns);
 
   // The link: fresh PEERs; a lost link zeroes the force at once and fades in when back.
-  const bool up = session_->live() && have_other_ && now_ns - other_arrival_ns_ <= toNs(config_.hold_s);
+  const bool up = session_->live() && have_other_ && now_ns - other_arrival_ns_ <= units::secondsToNanoseconds(config_.hold_s);
   if (link_up_ && !up) bump(link_faults_);
   link_up_ = up;
   Vec3 force = Vec3::Zero();
@@ -367,7 +366,7 @@ const MentorConfig& MentorCoupling::config() const noexcept { return impl_->conf
 // or the heartbeat that keeps the link up.
 bool MentorCoupling::Impl::worthSending(const wire::PeerPayload& out, std::int64_t now_ns) const noexcept {
   if (config_.deadband <= 0.0 || !have_sent_) return true;
-  if (now_ns - last_sent_ns_ >= toNs(config_.heartbeat_s)) return true;
+  if (now_ns - last_sent_ns_ >= units::secondsToNanoseconds(config_.heartbeat_s)) return true;
   if (out.flags != last_sent_.flags || out.coupling != last_sent_.coupling) return true;
   const auto beyondWeber = [k = config_.deadband](const Vec3& now, const Vec3& sent) {
     return (now - sent).norm() > k * sent.norm();

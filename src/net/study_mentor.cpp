@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/core/units.hpp"
 #include "hattr/net/mentor_station.hpp"
 
 namespace hattr::net {
@@ -122,7 +123,7 @@ class SimulatedStudyMentor final : public session::LiveGuidance {
 
   std::map<std::string, std::string> endTrial(session::TrialResult& result) override {
     HATTR_DEMAND(follower_ != nullptr, "endTrial() without beginTrial()");
-    follower_->close(static_cast<std::int64_t>(std::llround(stage_->lastTime_s() * 1e9)));
+    follower_->close(units::secondsToNanoseconds(stage_->lastTime_s()));
     const MentorStats s = follower_->stats();
     // The trainee's side ends each trial's session; a goodbye heard means the expert left mid-trial.
     result.mentor_link_faults += s.link_faults + s.goodbyes_received;

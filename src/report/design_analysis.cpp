@@ -116,7 +116,7 @@ std::vector<DesignTrialScore> completedTrials(const session::StudyDatabase& db, 
 
 /// A trial's kinematics as stored with it (SubjectTrials::measure), else measured now.
 std::map<std::string, double> kinematicsOf(const HapticProfile& profile) {
-  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  constexpr double kMissing = std::numeric_limits<double>::quiet_NaN();
   std::map<std::string, double> out;
   const auto& extra = profile.metadata().extra;
   for (const char* name : analysis::kinematicsNames()) {
@@ -127,11 +127,11 @@ std::map<std::string, double> kinematicsOf(const HapticProfile& profile) {
     }
     char* end = nullptr;
     const double v = std::strtod(it->second.c_str(), &end);
-    out[name] = it->second == "NA" || end == it->second.c_str() ? kNaN : v;
+    out[name] = it->second == "NA" || end == it->second.c_str() ? kMissing : v;
   }
   if (!out.empty()) return out;
   const nlohmann::json k = analysis::toJson(analysis::trialKinematics(profile));
-  for (const char* name : analysis::kinematicsNames()) out[name] = k.at(name).is_null() ? kNaN : k.at(name).get<double>();
+  for (const char* name : analysis::kinematicsNames()) out[name] = k.at(name).is_null() ? kMissing : k.at(name).get<double>();
   return out;
 }
 

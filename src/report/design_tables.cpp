@@ -14,21 +14,21 @@
 #include <fmt/format.h>
 
 #include "hattr/analysis/kinematics.hpp"
+#include "hattr/core/text_file.hpp"
 #include "hattr/io/table_csv.hpp"
 
 namespace hattr::report {
 namespace {
 
-nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 nlohmann::json kinematicsJson(const std::map<std::string, double>& k) {
   nlohmann::json out = nlohmann::json::object();
-  for (const auto& [name, v] : k) out[name] = number(v);
+  for (const auto& [name, v] : k) out[name] = jsonNumber(v);
   return out;
 }
 
 nlohmann::json meanJson(const SubjectMean& m) {
-  return {{"subjects", m.subjects}, {"mean", number(m.mean)}, {"ci95", number(m.ci)}};
+  return {{"subjects", m.subjects}, {"mean", jsonNumber(m.mean)}, {"ci95", jsonNumber(m.ci)}};
 }
 
 /// A number as a CSV cell (empty when not finite).
@@ -191,13 +191,13 @@ nlohmann::json designAnalysisToJson(const DesignAnalysis& a) {
   }
   for (const LearnerRow& r : a.learner) {
     learner.push_back({{"condition", r.condition}, {"phase", r.phase}, {"skill", r.skill}, {"trials", r.trials},
-                       {"first", number(r.first)}, {"best", number(r.best)}, {"best_trial", r.best_trial},
-                       {"latest", number(r.latest)}, {"mean", number(r.mean)}});
+                       {"first", jsonNumber(r.first)}, {"best", jsonNumber(r.best)}, {"best_trial", r.best_trial},
+                       {"latest", jsonNumber(r.latest)}, {"mean", jsonNumber(r.mean)}});
   }
   nlohmann::json subject_scores = nlohmann::json::array();
   for (const SubjectScore& x : a.subject_scores) {
     subject_scores.push_back({{"subject", x.subject}, {"condition", x.condition}, {"skill", x.skill}, {"score", x.score},
-                              {"shape", number(x.shape)}, {"force", number(x.force)}});
+                              {"shape", jsonNumber(x.shape)}, {"force", jsonNumber(x.force)}});
   }
   const char* design = a.subjects == 1 ? "one-learner" : a.paper_design ? "paper-incomplete" : "groups-and-sessions";
   return {{"design", design}, {"analysis", a.reason}, {"subjects", a.subjects},

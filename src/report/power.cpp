@@ -27,8 +27,7 @@ std::size_t metricSize(const PowerPlan& plan) { return 2 + plan.pairs().size(); 
 bool significant(double p, double alpha) { return std::isfinite(p) && p < alpha; }
 
 /// JSON keeps NaN as null; doubles otherwise round-trip exactly (17 significant digits).
-nlohmann::json exactNumber(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
-double exactNumber(const nlohmann::json& v) { return v.is_null() ? kNaN : v.get<double>(); }
+double numberOrNaN(const nlohmann::json& v) { return v.is_null() ? kNaN : v.get<double>(); }
 
 nlohmann::json planToJson(const PowerPlan& plan) {
   return {{"study", plan.study},   {"modes", plan.modes}, {"subject_counts", plan.subject_counts},
@@ -170,7 +169,7 @@ nlohmann::json powerShardToJson(const PowerPlan& plan, int shard, int shards, co
     std::vector<double> flat;
     encodeOutcome(o, flat);
     nlohmann::json values = nlohmann::json::array();
-    for (std::size_t i = 1; i < flat.size(); ++i) values.push_back(exactNumber(flat[i]));
+    for (std::size_t i = 1; i < flat.size(); ++i) values.push_back(numberOrNaN(flat[i]));
     replicates.push_back({{"replicate", o.replicate}, {"values", values}});
   }
   return {{"hattr_power_shard", kShardFormat}, {"shard", shard}, {"shards", shards}, {"plan", planToJson(plan)},
@@ -204,7 +203,7 @@ PowerTable mergePowerShards(const std::vector<std::filesystem::path>& files) {
                            "{}: replicate {}: expected a whole number from 0 to {}", where, index.dump(),
                            plan->replicates - 1);
         std::vector<double> flat{index.get<double>()};
-        for (const auto& v : entry.at("values")) flat.push_back(exactNumber(v));
+        for (const auto& v : entry.at("values")) flat.push_back(numberOrNaN(v));
         HATTR_THROW_UNLESS(flat.size() == encodedOutcomeSize(*plan), "{}: replicate {}: {} values, expected {}", where,
                            entry.at("replicate").dump(), flat.size() - 1, encodedOutcomeSize(*plan) - 1);
         ReplicateOutcome o = decodeOutcome(*plan, flat);
@@ -231,7 +230,7 @@ nlohmann::json powerTableToJson(const PowerTable& table) {
     nlohmann::json pairs = nlohmann::json::object();
     for (const auto& p : r.pairs) pairs[p.pair] = proportionJson(p.power);
     nlohmann::json row = {{"subjects", r.subjects}, {"metric", r.metric}, {"mode_effect", proportionJson(r.power)},
-                          {"mean_partial_eta_sq", exactNumber(r.mean_partial_eta_sq)}, {"tukey", pairs}};
+                          {"mean_partial_eta_sq", jsonNumber(r.mean_partial_eta_sq)}, {"tukey", pairs}};
     rows.push_back(row);
   }
   return {{"plan", planToJson(table.plan)}, {"rows", rows}};

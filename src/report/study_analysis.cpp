@@ -9,6 +9,7 @@
 
 #include "hattr/analysis/dtw.hpp"
 #include "hattr/core/error.hpp"
+#include "hattr/core/text_file.hpp"
 #include "hattr/io/table_csv.hpp"
 
 namespace hattr::report {
@@ -221,13 +222,12 @@ StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptio
 
 namespace {
 
-nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 nlohmann::json anovaJson(const analysis::AnovaTable& t) {
   nlohmann::json rows = nlohmann::json::array();
   for (const auto& r : t.rows) {
-    rows.push_back({{"source", r.source}, {"df", r.df}, {"ss", r.sum_sq}, {"ms", r.mean_sq}, {"f", number(r.f)},
-                    {"p", number(r.p)}, {"partial_eta_sq", number(r.partial_eta_sq)}, {"error_term", r.error_term}});
+    rows.push_back({{"source", r.source}, {"df", r.df}, {"ss", r.sum_sq}, {"ms", r.mean_sq}, {"f", jsonNumber(r.f)},
+                    {"p", jsonNumber(r.p)}, {"partial_eta_sq", jsonNumber(r.partial_eta_sq)}, {"error_term", r.error_term}});
   }
   return rows;
 }
@@ -237,10 +237,10 @@ nlohmann::json metricJson(const MetricResult& m) {
   for (const auto& [mode, table] : m.per_mode) per_mode[mode] = anovaJson(table);
   nlohmann::json stats = nlohmann::json::object();
   for (const auto& g : m.per_mode_stats) {
-    stats[g.a_level] = {{"n", g.stats.count}, {"mean", g.stats.mean}, {"variance", number(g.stats.variance)},
-                        {"sd", number(g.stats.sd)}};
+    stats[g.a_level] = {{"n", g.stats.count}, {"mean", g.stats.mean}, {"variance", jsonNumber(g.stats.variance)},
+                        {"sd", jsonNumber(g.stats.sd)}};
   }
-  for (const auto& v : m.inter_subject) stats[v.level]["inter_subject_variance"] = number(v.variance);
+  for (const auto& v : m.inter_subject) stats[v.level]["inter_subject_variance"] = jsonNumber(v.variance);
   nlohmann::json tukey = nullptr;
   if (m.tukey) {
     tukey = nlohmann::json::array();
@@ -273,7 +273,7 @@ nlohmann::json analysisToJson(const StudyAnalysis& a) {
   return {{"options",
            {{"normalization", analysis::normalizationName(a.options.normalization)},
             {"cost_fn", analysis::dtwCostName(a.options.cost)},
-            {"band", number(a.options.band_fraction < 0 ? NAN : a.options.band_fraction)}}},
+            {"band", jsonNumber(a.options.band_fraction < 0 ? NAN : a.options.band_fraction)}}},
           {"analyzed_recall_trials", a.analyzed_recall_trials},
           {"disturbed_policy", a.disturbed_policy},
           {"flagged_trials", flagged},

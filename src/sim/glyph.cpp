@@ -22,20 +22,14 @@ namespace {
 
 using nlohmann::json;
 
-constexpr std::array kTopKeys{"format", "version", "name", "character", "unicode", "description", "units",
+constexpr std::array kGlyphTopKeys{"format", "version", "name", "character", "unicode", "description", "units",
                               "size_note", "shape_note", "source_note", "strokes"};
 constexpr std::array kStrokeKeys{"note", "points"};
-
-std::string keyList(const auto& keys) {
-  std::string out;
-  for (const auto* k : keys) out += (out.empty() ? "" : ", ") + std::string(k);
-  return out;
-}
 
 void checkKeys(const json& object, const auto& keys, std::string_view where) {
   for (const auto& item : object.items()) {
     const bool known = std::any_of(keys.begin(), keys.end(), [&](const char* k) { return item.key() == k; });
-    HATTR_THROW_UNLESS(known, "{}: unknown key \"{}\": expected one of {}", where, item.key(), keyList(keys));
+    HATTR_THROW_UNLESS(known, "{}: unknown key \"{}\": expected one of {}", where, item.key(), fmt::join(keys, ", "));
   }
 }
 
@@ -55,7 +49,7 @@ bool isUnicodeLabel(const std::string& text) {
 
 Glyph parseGlyph(std::string_view json_text, std::string_view source) {
   const json root = parseJsonObject(json_text, source);
-  checkKeys(root, kTopKeys, source);
+  checkKeys(root, kGlyphTopKeys, source);
 
   const auto format = root.find("format");
   HATTR_THROW_UNLESS(format != root.end() && format->is_string() && *format == "hattr-glyph",

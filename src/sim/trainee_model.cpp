@@ -68,14 +68,8 @@ constexpr std::array kSpecs{
 
 constexpr std::array kHypothesisNames{"position-plan", "force-plan", "guidance-dependent"};
 
-constexpr std::array kTopKeys{"format", "version", "hypothesis", "description", "units_note", "per_subject_note", "parameters"};
+constexpr std::array kModelTopKeys{"format", "version", "hypothesis", "description", "units_note", "per_subject_note", "parameters"};
 constexpr std::array kParameterKeys{"value", "unit", "range", "source", "per_subject", "note"};
-
-std::string keyList(const auto& keys) {
-  std::string out;
-  for (const auto& k : keys) out += (out.empty() ? "" : ", ") + std::string(k);
-  return out;
-}
 
 std::string shown(const json* value) { return value ? jsonExcerpt(*value) : std::string("nothing"); }
 
@@ -148,7 +142,7 @@ ModelParameter parseParameter(const json& item, const ParameterSpec& spec, std::
   for (const auto& field : item.items()) {
     const bool known = std::any_of(kParameterKeys.begin(), kParameterKeys.end(),
                                    [&](const char* k) { return field.key() == k; });
-    HATTR_THROW_UNLESS(known, "{}: unknown field \"{}\": expected one of {}", where, field.key(), keyList(kParameterKeys));
+    HATTR_THROW_UNLESS(known, "{}: unknown field \"{}\": expected one of {}", where, field.key(), fmt::join(kParameterKeys, ", "));
   }
   ModelParameter p;
   p.key = spec.key;
@@ -223,8 +217,8 @@ double drawValue(const ModelParameter& p, detail::NormalSource& normal) {
 TraineeModel parseTraineeModel(std::string_view json_text, std::string_view source) {
   const json root = parseJsonObject(json_text, source);
   for (const auto& item : root.items()) {
-    const bool known = std::any_of(kTopKeys.begin(), kTopKeys.end(), [&](const char* k) { return item.key() == k; });
-    HATTR_THROW_UNLESS(known, "{}: unknown key \"{}\": expected one of {}", source, item.key(), keyList(kTopKeys));
+    const bool known = std::any_of(kModelTopKeys.begin(), kModelTopKeys.end(), [&](const char* k) { return item.key() == k; });
+    HATTR_THROW_UNLESS(known, "{}: unknown key \"{}\": expected one of {}", source, item.key(), fmt::join(kModelTopKeys, ", "));
   }
   const json* format = find(root, "format");
   HATTR_THROW_UNLESS(format && format->is_string() && *format == "hattr-trainee-model",
@@ -240,7 +234,7 @@ TraineeModel parseTraineeModel(std::string_view json_text, std::string_view sour
   model.source_name = std::string(source);
   if (const json* hypothesis = find(root, "hypothesis")) {
     HATTR_THROW_UNLESS(hypothesis->is_string(), "{}: key hypothesis: expected one of {}, got {}", source,
-                       keyList(kHypothesisNames), jsonExcerpt(*hypothesis));
+                       fmt::join(kHypothesisNames, ", "), jsonExcerpt(*hypothesis));
     model.hypothesis = parseHypothesis(hypothesis->get<std::string>(), fmt::format("{}: key hypothesis", source));
   }
   const std::string_view hypothesis_name = hypothesisName(model.hypothesis);
@@ -252,7 +246,7 @@ TraineeModel parseTraineeModel(std::string_view json_text, std::string_view sour
   for (const auto& item : parameters->items()) {
     HATTR_THROW_UNLESS(std::find(names.begin(), names.end(), item.key()) != names.end(),
                        "{}: unknown parameter \"parameters.{}\" for the {} hypothesis: expected one of {}", source,
-                       item.key(), hypothesis_name, keyList(names));
+                       item.key(), hypothesis_name, fmt::join(names, ", "));
   }
   for (const auto& spec : kSpecs) {
     if ((spec.hypotheses & bitOf(model.hypothesis)) == 0) continue;
@@ -282,7 +276,7 @@ LearningHypothesis parseHypothesis(std::string_view name, std::string_view where
   for (const LearningHypothesis h : allHypotheses()) {
     if (hypothesisName(h) == name) return h;
   }
-  throw InputError(fmt::format("{}: expected one of {}, got \"{}\"", where, keyList(kHypothesisNames), name));
+  throw InputError(fmt::format("{}: expected one of {}, got \"{}\"", where, fmt::join(kHypothesisNames, ", "), name));
 }
 
 const std::vector<LearningHypothesis>& allHypotheses() {

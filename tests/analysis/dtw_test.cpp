@@ -25,8 +25,8 @@ namespace {
 
 using ::testing::HasSubstr;
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kRelTol = 1e-9;
+using test::kInf;
+constexpr double kDtwRelTol = 1e-9;
 
 std::string seedNote(std::uint64_t seed) {
   return fmt::format("seed {} (rerun with HATTR_TEST_SEED={})", seed, seed);
@@ -61,16 +61,7 @@ RandomCase randomCase(std::mt19937_64& rng, std::size_t max_len) {
 }
 
 void expectNear(double actual, double expected, const std::string& note) {
-  EXPECT_NEAR(actual, expected, kRelTol * std::max(1.0, std::abs(expected))) << note;
-}
-
-std::string thrownMessage(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no InputError)";
+  EXPECT_NEAR(actual, expected, kDtwRelTol * std::max(1.0, std::abs(expected))) << note;
 }
 
 // ---- Hand-computed and analytic values ----------------------------------------------------
@@ -123,7 +114,7 @@ TEST(DtwBandRadius, FollowsTheFractionAndCoversTheLengthDifference) {
   EXPECT_EQ(dtwBandRadius(100, 100, 0.0), 0u);
   EXPECT_EQ(dtwBandRadius(100, 100, 1.0), kNoBand);
   EXPECT_EQ(dtwBandRadius(100, 100, -0.5), kNoBand);
-  EXPECT_THAT(thrownMessage([] { (void)dtwBandRadius(3, 3, std::nan("")); }),
+  EXPECT_THAT(test::inputErrorOf([] { (void)dtwBandRadius(3, 3, std::nan("")); }),
               HasSubstr("band_fraction: expected a number"));
 }
 
@@ -312,24 +303,24 @@ TEST(Dtw, RefusesEmptyAndNonFiniteSeriesSayingWhereAndWhat) {
   const std::vector<double> ok{1.0, 2.0};
   const std::vector<double> empty;
   const std::vector<double> with_nan{1.0, 2.0, std::nan("")};
-  EXPECT_EQ(thrownMessage([&] { (void)dtwDistance(empty, ok); }),
+  EXPECT_EQ(test::inputErrorOf([&] { (void)dtwDistance(empty, ok); }),
             "dtw: series a is empty: expected at least 1 value, got 0");
-  EXPECT_EQ(thrownMessage([&] { (void)dtw(ok, with_nan, {.want_path = true}); }),
+  EXPECT_EQ(test::inputErrorOf([&] { (void)dtw(ok, with_nan, {.want_path = true}); }),
             "dtw: series b at index 2: expected a finite number, got nan");
-  EXPECT_THAT(thrownMessage([&] { (void)dtwDistance(ok, ok, {.abandon_above = std::nan("")}); }),
+  EXPECT_THAT(test::inputErrorOf([&] { (void)dtwDistance(ok, ok, {.abandon_above = std::nan("")}); }),
               HasSubstr("abandon_above: expected a number or +infinity, got NaN"));
   const std::vector<std::vector<double>> two{ok, ok};
   const std::vector<std::vector<double>> ragged{ok, {1.0}};
-  EXPECT_EQ(thrownMessage([&] { (void)dtwDependent(two, ragged); }),
+  EXPECT_EQ(test::inputErrorOf([&] { (void)dtwDependent(two, ragged); }),
             "dtwDependent: series b channel 1: expected 2 values like channel 0, got 1");
-  EXPECT_EQ(thrownMessage([&] { (void)dtwIndependent(two, std::vector<std::vector<double>>{ok}); }),
+  EXPECT_EQ(test::inputErrorOf([&] { (void)dtwIndependent(two, std::vector<std::vector<double>>{ok}); }),
             "dtwIndependent: expected the same number of channels in both series, got 2 and 1");
-  EXPECT_EQ(thrownMessage([&] { (void)dtwBatch(two, std::vector<std::vector<double>>{ok}); }),
+  EXPECT_EQ(test::inputErrorOf([&] { (void)dtwBatch(two, std::vector<std::vector<double>>{ok}); }),
             "dtwBatch: expected as many series in a as in b, got 2 and 1");
-  EXPECT_EQ(thrownMessage([&] { (void)dtwCostMatrix(two, {}, 0); }),
+  EXPECT_EQ(test::inputErrorOf([&] { (void)dtwCostMatrix(two, {}, 0); }),
             "dtwCostMatrix: threads: expected at least 1, got 0");
   const std::vector<std::vector<double>> bad_third{ok, ok, with_nan};
-  EXPECT_EQ(thrownMessage([&] { (void)dtwCostMatrix(bad_third); }),
+  EXPECT_EQ(test::inputErrorOf([&] { (void)dtwCostMatrix(bad_third); }),
             "dtwCostMatrix: series 2 at index 2: expected a finite number, got nan");
 }
 
@@ -393,7 +384,7 @@ TEST(DtwIndependent, SumsPerChannelCostsAndNeverExceedsDependentDtw) {
       sum += per_channel[c];
     }
     expectNear(dtwIndependentSum(a, b), sum, fmt::format("trial {}", trial));
-    EXPECT_LE(sum, dtwDependent(a, b).cost * (1 + kRelTol)) << trial;
+    EXPECT_LE(sum, dtwDependent(a, b).cost * (1 + kDtwRelTol)) << trial;
     // Abandoning applies to the sum.
     EXPECT_EQ(dtwIndependentSum(a, b, {.abandon_above = 0.99 * sum}), kInf) << trial;
     expectNear(dtwIndependentSum(a, b, {.abandon_above = sum}), sum,

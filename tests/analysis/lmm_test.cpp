@@ -22,6 +22,7 @@
 
 #include "analysis/lmm_model.hpp"  // internal: the deviance's two factorizations
 #include "hattr/core/error.hpp"
+#include "support/test_support.hpp"
 #include "hattr/io/table_csv.hpp"
 
 namespace hattr::analysis {
@@ -29,7 +30,7 @@ namespace {
 
 using ::testing::HasSubstr;
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+using test::kNaN;
 
 struct CoefficientRow {
   const char* name;

@@ -18,15 +18,6 @@
 namespace hattr::analysis {
 namespace {
 
-std::string thrownMessage(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no InputError)";
-}
-
 // ---- Normalization ---------------------------------------------------------------------------
 
 // mean 3.25, range 6: (x - 3.25) / 6.
@@ -177,28 +168,28 @@ TEST(PreprocessTrial, UndoesAPureChangeOfSpeed) {
 TEST(PreprocessTrial, RefusesBadSeriesSayingWhichAndWhere) {
   const std::vector<double> t{0.0, 0.1, 0.2};
   const std::vector<double> v{1.0, 2.0, 3.0};
-  EXPECT_EQ(thrownMessage([&] { (void)preprocessTrial({}, {}, t); }),
+  EXPECT_EQ(test::inputErrorOf([&] { (void)preprocessTrial({}, {}, t); }),
             "preprocessTrial: trial times: expected at least 2 time stamps, got 0");
-  EXPECT_EQ(thrownMessage([&] {
+  EXPECT_EQ(test::inputErrorOf([&] {
               (void)preprocessTrial(std::vector<double>{0.0, 0.1, 0.1}, v, t);
             }),
             "preprocessTrial: trial times[2]: expected strictly increasing time stamps, got 0.1 s "
             "after 0.1 s");
-  EXPECT_EQ(thrownMessage([&] {
+  EXPECT_EQ(test::inputErrorOf([&] {
               (void)preprocessTrial(t, std::vector<double>{1.0, 2.0}, t);
             }),
             "preprocessTrial: expected as many trial values as trial time stamps (3), got 2");
-  EXPECT_EQ(thrownMessage([&] {
+  EXPECT_EQ(test::inputErrorOf([&] {
               (void)preprocessTrial(t, std::vector<double>{1.0, std::nan(""), 3.0}, t);
             }),
             "preprocessTrial: trial values[1]: expected a finite number, got nan");
-  EXPECT_EQ(thrownMessage([&] { (void)preprocessTrial(t, v, std::vector<double>{1.0}); }),
+  EXPECT_EQ(test::inputErrorOf([&] { (void)preprocessTrial(t, v, std::vector<double>{1.0}); }),
             "preprocessTrial: expert times: expected at least 2 time stamps, got 1");
-  EXPECT_EQ(thrownMessage([&] {
+  EXPECT_EQ(test::inputErrorOf([&] {
               (void)interpolateAt(t, v, std::vector<double>{0.1, 0.25});
             }),
             "interpolateAt: query time [1]: expected a time within [0, 0.2] s, got 0.25");
-  EXPECT_EQ(thrownMessage([] { (void)normalize({}, Normalization::kPaper); }),
+  EXPECT_EQ(test::inputErrorOf([] { (void)normalize({}, Normalization::kPaper); }),
             "normalize: values: expected at least 1 value, got 0");
 }
 

@@ -40,6 +40,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -197,6 +198,8 @@ def build_script(page: Page, runnable: list[tuple[int, Block]], out_dir: Path, f
     page_line: dict[int, int] = {}
     for k, block in runnable:
         lines.append(f"echo {k} > {shlex.quote(str(out_dir / 'current'))}")
+        # Each block's start time, so the runner can say which blocks take the page's time.
+        lines.append(f"date +%s.%N > {shlex.quote(str(out_dir / f'{k}.start'))}")
         lines.append("{")
         if block.info == "python":  # the whole block is one script for the interpreter running this one
             lines.append(f"{shlex.quote(sys.executable)} - <<'__HATTR_DOC_PYTHON__'")
@@ -295,6 +298,17 @@ def tail(text: str, lines: int = 25) -> str:
     return "\n".join("    | " + l for l in text.rstrip().split("\n")[-lines:])
 
 
+def print_slow_blocks(page: Page, runnable: list[tuple[int, Block]], out_dir: Path, at_least: float = 2.0) -> None:
+    """The blocks that took at least `at_least` seconds, longest first (from each block's start
+    time to the next's, the last to now)."""
+    starts = [(b, float((out_dir / f"{k}.start").read_text())) for k, b in runnable if (out_dir / f"{k}.start").exists()]
+    ends = [t for _, t in starts[1:]] + [time.time()]
+    took = sorted(((end - start, b) for (b, start), end in zip(starts, ends)), key=lambda x: -x[0])
+    for seconds, b in took:
+        if seconds >= at_least:
+            print(f"{page.name}:{b.line}: block took {seconds:.1f} s")
+
+
 def run_page(args: argparse.Namespace) -> int:
     source = Path(args.source_dir).resolve()
     doc = source / args.page
@@ -372,6 +386,7 @@ def run_page(args: argparse.Namespace) -> int:
                     failures += mismatch
                     failures.append(f"{page.name}:{b.line}: what the block printed:\n{tail(output, 40)}")
         ran = sum(1 for _ in runnable)
+        print_slow_blocks(page, runnable, out_dir)
         print(f"{page.name}: {ran} block(s) run, {sum(1 for b in page.blocks if b.info == 'synopsis')} synopsis block(s) "
               f"checked, in {clone}")
     finally:

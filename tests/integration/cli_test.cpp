@@ -13,26 +13,15 @@
 #include <nlohmann/json.hpp>
 
 #include "hattr/io/profile_csv.hpp"
+#include "support/run_command.hpp"
 #include "support/test_support.hpp"
 
 namespace hattr {
 namespace {
 
 using ::testing::HasSubstr;
-
-struct RunResult {
-  int exit_code;
-  std::string out;
-  std::string err;
-};
-
-RunResult runHattr(const test::TempDir& dir, const std::string& args) {
-  const auto out = dir / "stdout.txt";
-  const auto err = dir / "stderr.txt";
-  const std::string command = std::string(test::builtFile("HATTR_CLI")) + " " + args + " >" + out.string() + " 2>" + err.string();
-  const int status = std::system(command.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, test::readText(out), test::readText(err)};
-}
+using test::RunResult;
+using test::runHattr;
 
 constexpr const char* kGoodProfile =
     "# subject: S1\n# skill: na\n# rate_hz: 100\n"

@@ -24,10 +24,7 @@ namespace {
 using ::testing::HasSubstr;
 
 using test::RunResult;
-
-RunResult runHattr(const test::TempDir& dir, const std::string& args, const std::string& tag = "run") {
-  return test::runCommand(dir, test::builtFile("HATTR_CLI"), args, tag);
-}
+using test::runHattr;
 
 /// `hattr device serve` in the background, its stdout on a pipe.
 class ServeProcess : public test::BackgroundProcess {

@@ -10,6 +10,7 @@
 
 #include "hattr/io/profile_csv.hpp"
 #include "support/host_stalls.hpp"
+#include "support/run_command.hpp"
 #include "support/test_support.hpp"
 
 namespace hattr {
@@ -17,11 +18,7 @@ namespace {
 
 using ::testing::HasSubstr;
 
-struct RunResult {
-  int exit_code;
-  std::string out;
-  std::string err;
-};
+using test::RunResult;
 
 /// Runs hattr with `args` (shell-quoted by the caller), stdin from `input`.
 RunResult run(const test::TempDir& dir, const std::string& args, const std::string& input = "") {

@@ -17,9 +17,7 @@ namespace {
 
 using ::testing::HasSubstr;
 using test::RunResult;
-
-// The CLI, looked up when a test runs (not at start-up: listing the tests needs no build list).
-std::string hattrCli() { return test::builtFile("HATTR_CLI"); }
+using test::hattrCli;
 
 TEST(HypothesesCli, TabulatesThePapersPointsUnderEachHypothesisWithAnAaCheckEach) {
   HATTR_SKIP_UNDER_THREAD_SANITIZER("one thread (--threads 1) simulating and scoring 5 studies; subjects at once run "

@@ -22,10 +22,7 @@ namespace {
 using ::testing::HasSubstr;
 
 using test::RunResult;
-
-RunResult runHattr(const test::TempDir& dir, const std::string& args, const std::string& tag = "run") {
-  return test::runCommand(dir, test::builtFile("HATTR_CLI"), args, tag);
-}
+using test::runHattr;
 
 /// The expert's writing (a figure of eight in 2.4 s, then the pen lifted) and the trainee's
 /// (the same, 3 mm right and 2 mm down), written to the folder.

@@ -12,6 +12,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "support/run_command.hpp"
 #include "support/test_support.hpp"
 
 namespace hattr {
@@ -20,11 +21,7 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::Not;
 
-struct RunResult {
-  int exit_code;
-  std::string out;
-  std::string err;
-};
+using test::RunResult;
 
 /// hattr with stdout and stderr to files (as in a script).
 RunResult runPiped(const test::TempDir& dir, const std::string& args) {

@@ -17,9 +17,7 @@ namespace {
 
 using ::testing::HasSubstr;
 using test::RunResult;
-
-// The CLI, looked up when a test runs (not at start-up: listing the tests needs no build list).
-std::string hattrCli() { return test::builtFile("HATTR_CLI"); }
+using test::hattrCli;
 
 /// Sanitized builds run the power analysis on one process and in shards, but not under mpirun:
 /// Open MPI's library is not instrumented, and its own threads and memory hooks are outside

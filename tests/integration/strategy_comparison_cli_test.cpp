@@ -17,10 +17,7 @@ namespace {
 
 using ::testing::HasSubstr;
 using test::RunResult;
-
-RunResult runHattr(const test::TempDir& dir, const std::string& args) {
-  return test::runCommand(dir, test::builtFile("HATTR_CLI"), args);
-}
+using test::runHattr;
 
 TEST(StrategiesCli, TabulatesEachPhaseUnderEachStrategyAndHypothesisWithAnAaCheck) {
   HATTR_SKIP_UNDER_THREAD_SANITIZER("one thread (--threads 1) simulating and scoring 4 studies; subjects at once run "

@@ -27,10 +27,7 @@ namespace hattr {
 namespace {
 
 using test::RunResult;
-
-RunResult runHattr(const test::TempDir& dir, const std::string& args) {
-  return test::runCommand(dir, test::builtFile("HATTR_CLI"), args);
-}
+using test::runHattr;
 
 /// Three groups, one scheduled strategy each with parameters of the study's own, over two sessions.
 constexpr std::string_view kStudy = R"({

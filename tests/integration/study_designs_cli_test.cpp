@@ -23,10 +23,7 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::Not;
 using test::RunResult;
-
-RunResult runHattr(const test::TempDir& dir, const std::string& args) {
-  return test::runCommand(dir, test::builtFile("HATTR_CLI"), args);
-}
+using test::runHattr;
 
 /// The design made small: two trials a block (the paper's form: 2 training, 3 recall), at most
 /// two subjects a group (three in the paper's, one per Latin-square row), simulated, on a flat paper.

@@ -33,12 +33,6 @@ MentoredRun mentored(Coupling coupling, double rtt_s, double loss, bool passivit
   return runMentoredSimulation(setup, expert, trainee);
 }
 
-double trajectoryDtw(const HapticProfile& a, const HapticProfile& b) {
-  double sum = 0.0;
-  for (const char* axis : {"x", "y"}) sum += analysis::dtwDistance(a.channel(axis), b.channel(axis));
-  return sum / static_cast<double>(a.size());
-}
-
 // A mentoring station's recording is judged as a trial's is (issue 38): an expert pressing 18 N
 // where the pen renders 1.75 N sinks through the paper, and the leader's recording says so; the
 // follower's, written with the script's 1.2 N, does not.
@@ -63,10 +57,10 @@ TEST(Mentoring, AStationsRecordingSaysWhenThePenWentThroughThePaper) {
 
 TEST(Mentoring, EveryCouplingIsStableAt100MsAnd5PercentLossAndGuidanceBringsTheTraineeCloser) {
   const MentoredRun alone = mentored(Coupling::kObserve, 0.1, 0.05);
-  const double unguided = trajectoryDtw(alone.leader, alone.follower);
+  const double unguided = test::trajectoryDtw(alone.leader, alone.follower);
   for (const Coupling c : {Coupling::kObserve, Coupling::kPosition, Coupling::kForce, Coupling::kBilateral}) {
     const MentoredRun run = mentored(c, 0.1, 0.05);
-    const double dtw = trajectoryDtw(run.leader, run.follower);
+    const double dtw = test::trajectoryDtw(run.leader, run.follower);
     std::printf("%-9s tracking %.2f mm, force %.3f N, energy %+.4f J, dissipated %.4f J, peak %.2f N, DTW %.3f mm "
                 "(unguided %.3f mm), link faults %llu\n",
                 std::string(couplingName(c)).c_str(), run.tracking_rms_m * 1e3, run.force_rms_N, run.energy_generated_J,

@@ -18,7 +18,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-HapticProfile expertScript() { return test::figureEightScript(2.0); }
+HapticProfile udpExpertScript() { return test::figureEightScript(2.0); }
 
 
 /// A live station on its own real-time loop, its simulated hand released once linked.
@@ -68,7 +68,7 @@ bool waitFor(const std::function<bool()>& condition, std::chrono::milliseconds t
   return true;
 }
 
-double trajectoryDtw(const HapticProfile& a, const HapticProfile& b) {
+double trajectoryDtwOverLonger(const HapticProfile& a, const HapticProfile& b) {
   double sum = 0.0;
   for (const char* axis : {"x", "y"}) sum += analysis::dtwDistance(a.channel(axis), b.channel(axis));
   return sum / static_cast<double>(std::max(a.size(), b.size()));
@@ -83,7 +83,7 @@ struct Session {
 
 /// One live session of `coupling` through a relay of 50 ms each way and 5 % loss.
 Session liveSession(Coupling coupling) {
-  const HapticProfile script = expertScript();
+  const HapticProfile script = udpExpertScript();
   device::ProfileHandScript expert_plan(script);
   LaggingHand trainee_plan(script);
   const wire::AuthKey key = wire::randomKey();
@@ -109,12 +109,12 @@ Session liveSession(Coupling coupling) {
 
 TEST(MentoringOverUdp, EveryCouplingIsStableAt100MsAnd5PercentLossAndGuidanceHelps) {
   const Session alone = liveSession(Coupling::kObserve);
-  const double unguided = trajectoryDtw(alone.leader, alone.follower);
+  const double unguided = trajectoryDtwOverLonger(alone.leader, alone.follower);
   for (const Coupling c : {Coupling::kPosition, Coupling::kForce, Coupling::kBilateral}) {
     (void)test::passesUnlessTheHostStalls([&](std::uint64_t& stalls) {
       const Session s = liveSession(c);
       stalls = s.stalls;
-      const double dtw = trajectoryDtw(s.leader, s.follower);
+      const double dtw = trajectoryDtwOverLonger(s.leader, s.follower);
       const double energy = (s.leader_stats.energy_out_J - s.leader_stats.energy_in_J) +
                             (s.follower_stats.energy_out_J - s.follower_stats.energy_in_J);
       std::printf("%-9s DTW %.3f mm (observe %.3f mm), energy %+.4f J, rtt %.0f ms, lost %llu, link faults %llu, "
@@ -141,7 +141,7 @@ TEST(MentoringOverUdp, EveryCouplingIsStableAt100MsAnd5PercentLossAndGuidanceHel
 TEST(MentoringOverUdp, KillingEitherStationZeroesTheOthersForceWithin20Ms) {
   for (const bool kill_leader : {true, false}) {
     (void)test::passesUnlessTheHostStalls([&](std::uint64_t& stalls) {
-      const HapticProfile script = expertScript();
+      const HapticProfile script = udpExpertScript();
       device::ProfileHandScript plan_a(script), plan_b(script);
       const wire::AuthKey key = wire::randomKey();
       auto leader = std::make_unique<LiveStation>(MentorRole::kLeader, Coupling::kBilateral, key,
@@ -182,7 +182,7 @@ TEST(MentoringOverUdp, KillingEitherStationZeroesTheOthersForceWithin20Ms) {
 }
 
 TEST(MentoringOverUdp, ASecondFollowerAWrongKeyAndGarbageAreRefusedAndCounted) {
-  const HapticProfile script = expertScript();
+  const HapticProfile script = udpExpertScript();
   device::ProfileHandScript a(script), b(script), c(script);
   const wire::AuthKey key = wire::randomKey();
   LiveStation leader(MentorRole::kLeader, Coupling::kObserve, key, {}, a, "sim://pen");

@@ -26,12 +26,6 @@ HapticProfile expertWriting() { return test::figureEightThenLift(2.4); }
 /// The trainee's hand: the expert's plan 3 mm right and 2 mm down of it.
 HapticProfile offsetWriting(const HapticProfile& expert) { return test::offsetScript(expert, Vec3(0.003, -0.002, 0.0)); }
 
-double trajectoryDtw(const HapticProfile& a, const HapticProfile& b) {
-  double sum = 0.0;
-  for (const char* axis : {"x", "y"}) sum += analysis::dtwDistance(a.channel(axis), b.channel(axis));
-  return sum / static_cast<double>(a.size());
-}
-
 /// A study of the four mentored modes and BASIC, one scripted subject whose pen a coupling can
 /// move (a compliant grip), a simulated expert 100 ms away with 5 % loss.
 std::string mentoredStudy(const test::TempDir& dir) {
@@ -99,7 +93,7 @@ TEST(StudyMentor, MentoredModesAreStudyTrialsThatGuideTheTraineeStablyAt100MsAnd
         EXPECT_LE(generated, 1e-9);
       }
     }
-    if (t.plan.phase == session::kPhaseTraining && t.plan.index == 2) training_dtw[mode] = trajectoryDtw(trial, expert);
+    if (t.plan.phase == session::kPhaseTraining && t.plan.index == 2) training_dtw[mode] = test::trajectoryDtw(trial, expert);
   }
   for (const auto& [mode, dtw] : training_dtw) std::printf("%-17s training DTW to the expert %.3f mm\n", mode.c_str(), dtw * 1e3);
   // The live expert's pen guides: position and bilateral bring the trainee's shape to it.

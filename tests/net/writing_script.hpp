@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "hattr/analysis/dtw.hpp"
 #include "hattr/core/haptic_profile.hpp"
 
 namespace hattr::test {
@@ -46,6 +47,14 @@ inline HapticProfile offsetScript(const HapticProfile& script, const Vec3& offse
     p.append(s);
   }
   return p;
+}
+
+/// How far a recorded pen path is from another: the DTW cost of x plus that of y, per sample of
+/// `a` (the mentoring tests' distance between a trainee's and the expert's writing).
+inline double trajectoryDtw(const HapticProfile& a, const HapticProfile& b) {
+  double sum = 0.0;
+  for (const char* axis : {"x", "y"}) sum += analysis::dtwDistance(a.channel(axis), b.channel(axis));
+  return sum / static_cast<double>(a.size());
 }
 
 }  // namespace hattr::test

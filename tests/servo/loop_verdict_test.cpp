@@ -21,8 +21,8 @@ class ConstantGuidance final : public GuidanceController {
   Vec3 compute(const PenState&, const ContactForces&, double) noexcept override { return force; }
 };
 
-struct Rig {
-  explicit Rig(std::size_t ring = 1u << 16)
+struct VerdictRig {
+  explicit VerdictRig(std::size_t ring = 1u << 16)
       : device(device::SimulatedPenParams{}, nullptr), loop(device, ServoConfig{.sample_ring_capacity = ring}) {
     loop.setGuidance(&guidance);
   }
@@ -40,7 +40,7 @@ Verdict verdictOf(const LoopJudgement& j, const std::string& figure) {
 }
 
 TEST(LoopVerdict, ACleanLoopPassesEveryFigure) {
-  Rig rig;
+  VerdictRig rig;
   rig.loop.runSimulated(2000);
   const LoopJudgement j = judgeLoop(rig.loop);
   for (const auto& f : j.figures) EXPECT_EQ(f.verdict, Verdict::kPass) << f.name << " = " << f.value << " (" << f.rule << ")";
@@ -49,7 +49,7 @@ TEST(LoopVerdict, ACleanLoopPassesEveryFigure) {
 }
 
 TEST(LoopVerdict, AStalledLoopWarnsAndSaysWhy) {
-  Rig rig;
+  VerdictRig rig;
   rig.loop.runSimulated(500);
   rig.loop.delaySimulated(20ms);  // the host held the loop 20 ms: beyond the 10 ms watchdog
   rig.loop.runSimulated(500);
@@ -62,7 +62,7 @@ TEST(LoopVerdict, AStalledLoopWarnsAndSaysWhy) {
 // The period error is measured on a real-time or device clock (simulated ticks have none), so
 // the jitter rule is checked on the figures of a clean simulated run with the p99 set.
 TEST(LoopVerdict, JitterBeyondATenthOfThePeriodWarns) {
-  Rig rig;
+  VerdictRig rig;
   rig.loop.runSimulated(1000);
   LoopFigures figures = figuresOf(rig.loop);
   EXPECT_DOUBLE_EQ(figures.period_us, 1000.0);
@@ -81,7 +81,7 @@ TEST(LoopVerdict, JitterBeyondATenthOfThePeriodWarns) {
 }
 
 TEST(LoopVerdict, ALatchedFaultOrLostSamplesFail) {
-  Rig faulty;
+  VerdictRig faulty;
   faulty.loop.runSimulated(100);
   faulty.guidance.force = Vec3(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0);
   faulty.loop.runSimulated(10);
@@ -89,7 +89,7 @@ TEST(LoopVerdict, ALatchedFaultOrLostSamplesFail) {
   EXPECT_EQ(verdictOf(j, "faults"), Verdict::kFail);
   EXPECT_EQ(j.overall, Verdict::kFail);
 
-  Rig unread(64);  // nobody drains a 64-sample ring
+  VerdictRig unread(64);  // nobody drains a 64-sample ring
   unread.loop.runSimulated(200);
   j = judgeLoop(unread.loop);
   EXPECT_EQ(verdictOf(j, "dropped_samples"), Verdict::kFail);
@@ -97,7 +97,7 @@ TEST(LoopVerdict, ALatchedFaultOrLostSamplesFail) {
 }
 
 TEST(LoopVerdict, LinkLossBeyondOnePercentWarns) {
-  Rig rig;
+  VerdictRig rig;
   rig.loop.runSimulated(100);
   device::LinkStats link;
   link.states_received = 990;

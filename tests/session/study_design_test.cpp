@@ -50,7 +50,7 @@ std::string twoGroups() {
                             {"phase": "transfer", "skill": "dot", "trials": 1, "show_reference": true}]}]})";
 }
 
-std::string studyError(const std::string& json, const std::filesystem::path& base) {
+std::string designError(const std::string& json, const std::filesystem::path& base) {
   try {
     (void)parseStudy(json, "design.json", base);
   } catch (const InputError& e) {
@@ -138,7 +138,7 @@ TEST(StudyDesigns, ThePapersProtocolWrittenAsADesignIsTheSameStudy) {
 TEST(StudyDesigns, AnImpossibleDesignIsRefusedWithEveryProblemAtOnce) {
   test::TempDir dir;
   writeExpert(dir / "expert.csv");
-  const std::string message = studyError(R"({"name": "x", "skill": "dash", "experts": {"dash": "expert.csv"},
+  const std::string message = designError(R"({"name": "x", "skill": "dash", "experts": {"dash": "expert.csv"},
     "protocol": {"training_trials": 5},
     "groups": [{"name": "a", "strategies": ["alpha", "gamma"], "subjects": {"count": 2}},
                {"name": "b", "strategies": ["basic"]}],

@@ -26,7 +26,7 @@ std::string glyphText(const std::string& strokes, const std::string& extra = "")
 }
 
 /// The message of the InputError that parsing `text` throws ("" if none).
-std::string parseError(const std::string& text) {
+std::string glyphError(const std::string& text) {
   try {
     (void)parseGlyph(text, "bad.json");
   } catch (const InputError& e) {
@@ -99,7 +99,7 @@ TEST(GlyphFile, MillimetresAreConvertedToMetresOnLoading) {
 }
 
 TEST(GlyphFile, ABadPointIsReportedWithTheFileTheStrokeAndThePoint) {
-  const std::string message = parseError(glyphText(R"([{"points": [[0, 0], [1, 1]]},
+  const std::string message = glyphError(glyphText(R"([{"points": [[0, 0], [1, 1]]},
                                                       {"points": [[0, 0], [1, 1], [2, "a"]]}])"));
   EXPECT_THAT(message, HasSubstr("bad.json: stroke 2, point 3"));
   EXPECT_THAT(message, HasSubstr("expected [x_mm, y_mm]"));
@@ -107,31 +107,31 @@ TEST(GlyphFile, ABadPointIsReportedWithTheFileTheStrokeAndThePoint) {
 }
 
 TEST(GlyphFile, PointsMustBeTwoFiniteNumbersWithinTheLimit) {
-  EXPECT_THAT(parseError(glyphText(R"([{"points": [[0, 0], [1, 2, 3]]}])")), HasSubstr("stroke 1, point 2"));
-  EXPECT_THAT(parseError(glyphText(R"([{"points": [[0, 0], [60, 0]]}])")), HasSubstr("within ±50 mm, got [60,0]"));
-  EXPECT_THAT(parseError(glyphText(R"([{"points": [[0, 0], 7]}])")), HasSubstr("point 2"));
+  EXPECT_THAT(glyphError(glyphText(R"([{"points": [[0, 0], [1, 2, 3]]}])")), HasSubstr("stroke 1, point 2"));
+  EXPECT_THAT(glyphError(glyphText(R"([{"points": [[0, 0], [60, 0]]}])")), HasSubstr("within ±50 mm, got [60,0]"));
+  EXPECT_THAT(glyphError(glyphText(R"([{"points": [[0, 0], 7]}])")), HasSubstr("point 2"));
 }
 
 TEST(GlyphFile, AStrokeNeedsTwoDistinctConsecutivePoints) {
-  EXPECT_THAT(parseError(glyphText(R"([{"points": [[0, 0]]}])")),
+  EXPECT_THAT(glyphError(glyphText(R"([{"points": [[0, 0]]}])")),
               HasSubstr("stroke 1: key points: expected a list of at least two"));
-  EXPECT_THAT(parseError(glyphText(R"([{"points": [[0, 0], [1, 1], [1, 1]]}])")),
+  EXPECT_THAT(glyphError(glyphText(R"([{"points": [[0, 0], [1, 1], [1, 1]]}])")),
               HasSubstr("stroke 1, point 3: expected a point different from point 2"));
 }
 
 TEST(GlyphFile, FormatVersionNameStrokesAndKeysAreChecked) {
-  EXPECT_THAT(parseError("{"), HasSubstr("bad.json: not valid JSON"));
-  EXPECT_THAT(parseError(R"({"format": "x", "version": 1, "name": "t", "strokes": []})"),
+  EXPECT_THAT(glyphError("{"), HasSubstr("bad.json: not valid JSON"));
+  EXPECT_THAT(glyphError(R"({"format": "x", "version": 1, "name": "t", "strokes": []})"),
               HasSubstr("key format: expected \"hattr-glyph\""));
-  EXPECT_THAT(parseError(R"({"format": "hattr-glyph", "version": 2, "name": "t", "strokes": []})"),
+  EXPECT_THAT(glyphError(R"({"format": "hattr-glyph", "version": 2, "name": "t", "strokes": []})"),
               HasSubstr("key version: expected 1, got 2"));
-  EXPECT_THAT(parseError(R"({"format": "hattr-glyph", "version": 1, "strokes": [{"points": [[0,0],[1,1]]}]})"),
+  EXPECT_THAT(glyphError(R"({"format": "hattr-glyph", "version": 1, "strokes": [{"points": [[0,0],[1,1]]}]})"),
               HasSubstr("key name: expected a non-empty string"));
-  EXPECT_THAT(parseError(glyphText("[]")), HasSubstr("key strokes: expected a non-empty list"));
-  EXPECT_THAT(parseError(glyphText(R"([{"points": [[0,0],[1,1]]}])", R"("colour": "red", )")),
+  EXPECT_THAT(glyphError(glyphText("[]")), HasSubstr("key strokes: expected a non-empty list"));
+  EXPECT_THAT(glyphError(glyphText(R"([{"points": [[0,0],[1,1]]}])", R"("colour": "red", )")),
               HasSubstr("unknown key \"colour\""));
-  EXPECT_THAT(parseError(glyphText(R"([{"pts": [[0,0],[1,1]]}])")), HasSubstr("stroke 1: unknown key \"pts\""));
-  EXPECT_THAT(parseError(R"({"format": "hattr-glyph", "version": 1, "name": "t", "unicode": "0BA8",
+  EXPECT_THAT(glyphError(glyphText(R"([{"pts": [[0,0],[1,1]]}])")), HasSubstr("stroke 1: unknown key \"pts\""));
+  EXPECT_THAT(glyphError(R"({"format": "hattr-glyph", "version": 1, "name": "t", "unicode": "0BA8",
                              "strokes": [{"points": [[0,0],[1,1]]}]})"),
               HasSubstr("key unicode: expected \"U+\""));
 }

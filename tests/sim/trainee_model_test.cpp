@@ -39,7 +39,7 @@ std::string edited(const std::string& from, const std::string& to) {
   return text.replace(at, from.size(), to);
 }
 
-std::string parseError(const std::string& text) {
+std::string modelError(const std::string& text) {
   try {
     (void)parseTraineeModel(text, "model.json");
   } catch (const InputError& e) {
@@ -75,41 +75,41 @@ TEST(TraineeModelFile, TheShippedModelStatesEveryParameterWithARangeAndASource) 
 }
 
 TEST(TraineeModelFile, AValueOutsideItsRangeIsReportedWithKeyRangeAndValue) {
-  const std::string message = parseError(edited(R"("value": 0.59)", R"("value": 0.95)"));
+  const std::string message = modelError(edited(R"("value": 0.59)", R"("value": 0.95)"));
   EXPECT_THAT(message, HasSubstr("model.json: parameters.fast_retention.value"));
   EXPECT_THAT(message, HasSubstr("[0.2, 0.9]"));
   EXPECT_THAT(message, HasSubstr("got 0.95"));
 }
 
 TEST(TraineeModelFile, ARangeBeyondWhatTheModelCanUseIsRejected) {
-  EXPECT_THAT(parseError(edited(R"("range": [0.2, 0.9])", R"("range": [0.2, 1.5])")),
+  EXPECT_THAT(modelError(edited(R"("range": [0.2, 0.9])", R"("range": [0.2, 1.5])")),
               HasSubstr("parameters.fast_retention.range: expected [min, max] with 0 <= min <= max <= 1"));
 }
 
 TEST(TraineeModelFile, MissingUnknownAndMalformedEntriesAreRejected) {
-  EXPECT_THAT(parseError(edited(R"("force_offset_N": {)", R"("force_offset_x": {)")),
+  EXPECT_THAT(modelError(edited(R"("force_offset_N": {)", R"("force_offset_x": {)")),
               HasSubstr("unknown parameter \"parameters.force_offset_x\""));
-  EXPECT_THAT(parseError(edited(R"("unit": "mm")", R"("unit": "m")")),
+  EXPECT_THAT(modelError(edited(R"("unit": "mm")", R"("unit": "m")")),
               HasSubstr("parameters.deviation_rms_mm.unit: expected \"mm\", got \"m\""));
-  EXPECT_THAT(parseError(edited(R"("source": "assumption: a novice)", R"("source": "", "x": "a novice)")),
+  EXPECT_THAT(modelError(edited(R"("source": "assumption: a novice)", R"("source": "", "x": "a novice)")),
               HasSubstr("parameters.deviation_rms_mm: unknown field \"x\""));
-  EXPECT_THAT(parseError(edited(R"("source": "Jones 1989)", R"("source": "Jones, Matching)")),
+  EXPECT_THAT(modelError(edited(R"("source": "Jones 1989)", R"("source": "Jones, Matching)")),
               HasSubstr("parameters.weber_fraction.source: expected \"Author year, short title\" or \"assumption: "));
-  EXPECT_THAT(parseError(edited(R"({"kind": "lognormal", "sigma_log": 0.4})", R"({"kind": "uniform"})")),
+  EXPECT_THAT(modelError(edited(R"({"kind": "lognormal", "sigma_log": 0.4})", R"({"kind": "uniform"})")),
               HasSubstr("parameters.deviation_rms_mm.per_subject.kind: expected one of fixed, normal"));
-  EXPECT_THAT(parseError(edited(R"({"kind": "lognormal", "sigma_log": 0.4})", R"({"kind": "lognormal", "sigma_log": -1})")),
+  EXPECT_THAT(modelError(edited(R"({"kind": "lognormal", "sigma_log": 0.4})", R"({"kind": "lognormal", "sigma_log": -1})")),
               HasSubstr("per_subject.sigma_log: expected a number in [0, 10], got -1"));
-  EXPECT_THAT(parseError(edited(R"("value": 30)", R"("value": 30.5)")),
+  EXPECT_THAT(modelError(edited(R"("value": 30)", R"("value": 30.5)")),
               HasSubstr("parameters.basis_count.value: expected an integer, got 30.5"));
-  EXPECT_THAT(parseError(edited(R"("version": 1)", R"("version": 2)")), HasSubstr("key version: expected 1, got 2"));
-  EXPECT_THAT(parseError("[]"), HasSubstr("expected a JSON object"));
+  EXPECT_THAT(modelError(edited(R"("version": 1)", R"("version": 2)")), HasSubstr("key version: expected 1, got 2"));
+  EXPECT_THAT(modelError("[]"), HasSubstr("expected a JSON object"));
 }
 
 TEST(TraineeModelFile, TheBasisIsTheSameForEverySubject) {
   std::string varying = modelText();
   const std::string fixed = R"({"kind": "fixed"})";  // basis_count's, the first in the file
   varying.replace(varying.find(fixed), fixed.size(), R"({"kind": "normal", "sd": 1})");
-  EXPECT_THAT(parseError(varying), HasSubstr("parameters.basis_count.per_subject.kind: expected fixed"));
+  EXPECT_THAT(modelError(varying), HasSubstr("parameters.basis_count.per_subject.kind: expected fixed"));
 }
 
 TEST(TraineeModelFile, AParameterMayCarryANote) {
@@ -125,7 +125,7 @@ TEST(TraineeModelFile, TheFastProcessMustStayFasterThanTheSlowOne) {
   text.replace(text.find(fast_from), fast_from.size(), R"("value": 0.06, "unit": "1", "range": [0.05, 0.6])");
   EXPECT_NO_THROW((void)parseTraineeModel(text, "model.json")) << "B_f = 0.06 >= B_s = 0.02";
   text.replace(text.find(slow_from), slow_from.size(), R"("value": 0.08, "unit": "1", "range": [0.002, 0.1])");
-  EXPECT_THAT(parseError(text), HasSubstr("parameters.fast_rate: expected at least slow_rate = 0.08, got 0.06"));
+  EXPECT_THAT(modelError(text), HasSubstr("parameters.fast_rate: expected at least slow_rate = 0.08, got 0.06"));
 }
 
 TEST(DrawSubject, TheSameSeedGivesTheSameSubjectAndEveryDrawStaysInRange) {

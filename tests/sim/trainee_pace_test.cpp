@@ -13,15 +13,11 @@
 #include "hattr/sim/expert.hpp"
 #include "hattr/sim/participant.hpp"
 #include "hattr/sim/trainee.hpp"
+#include "sim/shipped_model.hpp"
 #include "support/test_support.hpp"
 
 namespace hattr::sim {
 namespace {
-
-const TraineeModel& shippedModel() {
-  static const TraineeModel model = loadTraineeModel(defaultDataDir() / "sim" / "trainee_model.json");
-  return model;
-}
 
 const HapticProfile& loopScript() {
   static const HapticProfile script = expertScript(loadGlyph(defaultDataDir() / "glyphs" / "loop.json"));
@@ -29,11 +25,11 @@ const HapticProfile& loopScript() {
 }
 
 TEST(SimulatedTraineePace, EachTrialHasItsOwnPaceDrawnFromItsSeed) {
-  const SubjectTraits traits = populationTraits(shippedModel());
+  const SubjectTraits traits = populationTraits(test::shippedModel());
   ASSERT_GT(traits.pace_cv, 0.0);
   const std::uint64_t seed = test::testSeed(5);
   SCOPED_TRACE(::testing::Message() << "seed " << seed);
-  const SimulatedTrainee trainee(shippedModel(), traits, loopScript(), seed);
+  const SimulatedTrainee trainee(test::shippedModel(), traits, loopScript(), seed);
   // The same trial seed, the same pace; the log of the pace has the model's SD.
   std::vector<double> logs;
   for (std::uint64_t trial = 0; trial < 2000; ++trial) {
@@ -54,7 +50,7 @@ TEST(SimulatedTraineePace, EachTrialHasItsOwnPaceDrawnFromItsSeed) {
   // Without variability every trial keeps the plan's pace.
   SubjectTraits steady = traits;
   steady.pace_cv = 0.0;
-  EXPECT_EQ(SimulatedTrainee(shippedModel(), steady, loopScript(), seed).paceFactor(7), 1.0);
+  EXPECT_EQ(SimulatedTrainee(test::shippedModel(), steady, loopScript(), seed).paceFactor(7), 1.0);
 }
 
 /// The durations [s] of the trials of a one-subject BASIC study of simulated trainees whose
@@ -66,7 +62,7 @@ std::vector<double> studyTrialDurations(double pace_cv) {
     "modes": ["basic"], "protocol": {"training_trials": 2, "recall_trials": 2, "rest_s": 0,
     "trial_end": {"pen_up_s": 0.2}}, "world": {"relief": {"kind": "flat"}},
     "subjects": {"count": 1, "participant": "simulated"}})");
-  TraineeModel model = shippedModel();
+  TraineeModel model = test::shippedModel();
   model.pace_cv.value = pace_cv;
   session::StudyDatabase db =
       session::StudyDatabase::create(dir / "s.sqlite", session::loadStudy(dir / "study.json"));
@@ -85,7 +81,7 @@ std::vector<double> studyTrialDurations(double pace_cv) {
 }
 
 TEST(SimulatedTraineePace, AStudysTrialsLastAsLongAsTheTraineeTakes) {
-  const auto varied = studyTrialDurations(shippedModel().pace_cv.value);
+  const auto varied = studyTrialDurations(test::shippedModel().pace_cv.value);
   const auto steady = studyTrialDurations(0.0);
   ASSERT_EQ(varied.size(), 4u);
   ASSERT_EQ(steady.size(), 4u);

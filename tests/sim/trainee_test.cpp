@@ -16,6 +16,7 @@
 #include "hattr/sim/data_dir.hpp"
 #include "hattr/sim/expert.hpp"
 #include "hattr/sim/trainee.hpp"
+#include "sim/shipped_model.hpp"
 #include "support/test_support.hpp"
 
 namespace hattr::sim {
@@ -43,21 +44,16 @@ HapticProfile penDownTemplate(double duration_s = 1.0, double scale = 1.0) {
   return p;
 }
 
-const TraineeModel& shippedModel() {
-  static const TraineeModel model = loadTraineeModel(defaultDataDir() / "sim" / "trainee_model.json");
-  return model;
-}
-
 /// The shipped model with a negligible ridge, so projections of fields on the basis are exact.
 TraineeModel exactModel() {
-  TraineeModel model = shippedModel();
+  TraineeModel model = test::shippedModel();
   model.projection_ridge.value = 1e-12;
   return model;
 }
 
 /// The population's traits without motor or perception noise.
 SubjectTraits quietTraits() {
-  SubjectTraits t = populationTraits(shippedModel());
+  SubjectTraits t = populationTraits(test::shippedModel());
   t.position_noise_coefficient = 0.0;
   t.force_noise_coefficient = 0.0;
   t.weber_fraction = 0.0;
@@ -101,7 +97,7 @@ TEST(SimulatedTrainee, WithoutNoiseOrDeviationTheHandPlaysTheTemplate) {
   const HapticProfile script = expertScript(loadGlyph(defaultDataDir() / "glyphs" / "loop.json"));
   SubjectTraits traits = quietTraits();
   traits.deviation_rms_m = 0.0;
-  const SimulatedTrainee trainee(shippedModel(), traits, script, 1);
+  const SimulatedTrainee trainee(test::shippedModel(), traits, script, 1);
   const auto hand = trainee.handForTrial(1);
   device::ProfileHandScript reference(script);
   for (double t = 0.0; t < script.duration_s() + 0.5; t += 0.00025) {
@@ -123,7 +119,7 @@ TEST(SimulatedTrainee, StartsFromTheTemplatePlusASmoothPersonalDeviationOfItsRms
   traits.deviation_rms_m = 0.003;
   const std::uint64_t seed = test::testSeed(5);
   SCOPED_TRACE(::testing::Message() << "seed " << seed);
-  const SimulatedTrainee trainee(shippedModel(), traits, tmpl, seed);
+  const SimulatedTrainee trainee(test::shippedModel(), traits, tmpl, seed);
   const HapticProfile plan = trainee.plan();
   EXPECT_NEAR(rmsDistance(plan, tmpl), 0.003, 1e-12);
   // Smooth: the offset varies on the basis's time scale σ·T, not from sample to sample: its
@@ -141,9 +137,9 @@ TEST(SimulatedTrainee, StartsFromTheTemplatePlusASmoothPersonalDeviationOfItsRms
 
 TEST(SimulatedTrainee, TheSameSeedsGiveTheSameTraineeAndTheSameTrials) {
   const HapticProfile tmpl = penDownTemplate(0.5);
-  const SubjectTraits traits = drawSubject(shippedModel(), 3);
-  SimulatedTrainee a(shippedModel(), traits, tmpl, 77), b(shippedModel(), traits, tmpl, 77);
-  const SimulatedTrainee other(shippedModel(), traits, tmpl, 78);
+  const SubjectTraits traits = drawSubject(test::shippedModel(), 3);
+  SimulatedTrainee a(test::shippedModel(), traits, tmpl, 77), b(test::shippedModel(), traits, tmpl, 77);
+  const SimulatedTrainee other(test::shippedModel(), traits, tmpl, 78);
   EXPECT_TRUE(a.plan() == b.plan());
   EXPECT_FALSE(a.plan() == other.plan());
   const auto ha = a.handForTrial(9), hb = b.handForTrial(9), hc = a.handForTrial(10);
@@ -183,8 +179,8 @@ TEST(SimulatedTrainee, SeeingTheTemplateShrinksThePlanErrorAsTheTwoStateModelPre
 
 TEST(SimulatedTrainee, WithTheTemplateHiddenAndNoGuidanceEachStateDecaysByItsRetention) {
   const HapticProfile tmpl = penDownTemplate();
-  const SubjectTraits traits = drawSubject(shippedModel(), 12);
-  SimulatedTrainee trainee(shippedModel(), traits, tmpl, 12);
+  const SubjectTraits traits = drawSubject(test::shippedModel(), 12);
+  SimulatedTrainee trainee(test::shippedModel(), traits, tmpl, 12);
   for (int n = 0; n < 3; ++n) trainee.learn(standIn(trainee), true);
   const PlanWeights fast = trainee.fastState();
   const PlanWeights slow = trainee.slowState();
@@ -198,7 +194,7 @@ TEST(SimulatedTrainee, WithTheTemplateHiddenAndNoGuidanceEachStateDecaysByItsRet
 // (Joiner & Smith 2008); within a day nothing changes.
 TEST(SimulatedTrainee, DaysBetweenSessionsForgetTheFastStateAndKeepTheSlow) {
   const HapticProfile tmpl = penDownTemplate();
-  SimulatedTrainee trainee(shippedModel(), drawSubject(shippedModel(), 13), tmpl, 13);
+  SimulatedTrainee trainee(test::shippedModel(), drawSubject(test::shippedModel(), 13), tmpl, 13);
   for (int n = 0; n < 3; ++n) trainee.learn(standIn(trainee), true);
   const PlanWeights fast = trainee.fastState();
   const PlanWeights slow = trainee.slowState();
@@ -213,7 +209,7 @@ TEST(SimulatedTrainee, DaysBetweenSessionsForgetTheFastStateAndKeepTheSlow) {
 
 TEST(SimulatedTrainee, FeltInPlaneGuidanceShiftsThePlanTheWayItPushed) {
   const HapticProfile tmpl = penDownTemplate();
-  const SubjectTraits traits = drawSubject(shippedModel(), 21);
+  const SubjectTraits traits = drawSubject(test::shippedModel(), 21);
   SimulatedTrainee trainee(exactModel(), traits, tmpl, 21);
   const Vec3 force(0.3, 0.4, 0.0);  // 0.5 N
   const HapticProfile before = trainee.plan();
@@ -237,7 +233,7 @@ TEST(SimulatedTrainee, FeltInPlaneGuidanceShiftsThePlanTheWayItPushed) {
 
 TEST(SimulatedTrainee, FeltPushIntoThePaperRaisesThePlannedForce) {
   const HapticProfile tmpl = penDownTemplate();
-  const SubjectTraits traits = drawSubject(shippedModel(), 22);
+  const SubjectTraits traits = drawSubject(test::shippedModel(), 22);
   SimulatedTrainee trainee(exactModel(), traits, tmpl, 22);
   const HapticProfile before = trainee.plan();
   trainee.learn(standIn(trainee, Vec3(0.0, 0.0, -0.3)), false);  // the device pushed the pen down 0.3 N
@@ -345,9 +341,9 @@ TEST(SimulatedTrainee, RejectsBadInputWithAMessage) {
   const HapticProfile tmpl = penDownTemplate(0.2);
   SubjectTraits bad = quietTraits();
   bad.fast_rate = 1.5;
-  EXPECT_THROW(SimulatedTrainee(shippedModel(), bad, tmpl, 1), InputError);
-  EXPECT_THROW(SimulatedTrainee(shippedModel(), quietTraits(), HapticProfile{}, 1), InputError);
-  SimulatedTrainee trainee(shippedModel(), quietTraits(), tmpl, 1);
+  EXPECT_THROW(SimulatedTrainee(test::shippedModel(), bad, tmpl, 1), InputError);
+  EXPECT_THROW(SimulatedTrainee(test::shippedModel(), quietTraits(), HapticProfile{}, 1), InputError);
+  SimulatedTrainee trainee(test::shippedModel(), quietTraits(), tmpl, 1);
   try {
     trainee.learn(HapticProfile{}, true);
     FAIL() << "expected an InputError";
@@ -392,12 +388,12 @@ struct PenFixture {
 
 TEST(SimulatedTraineeOnThePen, TheRecordedTrialFollowsThePlanAndSeeingItHelps) {
   PenFixture f;
-  SubjectTraits traits = populationTraits(shippedModel());
+  SubjectTraits traits = populationTraits(test::shippedModel());
   traits.deviation_rms_m = 0.003;
   traits.pace_cv = 0.0;  // compared with the plan sample by sample
   const std::uint64_t seed = test::testSeed(3);
   SCOPED_TRACE(::testing::Message() << "seed " << seed);
-  SimulatedTrainee trainee(shippedModel(), traits, f.script, seed);
+  SimulatedTrainee trainee(test::shippedModel(), traits, f.script, seed);
   const HapticProfile plan = trainee.plan();
   const HapticProfile recorded = f.trial(trainee, guidance::TrainingMode::kBasic, 1);
   const double from_plan = PenFixture::penDownRms(plan, recorded);
@@ -410,10 +406,10 @@ TEST(SimulatedTraineeOnThePen, TheRecordedTrialFollowsThePlanAndSeeingItHelps) {
 
 TEST(SimulatedTraineeOnThePen, PositionGuidanceFeltWithTheTemplateHiddenPullsThePlanTowardIt) {
   PenFixture f;
-  SubjectTraits traits = populationTraits(shippedModel());
+  SubjectTraits traits = populationTraits(test::shippedModel());
   traits.deviation_rms_m = 0.003;
   traits.pace_cv = 0.0;  // compared with the template sample by sample
-  SimulatedTrainee trainee(shippedModel(), traits, f.script, 8);
+  SimulatedTrainee trainee(test::shippedModel(), traits, f.script, 8);
   const double before = PenFixture::penDownRms(trainee.plan(), f.script);
   const HapticProfile recorded = f.trial(trainee, guidance::TrainingMode::kPositionControl, 1);
   double felt = 0.0;

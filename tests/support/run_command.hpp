@@ -35,6 +35,14 @@ inline RunResult runCommand(const TempDir& dir, const std::string& program, cons
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, readText(out), readText(err)};
 }
 
+/// The CLI the tests run, looked up when a test runs (listing the tests needs no build list).
+inline std::string hattrCli() { return builtFile("HATTR_CLI"); }
+
+/// `hattr args`, as runCommand runs it.
+inline RunResult runHattr(const TempDir& dir, const std::string& args, const std::string& tag = "run") {
+  return runCommand(dir, hattrCli(), args, tag);
+}
+
 /// Starts `args` (args[0] the program) in the background, its stdout discarded and its stderr
 /// appended to `err` (or inherited when empty); returns its process id (exitStatus waits).
 inline pid_t spawnProcess(std::vector<std::string> args, const std::filesystem::path& err = {}) {

@@ -14,9 +14,19 @@
 #include <gtest/gtest-spi.h>
 #include <gtest/gtest.h>
 
+#include "hattr/core/error.hpp"
 #include "support/host_stalls.hpp"
 
 namespace hattr::test {
+
+std::string inputErrorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(no InputError)";
+}
 
 TempDir::TempDir() {
   std::string pattern = (std::filesystem::temp_directory_path() / "hattr-test-XXXXXX").string();

@@ -4,6 +4,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <limits>
 #include <optional>
 #include <random>
 #include <string>
@@ -36,6 +38,13 @@ std::optional<std::filesystem::path> svc2004Folder();
 /// another folder compiles the same objects and the compiler cache reuses them. A missing list
 /// or name ends the program with exit code 2 and what is missing.
 const char* builtFile(const std::string& name);
+
+/// Not-a-number and infinity, for tests that feed them in or expect them out.
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// The message of the InputError `f` throws, or "(no InputError)" when it throws none.
+std::string inputErrorOf(const std::function<void()>& f);
 
 /// Writes `text` to `file`.
 void writeText(const std::filesystem::path& file, const std::string& text);

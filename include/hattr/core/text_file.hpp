@@ -2,6 +2,7 @@
 /// Reading configuration and data files whole: one place for the "cannot open" and "not valid
 /// JSON" errors every loader gives. Not for the servo thread.
 
+#include <cmath>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -38,6 +39,10 @@ auto readingJson(std::string_view source, Read&& read) -> decltype(read()) {
     throw InputError(std::string(source) + ": " + jsonLibraryMessage(e));
   }
 }
+
+/// A number for JSON output: JSON has no NaN or infinity, so a value that is not finite is
+/// written null (readers see "missing"); finite doubles round-trip exactly.
+inline nlohmann::json jsonNumber(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 /// A value as it appears in a message: its JSON text, cut to about 60 characters ("[1, 2, ...]
 /// (5000 characters)") so no message ever prints an unbounded value.

@@ -3,6 +3,8 @@
 /// N·s/m, rad). Millimetres, the paper's N/mm gains, tablet units and degrees appear
 /// only in files, importers and user interfaces, and are converted here, once.
 
+#include <cmath>
+#include <cstdint>
 #include <numbers>
 
 namespace hattr::units {
@@ -19,6 +21,9 @@ constexpr double millisecondsToSeconds(double ms) { return ms * kSecondsPerMilli
 constexpr double degreesToRadians(double deg) { return deg * kRadiansPerDegree; }
 constexpr double radiansToDegrees(double rad) { return rad / kRadiansPerDegree; }
 constexpr double gramForceToNewtons(double gf) { return gf * 1e-3 * kStandardGravity_m_per_s2; }
+
+/// A duration in seconds as whole nanoseconds (rounded to the nearest), for clocks and timeouts.
+inline std::int64_t secondsToNanoseconds(double s) { return static_cast<std::int64_t>(std::llround(s * 1e9)); }
 
 inline constexpr double kMillimetresPerMetre = 1000.0;
 
