@@ -26,16 +26,19 @@ hattr="$build/apps/hattr/hattr"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1  # these machines run as root
 rate() { python3 -c 'import json,sys; r=json.load(sys.stdin)["run"]; print("%d studies in %.1f s: %.4f studies/s" % (r["studies"], r["seconds"], r["studies_per_second"]))'; }
 
+# This run's own folder for the two tables (two runs at once must not share files).
+work=$(mktemp -d /tmp/hattr-power-scaling-XXXXXX)
+trap 'rm -rf "$work"' EXIT
 echo "== the paper's design ($design)"
-one=$("$hattr" sim power $design --threads 1 --json | tee /tmp/power-one.json | rate)
+one=$("$hattr" sim power $design --threads 1 --json | tee "$work/power-one.json" | rate)
 echo "1 process, 1 thread:   $one"
-two=$(mpirun -n 2 "$hattr" sim power $design --threads 1 --json | tee /tmp/power-two.json | rate)
+two=$(mpirun -n 2 "$hattr" sim power $design --threads 1 --json | tee "$work/power-two.json" | rate)
 echo "2 processes (mpirun):  $two"
 threads=$("$hattr" sim power $design --threads 2 --json | rate)
 echo "1 process, 2 threads:  $threads"
-python3 - <<'PY'
-import json
-one, two = (json.load(open(f"/tmp/power-{k}.json")) for k in ("one", "two"))
+python3 - "$work" <<'PY'
+import json, sys
+one, two = (json.load(open(f"{sys.argv[1]}/power-{k}.json")) for k in ("one", "two"))
 same = one["rows"] == two["rows"]
 print(f"2 processes / 1: {two['run']['studies_per_second'] / one['run']['studies_per_second']:.2f}x; tables the same: {same}")
 PY

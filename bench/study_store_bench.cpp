@@ -8,6 +8,8 @@
 // --quick: 2 × 20 iterations: the smoke size bench/study_stations.sh --quick runs (the
 // doc test), which proves the benchmark works and measures nothing.
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
@@ -28,6 +30,14 @@
 namespace {
 
 using namespace hattr;
+
+/// This process's scratch folder (two benchmark runs at once, as the doc tests may run them, must
+/// not share one), removed when the program ends.
+const std::filesystem::path& scratchRoot() {
+  static const std::filesystem::path root =
+      std::filesystem::temp_directory_path() / ("hattr-bench-study-" + std::to_string(::getpid()));
+  return root;
+}
 
 /// The simulated expert's recording, made once.
 const HapticProfile& trial() {
@@ -87,7 +97,7 @@ std::vector<std::int64_t> pendingTrials(const session::StudyDatabase& db) {
 }
 
 void BM_StoreTrial(benchmark::State& state, const char* postgres_variable) {
-  session::StudyDatabase& db = studyFor(std::filesystem::temp_directory_path() / "hattr-bench-study", postgres_variable);
+  session::StudyDatabase& db = studyFor(scratchRoot() / "store", postgres_variable);
   const auto pending = pendingTrials(db);
   std::size_t next = 0;
   for (auto _ : state) {
@@ -102,7 +112,7 @@ void BM_StoreTrial(benchmark::State& state, const char* postgres_variable) {
 
 void BM_ReadTrial(benchmark::State& state, const char* postgres_variable) {
   session::StudyDatabase& db =
-      studyFor(std::filesystem::temp_directory_path() / "hattr-bench-study-read", postgres_variable);
+      studyFor(scratchRoot() / "read", postgres_variable);
   const auto trials = db.trials();
   const auto id = trials.front().id;
   if (trials.front().status != session::TrialStatus::kCompleted) db.completeTrial(id, trial(), "bench");
@@ -142,5 +152,7 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
+  std::error_code ignored;
+  std::filesystem::remove_all(scratchRoot(), ignored);
   return 0;
 }

@@ -1,6 +1,7 @@
 # Unity builds: each target's C++ files compiled a batch at a time, so the heavy headers every
-# file includes (nlohmann/json, fmt, Eigen, GoogleTest: about 2.8 s of each file's 5 s) are read
-# once a batch instead of once a file (docs/architecture.md, "Build and CI in proportion").
+# file includes (nlohmann/json, fmt, Eigen, GoogleTest: 2.8 s to parse, against about 5 s for a
+# typical file) are read once a batch instead of once a file (docs/architecture.md, "Build and CI
+# in proportion").
 #
 # CMake's own UNITY_BUILD writes each batch as #include "/absolute/path/file.cpp", so a clone in
 # another folder has other batch files and misses the compiler cache (CI builds a fresh clone).
@@ -8,7 +9,7 @@
 # every clone, found through -I<root>, which ccache's CCACHE_BASEDIR makes relative.
 #
 # A file that cannot share a batch stays on its own: one with its own compile options or
-# definitions (the sample codec's -ffp-contract=off), one marked SKIP_UNITY_BUILD_INCLUSION
+# definitions (the sample codec's -ffp-contract=off, sim/data_dir.cpp), one marked SKIP_UNITY_BUILD_INCLUSION
 # (Highway's per-target kernels include themselves), one that several targets compile (a batch
 # hides its file from every target of the folder), and every file of a target that Qt's moc
 # processes. HATTR_UNITY_BUILD=OFF compiles every file alone (to check each includes what it uses).
@@ -17,18 +18,24 @@ option(HATTR_UNITY_BUILD "Compile each target's C++ files in batches (unity buil
 set(HATTR_UNITY_BATCH_SIZE 8 CACHE STRING "C++ files per unity batch")
 
 # Whether `source` of a target may share a batch (`shared`: the folder's files in several targets).
-function(hattr_unity_batchable source shared result)
+function(hattr_unity_batchable source absolute shared result)
   set(${result} FALSE PARENT_SCOPE)
-  if(NOT source MATCHES "\\.cpp$" OR source IN_LIST shared)
+  if(NOT source MATCHES "\\.cpp$" OR absolute IN_LIST shared)
     return()
   endif()
-  foreach(property COMPILE_OPTIONS COMPILE_DEFINITIONS COMPILE_FLAGS INCLUDE_DIRECTORIES
-                   SKIP_UNITY_BUILD_INCLUSION HEADER_FILE_ONLY GENERATED)
+  # Any of these set (whatever its value) keeps the file alone.
+  foreach(property COMPILE_OPTIONS COMPILE_DEFINITIONS COMPILE_FLAGS INCLUDE_DIRECTORIES OBJECT_DEPENDS
+                   SKIP_UNITY_BUILD_INCLUSION HEADER_FILE_ONLY)
     get_source_file_property(value ${source} ${property})
-    if(value)
+    if(NOT value STREQUAL "NOTFOUND")
       return()
     endif()
   endforeach()
+  # GENERATED reads 0 when not set (and LANGUAGE the language), so they are read apart.
+  get_source_file_property(generated ${source} GENERATED)
+  if(generated)
+    return()
+  endif()
   set(${result} TRUE PARENT_SCOPE)
 endfunction()
 
@@ -49,7 +56,8 @@ function(hattr_unity_build target shared)
   get_target_property(source_dir ${target} SOURCE_DIR)
   set(batchable)
   foreach(source IN LISTS sources)
-    hattr_unity_batchable(${source} "${shared}" ok)
+    cmake_path(ABSOLUTE_PATH source BASE_DIRECTORY ${source_dir} NORMALIZE OUTPUT_VARIABLE absolute)
+    hattr_unity_batchable(${source} ${absolute} "${shared}" ok)
     if(ok)
       list(APPEND batchable ${source})
     endif()
@@ -92,6 +100,9 @@ function(hattr_unity_build_directory)
   if(NOT HATTR_UNITY_BUILD)
     return()
   endif()
+  if(NOT HATTR_UNITY_BATCH_SIZE MATCHES "^[1-9][0-9]*$")
+    message(FATAL_ERROR "HATTR_UNITY_BATCH_SIZE: expected a whole number of files from 1, got \"${HATTR_UNITY_BATCH_SIZE}\"")
+  endif()
   get_property(all_targets DIRECTORY PROPERTY BUILDSYSTEM_TARGETS)
   set(targets)
   set(seen)
@@ -102,14 +113,17 @@ function(hattr_unity_build_directory)
       list(APPEND targets ${target})
     endif()
     get_target_property(sources ${target} SOURCES)
+    get_target_property(source_dir ${target} SOURCE_DIR)
     if(NOT sources)
       continue()
     endif()
+    # Compared as absolute paths: two targets may name one file differently.
     foreach(source IN LISTS sources)
-      if(source IN_LIST seen)
-        list(APPEND shared ${source})
+      cmake_path(ABSOLUTE_PATH source BASE_DIRECTORY ${source_dir} NORMALIZE OUTPUT_VARIABLE absolute)
+      if(absolute IN_LIST seen)
+        list(APPEND shared ${absolute})
       endif()
-      list(APPEND seen ${source})
+      list(APPEND seen ${absolute})
     endforeach()
   endforeach()
   foreach(target IN LISTS targets)

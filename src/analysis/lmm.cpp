@@ -409,7 +409,6 @@ void flagSingularity(const Model& m, const Eigen::VectorXd& theta, LmmFit& fit) 
   }
 }
 
-
 }  // namespace
 
 LmmFit fitLmm(const DataTable& data, std::string_view formula, const LmmOptions& options) {

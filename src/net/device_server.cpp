@@ -9,8 +9,9 @@
 #include "hattr/wire/link_session.hpp"
 
 namespace hattr::net {
-// Named, not anonymous: DeviceServer::Impl holds these, and a class with external linkage may
-// not hold types of an anonymous namespace when the file is compiled in a unity batch.
+// Named, not anonymous: DeviceServer::Impl holds these, and GCC's -Wsubobject-linkage (an error
+// under CI's -Werror) refuses a class with external linkage holding types of an anonymous
+// namespace in any file but the one compiled, which this file is not in a unity batch.
 namespace server_parts {
 
 constexpr double kLiftHeight_m = 0.003;   // a released hand holds the pen at least this high

@@ -9,10 +9,6 @@
 #include "hattr/core/units.hpp"
 
 namespace hattr::net {
-namespace {
-
-
-}  // namespace
 
 void LinkConditions::validate() const {
   const auto check_time = [](const char* name, double value) {

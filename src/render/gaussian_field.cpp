@@ -1,6 +1,8 @@
 #include "hattr/render/gaussian_field.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <numbers>
 
 #include "hattr/core/error.hpp"
@@ -113,6 +115,29 @@ double CorrelatedGaussianField::at(double x_m, double y_m) const noexcept {
   const double a = values_[y0 + x0] + u * (values_[y0 + x1] - values_[y0 + x0]);
   const double b = values_[y1 + x0] + u * (values_[y1 + x1] - values_[y1 + x0]);
   return a + v * (b - a);
+}
+
+std::shared_ptr<const CorrelatedGaussianField> sharedGaussianField(const GaussianFieldParams& params) {
+  // The fields still held anywhere (weak) and the last two asked for (kept alive), newest last.
+  static std::mutex mutex;
+  static std::vector<std::weak_ptr<const CorrelatedGaussianField>> known;
+  static std::vector<std::shared_ptr<const CorrelatedGaussianField>> recent;
+  constexpr std::size_t kKept = 2;
+  const std::lock_guard lock(mutex);
+  std::erase_if(known, [](const auto& w) { return w.expired(); });
+  std::shared_ptr<const CorrelatedGaussianField> field;
+  for (const auto& w : known) {
+    auto held = w.lock();
+    if (held && held->params() == params) field = std::move(held);
+  }
+  if (!field) {
+    field = std::make_shared<const CorrelatedGaussianField>(params);
+    known.push_back(field);
+  }
+  std::erase(recent, field);
+  recent.push_back(field);
+  if (recent.size() > kKept) recent.erase(recent.begin());
+  return field;
 }
 
 }  // namespace hattr::render

@@ -40,7 +40,7 @@ PaperRenderer::PaperRenderer(const PaperParams& params, HeightField relief)
     : params_(params), relief_(std::move(relief)) {
   validatePaperParams(params_);
   if (params_.texture.sigma > 0.0) {
-    texture_ = std::make_unique<CorrelatedGaussianField>(
+    texture_ = sharedGaussianField(
         GaussianFieldParams{.correlation_length_m = params_.texture.correlation_length_m, .seed = params_.texture.seed});
   }
 }

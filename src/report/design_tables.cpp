@@ -20,7 +20,6 @@
 namespace hattr::report {
 namespace {
 
-
 nlohmann::json kinematicsJson(const std::map<std::string, double>& k) {
   nlohmann::json out = nlohmann::json::object();
   for (const auto& [name, v] : k) out[name] = jsonNumber(v);

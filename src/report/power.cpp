@@ -26,7 +26,8 @@ std::size_t metricSize(const PowerPlan& plan) { return 2 + plan.pairs().size(); 
 /// A significant result: a p below α (a NaN p, no variance to test, never is).
 bool significant(double p, double alpha) { return std::isfinite(p) && p < alpha; }
 
-/// JSON keeps NaN as null; doubles otherwise round-trip exactly (17 significant digits).
+/// A number read back from a shard: null (how jsonNumber writes NaN) is NaN again; doubles
+/// round-trip exactly (17 significant digits).
 double numberOrNaN(const nlohmann::json& v) { return v.is_null() ? kNaN : v.get<double>(); }
 
 nlohmann::json planToJson(const PowerPlan& plan) {
@@ -169,7 +170,7 @@ nlohmann::json powerShardToJson(const PowerPlan& plan, int shard, int shards, co
     std::vector<double> flat;
     encodeOutcome(o, flat);
     nlohmann::json values = nlohmann::json::array();
-    for (std::size_t i = 1; i < flat.size(); ++i) values.push_back(numberOrNaN(flat[i]));
+    for (std::size_t i = 1; i < flat.size(); ++i) values.push_back(jsonNumber(flat[i]));
     replicates.push_back({{"replicate", o.replicate}, {"values", values}});
   }
   return {{"hattr_power_shard", kShardFormat}, {"shard", shard}, {"shards", shards}, {"plan", planToJson(plan)},

@@ -222,7 +222,6 @@ StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptio
 
 namespace {
 
-
 nlohmann::json anovaJson(const analysis::AnovaTable& t) {
   nlohmann::json rows = nlohmann::json::array();
   for (const auto& r : t.rows) {

@@ -284,6 +284,77 @@ class DocRunner(unittest.TestCase):
                 pass
         self.assertEqual(still_running, [])
 
+    PARTS_PAGE = """\
+        ```sh
+        greeting=hello
+        ```
+
+        ```sh
+        echo "$greeting" > made.txt
+        ```
+
+        <!-- doc-test: own test slow, after "greeting=hello" and "made.txt" -->
+        ```sh
+        cat made.txt
+        echo "$greeting again"
+        ```
+
+        ```output
+        hello
+        hello again
+        ```
+
+        ```sh
+        echo main
+        test ! -e made-in-part.txt
+        ```
+
+        <!-- doc-test: own test slow -->
+        ```sh
+        echo "part's second block" > made-in-part.txt
+        ```
+        """
+
+    def test_a_pages_own_test_runs_its_blocks_after_the_ones_they_need_and_the_page_leaves_them_out(self):
+        main = run_page(self.PARTS_PAGE, "--parts", "slow")
+        self.assertEqual(main.returncode, 0, main.stdout + main.stderr)
+        self.assertIn("3 block(s) run", main.stdout)
+        part = run_page(self.PARTS_PAGE, "--part", "slow", "--parts", "slow")
+        self.assertEqual(part.returncode, 0, part.stdout + part.stderr)
+        self.assertIn("4 block(s) run", part.stdout)  # the two it needs, then its own two
+
+    def test_a_page_whose_parts_differ_from_ctests_is_refused(self):
+        r = run_page(self.PARTS_PAGE)  # ctest runs no part: the "slow" blocks would go untested
+        self.assertEqual(r.returncode, 2, r.stdout + r.stderr)
+        self.assertIn("page.md: its own-test parts are slow, but ctest runs none besides the page", r.stderr)
+        unknown = run_page(self.PARTS_PAGE, "--part", "fast", "--parts", "slow")
+        self.assertEqual(unknown.returncode, 2, unknown.stdout + unknown.stderr)
+        self.assertIn("--part fast: no block is marked", unknown.stderr)
+
+    def test_a_part_needing_a_block_the_page_does_not_have_is_refused(self):
+        r = run_page("""\
+            <!-- doc-test: own test lonely, after "no such text" -->
+            ```sh
+            echo alone
+            ```
+            """, "--part", "lonely", "--parts", "lonely")
+        self.assertEqual(r.returncode, 2, r.stdout + r.stderr)
+        self.assertIn("page.md:2: needs an earlier block with 'no such text': there is none", r.stderr)
+
+    def test_the_blocks_that_took_two_seconds_or_more_are_named(self):
+        r = run_page("""\
+            ```sh
+            sleep 2.2
+            ```
+
+            ```sh
+            echo quick
+            ```
+            """)
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        self.assertRegex(r.stdout, r"page.md:1: block took 2\.\d s")
+        self.assertNotIn("page.md:5: block took", r.stdout)
+
 
 if __name__ == "__main__":
     HATTR = sys.argv.pop(1)

@@ -21,6 +21,14 @@ command, or a block labelled bash, shell or console, fails the page (say sh, syn
 A block that reads ../shared/data (the SVC2004 recordings) is skipped, saying so, when the data
 is absent.
 
+A long page can run as several tests (so that no test takes more than a minute): the sh blocks
+right below a comment line "<!-- doc-test: own test NAME -->" run in a test of their own
+(--part NAME), in page order in their own scratch folder, and the page's test leaves them out.
+"<!-- doc-test: own test NAME, after "TEXT" and "TEXT2" -->" first runs the earlier blocks that
+contain each TEXT (what the part needs: a variable, a file). The page's test checks that the
+page's parts are the ones ctest runs (--parts NAME,NAME, tests/CMakeLists.txt). Each test
+prints the blocks that took 2 s or more.
+
 What fails a block: a command whose exit status is not 0, as bash's ERR trap sees it (not the
 left side of && or ||, nor a command in an if condition).
 
@@ -45,6 +53,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 SKIP_MARK = re.compile(r"^(?:#\s*)?not runnable here(?: as written)?:\s*(.*)$")
+OWN_TEST = re.compile(r"^<!--\s*doc-test: own test ([a-z0-9-]+)(?:, after (.*?))?\s*-->$")
 COMMAND_START = re.compile(r"^\s*(\$?hattr\b|build/|\./|make\b|cmake\b|ctest\b|python3?\b|time\b|/usr/bin/|cd\b|sudo\b|apt(-get)?\b)")
 RUNNABLE_LABELS = {"sh", "python"}  # run in order; python blocks by the interpreter running this script
 SHELL_LABELS = {"bash", "shell", "console", "zsh", "shell-session", "sh-session"}
@@ -129,6 +138,42 @@ def skip_reason(block: Block) -> str | None:
         if skip:
             return skip.group(1).strip()
     return None
+
+
+def own_test_part(block: Block) -> tuple[str, list[str]] | None:
+    """For a block marked to run in a test of its own: the part's name and the texts naming the
+    earlier blocks it needs (maybe none); None for any other block."""
+    mark = OWN_TEST.match(block.note)
+    if mark is None:
+        return None
+    return mark.group(1), re.findall(r'"([^"]+)"', mark.group(2) or "")
+
+
+def blocks_of_part(page: Page, runnable: list[tuple[int, Block]], part: str, parts: list[str]) -> list[tuple[int, Block]]:
+    """The runnable blocks of one part of the page: part "" is the page without its own-test
+    blocks (and checks that its parts are `parts`), part NAME the blocks marked with NAME, after
+    the blocks they need."""
+    marked = [(k, b, own_test_part(b)) for k, b in enumerate(page.blocks) if b.info in RUNNABLE_LABELS]
+    marked = [(k, b, m) for k, b, m in marked if m is not None]
+    names = list(dict.fromkeys(m[0] for _, _, m in marked))
+    if part == "":
+        if sorted(names) != sorted(parts):
+            raise PageError(f"{page.name}: its own-test parts are {', '.join(names) or 'none'}, but ctest runs "
+                            f"{', '.join(parts) or 'none'} besides the page: name them in tests/CMakeLists.txt "
+                            f"(hattr_doc_parts)")
+        return [(k, b) for k, b in runnable if own_test_part(b) is None]
+    if part not in names:
+        raise PageError(f"{page.name}: --part {part}: no block is marked \"doc-test: own test {part}\"")
+    mine = [(k, b, m) for k, b, m in marked if m[0] == part]
+    chosen = set()
+    for k_own, own_block, (_, needs) in mine:
+        for text in needs:
+            found = next(((k, b) for k, b in runnable if k < k_own and any(text in l for l in b.lines)), None)
+            if found is None:
+                raise PageError(f"{page.name}:{own_block.line}: needs an earlier block with {text!r}: there is none")
+            chosen.add(found[0])
+    chosen |= {k for k, _, _ in mine}
+    return [(k, b) for k, b in runnable if k in chosen]
 
 
 def tracked_entries(source: Path) -> list[str]:
@@ -333,6 +378,7 @@ def run_page(args: argparse.Namespace) -> int:
             data_absent += 1
             continue
         runnable.append((k, b))
+    runnable = blocks_of_part(page, runnable, args.part, [p for p in args.parts.split(",") if p])
     if data_absent and not runnable and not any(b.info == "synopsis" for b in page.blocks):
         return SKIPPED_EXIT
 
@@ -346,7 +392,7 @@ def run_page(args: argparse.Namespace) -> int:
         env["BENCHMARK_MIN_TIME"] = "0.001"
         # python blocks import the build's package (copied into the scratch clone).
         env["PYTHONPATH"] = str(clone / "build" / "release" / "python")
-        for b in page.blocks:
+        for b in page.blocks if args.part == "" else []:  # a part runs its blocks only
             if b.info == "synopsis":
                 failures += synopsis_failures(page, b, hattr, env, clone)
 
@@ -405,6 +451,8 @@ def main() -> int:
     parser.add_argument("--build-dir", help="the build tree (default: three folders above --hattr)")
     parser.add_argument("--shared", help="the shared folder beside the clone (default: SOURCE/../shared)")
     parser.add_argument("--timeout", type=float, default=900, help="seconds for the whole page")
+    parser.add_argument("--part", default="", help="NAME: the page's blocks marked \"own test NAME\" (default: the rest)")
+    parser.add_argument("--parts", default="", help="the page's part names, comma-separated (checked by the page's test)")
     parser.add_argument("--keep", action="store_true", help="keep the scratch folder")
     args = parser.parse_args()
     try:

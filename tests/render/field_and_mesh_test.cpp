@@ -1,4 +1,5 @@
 #include <cmath>
+#include <memory>
 #include <numbers>
 #include <random>
 
@@ -49,6 +50,29 @@ TEST(GaussianField, SameSeedSameFieldOtherSeedOtherField) {
     differences += std::abs(a.at(x, y) - c.at(x, y));
   }
   EXPECT_GT(differences / 1000, 0.5);
+}
+
+// A paper's texture is built once and shared: the same parameters give the same field (the
+// values of one built on its own), other parameters another; the last two asked for are kept.
+TEST(GaussianField, SharedFieldsAreBuiltOnceForTheSameParametersAndEqualAFreshBuild) {
+  const GaussianFieldParams five{.seed = 5, .tile_cells = 64};
+  const auto a = sharedGaussianField(five);
+  const auto b = sharedGaussianField(five);
+  EXPECT_EQ(a.get(), b.get());
+  auto other = sharedGaussianField({.seed = 6, .tile_cells = 64});
+  EXPECT_NE(other.get(), a.get());
+  const CorrelatedGaussianField fresh(five);
+  for (int i = 0; i < 200; ++i) EXPECT_EQ(a->at(i * 1.3e-4, i * 0.7e-4), fresh.at(i * 1.3e-4, i * 0.7e-4));
+  // Released by everyone here, a field is still kept while it is among the last two asked for.
+  const std::weak_ptr<const CorrelatedGaussianField> watch = other;
+  other.reset();
+  ASSERT_FALSE(watch.expired());
+  EXPECT_EQ(sharedGaussianField({.seed = 6, .tile_cells = 64}).get(), watch.lock().get());
+  // A third field pushes the oldest released one out.
+  const std::weak_ptr<const CorrelatedGaussianField> oldest = sharedGaussianField({.seed = 7, .tile_cells = 64});
+  (void)sharedGaussianField({.seed = 8, .tile_cells = 64});
+  (void)sharedGaussianField({.seed = 9, .tile_cells = 64});
+  EXPECT_TRUE(oldest.expired());
 }
 
 TEST(GaussianField, TextureMakesFrictionVaryAroundItsMean) {

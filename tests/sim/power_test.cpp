@@ -95,6 +95,9 @@ TEST(PowerStudy, AReplicateIsTheInSilicoStudyWithSeedPlusRAndEachDesignItsFirstS
 TEST(PowerStudy, UnderAHypothesisAReplicateIsTheInSilicoStudyUnderIt) {
   HATTR_SKIP_UNDER_THREAD_SANITIZER("a replicate compared with two in silico studies; subjects at once run under it in "
                                     "InSilicoStudy.SubjectsRunAtOnceGiveTheSameTrialsToTheBitAsOneAtATime");
+  HATTR_SKIP_UNDER_ADDRESS_SANITIZER("48 s under it; a replicate's path runs there in "
+                                     "PowerStudy.AReplicateIsTheInSilicoStudy..., the hypotheses' models in "
+                                     "HypothesesCli.TabulatesThePapersPoints...");
   test::TempDir dir;
   const PowerStudy power({.training_trials = 2, .recall_trials = 3, .subject_counts = {3}, .replicates = 1, .seed = 8,
                           .threads = 2, .hypothesis = "guidance-dependent", .scratch = dir / "scratch"});
@@ -224,6 +227,8 @@ TEST(PowerStudy, AWeekApartReplicateIsTheDesignRunWithItsSubjectsAndItsStrategie
 TEST(PowerStudy, ReplicatesRunTogetherAreEachTheSameAsRunOnItsOwn) {
   HATTR_SKIP_UNDER_THREAD_SANITIZER("five replicates took 231 s under it; "
                                     "PowerStudy.TwoReplicatesOnTwoThreadsShareNothingWritable runs the threads there");
+  HATTR_SKIP_UNDER_ADDRESS_SANITIZER("67 s under it; PowerStudy.TwoReplicatesOnTwoThreadsShareNothingWritable runs "
+                                     "replicates two at once there");
   test::TempDir dir;
   const PowerStudy power({.training_trials = 0, .recall_trials = 3, .subject_counts = {3}, .replicates = 2,
                           .seed = 11, .threads = 2, .scratch = dir / "scratch"});

@@ -31,3 +31,18 @@
 #else
 #define HATTR_SKIP_UNDER_ADDRESS_SANITIZER(why) static_cast<void>(0)
 #endif
+
+namespace hattr::test {
+
+/// Whether this program runs under a sanitizer (address + undefined, or thread). A test that
+/// repeats one path over many inputs runs fewer of them there: the sanitizers look for memory
+/// and thread errors, which a path shows on its first inputs, and they slow the simulated
+/// trials 10-40 times; the release build runs every input (docs/architecture.md).
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || defined(HATTR_UNDER_ADDRESS_SANITIZER) || \
+    defined(HATTR_UNDER_THREAD_SANITIZER)
+inline constexpr bool kSanitized = true;
+#else
+inline constexpr bool kSanitized = false;
+#endif
+
+}  // namespace hattr::test

@@ -23,7 +23,7 @@ constexpr double radiansToDegrees(double rad) { return rad / kRadiansPerDegree; 
 constexpr double gramForceToNewtons(double gf) { return gf * 1e-3 * kStandardGravity_m_per_s2; }
 
 /// A duration in seconds as whole nanoseconds (rounded to the nearest), for clocks and timeouts.
-inline std::int64_t secondsToNanoseconds(double s) { return static_cast<std::int64_t>(std::llround(s * 1e9)); }
+inline std::int64_t secondsToNanoseconds(double s) noexcept { return static_cast<std::int64_t>(std::llround(s * 1e9)); }
 
 inline constexpr double kMillimetresPerMetre = 1000.0;
 

@@ -75,7 +75,7 @@ class PaperRenderer final : public WorldRenderer {
  private:
   PaperParams params_;
   HeightField relief_;
-  std::unique_ptr<CorrelatedGaussianField> texture_;
+  std::shared_ptr<const CorrelatedGaussianField> texture_;  ///< sharedGaussianField: read only
   ContactDetail detail_;
   bool in_contact_ = false;
 };
