@@ -79,8 +79,13 @@ std::string postgresFor(const char* variable) {
 
 /// SQLite: a fresh study file for each run. PostgreSQL: the database the environment names,
 /// made into the study at the first run and kept for the others (a database holds one study).
-session::StudyDatabase& studyFor(const std::filesystem::path& dir, const char* postgres_variable) {
+std::map<std::string, session::StudyDatabase>& keptStudies() {
   static std::map<std::string, session::StudyDatabase> kept;
+  return kept;
+}
+
+session::StudyDatabase& studyFor(const std::filesystem::path& dir, const char* postgres_variable) {
+  auto& kept = keptStudies();
   const std::string address = postgres_variable ? postgresFor(postgres_variable) : "";
   if (address.empty()) kept.erase(address);
   if (!kept.contains(address)) kept.emplace(address, freshStudy(dir, address));
@@ -152,6 +157,7 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
+  keptStudies().clear();  // closed before their folder goes
   std::error_code ignored;
   std::filesystem::remove_all(scratchRoot(), ignored);
   return 0;

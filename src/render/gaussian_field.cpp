@@ -118,10 +118,15 @@ double CorrelatedGaussianField::at(double x_m, double y_m) const noexcept {
 }
 
 std::shared_ptr<const CorrelatedGaussianField> sharedGaussianField(const GaussianFieldParams& params) {
-  // The fields still held anywhere (weak) and the last two asked for (kept alive), newest last.
-  static std::mutex mutex;
-  static std::vector<std::weak_ptr<const CorrelatedGaussianField>> known;
-  static std::vector<std::shared_ptr<const CorrelatedGaussianField>> recent;
+  // The fields still held anywhere (weak) and the last two asked for (kept alive), newest last;
+  // never destroyed, so a thread asking while the program exits finds it whole.
+  struct Cache {
+    std::mutex mutex;
+    std::vector<std::weak_ptr<const CorrelatedGaussianField>> known;
+    std::vector<std::shared_ptr<const CorrelatedGaussianField>> recent;
+  };
+  static Cache& cache = *new Cache;
+  auto& [mutex, known, recent] = cache;
   constexpr std::size_t kKept = 2;
   const std::lock_guard lock(mutex);
   std::erase_if(known, [](const auto& w) { return w.expired(); });

@@ -341,6 +341,39 @@ class DocRunner(unittest.TestCase):
         self.assertEqual(r.returncode, 2, r.stdout + r.stderr)
         self.assertIn("page.md:2: needs an earlier block with 'no such text': there is none", r.stderr)
 
+    def test_a_misspelt_mark_and_a_part_with_nothing_to_run_are_refused(self):
+        misspelt = run_page("""\
+            <!-- doc-test: own-test slow -->
+            ```sh
+            echo hidden
+            ```
+            """)
+        self.assertEqual(misspelt.returncode, 2, misspelt.stdout + misspelt.stderr)
+        self.assertIn("page.md:1: expected <!-- doc-test: own test NAME -->", misspelt.stderr)
+        empty = run_page("""\
+            <!-- doc-test: own test idle -->
+            ```sh
+            # not runnable here: a real pen
+            echo never
+            ```
+            """, "--part", "idle", "--parts", "idle")
+        self.assertEqual(empty.returncode, 2, empty.stdout + empty.stderr)
+        self.assertIn("--part idle: every block of the part is marked not runnable here", empty.stderr)
+
+    def test_a_parts_output_block_is_checked(self):
+        r = run_page("""\
+            <!-- doc-test: own test checked -->
+            ```sh
+            echo actual
+            ```
+
+            ```output
+            expected
+            ```
+            """, "--part", "checked", "--parts", "checked")
+        self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+        self.assertIn("expected output line not printed", r.stderr)
+
     def test_the_blocks_that_took_two_seconds_or_more_are_named(self):
         r = run_page("""\
             ```sh

@@ -25,7 +25,8 @@ A long page can run as several tests (so that no test takes more than a minute):
 right below a comment line "<!-- doc-test: own test NAME -->" run in a test of their own
 (--part NAME), in page order in their own scratch folder, and the page's test leaves them out.
 "<!-- doc-test: own test NAME, after "TEXT" and "TEXT2" -->" first runs the earlier blocks that
-contain each TEXT (what the part needs: a variable, a file). The page's test checks that the
+contain each TEXT, the nearest one each (what the part needs: a variable, a file; not followed
+further, so name every block it needs). The page's test checks that the
 page's parts are the ones ctest runs (--parts NAME,NAME, tests/CMakeLists.txt). Each test
 prints the blocks that took 2 s or more.
 
@@ -149,6 +150,16 @@ def own_test_part(block: Block) -> tuple[str, list[str]] | None:
     return mark.group(1), re.findall(r'"([^"]+)"', mark.group(2) or "")
 
 
+def check_marks(page: Page) -> None:
+    """Refuses a "doc-test:" comment that is not a well-formed own-test mark (a typo would
+    otherwise leave its block in the page's test, or a need unmet)."""
+    for b in page.blocks:
+        if re.match(r"^<!--\s*doc-test:", b.note) and own_test_part(b) is None:
+            raise PageError(f"{page.name}:{b.line - 1}: expected <!-- doc-test: own test NAME --> or "
+                            f"<!-- doc-test: own test NAME, after \"TEXT\" and \"TEXT\" --> (NAME: a-z, 0-9, -), "
+                            f"got {b.note}")
+
+
 def blocks_of_part(page: Page, runnable: list[tuple[int, Block]], part: str, parts: list[str]) -> list[tuple[int, Block]]:
     """The runnable blocks of one part of the page: part "" is the page without its own-test
     blocks (and checks that its parts are `parts`), part NAME the blocks marked with NAME, after
@@ -165,10 +176,13 @@ def blocks_of_part(page: Page, runnable: list[tuple[int, Block]], part: str, par
     if part not in names:
         raise PageError(f"{page.name}: --part {part}: no block is marked \"doc-test: own test {part}\"")
     mine = [(k, b, m) for k, b, m in marked if m[0] == part]
+    if not any(k == k_own for k_own, _, _ in mine for k, _ in runnable):
+        return []  # every block of the part skipped (not runnable here, or its data absent)
     chosen = set()
     for k_own, own_block, (_, needs) in mine:
         for text in needs:
-            found = next(((k, b) for k, b in runnable if k < k_own and any(text in l for l in b.lines)), None)
+            # The nearest earlier block with the text (needs are not followed further).
+            found = next(((k, b) for k, b in reversed(runnable) if k < k_own and any(text in l for l in b.lines)), None)
             if found is None:
                 raise PageError(f"{page.name}:{own_block.line}: needs an earlier block with {text!r}: there is none")
             chosen.add(found[0])
@@ -359,6 +373,7 @@ def run_page(args: argparse.Namespace) -> int:
     doc = source / args.page
     page = parse_page(doc, args.page)
     check_page_form(page)
+    check_marks(page)
     hattr = Path(args.hattr).resolve()
     build = Path(args.build_dir).resolve() if args.build_dir else hattr.parent.parent.parent
     shared = Path(args.shared).resolve() if args.shared else (source.parent / "shared")
@@ -379,6 +394,10 @@ def run_page(args: argparse.Namespace) -> int:
             continue
         runnable.append((k, b))
     runnable = blocks_of_part(page, runnable, args.part, [p for p in args.parts.split(",") if p])
+    if args.part and not runnable:  # the part's own blocks were all skipped
+        if data_absent:
+            return SKIPPED_EXIT
+        raise PageError(f"{page.name}: --part {args.part}: every block of the part is marked not runnable here")
     if data_absent and not runnable and not any(b.info == "synopsis" for b in page.blocks):
         return SKIPPED_EXIT
 

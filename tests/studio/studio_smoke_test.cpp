@@ -54,6 +54,10 @@ class StudioSmokeTest : public QObject {
     settings->setValue("train/settle_s", 0.5);
     settings->setValue("record/trigger", 1);  // start/stop buttons
     settings->setValue("record/name", "Ana");
+    // The mouse presses 0.8 N, not the default 1.2 N: a take recorded in real time overshoots at
+    // touch-down, more on a loaded host (1.80 N was seen beside the doc tests), and a take used
+    // as the reference must stay within the pen's 1.75 N whatever the load.
+    settings->setValue("input/press_N", 0.8);
     settings->setValue("record/character", "eight");
     window_ = std::make_unique<MainWindow>(std::move(settings));
     window_->setInteractive(false);
