@@ -8,6 +8,7 @@
 #include <fmt/ranges.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/core/units.hpp"
 #include "hattr/device/device_uri.hpp"
 #include "hattr/guidance/strategy_catalog.hpp"
 #include "hattr/guidance/strategy_schedule.hpp"
@@ -281,7 +282,7 @@ TrialResult runTrial(TrialEnvironment& env, const TrialSetup& setup, device::Han
                                 : ticks;
     advance(stall_tick);
     if (stall_tick < ticks) {
-      loop.delaySimulated(std::chrono::nanoseconds(std::llround(setup.injected_stall_s * 1e9)));
+      loop.delaySimulated(std::chrono::nanoseconds(units::secondsToNanoseconds(setup.injected_stall_s)));
       advance(ticks - stall_tick);
     }
   } else {
