@@ -19,6 +19,7 @@
 
 #include "hattr/core/error.hpp"
 #include "support/test_support.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr::analysis {
 namespace {
@@ -478,6 +479,7 @@ std::vector<double> warpedCopy(std::mt19937_64& rng, const std::vector<double>& 
 // are those of the pair-by-pair kernel to the bit (absolute costs: no rounding differs), and
 // the reference's for squared ones.
 TEST(DtwBatch, PruningLeavesEveryCostAsComputedInFull) {
+  HATTR_STARTS_NO_THREAD();
   const std::uint64_t seed = test::testSeed(23);
   SCOPED_TRACE(seedNote(seed));
   std::mt19937_64 rng(seed);

@@ -23,6 +23,7 @@
 #include "support/host_stalls.hpp"
 #include "support/no_allocation.hpp"
 #include "support/test_support.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr::device {
 namespace {
@@ -107,6 +108,7 @@ session::TrialResult runCircleTrial(const std::string& device_uri, guidance::Tra
 }
 
 TEST(SimPlugin, TrialThroughThePluginIsBitIdenticalToSimPen) {
+  HATTR_STARTS_NO_THREAD();
   const auto direct = runCircleTrial("sim://pen?mass_kg=0.05", guidance::TrainingMode::kBasic, nullptr);
   const auto plugged = runCircleTrial(uriOf(test::builtFile("HATTR_SIM_PLUGIN"), "mass_kg=0.05"), guidance::TrainingMode::kBasic, nullptr);
   ASSERT_EQ(direct.profile.size(), plugged.profile.size());

@@ -19,6 +19,7 @@
 
 #include "support/run_command.hpp"
 #include "support/test_support.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr {
 namespace {
@@ -376,6 +377,7 @@ std::set<std::string> filesUnder(const fs::path& dir) {
 }
 
 TEST_P(BadInputCorpus, ExitsTwoNamingTheFileAndLeavesNothingBehind) {
+  HATTR_STARTS_NO_THREAD();
   const BadInput& c = GetParam();
   test::TempDir dir;
   const std::string args = c.prepare(dir.path());
@@ -460,6 +462,7 @@ TEST(Outputs, TwoOutputsAreCheckedBeforeEitherIsWrittenAndATrialBeforeItRuns) {
 
 // While a runner holds the study, its running trial is running, not interrupted.
 TEST(StudyStatus, ARunningTrialOfALiveRunnerIsNotCountedInterrupted) {
+  HATTR_STARTS_NO_THREAD();
   test::TempDir dir;
   fs::copy_file(goodDatabase(), dir / "s.sqlite");
   sqlite3* raw = nullptr;

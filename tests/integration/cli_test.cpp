@@ -15,6 +15,7 @@
 #include "hattr/io/profile_csv.hpp"
 #include "support/run_command.hpp"
 #include "support/test_support.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr {
 namespace {
@@ -212,6 +213,7 @@ std::string handScript(double y_offset_mm = 0.0, double press_N = 1.2) {
 // is written and marked, and the command exits 1 naming what happened, unless told to keep it
 // (issue 38).
 TEST(Cli, ARecordingThroughThePaperIsKeptMarkedAndFailsUnlessKeepDisturbed) {
+  HATTR_STARTS_NO_THREAD();
   test::TempDir dir;
   test::writeText(dir / "heavy.csv", handScript(0.0, 20.0));
   const auto path = [&](const char* name) { return (dir / name).string(); };
@@ -241,6 +243,7 @@ TEST(Cli, ARecordingThroughThePaperIsKeptMarkedAndFailsUnlessKeepDisturbed) {
 // Issue 38: train refuses a reference (or a hand) the pen cannot render, before the trial, with
 // the numbers and the remedy; `profile convert --scale-force` is that remedy.
 TEST(Cli, TrainRefusesAReferenceThePenCannotRenderAndScalingItsForcesFixesIt) {
+  HATTR_STARTS_NO_THREAD();
   test::TempDir dir;
   test::writeText(dir / "heavy.csv", handScript(0.0, 3.5));
   test::writeText(dir / "light.csv", handScript());
@@ -281,6 +284,7 @@ TEST(Cli, TrainRefusesAReferenceThePenCannotRenderAndScalingItsForcesFixesIt) {
 }
 
 TEST(Cli, RecordThenTrainInEveryModeWritesProfilesWithGuidanceApart) {
+  HATTR_STARTS_NO_THREAD();
   test::TempDir dir;
   test::writeText(dir / "script.csv", handScript());
   test::writeText(dir / "drift.csv", handScript(5.0));
@@ -331,6 +335,7 @@ TEST(Cli, TrainRefusesBadModesAndMissingFilesWithExitTwo) {
 }
 
 TEST(Cli, StudyCommandsReportStatusAndRefuseBadInputWithExitTwo) {
+  HATTR_STARTS_NO_THREAD();
   test::TempDir dir;
   test::writeText(dir / "expert.csv", handScript());
   test::writeText(dir / "bad.json", R"({"name": "x", "skill": "loop", "experts": {"loop": "nope.csv"},
@@ -370,6 +375,7 @@ TEST(Cli, StudyCommandsReportStatusAndRefuseBadInputWithExitTwo) {
 // Issue 35: `--glyph` takes a glyph file by its path (it looked for data/glyphs/a.json.json), a
 // built-in name or the character; the expert's skill is the glyph's name.
 TEST(Cli, SimExpertTakesAGlyphByItsPathOrItsCharacter) {
+  HATTR_STARTS_NO_THREAD();
   test::TempDir dir;
   test::writeText(dir / "a.json", R"({"format": "hattr-glyph", "version": 1, "name": "hook",
       "strokes": [{"points": [[-5, 0], [0, 5], [5, 0]]}]})");

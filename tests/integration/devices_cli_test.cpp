@@ -12,6 +12,7 @@
 #include "support/host_stalls.hpp"
 #include "support/run_command.hpp"
 #include "support/test_support.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr {
 namespace {
@@ -136,6 +137,7 @@ TEST(DevicesCli, EveryPluginLoadingFailureExitsTwoWithItsMessage) {
 }
 
 TEST(DevicesCli, TrainOnTheSimPluginWritesTheSameSamplesAsOnSimPen) {
+  HATTR_STARTS_NO_THREAD();
   test::TempDir dir;
   // An expert recorded on sim://pen, then the same training trial on both devices.
   test::writeText(dir / "hand.csv",

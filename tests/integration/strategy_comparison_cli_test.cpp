@@ -74,6 +74,7 @@ TEST(StrategiesCli, TabulatesEachPhaseUnderEachStrategyAndHypothesisWithAnAaChec
 
 // The table for people, on the smallest design: one study of 2 strategies × 2 subjects × 6 trials.
 TEST(StrategiesCli, PrintsOnePhaseARowAndAStrategyAColumn) {
+  HATTR_STARTS_NO_THREAD();
   test::TempDir dir;
   const RunResult table = runHattr(dir, "sim compare-strategies --strategies basic,pcontrol --hypotheses position-plan "
                                         "--subjects 2 --trials 1 --aa-seeds 0 --threads 1");

@@ -13,6 +13,7 @@
 #include "hattr/session/study_database.hpp"
 #include "support/run_command.hpp"
 #include "support/test_support.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr {
 namespace {
@@ -41,6 +42,7 @@ void makeStudy(const test::TempDir& dir, const std::string& db) {
 }
 
 TEST(StudyCrash, KilledRunnerResumesWithEveryCompletedTrialIntactAndIdentical) {
+  HATTR_STARTS_NO_THREAD();
   test::TempDir dir;
   makeStudy(dir, "reference.sqlite");
   makeStudy(dir, "crash.sqlite");

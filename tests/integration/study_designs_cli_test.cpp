@@ -154,6 +154,7 @@ INSTANTIATE_TEST_SUITE_P(Designs, ShippedDesign,
 // A design's status says each subject's group and where it stands in the schedule; the
 // calendar holds a run at a session's end.
 TEST(DesignsCli, StatusShowsTheScheduleAndTheCalendarHoldsTheNextSession) {
+  HATTR_STARTS_NO_THREAD();
   test::TempDir dir;
   const RunResult design = runHattr(dir, "study example --design groups-retention");
   test::writeText(dir / "study.json", smallDesign(nlohmann::json::parse(design.out)).dump(2));
@@ -175,6 +176,7 @@ TEST(DesignsCli, StatusShowsTheScheduleAndTheCalendarHoldsTheNextSession) {
 // A design whose experts are named by their glyphs (the character, a built-in name) needs no
 // expert files: init records them; a name that is no glyph is refused with exit 2.
 TEST(DesignsCli, ExpertsNamedByTheirGlyphNeedNoFiles) {
+  HATTR_STARTS_NO_THREAD();
   test::TempDir dir;
   const RunResult design = runHattr(dir, "study example --design groups-retention");
   nlohmann::json study = smallDesign(nlohmann::json::parse(design.out));

@@ -12,6 +12,7 @@
 #include "hattr/net/mentor_station.hpp"
 #include "net/writing_script.hpp"
 #include "support/no_allocation.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr::net {
 namespace {
@@ -37,6 +38,7 @@ MentoredRun mentored(Coupling coupling, double rtt_s, double loss, bool passivit
 // where the pen renders 1.75 N sinks through the paper, and the leader's recording says so; the
 // follower's, written with the script's 1.2 N, does not.
 TEST(Mentoring, AStationsRecordingSaysWhenThePenWentThroughThePaper) {
+  HATTR_STARTS_NO_THREAD();
   const HapticProfile light = expertScript();
   HapticProfile heavy(light.metadata());
   for (Sample s : light.samples()) {
@@ -56,6 +58,7 @@ TEST(Mentoring, AStationsRecordingSaysWhenThePenWentThroughThePaper) {
 }
 
 TEST(Mentoring, EveryCouplingIsStableAt100MsAnd5PercentLossAndGuidanceBringsTheTraineeCloser) {
+  HATTR_STARTS_NO_THREAD();
   const MentoredRun alone = mentored(Coupling::kObserve, 0.1, 0.05);
   const double unguided = test::trajectoryDtw(alone.leader, alone.follower);
   for (const Coupling c : {Coupling::kObserve, Coupling::kPosition, Coupling::kForce, Coupling::kBilateral}) {
@@ -84,6 +87,7 @@ TEST(Mentoring, EveryCouplingIsStableAt100MsAnd5PercentLossAndGuidanceBringsTheT
 }
 
 TEST(Mentoring, WithoutThePassivityControllerLooselyHeldPensGoUnstableUnderDelayWithItTheyDoNot) {
+  HATTR_STARTS_NO_THREAD();
   // Both people hold their pens loosely (no grip stiffness, little damping): the bilateral
   // spring closes a loop over a 200 ms round trip.
   constexpr const char* kLoose = "sim://pen?hand_stiffness_N_per_m=0&hand_damping_N_s_per_m=0.2";
@@ -109,6 +113,7 @@ TEST(Mentoring, WithoutThePassivityControllerLooselyHeldPensGoUnstableUnderDelay
 }
 
 TEST(MentoringDeadband, SendsFewerPacketsWhileEveryCouplingStaysStableAndGuidesAsWell) {
+  HATTR_STARTS_NO_THREAD();
   // Weber fraction 0.1 at 100 ms round trip and 5 % loss: well under a packet per tick, never
   // under the heartbeat's rate, the link never drops, and the same coupling does what it did.
   for (const Coupling c : {Coupling::kPosition, Coupling::kForce, Coupling::kBilateral}) {

@@ -14,6 +14,7 @@
 #include "hattr/session/study_runner.hpp"
 #include "net/writing_script.hpp"
 #include "support/test_support.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr::net {
 namespace {
@@ -58,6 +59,7 @@ int runStudy(const std::filesystem::path& db_file, int max_trials = -1) {
 double metaNumber(const HapticProfile& p, const char* key) { return std::stod(p.metadata().extra.at(key)); }
 
 TEST(StudyMentor, MentoredModesAreStudyTrialsThatGuideTheTraineeStablyAt100MsAnd5PercentLoss) {
+  HATTR_STARTS_NO_THREAD();
   test::TempDir dir;
   test::writeText(dir / "study.json", mentoredStudy(dir));
   const auto db_file = dir / "study.sqlite";
@@ -103,6 +105,7 @@ TEST(StudyMentor, MentoredModesAreStudyTrialsThatGuideTheTraineeStablyAt100MsAnd
 }
 
 TEST(StudyMentor, AMentoredStudyResumedMidwayIsBitIdenticalToOneRunStraight) {
+  HATTR_STARTS_NO_THREAD();
   test::TempDir dir;
   test::writeText(dir / "study.json", mentoredStudy(dir));
   const auto study = session::loadStudy(dir / "study.json");
@@ -127,6 +130,7 @@ TEST(StudyMentor, AMentoredStudyResumedMidwayIsBitIdenticalToOneRunStraight) {
 }
 
 TEST(StudyMentor, AStudyWithMentoredModesNeedsItsMentorAndATrialWithoutOneIsRefused) {
+  HATTR_STARTS_NO_THREAD();
   test::TempDir dir;
   test::writeText(dir / "study.json", mentoredStudy(dir));
   (void)session::StudyDatabase::create(dir / "s.sqlite", session::loadStudy(dir / "study.json"));
@@ -155,6 +159,7 @@ TEST(StudyMentor, AStudyWithMentoredModesNeedsItsMentorAndATrialWithoutOneIsRefu
 }
 
 TEST(StudyMentor, ALinkThatNeverComesUpFailsTheTrialBeforeAnythingIsRecorded) {
+  HATTR_STARTS_NO_THREAD();
   test::TempDir dir;
   test::writeText(dir / "study.json", mentoredStudy(dir));
   auto study = session::loadStudy(dir / "study.json");

@@ -17,6 +17,7 @@
 #include "hattr/report/design_analysis.hpp"
 #include "hattr/session/study_runner.hpp"
 #include "support/test_support.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr::report {
 namespace {
@@ -549,6 +550,7 @@ TEST(StudyAnalysis, AnIncompletePapersStudysFallbackUsesTheSpareForAnExcludedTri
 }
 
 TEST(DisturbedTrials, ExcludeWithoutASpareSaysWhatToDo) {
+  HATTR_STARTS_NO_THREAD();
   CompletedStudy study(R"("disturbed_trials": "exclude", "analyzed_recall_trials": [1, 2, 3],)", stallInS01Recall2());
   const auto db = session::StudyDatabase::open(study.dir / "s.sqlite", session::OpenMode::kReadOnly);
   try {

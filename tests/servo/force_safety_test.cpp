@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "hattr/core/error.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr::servo {
 namespace {
@@ -98,6 +99,7 @@ double extremeNumber(std::mt19937_64& random) {
 }
 
 TEST(ForceSafety, IsTotalForEveryInputFiniteWithinTheLimitOrALatchedFault) {
+  HATTR_STARTS_NO_THREAD();
   const std::uint64_t seed = std::random_device{}();
   std::mt19937_64 random(seed);
   // A pool of extreme numbers, drawn from by a cheap generator: 10^7 cases in about a second.

@@ -15,6 +15,7 @@
 #include "hattr/session/study_schedule.hpp"
 #include "session/study_fixture.hpp"
 #include "support/test_support.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr::session {
 namespace {
@@ -88,6 +89,7 @@ TEST(StudyDesigns, EveryShippedDesignReadsAndPlansWhatItSays) {
 // The paper's protocol written as a design (one group, one session, a block per mode and
 // phase) is the same study: the same plan, and the same trials to the bit.
 TEST(StudyDesigns, ThePapersProtocolWrittenAsADesignIsTheSameStudy) {
+  HATTR_STARTS_NO_THREAD();
   const std::string paper_form = R"({"name": "p", "skill": "dash", "experts": {"dash": "expert.csv"},
     "modes": ["basic", "pcontrol", "alpha"],
     "protocol": {"training_trials": 2, "recall_trials": 1, "rest_s": 0, "tail_s": 0.05},
@@ -206,6 +208,7 @@ class DaysParticipant : public Participant {
 // In simulated days, each session follows at once and every participant the subject has is
 // told how many days passed, the same on a resume as in one run.
 TEST(StudyDesigns, SimulatedDaysPassBetweenSessionsAlikeInOneRunAndOnResume) {
+  HATTR_STARTS_NO_THREAD();
   DesignFolder folder(twoGroups());
   const StudyDefinition study = loadStudy(folder.dir / "study.json");
   const auto logged_run = [&](const std::string& file, const std::vector<int>& stops) {
@@ -281,6 +284,7 @@ TEST(StudySchedule, ASessionIsDueOnItsDayAfterTheFirstAndABegunSessionGoesOn) {
 
 // Following the calendar, a run stops at a session's end until the next is due, and says so.
 TEST(StudyDesigns, OnTheCalendarARunWaitsForTheNextSessionsDate) {
+  HATTR_STARTS_NO_THREAD();
   DesignFolder folder(twoGroups());
   { (void)StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json")); }
   StudyDatabase db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);
@@ -332,6 +336,7 @@ TEST(StudyDesigns, ASchema4StudyGetsItsTrialsPlacesInTheDesign) {
 // A design's export has each trial's place; its import is the same study. An export written
 // before designs (15 columns) still imports.
 TEST(StudyDesigns, ADesignExportsWithEachTrialsPlaceAndImportsAgain) {
+  HATTR_STARTS_NO_THREAD();
   DesignFolder folder(twoGroups());
   { (void)StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json")); }
   StudyDatabase db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);

@@ -15,6 +15,7 @@
 #include "hattr/session/study_runner.hpp"
 #include "session/study_fixture.hpp"
 #include "support/test_support.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr::session {
 namespace {
@@ -202,6 +203,7 @@ TEST(StudyDatabase, ASecondRunnerGetsAClearError) {
 }
 
 TEST(StudyRunner, RunsTheWholeProtocolAndExportImportIsExact) {
+  HATTR_STARTS_NO_THREAD();
   StudyFolder folder;
   StudyDatabase db = StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json"));
   db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);
@@ -305,6 +307,7 @@ ParticipantFactory countingFactory(RunnerLog& log) {
 // A resume costs what is left: a finished subject gets no participant and relives nothing;
 // a subject with trials left relives its own completed trials, then runs the rest.
 TEST(StudyRunner, AResumeRelivesOnlyTheSubjectsWithTrialsLeft) {
+  HATTR_STARTS_NO_THREAD();
   StudyFolder folder(smallStudy(3));
   { (void)StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json")); }
   StudyDatabase db = StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kRunner);
@@ -418,6 +421,7 @@ std::set<std::string> filesIn(const std::filesystem::path& dir) {
 // Import is all or nothing: one bad trial, and no database (nor any hidden half of one) is
 // left; with the trial fixed, the same import succeeds.
 TEST(StudyImport, OneBadTrialLeavesNoDatabaseBehind) {
+  HATTR_STARTS_NO_THREAD();
   StudyFolder folder;
   {
     StudyDatabase db = StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json"));

@@ -14,6 +14,7 @@
 #include "hattr/session/trial.hpp"
 #include "support/host_stalls.hpp"
 #include "support/test_support.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr::session {
 namespace {
@@ -45,6 +46,7 @@ render::WorldConfig flatWorld() {
 }
 
 TEST(TrialEnd, EndsThePenUpTimeAfterTheLastPenUpNotAtTheMaximum) {
+  HATTR_STARTS_NO_THREAD();
   TrialEnvironment env("sim://pen", flatWorld(), 1000.0);
   device::ProfileHandScript hand(writeThenLift(1.0, 1.2));
   TrialSetup setup{.duration_s = 10.0, .pen_up_end_s = 0.5};
@@ -92,6 +94,7 @@ TEST(TrialEnd, APenDownTriggerWithTheSamePenUpTimeEndsAsPenLifted) {
 }
 
 TEST(TrialEnd, WithoutTheRuleATrialLastsItsWholeDuration) {
+  HATTR_STARTS_NO_THREAD();
   TrialEnvironment env("sim://pen", flatWorld(), 1000.0);
   device::ProfileHandScript hand(writeThenLift(0.5, 0.6));
   const TrialResult r = runTrial(env, TrialSetup{.duration_s = 1.5}, hand);

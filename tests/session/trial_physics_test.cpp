@@ -11,6 +11,7 @@
 #include "hattr/render/world_config.hpp"
 #include "hattr/session/trial.hpp"
 #include "hattr/session/trial_physics.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr::session {
 namespace {
@@ -127,6 +128,7 @@ TrialResult runPressing(double press_N) {
 // Through the whole pipeline: a hand pressing 1.2 N writes a clean trial; one pressing 20 N
 // (past what the pen renders) sinks through the paper, and the recording says so.
 TEST(TrialPhysics, ATrialWhoseHandPressesPastTheDeviceIsDisturbedAndMarked) {
+  HATTR_STARTS_NO_THREAD();
   const TrialResult light = runPressing(1.2);
   EXPECT_FALSE(light.physics.any()) << describePhysicalEvents(light.physics);
   EXPECT_EQ(disturbanceOf(light), "");

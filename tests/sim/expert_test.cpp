@@ -16,6 +16,7 @@
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/session/study_database.hpp"
 #include "support/test_support.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr::sim {
 namespace {
@@ -61,6 +62,7 @@ double polylineLength(const std::vector<Vec2>& points) {
 }
 
 TEST(ExpertScript, PassesThroughEveryViaPointInWritingOrder) {
+  HATTR_STARTS_NO_THREAD();
   const HapticProfile& script = naScript();
   const auto runs = penDownRuns(script);
   ASSERT_EQ(runs.size(), na().strokes.size());
@@ -82,6 +84,7 @@ TEST(ExpertScript, PassesThroughEveryViaPointInWritingOrder) {
 }
 
 TEST(ExpertScript, StartsAndEndsAtRestAndRestsAtTouchDownAndLiftOff) {
+  HATTR_STARTS_NO_THREAD();
   const HapticProfile& script = naScript();
   EXPECT_EQ(script.samples().front().v_WT.norm(), 0.0);
   EXPECT_EQ(script.samples().back().v_WT.norm(), 0.0);
@@ -95,6 +98,7 @@ TEST(ExpertScript, StartsAndEndsAtRestAndRestsAtTouchDownAndLiftOff) {
 }
 
 TEST(ExpertScript, PeakSpeedIsTheDocumentedHandwritingSpeed) {
+  HATTR_STARTS_NO_THREAD();
   const auto speed = finiteDifferenceSpeed(naScript());
   const double peak = *std::max_element(speed.begin(), speed.end());
   EXPECT_GE(peak, 0.050);
@@ -108,6 +112,7 @@ TEST(ExpertScript, PeakSpeedIsTheDocumentedHandwritingSpeed) {
 }
 
 TEST(ExpertScript, VelocityChannelIsTheDerivativeOfThePath) {
+  HATTR_STARTS_NO_THREAD();
   const HapticProfile& script = naScript();
   double worst = 0.0;
   for (std::size_t i = 1; i + 1 < script.size(); ++i) {
@@ -118,6 +123,7 @@ TEST(ExpertScript, VelocityChannelIsTheDerivativeOfThePath) {
 }
 
 TEST(ExpertScript, LiftsThePenTwoToThreeMillimetresBetweenStrokes) {
+  HATTR_STARTS_NO_THREAD();
   const HapticProfile& script = naScript();
   const auto runs = penDownRuns(script);
   ASSERT_EQ(runs.size(), 3u);
@@ -139,6 +145,7 @@ TEST(ExpertScript, LiftsThePenTwoToThreeMillimetresBetweenStrokes) {
 }
 
 TEST(ExpertScript, StopsAtTheSharpCornerOfTheFirstStroke) {
+  HATTR_STARTS_NO_THREAD();
   // The first stroke turns 90° at the top left: handwriting comes to rest at such corners.
   const HapticProfile& script = naScript();
   const Vec2 corner = na().strokes[0].points[1];
@@ -152,6 +159,7 @@ TEST(ExpertScript, StopsAtTheSharpCornerOfTheFirstStroke) {
 }
 
 TEST(ExpertScript, LongerMovementsTakeLongerButLessThanInProportion) {
+  HATTR_STARTS_NO_THREAD();
   // Isochrony: a movement's duration grows as its length to the power β (0.5 by default).
   // Strokes 2 and 3 of ந are single movements; each pen-down run is its movement plus the
   // touch-down and lift-off rests.
@@ -167,6 +175,7 @@ TEST(ExpertScript, LongerMovementsTakeLongerButLessThanInProportion) {
 }
 
 TEST(ExpertScript, AxialForceRisesAtTouchDownHoldsAndFallsBeforeLiftOff) {
+  HATTR_STARTS_NO_THREAD();
   const ExpertConfig config;
   const HapticProfile& script = naScript();
   const double plateau_N = config.axial_force_N * std::sin(config.altitude_rad);
@@ -249,6 +258,7 @@ TEST(RecordExpert, PlaysTheScriptOnTheSimulatedPen) {
 // writing it on the study's pen and world, the same to the bit as recording it by hand, and
 // stored by create; a file is still a file, a missing one refused, an unknown name refused.
 TEST(RecordNamedExperts, RecordsTheGlyphsSimulatedExpertForTheStudyToStore) {
+  HATTR_STARTS_NO_THREAD();
   test::TempDir dir;
   const auto parse = [&](const std::string& experts) {
     return session::parseStudy(R"({"name": "named", "skill": "na", "experts": )" + experts +

@@ -19,6 +19,7 @@
 #include "hattr/sim/participant.hpp"
 #include "hattr/sim/trainee.hpp"
 #include "support/test_support.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr::sim {
 namespace {
@@ -228,6 +229,7 @@ TEST(LearningHypotheses, AForcePlanLearnerTakesAFeltForceAsForceToPushWith) {
 }
 
 TEST(LearningHypotheses, OnThePenAForcePlanWriterWhoPressesHarderThanItsPlanExpectsLagsMore) {
+  HATTR_STARTS_NO_THREAD();
   // The paper's section 4.3: the path follows from the force; pressing harder than the force
   // plan expects adds friction it does not push against, so the pen falls behind.
   const HapticProfile script = expertScript(loadGlyph(defaultDataDir() / "glyphs" / "loop.json"));

@@ -277,6 +277,7 @@ TEST(PowerStudy, TwoReplicatesOnTwoThreadsShareNothingWritable) {
 }
 
 TEST(PowerStudy, RefusesDesignsItCannotAnalyzeNamingTheOption) {
+  HATTR_STARTS_NO_THREAD();
   const auto message = [](const PowerOptions& o) {
     try {
       const PowerStudy power(o);

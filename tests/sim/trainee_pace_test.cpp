@@ -15,6 +15,7 @@
 #include "hattr/sim/trainee.hpp"
 #include "sim/shipped_model.hpp"
 #include "support/test_support.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr::sim {
 namespace {
@@ -81,6 +82,7 @@ std::vector<double> studyTrialDurations(double pace_cv) {
 }
 
 TEST(SimulatedTraineePace, AStudysTrialsLastAsLongAsTheTraineeTakes) {
+  HATTR_STARTS_NO_THREAD();
   const auto varied = studyTrialDurations(test::shippedModel().pace_cv.value);
   const auto steady = studyTrialDurations(0.0);
   ASSERT_EQ(varied.size(), 4u);

@@ -18,6 +18,7 @@
 #include "hattr/sim/trainee.hpp"
 #include "sim/shipped_model.hpp"
 #include "support/test_support.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr::sim {
 namespace {
@@ -251,6 +252,7 @@ TEST(SimulatedTrainee, FeltPushIntoThePaperRaisesThePlannedForce) {
 }
 
 TEST(SimulatedTrainee, UnderGuidanceThePlanSettlesWithTheResidualItsRetentionLeaves) {
+  HATTR_STARTS_NO_THREAD();
   // Slacking: the guidance holds the pen on the template and the trainee feels the force that
   // takes; with retention below 1 the plan never gets all the way there — it drifts back until
   // the force it feels sustains it, and the device carries the rest. Without forgetting, it does.
@@ -387,6 +389,7 @@ struct PenFixture {
 };
 
 TEST(SimulatedTraineeOnThePen, TheRecordedTrialFollowsThePlanAndSeeingItHelps) {
+  HATTR_STARTS_NO_THREAD();
   PenFixture f;
   SubjectTraits traits = populationTraits(test::shippedModel());
   traits.deviation_rms_m = 0.003;

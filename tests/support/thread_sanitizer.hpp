@@ -18,6 +18,13 @@
 #define HATTR_SKIP_UNDER_THREAD_SANITIZER(why) static_cast<void>(0)
 #endif
 
+// A test that starts no thread, in its process or in any process it starts (strace measured it:
+// scripts/threads-per-test; the release suite's lint:no-thread-marks checks every mark). Under
+// ThreadSanitizer, which finds races between threads, it has nothing to look at: it skips itself.
+#define HATTR_STARTS_NO_THREAD()                                                                   \
+  HATTR_SKIP_UNDER_THREAD_SANITIZER("it starts no thread, nor does any process it starts "         \
+                                    "(lint:no-thread-marks checks it)")
+
 // The same for AddressSanitizer, for a test whose cases repeat one path over data: one case
 // keeps the path under it, the others skip saying which one runs it.
 #if defined(__has_feature)
