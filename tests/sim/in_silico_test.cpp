@@ -4,6 +4,7 @@
 
 #include "hattr/session/study_database.hpp"
 #include "support/test_support.hpp"
+#include "support/thread_sanitizer.hpp"
 
 namespace hattr::sim {
 namespace {
@@ -19,7 +20,7 @@ struct SmallStudy {
 
 SmallStudy runSmallStudy(const std::filesystem::path& dir, int threads) {
   const InSilicoResult r = runInSilicoStudy(
-      {.out_dir = dir, .subjects = 3, .seed = 7, .training_trials = 1, .recall_trials = 2, .write_report = false,
+      {.out_dir = dir, .glyph = test::kStudyGlyph, .subjects = 3, .seed = 7, .training_trials = 1, .recall_trials = 2, .write_report = false,
        .threads = threads});
   SmallStudy s;
   const auto db = session::StudyDatabase::open(r.database, session::OpenMode::kReadOnly);

@@ -72,8 +72,8 @@ TEST(PowerStudy, AReplicateIsTheInSilicoStudyWithSeedPlusRAndEachDesignItsFirstS
   HATTR_SKIP_UNDER_THREAD_SANITIZER("a replicate compared with two in silico studies; subjects at once run under it in "
                                     "InSilicoStudy.SubjectsRunAtOnceGiveTheSameTrialsToTheBitAsOneAtATime");
   test::TempDir dir;
-  const PowerStudy power({.training_trials = 1, .recall_trials = 3, .subject_counts = {4, 3}, .replicates = 2,
-                          .seed = 5, .threads = 2, .scratch = dir / "scratch"});
+  const PowerStudy power({.glyph = test::kStudyGlyph, .training_trials = 1, .recall_trials = 3,
+                          .subject_counts = {4, 3}, .replicates = 2, .seed = 5, .threads = 2, .scratch = dir / "scratch"});
   EXPECT_EQ(power.plan().subject_counts, (std::vector<int>{3, 4}));
   EXPECT_EQ(power.plan().pairs(), (std::vector<std::string>{"BASIC-PCONTROL", "BASIC-ALPHA", "PCONTROL-ALPHA"}));
   const report::ReplicateOutcome outcome = power.runReplicate(1);
@@ -82,8 +82,9 @@ TEST(PowerStudy, AReplicateIsTheInSilicoStudyWithSeedPlusRAndEachDesignItsFirstS
   EXPECT_FALSE(std::filesystem::exists(dir / "scratch" / "replicate-1")) << "a replicate's database is removed";
 
   for (const int n : {3, 4}) {
-    const InSilicoResult alone = runInSilicoStudy({.out_dir = dir / std::to_string(n), .subjects = n, .seed = 6,
-                                                   .training_trials = 1, .recall_trials = 3, .write_report = false});
+    const InSilicoResult alone =
+        runInSilicoStudy({.out_dir = dir / std::to_string(n), .glyph = test::kStudyGlyph, .subjects = n, .seed = 6,
+                          .training_trials = 1, .recall_trials = 3, .write_report = false});
     const auto& design = outcome.designs[n == 3 ? 0 : 1];
     expectOutcomeOf(design[0], alone.analysis.trajectory, power.plan(), fmt::format("{} subjects trajectory", n));
     expectOutcomeOf(design[1], alone.analysis.force, power.plan(), fmt::format("{} subjects force", n));
@@ -121,8 +122,8 @@ TEST(PowerStudy, UnderAHypothesisAReplicateIsTheInSilicoStudyUnderIt) {
 TEST(PowerStudy, AGroupDesignsReplicateIsTheDesignRunWithItsSubjectsAndCompared) {
   HATTR_SKIP_UNDER_THREAD_SANITIZER("a replicate compared with the same study run on its own");
   test::TempDir dir;
-  const InSilicoResult expert = runInSilicoStudy({.out_dir = dir / "expert", .subjects = 2, .seed = 1,
-                                                  .training_trials = 0, .recall_trials = 2, .write_report = false});
+  const InSilicoResult expert = runInSilicoStudy({.out_dir = dir / "expert", .glyph = test::kStudyGlyph, .subjects = 2,
+                                                  .seed = 1, .training_trials = 0, .recall_trials = 2, .write_report = false});
   const std::string groups = R"({"name": "g", "skill": "na", "experts": {"na": "EXPERT"},
     "protocol": {"rest_s": 0}, "order": {"kind": "fixed"}, "world": {"relief": {"kind": "flat"}},
     "groups": [{"name": "one", "strategies": ["basic"], "subjects": SUBJECTS_ONE},
@@ -186,8 +187,8 @@ TEST(PowerStudy, AGroupDesignsReplicateIsTheDesignRunWithItsSubjectsAndCompared)
 TEST(PowerStudy, AWeekApartReplicateIsTheDesignRunWithItsSubjectsAndItsStrategiesCompared) {
   HATTR_SKIP_UNDER_THREAD_SANITIZER("a replicate compared with the same study run on its own");
   test::TempDir dir;
-  const InSilicoResult expert = runInSilicoStudy({.out_dir = dir / "expert", .subjects = 2, .seed = 1,
-                                                  .training_trials = 0, .recall_trials = 2, .write_report = false});
+  const InSilicoResult expert = runInSilicoStudy({.out_dir = dir / "expert", .glyph = test::kStudyGlyph, .subjects = 2,
+                                                  .seed = 1, .training_trials = 0, .recall_trials = 2, .write_report = false});
   std::string blocks;
   for (int k = 1; k <= 3; ++k) {
     blocks += fmt::format(R"({}{{"phase": "training", "strategy": {{"order": {}}}, "trials": 1}},
@@ -267,8 +268,8 @@ TEST(PowerStudy, ReplicatesRunTogetherAreEachTheSameAsRunOnItsOwn) {
 // with its outcome (found a race on glibc's signgam in std::lgamma, clean-clone run 26).
 TEST(PowerStudy, TwoReplicatesOnTwoThreadsShareNothingWritable) {
   test::TempDir dir;
-  const PowerStudy power({.training_trials = 0, .recall_trials = 2, .subject_counts = {3}, .replicates = 2,
-                          .seed = 3, .threads = 2, .scratch = dir / "scratch"});
+  const PowerStudy power({.glyph = test::kStudyGlyph, .training_trials = 0, .recall_trials = 2, .subject_counts = {3},
+                          .replicates = 2, .seed = 3, .threads = 2, .scratch = dir / "scratch"});
   const std::vector<report::ReplicateOutcome> outcomes = power.runReplicates(std::vector<int>{0, 1});
   ASSERT_EQ(outcomes.size(), 2u);
   EXPECT_EQ(outcomes[0].replicate, 0);
