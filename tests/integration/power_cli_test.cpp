@@ -29,7 +29,8 @@ using test::hattrCli;
 /// ThreadSanitizer now leaves the test to the other builds.
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 constexpr bool kRunMpirun = false;
-const std::string kPowerDesign = "sim power --subjects 3 --replicates 2 --trials 2 --seed 3 --glyph loop";
+const std::string kPowerDesign =
+    std::string("sim power --subjects 3 --replicates 2 --trials 2 --seed 3 --glyph ") + test::kStudyGlyph;
 constexpr std::size_t kDesigns = 1;
 constexpr int kReplicates = 2;
 #else

@@ -307,7 +307,6 @@ TEST(DeviceServer, HostilePacketsAreDroppedCountedByReasonAndChangeNothing) {
 // opens nothing once its cookie's two seconds are over. (More recorded sessions than the
 // responder remembers nonces of: tests/wire/link_session_test.cpp, on a simulated clock.)
 TEST(DeviceServer, NoAnswerIsLargerThanItsHelloAndRecordedHellosCannotKeepAClientOut) {
-  HATTR_STARTS_NO_THREAD();
   Rig rig;
   DeviceServer server(rig.config());
   RawClient recorder{rig, server};

@@ -19,8 +19,9 @@
 #endif
 
 // A test that starts no thread, in its process or in any process it starts (strace measured it:
-// scripts/threads-per-test; the release suite's lint:no-thread-marks checks every mark). Under
-// ThreadSanitizer, which finds races between threads, it has nothing to look at: it skips itself.
+// scripts/threads-per-test; the release suite's lint:no-thread-marks checks every mark). It has
+// no race for ThreadSanitizer to find, so it skips itself there (AddressSanitizer still runs it).
+// The mark is the first line of the test's body.
 #define HATTR_STARTS_NO_THREAD()                                                                   \
   HATTR_SKIP_UNDER_THREAD_SANITIZER("it starts no thread, nor does any process it starts "         \
                                     "(lint:no-thread-marks checks it)")
