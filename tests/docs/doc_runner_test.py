@@ -24,6 +24,12 @@ def run_page(text: str, *extra: str) -> subprocess.CompletedProcess[str]:
 
 
 class DocRunner(unittest.TestCase):
+    def assert_refused(self, message: str, text: str, *extra: str) -> None:
+        """The runner refuses the page (exit 2) with `message` on stderr."""
+        r = run_page(text, *extra)
+        self.assertEqual(r.returncode, 2, r.stdout + r.stderr)
+        self.assertIn(message, r.stderr)
+
     def test_a_page_that_matches_passes(self):
         r = run_page("""\
             Intro.
@@ -324,41 +330,33 @@ class DocRunner(unittest.TestCase):
         self.assertIn("4 block(s) run", part.stdout)  # the two it needs, then its own two
 
     def test_a_page_whose_parts_differ_from_ctests_is_refused(self):
-        r = run_page(self.PARTS_PAGE)  # ctest runs no part: the "slow" blocks would go untested
-        self.assertEqual(r.returncode, 2, r.stdout + r.stderr)
-        self.assertIn("page.md: its own-test parts are slow, but ctest runs none besides the page", r.stderr)
-        unknown = run_page(self.PARTS_PAGE, "--part", "fast", "--parts", "slow")
-        self.assertEqual(unknown.returncode, 2, unknown.stdout + unknown.stderr)
-        self.assertIn("--part fast: no block is marked", unknown.stderr)
+        # ctest runs no part: the "slow" blocks would go untested.
+        self.assert_refused("page.md: its own-test parts are slow, but ctest runs none besides the page",
+                            self.PARTS_PAGE)
+        self.assert_refused("--part fast: no block is marked", self.PARTS_PAGE, "--part", "fast", "--parts", "slow")
 
     def test_a_part_needing_a_block_the_page_does_not_have_is_refused(self):
-        r = run_page("""\
+        self.assert_refused("page.md:2: needs an earlier block with 'no such text': there is none", """\
             <!-- doc-test: own test lonely, after "no such text" -->
             ```sh
             echo alone
             ```
             """, "--part", "lonely", "--parts", "lonely")
-        self.assertEqual(r.returncode, 2, r.stdout + r.stderr)
-        self.assertIn("page.md:2: needs an earlier block with 'no such text': there is none", r.stderr)
 
     def test_a_misspelt_mark_and_a_part_with_nothing_to_run_are_refused(self):
-        misspelt = run_page("""\
+        self.assert_refused("page.md:1: expected <!-- doc-test: own test NAME -->", """\
             <!-- doc-test: own-test slow -->
             ```sh
             echo hidden
             ```
             """)
-        self.assertEqual(misspelt.returncode, 2, misspelt.stdout + misspelt.stderr)
-        self.assertIn("page.md:1: expected <!-- doc-test: own test NAME -->", misspelt.stderr)
-        empty = run_page("""\
+        self.assert_refused("--part idle: every block of the part is marked not runnable here", """\
             <!-- doc-test: own test idle -->
             ```sh
             # not runnable here: a real pen
             echo never
             ```
             """, "--part", "idle", "--parts", "idle")
-        self.assertEqual(empty.returncode, 2, empty.stdout + empty.stderr)
-        self.assertIn("--part idle: every block of the part is marked not runnable here", empty.stderr)
 
     def test_a_parts_output_block_is_checked(self):
         r = run_page("""\
