@@ -9,6 +9,7 @@
 
 #include "cli_common.hpp"
 #include "hattr/core/error.hpp"
+#include "hattr/core/units.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/session/trial.hpp"
 #include "hattr/sim/data_dir.hpp"
@@ -56,6 +57,27 @@ void runExpert(const SimOptions& opt) {
                            expert.duration_s(), opt.script_output.empty() ? "" : fmt::format(" (script: {})", opt.script_output));
 }
 
+/// The built-in glyphs, one a line, name first: the character, its strokes and its size.
+void runGlyphs(const SimOptions& opt) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (const sim::Glyph& glyph : sim::builtInGlyphs()) {
+    const sim::GlyphBounds box = sim::glyphBounds(glyph);
+    const Eigen::Vector2d size_mm = (box.max - box.min) * units::kMillimetresPerMetre;
+    rows.push_back({{"name", glyph.name}, {"character", glyph.character}, {"unicode", glyph.unicode},
+                    {"strokes", glyph.strokes.size()}, {"width_mm", size_mm.x()}, {"height_mm", size_mm.y()},
+                    {"path_mm", units::metresToMillimetres(sim::glyphPathLength(glyph))}});
+  }
+  if (opt.json) return printJson({{"glyphs", rows}});
+  std::cout << fmt::format("{:<12} {:<9} {:<8} {:>7} {:>14} {:>9}\n", "name", "character", "unicode", "strokes",
+                           "size (w×h mm)", "path mm");
+  for (const auto& r : rows) {
+    std::cout << fmt::format("{:<12} {:<9} {:<8} {:>7} {:>7.1f}×{:<6.1f} {:>9.1f}\n", r["name"].get<std::string>(),
+                             r["character"].get<std::string>(), r["unicode"].get<std::string>(),
+                             r["strokes"].get<std::size_t>(), r["width_mm"].get<double>(), r["height_mm"].get<double>(),
+                             r["path_mm"].get<double>());
+  }
+}
+
 /// Moves `progress` through one study of several (`before` studies done): its trials.
 std::function<void(std::string_view, int, int)> withinStudy(Progress& progress, double before) {
   return [&progress, before](std::string_view stage, int done, int total) {
@@ -71,7 +93,8 @@ void runAa(const SimOptions& opt) {
   Progress progress("A/A", opt.seeds, "studies");
   for (int s = 1; s <= opt.seeds; ++s) {
     progress.update(s - 1, fmt::format("A/A: study {} of {}", s, opt.seeds));
-    const auto r = sim::runInSilicoStudy({.out_dir = fmt::format("{}/aa-{:03}", opt.out_dir, s), .subjects = opt.subjects,
+    const auto r = sim::runInSilicoStudy({.out_dir = fmt::format("{}/aa-{:03}", opt.out_dir, s), .glyph = opt.glyph,
+                                          .subjects = opt.subjects,
                                           .seed = static_cast<std::uint64_t>(s), .training_trials = opt.trials,
                                           .recall_trials = opt.trials, .guidance = false,
                                           .hypothesis = hypothesis,
@@ -84,14 +107,14 @@ void runAa(const SimOptions& opt) {
     seeds.push_back({{"seed", s}, {"p_mode_trajectory", p_traj}, {"p_mode_force", p_force}});
   }
   progress.finish();
-  const nlohmann::json json = {{"hypothesis", opt.hypothesis}, {"seeds", seeds}, {"alpha", 0.05},
+  const nlohmann::json json = {{"glyph", opt.glyph}, {"hypothesis", opt.hypothesis}, {"seeds", seeds}, {"alpha", 0.05},
                                {"fraction_significant_trajectory", static_cast<double>(significant[0]) / opt.seeds},
                                {"fraction_significant_force", static_cast<double>(significant[1]) / opt.seeds}};
   if (opt.json) return printJson(json);
-  std::cout << fmt::format("A/A check ({} seeds, {} subjects, {}+{} trials per mode, guidance off in every mode, {} "
-                           "learner):\n"
+  std::cout << fmt::format("A/A check ({} seeds, {} subjects, {}+{} trials per mode, glyph {}, guidance off in every "
+                           "mode, {} learner):\n"
                            "  mode effect significant at α = 0.05: trajectory {}/{}, force {}/{} (expected about {:.1f})\n",
-                           opt.seeds, opt.subjects, opt.trials, opt.trials, opt.hypothesis, significant[0], opt.seeds,
+                           opt.seeds, opt.subjects, opt.trials, opt.trials, opt.glyph, opt.hypothesis, significant[0], opt.seeds,
                            significant[1], opt.seeds, 0.05 * opt.seeds);
 }
 
@@ -116,7 +139,7 @@ void runSweep(const SimOptions& opt) {
     sim::TraineeModel model = base;
     sim::setModelParameter(model, opt.parameter, v);
     const auto r = sim::runInSilicoStudy({.out_dir = fmt::format("{}/sweep-{}-{}", opt.out_dir, opt.parameter, v),
-                                          .subjects = opt.subjects, .training_trials = opt.trials,
+                                          .glyph = opt.glyph, .subjects = opt.subjects, .training_trials = opt.trials,
                                           .recall_trials = opt.trials, .model = model, .write_report = false,
                                           .progress = withinStudy(progress, static_cast<double>(rows.size()))});
     nlohmann::json entry = {{"value", v}};
@@ -149,20 +172,26 @@ void registerSimCommands(CLI::App& app) {
   auto opt = std::make_shared<SimOptions>();
 
   auto* expert = simc->add_subcommand("expert", "Synthesize the expert writing a glyph and record their haptic profile");
-  expert->add_option("--glyph", opt->glyph, "The glyph: a glyph file, a built-in name (na, loop) or the character (ந)")->capture_default_str();
+  constexpr const char* kGlyphHelp = "The glyph: a glyph file, a built-in name (na, loop, small-a, ...: hattr sim glyphs) or the character (ந, a, A, 7)";
+  expert->add_option("--glyph", opt->glyph, kGlyphHelp)->capture_default_str();
   expert->add_option("-o,--output", opt->output, "The expert's haptic profile")->required();
   expert->add_option("--script-out", opt->script_output, "Also write the script the expert meant to write");
   expert->add_flag("--force", opt->force, "Replace existing files");
   expert->callback([opt] { runExpert(*opt); });
 
+  auto* glyphs = simc->add_subcommand("glyphs", "List the built-in glyphs (data/glyphs): name, character, strokes, size");
+  glyphs->add_flag("--json", opt->json, "Print JSON: glyphs [{name, character, unicode, strokes, width_mm, height_mm, path_mm}]");
+  glyphs->callback([opt] { runGlyphs(*opt); });
+
   auto* aa = simc->add_subcommand("aa", "A/A check: guidance off in every mode; how often is the mode effect significant?");
   aa->add_option("--seeds", opt->seeds, "Studies to run")->check(CLI::Range(1, 1000))->capture_default_str();
   aa->add_option("--subjects", opt->subjects, "Subjects per study")->check(CLI::Range(2, 100))->capture_default_str();
   aa->add_option("--trials", opt->trials, "Training and recall trials per mode")->check(CLI::Range(2, 50))->capture_default_str();
+  aa->add_option("--glyph", opt->glyph, kGlyphHelp)->capture_default_str();
   aa->add_option("--out", opt->out_dir, "Folder for the studies")->capture_default_str();
   aa->add_option("--hypothesis", opt->hypothesis, "Learning hypothesis: position-plan, force-plan, guidance-dependent")
       ->capture_default_str();
-  aa->add_flag("--json", opt->json, "Print JSON: hypothesis, seeds [{seed, p_mode_trajectory, p_mode_force}], fractions");
+  aa->add_flag("--json", opt->json, "Print JSON: glyph, hypothesis, seeds [{seed, p_mode_trajectory, p_mode_force}], fractions");
   aa->callback([opt] { runAa(*opt); });
 
   auto* sweep = simc->add_subcommand("sweep", "Sensitivity: rerun the study over values of one learning-rule parameter");
@@ -170,6 +199,7 @@ void registerSimCommands(CLI::App& app) {
   sweep->add_option("--values", opt->values, "Comma-separated values")->required();
   sweep->add_option("--subjects", opt->subjects, "Subjects per study")->check(CLI::Range(2, 100))->capture_default_str();
   sweep->add_option("--trials", opt->trials, "Training and recall trials per mode")->check(CLI::Range(2, 50))->capture_default_str();
+  sweep->add_option("--glyph", opt->glyph, kGlyphHelp)->capture_default_str();
   sweep->add_option("--out", opt->out_dir, "Folder for the studies")->capture_default_str();
   sweep->add_flag("--json", opt->json, "Print JSON rows: value, best mode and p per metric, same_as_first");
   sweep->callback([opt] { runSweep(*opt); });

@@ -267,7 +267,7 @@ void registerPowerCommands(CLI::App& sim) {
       ->check(CLI::Range(2, 50))
       ->capture_default_str()
       ->excludes(study);
-  power->add_option("--glyph", opt->glyph, "The glyph: a file, a built-in name (na, loop) or the character (the paper's study only)")
+  power->add_option("--glyph", opt->glyph, "The glyph: a file, a built-in name (hattr sim glyphs) or the character (the paper's study only)")
       ->capture_default_str()
       ->excludes(study);
   power->add_option("--hypothesis", opt->hypothesis,

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -138,10 +139,19 @@ Glyph findBuiltInGlyph(std::string_view name) {
   for (const Glyph& g : glyphs) {
     if (g.name == name || (!g.character.empty() && g.character == name)) return g;
   }
+  // The letter library by its characters alone; the other glyphs by name (and character).
   std::vector<std::string> known;
-  for (const Glyph& g : glyphs) known.push_back(g.character.empty() ? g.name : fmt::format("{} ({})", g.name, g.character));
+  std::string characters;
+  for (const Glyph& g : glyphs) {
+    if (g.character.size() == 1 && std::isalnum(static_cast<unsigned char>(g.character[0])) != 0) {
+      characters += g.character;
+    } else {
+      known.push_back(g.character.empty() ? g.name : fmt::format("{} ({})", g.name, g.character));
+    }
+  }
+  if (!characters.empty()) known.push_back(fmt::format("a letter or digit by its character ({})", characters));
   throw InputError(fmt::format("glyph \"{}\": no such file, and no built-in glyph has that name or character; "
-                               "expected a glyph file or one of: {}",
+                               "expected a glyph file or one of: {} (hattr sim glyphs lists them)",
                                name, fmt::join(known, ", ")));
 }
 
@@ -151,6 +161,18 @@ double glyphPathLength(const Glyph& glyph) {
     for (std::size_t i = 1; i < stroke.points.size(); ++i) length += (stroke.points[i] - stroke.points[i - 1]).norm();
   }
   return length;
+}
+
+GlyphBounds glyphBounds(const Glyph& glyph) {
+  GlyphBounds box{.min = Vec2::Constant(std::numeric_limits<double>::infinity()),
+                  .max = Vec2::Constant(-std::numeric_limits<double>::infinity())};
+  for (const auto& stroke : glyph.strokes) {
+    for (const Vec2& p : stroke.points) {
+      box.min = box.min.cwiseMin(p);
+      box.max = box.max.cwiseMax(p);
+    }
+  }
+  return box;
 }
 
 }  // namespace hattr::sim

@@ -48,7 +48,7 @@ Glyph parseGlyph(std::string_view json_text, std::string_view source_name);
 Glyph loadGlyph(const std::filesystem::path& file);
 
 /// A glyph as people name it: a file path (an existing file, or any name with a '/' or ending
-/// in .json), a built-in glyph's name (data/glyphs/NAME.json: "na", "loop"), or the character
+/// in .json), a built-in glyph's name (data/glyphs/NAME.json: "na", "loop", "small-a"), or the character
 /// itself ("ந"). Throws InputError naming what was tried and listing the built-in glyphs.
 Glyph findGlyph(std::string_view name);
 /// A built-in glyph by its name or character only (no file is looked for); InputError listing
@@ -60,5 +60,12 @@ std::vector<Glyph> builtInGlyphs();
 
 /// Total pen-down path length of a glyph [m] (the sum of its strokes' polyline lengths).
 double glyphPathLength(const Glyph& glyph);
+
+/// The smallest axis-aligned box holding every via point of a glyph [m].
+struct GlyphBounds {
+  Vec2 min;
+  Vec2 max;
+};
+GlyphBounds glyphBounds(const Glyph& glyph);
 
 }  // namespace hattr::sim
