@@ -249,12 +249,18 @@ void MainWindow::loadSettings() {
     interactive_ = was;
     last_error_.clear();
   }
-  // The reference of last time, quietly: a file that went away just leaves none loaded.
+  // The reference of last time, quietly: a file that went away (or a letter no longer built
+  // in) just leaves none loaded.
   const QString reference = s.value("train/reference_file").toString();
-  if (!reference.isEmpty() && QFileInfo::exists(reference)) {
+  const QString letter = s.value("train/reference_letter").toString();
+  if ((!reference.isEmpty() && QFileInfo::exists(reference)) || !letter.isEmpty()) {
     const bool was = interactive_;
     interactive_ = false;
-    loadReference(reference);
+    if (!reference.isEmpty()) {
+      loadReference(reference);
+    } else {
+      train_tab_->useLetter(letter);
+    }
     interactive_ = was;
     last_error_.clear();
   }

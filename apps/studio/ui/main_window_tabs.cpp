@@ -97,7 +97,8 @@ void MainWindow::buildTrainTab() {
   host.idle = [this] { return idle(); };
   host.trial_running = [this] { return activity_ == Activity::kTrial; };
   host.may_change_reference = [this] { return activity_ != Activity::kTrial && activity_ != Activity::kStudyTrial; };
-  host.rate_hz = [this] { return environment_->rate_hz(); };
+  // Before the first environment is in use (settings loading), the default one's rate.
+  host.rate_hz = [this] { return (environment_ != nullptr ? environment_ : default_environment_.get())->rate_hz(); };
   host.start_trial = [this](const session::TrialSetup& setup, const HapticProfile& expert, bool reference_on_paper,
                             const QString& title, QLabel* scores) {
     beginLiveTrial(*environment_, setup, Activity::kTrial, expert, reference_on_paper, true, title, scores);

@@ -15,7 +15,10 @@
 #include "core/profile_files.hpp"
 #include "hattr/guidance/strategy_catalog.hpp"
 #include "hattr/guidance/strategy_schedule.hpp"
+#include "hattr/render/world_config.hpp"
 #include "hattr/session/study.hpp"
+#include "hattr/sim/expert.hpp"
+#include "hattr/sim/glyph.hpp"
 #include "ui/learning_curve.hpp"
 #include "ui/ui_text.hpp"
 
@@ -43,14 +46,7 @@ void TrainTab::buildUi() {
       wrappedLabel(tr("<b>Train</b> against an expert's haptic profile. After the trial, DTW scores "
                       "compare your trace (shape: x, y) and your force (fx, fy, fz) with the "
                       "expert's; lower is closer.")));
-  w_.reference = wrappedLabel(tr("No reference loaded."));
-  layout->addWidget(w_.reference);
-  auto* open = new QPushButton(tr("Open reference… (Ctrl+O)"));
-  connect(open, &QPushButton::clicked, this, [this] {
-    const QString file = host_.ask_open_file(tr("Open a reference profile"), tr("Haptic profiles (*.csv);;All files (*)"));
-    if (!file.isEmpty()) loadReference(file);
-  });
-  layout->addWidget(open);
+  buildReferenceChoice(*layout);
 
   // The mode, its indexing, the get-ready time and whether the reference is drawn.
   auto* form = new QFormLayout;
@@ -113,6 +109,33 @@ void TrainTab::buildUi() {
 
 // ---- The reference ------------------------------------------------------------------------
 
+// The reference: what it is, a file to open, or a letter the simulated expert writes.
+void TrainTab::buildReferenceChoice(QVBoxLayout& layout) {
+  w_.reference = wrappedLabel(tr("No reference loaded."));
+  layout.addWidget(w_.reference);
+  auto* open = new QPushButton(tr("Open reference… (Ctrl+O)"));
+  connect(open, &QPushButton::clicked, this, [this] {
+    const QString file = host_.ask_open_file(tr("Open a reference profile"), tr("Haptic profiles (*.csv);;All files (*)"));
+    if (!file.isEmpty()) loadReference(file);
+  });
+  layout.addWidget(open);
+  // Or a letter of the library (or another built-in glyph), written by the simulated expert.
+  w_.letter = new QComboBox;
+  w_.letter->addItem(tr("Or write a letter: choose one"), QString());
+  for (const sim::Glyph& glyph : sim::builtInGlyphs()) {
+    const QString name = qs(glyph.name);
+    w_.letter->addItem(glyph.character.empty() ? name : tr("%1   (%2)").arg(qs(glyph.character), name), name);
+  }
+  w_.letter->setToolTip(tr("The simulated expert writes the letter in hattr's print script on the simulated pen "
+                           "(as hattr sim expert --glyph does), and that becomes the reference"));
+  connect(w_.letter, &QComboBox::activated, this, [this](int index) {
+    const QString name = w_.letter->itemData(index).toString();
+    if (!name.isEmpty()) useLetter(name);
+  });
+  layout.addWidget(w_.letter);
+}
+
+
 bool TrainTab::loadReference(const QString& file) {
   if (!host_.may_change_reference()) {
     host_.error(tr("The reference cannot change now"), tr("finish or abort the trial first (Esc)"));
@@ -128,6 +151,30 @@ bool TrainTab::loadReference(const QString& file) {
     return true;
   } catch (const std::exception& e) {
     host_.error(tr("The reference could not be loaded"), what(e));
+    return false;
+  }
+}
+
+bool TrainTab::useLetter(const QString& glyph_name) {
+  if (!host_.may_change_reference()) {
+    host_.error(tr("The reference cannot change now"), tr("finish or abort the trial first (Esc)"));
+    return false;
+  }
+  try {
+    const sim::Glyph glyph = sim::findBuiltInGlyph(glyph_name.toStdString());
+    // The simulated expert on the simulated pen and the default paper, at the studio's rate.
+    session::TrialEnvironment pen("sim://pen", render::WorldConfig{}, host_.rate_hz());
+    HapticProfile profile =
+        sim::recordExpert(pen, sim::expertScript(glyph), {.subject = "expert", .skill = glyph.name, .source = "sim:expert"});
+    const QString shown = glyph.character.empty() ? qs(glyph.name) : qs(glyph.character);
+    const QString label = tr("Reference: the letter <b>%1</b> (%2) written by the simulated expert: %3")
+                              .arg(shown.toHtmlEscaped(), qs(glyph.name).toHtmlEscaped(), describeProfile(profile));
+    setReference(std::move(profile), QString(), qs(glyph.name), label);
+    reference_letter_ = qs(glyph.name);
+    w_.letter->setCurrentIndex(std::max(0, w_.letter->findData(reference_letter_)));
+    return true;
+  } catch (const std::exception& e) {
+    host_.error(tr("The letter could not be written"), what(e));
     return false;
   }
 }
@@ -170,6 +217,8 @@ void TrainTab::setReference(HapticProfile profile, const QString& file, const QS
   reference_file_ = file;
   reference_name_ = name;
   reference_is_take_ = false;
+  reference_letter_.clear();
+  w_.letter->setCurrentIndex(0);
   w_.reference->setText(label_html);
   w_.curve->clear();  // scores against another reference do not compare
   scheduled_errors_.clear();  // nor do its tracking errors
@@ -269,8 +318,14 @@ void TrainTab::saveSettings() {
   settings_.setValue("train/indexing", w_.indexing->currentIndex());
   settings_.setValue("train/show_reference", w_.show_reference->isChecked());
   settings_.setValue("train/settle_s", w_.settle->value());
-  // An unsaved take as the reference is not remembered; the last file reference stays.
-  if (!reference_file_.isEmpty()) settings_.setValue("train/reference_file", reference_file_);
+  // An unsaved take as the reference is not remembered; the last file or letter stays.
+  if (!reference_file_.isEmpty()) {
+    settings_.setValue("train/reference_file", reference_file_);
+    settings_.remove("train/reference_letter");
+  } else if (!reference_letter_.isEmpty()) {
+    settings_.setValue("train/reference_letter", reference_letter_);
+    settings_.remove("train/reference_file");
+  }
 }
 
 bool TrainTab::referenceShown() const { return w_.show_reference->isChecked(); }

@@ -1,5 +1,6 @@
 #pragma once
-/// The Train tab: the training reference (a profile file or the Record tab's take), the
+/// The Train tab: the training reference (a profile file, a letter the simulated expert writes
+/// or the Record tab's take), the
 /// strategy (every one but the mentored, by its plain name; a scheduled one's law and gain set
 /// from this reference's trials in it so far) with its indexing and get-ready time, a trial
 /// against the reference, its scores and the learning curve. The tab owns the reference, the mode and its widgets, and
@@ -25,6 +26,7 @@ class QDoubleSpinBox;
 class QLabel;
 class QPushButton;
 class QSettings;
+class QVBoxLayout;
 
 namespace hattr::studio {
 
@@ -83,6 +85,9 @@ class TrainTab final : public QWidget {
   bool loadReference(const QString& file);
   /// The take becomes the reference, named by `name` (refused while anything runs).
   bool useTake(const HapticProfile& take, const TakeName& name);
+  /// A built-in glyph (a letter of the library, ந, the loop; by name or character) written by
+  /// the simulated expert on the simulated pen becomes the reference (refused while a trial runs).
+  bool useLetter(const QString& glyph);
   /// The take that is the reference was saved: it is named by its file from now on.
   void takeRenamed(const TakeName& name);
   /// The take went (a new recording): a reference made of it stays, as a take nobody can save.
@@ -116,6 +121,7 @@ class TrainTab final : public QWidget {
   /// The widgets, so tests read what a person reads.
   struct Widgets {
     QLabel* reference = nullptr;
+    QComboBox* letter = nullptr;  ///< "Or a letter": the built-in glyphs by character
     QComboBox* mode = nullptr;
     QComboBox* indexing = nullptr;
     QCheckBox* show_reference = nullptr;
@@ -130,6 +136,7 @@ class TrainTab final : public QWidget {
 
  private:
   void buildUi();
+  void buildReferenceChoice(QVBoxLayout& layout);
   /// The training reference, read from `file` (empty: not from a file, not remembered), named
   /// `name` in trials' metadata, described by `label_html`.
   void setReference(HapticProfile profile, const QString& file, const QString& name, const QString& label_html);
@@ -140,6 +147,7 @@ class TrainTab final : public QWidget {
   Widgets w_;
   std::optional<HapticProfile> reference_;
   QString reference_file_;  // remembered in settings; empty for an unsaved take
+  QString reference_letter_;  // the built-in glyph written as the reference (remembered), or empty
   QString reference_name_;  // in the trials' metadata (reference_file)
   bool reference_is_take_ = false;  // the reference is the Record tab's take
   guidance::TrainingMode mode_ = guidance::TrainingMode::kBasic;
