@@ -90,6 +90,7 @@ void runAa(const SimOptions& opt) {
   const sim::LearningHypothesis hypothesis = sim::parseHypothesis(opt.hypothesis, "--hypothesis");
   nlohmann::json seeds = nlohmann::json::array();
   int significant[2] = {0, 0};
+  std::string skill;  // the glyph's name, as the studies store it
   Progress progress("A/A", opt.seeds, "studies");
   for (int s = 1; s <= opt.seeds; ++s) {
     progress.update(s - 1, fmt::format("A/A: study {} of {}", s, opt.seeds));
@@ -100,6 +101,7 @@ void runAa(const SimOptions& opt) {
                                           .hypothesis = hypothesis,
                                           .write_report = false,
                                           .progress = withinStudy(progress, s - 1)});
+    skill = r.study.skill;
     const double p_traj = row(r.analysis.trajectory.overall, "mode")->p;
     const double p_force = row(r.analysis.force.overall, "mode")->p;
     significant[0] += p_traj < 0.05 ? 1 : 0;
@@ -107,14 +109,14 @@ void runAa(const SimOptions& opt) {
     seeds.push_back({{"seed", s}, {"p_mode_trajectory", p_traj}, {"p_mode_force", p_force}});
   }
   progress.finish();
-  const nlohmann::json json = {{"glyph", opt.glyph}, {"hypothesis", opt.hypothesis}, {"seeds", seeds}, {"alpha", 0.05},
+  const nlohmann::json json = {{"glyph", skill}, {"hypothesis", opt.hypothesis}, {"seeds", seeds}, {"alpha", 0.05},
                                {"fraction_significant_trajectory", static_cast<double>(significant[0]) / opt.seeds},
                                {"fraction_significant_force", static_cast<double>(significant[1]) / opt.seeds}};
   if (opt.json) return printJson(json);
   std::cout << fmt::format("A/A check ({} seeds, {} subjects, {}+{} trials per mode, glyph {}, guidance off in every "
                            "mode, {} learner):\n"
                            "  mode effect significant at α = 0.05: trajectory {}/{}, force {}/{} (expected about {:.1f})\n",
-                           opt.seeds, opt.subjects, opt.trials, opt.trials, opt.glyph, opt.hypothesis, significant[0], opt.seeds,
+                           opt.seeds, opt.subjects, opt.trials, opt.trials, skill, opt.hypothesis, significant[0], opt.seeds,
                            significant[1], opt.seeds, 0.05 * opt.seeds);
 }
 
@@ -133,6 +135,7 @@ void runSweep(const SimOptions& opt) {
   HATTR_THROW_UNLESS(!values.empty(), "--values: expected at least one number");
   nlohmann::json rows = nlohmann::json::array();
   std::string baseline;
+  std::string skill;  // the glyph's name, as the studies store it
   Progress progress("sweep", static_cast<double>(values.size()), "studies");
   for (const double v : values) {
     progress.update(static_cast<double>(rows.size()), fmt::format("sweep: {} = {}", opt.parameter, v));
@@ -142,6 +145,7 @@ void runSweep(const SimOptions& opt) {
                                           .glyph = opt.glyph, .subjects = opt.subjects, .training_trials = opt.trials,
                                           .recall_trials = opt.trials, .model = model, .write_report = false,
                                           .progress = withinStudy(progress, static_cast<double>(rows.size()))});
+    skill = r.study.skill;
     nlohmann::json entry = {{"value", v}};
     std::string conclusion;
     for (const auto* m : {&r.analysis.trajectory, &r.analysis.force}) {
@@ -161,7 +165,7 @@ void runSweep(const SimOptions& opt) {
                                conclusion == baseline ? "" : "  <- differs");
     }
   }
-  if (opt.json) printJson({{"parameter", opt.parameter}, {"rows", rows}});
+  if (opt.json) printJson({{"parameter", opt.parameter}, {"glyph", skill}, {"rows", rows}});
 }
 
 }  // namespace
@@ -201,7 +205,7 @@ void registerSimCommands(CLI::App& app) {
   sweep->add_option("--trials", opt->trials, "Training and recall trials per mode")->check(CLI::Range(2, 50))->capture_default_str();
   sweep->add_option("--glyph", opt->glyph, kGlyphHelp)->capture_default_str();
   sweep->add_option("--out", opt->out_dir, "Folder for the studies")->capture_default_str();
-  sweep->add_flag("--json", opt->json, "Print JSON rows: value, best mode and p per metric, same_as_first");
+  sweep->add_flag("--json", opt->json, "Print JSON: parameter, glyph, rows [{value, best mode and p per metric, same_as_first}]");
   sweep->callback([opt] { runSweep(*opt); });
 
   registerPowerCommands(*simc);

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -123,26 +124,45 @@ std::vector<Glyph> builtInGlyphs() {
 
 // A path first (what is clearly one, or a file that is there), then a built-in name, then a
 // built-in character.
-Glyph findGlyph(std::string_view name) {
-  HATTR_THROW_UNLESS(!name.empty(), "glyph: expected a file, a built-in glyph's name or a character, got \"\"");
-  const std::filesystem::path as_path(name);
-  std::error_code ec;
-  if (name.find('/') != std::string_view::npos || as_path.extension() == ".json" ||
-      std::filesystem::is_regular_file(as_path, ec)) {
-    return loadGlyph(as_path);
+namespace {
+
+// The files a built-in glyph of that name or character would be in: data/glyphs/NAME.json, and a
+// letter's or digit's small-x, capital-x or digit-x (the letter library's names).
+std::vector<std::filesystem::path> likelyFiles(std::string_view name) {
+  std::vector<std::filesystem::path> files;
+  const std::filesystem::path folder = defaultDataDir() / "glyphs";
+  if (name.find('/') == std::string_view::npos) files.push_back(folder / (std::string(name) + ".json"));
+  if (name.size() == 1 && std::isalnum(static_cast<unsigned char>(name[0])) != 0) {
+    const unsigned char c = static_cast<unsigned char>(name[0]);
+    const std::string stem = std::islower(c) != 0   ? fmt::format("small-{}", name)
+                             : std::isupper(c) != 0 ? fmt::format("capital-{}", static_cast<char>(std::tolower(c)))
+                                                    : fmt::format("digit-{}", name);
+    files.push_back(folder / (stem + ".json"));
   }
-  return findBuiltInGlyph(name);
+  return files;
 }
 
-Glyph findBuiltInGlyph(std::string_view name) {
-  const std::vector<Glyph> glyphs = builtInGlyphs();
-  for (const Glyph& g : glyphs) {
-    if (g.name == name || (!g.character.empty() && g.character == name)) return g;
+// The built-in glyph with that name or character: its likely file first (one file read), else
+// every built-in glyph (another glyph file in the folder may use any file name).
+std::optional<Glyph> lookUpBuiltInGlyph(std::string_view name) {
+  const auto matches = [name](const Glyph& g) { return g.name == name || (!g.character.empty() && g.character == name); };
+  std::error_code ec;
+  for (const auto& file : likelyFiles(name)) {
+    if (!std::filesystem::is_regular_file(file, ec)) continue;
+    Glyph glyph = loadGlyph(file);
+    if (matches(glyph)) return glyph;
   }
+  for (Glyph& glyph : builtInGlyphs()) {
+    if (matches(glyph)) return std::move(glyph);
+  }
+  return std::nullopt;
+}
+
+[[noreturn]] void throwUnknownGlyph(std::string_view name) {
   // The letter library by its characters alone; the other glyphs by name (and character).
   std::vector<std::string> known;
   std::string characters;
-  for (const Glyph& g : glyphs) {
+  for (const Glyph& g : builtInGlyphs()) {
     if (g.character.size() == 1 && std::isalnum(static_cast<unsigned char>(g.character[0])) != 0) {
       characters += g.character;
     } else {
@@ -153,6 +173,25 @@ Glyph findBuiltInGlyph(std::string_view name) {
   throw InputError(fmt::format("glyph \"{}\": no such file, and no built-in glyph has that name or character; "
                                "expected a glyph file or one of: {} (hattr sim glyphs lists them)",
                                name, fmt::join(known, ", ")));
+}
+
+}  // namespace
+
+Glyph findGlyph(std::string_view name) {
+  HATTR_THROW_UNLESS(!name.empty(), "glyph: expected a file, a built-in glyph's name or a character, got \"\"");
+  const std::filesystem::path as_path(name);
+  // A path or a .json name is a file; otherwise a built-in glyph's name or character comes
+  // first (a file "a" in the working folder does not hide the letter a), then an existing file.
+  if (name.find('/') != std::string_view::npos || as_path.extension() == ".json") return loadGlyph(as_path);
+  if (auto glyph = lookUpBuiltInGlyph(name)) return std::move(*glyph);
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(as_path, ec)) return loadGlyph(as_path);
+  throwUnknownGlyph(name);
+}
+
+Glyph findBuiltInGlyph(std::string_view name) {
+  if (auto glyph = lookUpBuiltInGlyph(name)) return std::move(*glyph);
+  throwUnknownGlyph(name);
 }
 
 double glyphPathLength(const Glyph& glyph) {

@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -40,6 +42,25 @@ TEST(Cli, VersionAndHelpExitZero) {
     EXPECT_EQ(help.exit_code, 0) << sub;
     EXPECT_THAT(help.out, HasSubstr("Usage")) << sub;
   }
+}
+
+// Issue 39: every built-in glyph, one a line, name first; the JSON its numbers.
+TEST(Cli, SimGlyphsListsEveryBuiltInGlyph) {
+  HATTR_STARTS_NO_THREAD();
+  test::TempDir dir;
+  const RunResult text = runHattr(dir, "sim glyphs");
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_THAT(text.out, HasSubstr("capital-a    A         U+0041         3    13.0×20.0        50.5\n"));
+  EXPECT_THAT(text.out, HasSubstr("\nna           ந         U+0BA8         3"));
+  const RunResult r = runHattr(dir, "sim glyphs --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto glyphs = nlohmann::json::parse(r.out)["glyphs"];
+  ASSERT_EQ(glyphs.size(), 64u);
+  const auto small_g = std::find_if(glyphs.begin(), glyphs.end(), [](const auto& g) { return g["name"] == "small-g"; });
+  ASSERT_NE(small_g, glyphs.end());
+  EXPECT_EQ((*small_g)["character"], "g");
+  EXPECT_EQ((*small_g)["strokes"], 1);
+  EXPECT_NEAR((*small_g)["height_mm"].get<double>(), 17.0, 1e-9);  // midline 0 to the descender line -17
 }
 
 TEST(Cli, ProfileInfoJsonHasTheStableKeys) {

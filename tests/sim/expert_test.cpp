@@ -15,6 +15,7 @@
 #include "hattr/sim/expert.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/session/study_database.hpp"
+#include "sim/expert_checks.hpp"
 #include "support/test_support.hpp"
 #include "support/thread_sanitizer.hpp"
 
@@ -35,16 +36,7 @@ const HapticProfile& naScript() {
   return script;
 }
 
-/// [first, last] sample indices of each pen-down run.
-std::vector<std::pair<std::size_t, std::size_t>> penDownRuns(const HapticProfile& p) {
-  std::vector<std::pair<std::size_t, std::size_t>> runs;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    if (!p[i].pen_down) continue;
-    if (runs.empty() || runs.back().second + 1 != i) runs.emplace_back(i, i);
-    runs.back().second = i;
-  }
-  return runs;
-}
+using checks::penDownRuns;
 
 /// Speed from the positions alone (central differences).
 std::vector<double> finiteDifferenceSpeed(const HapticProfile& p) {
@@ -63,24 +55,7 @@ double polylineLength(const std::vector<Vec2>& points) {
 
 TEST(ExpertScript, PassesThroughEveryViaPointInWritingOrder) {
   HATTR_STARTS_NO_THREAD();
-  const HapticProfile& script = naScript();
-  const auto runs = penDownRuns(script);
-  ASSERT_EQ(runs.size(), na().strokes.size());
-  for (std::size_t s = 0; s < runs.size(); ++s) {
-    std::size_t previous = runs[s].first;
-    for (std::size_t k = 0; k < na().strokes[s].points.size(); ++k) {
-      const Vec2& via = na().strokes[s].points[k];
-      // The nearest pen-down sample of this stroke, searched from the previous via point on.
-      std::size_t best = previous;
-      for (std::size_t i = previous; i <= runs[s].second; ++i) {
-        if ((script[i].p_WT.head<2>() - via).norm() < (script[best].p_WT.head<2>() - via).norm()) best = i;
-      }
-      // At 1 kHz and at most 0.1 m/s, a sample lies within 0.05 mm of any point passed.
-      EXPECT_LT((script[best].p_WT.head<2>() - via).norm(), 5e-5) << "stroke " << s + 1 << ", via point " << k + 1;
-      EXPECT_GE(best, previous) << "via points are passed in writing order";
-      previous = best;
-    }
-  }
+  checks::expectPassesEveryViaPointInOrder(na(), naScript());
 }
 
 TEST(ExpertScript, StartsAndEndsAtRestAndRestsAtTouchDownAndLiftOff) {
@@ -237,21 +212,8 @@ TEST(RecordExpert, PlaysTheScriptOnTheSimulatedPen) {
   EXPECT_EQ(expert.metadata().extra.at("mode"), "BASIC");
   EXPECT_EQ(expert.metadata().subject, "expert");
   // Where the script writes at its plateau force, the pen is on the paper, close to the
-  // script's path (the hand's impedance lags a little), pressing with about the planned force.
-  const double plateau_N = ExpertConfig{}.axial_force_N * std::sin(ExpertConfig{}.altitude_rad);
-  double squared = 0.0, normal = 0.0;
-  std::size_t n = 0, in_contact = 0;
-  for (std::size_t i = 0; i < std::min(script.size(), expert.size()); ++i) {
-    if (!script[i].pen_down || -script[i].f_user_W.z() < plateau_N - 1e-9) continue;
-    squared += (expert[i].p_WT.head<2>() - script[i].p_WT.head<2>()).squaredNorm();
-    normal += -expert[i].f_user_W.z();
-    in_contact += expert[i].in_contact ? 1 : 0;
-    ++n;
-  }
-  ASSERT_GT(n, 500u);
-  EXPECT_EQ(in_contact, n);
-  EXPECT_LT(std::sqrt(squared / static_cast<double>(n)), 0.0015);
-  EXPECT_NEAR(normal / static_cast<double>(n), plateau_N, 0.1 * plateau_N);
+  // script's path, pressing with about the planned force.
+  checks::expectRecordingFollowsScript(script, expert, 500);
 }
 
 // A study may name an expert by its glyph (built-in name or character): the simulated expert

@@ -6,6 +6,7 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <numbers>
 #include <set>
 #include <string>
 #include <vector>
@@ -15,10 +16,13 @@
 #include <gtest/gtest.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/core/units.hpp"
 #include "hattr/sim/data_dir.hpp"
 #include "hattr/sim/expert.hpp"
 #include "hattr/sim/glyph.hpp"
 #include "hattr/session/trial.hpp"
+#include "sim/expert_checks.hpp"
+#include "support/test_support.hpp"
 #include "support/thread_sanitizer.hpp"
 
 namespace hattr::sim {
@@ -47,7 +51,6 @@ std::string expectedName(char c) {
   return fmt::format("digit-{}", c);
 }
 
-double toMm(double metres) { return metres * 1000.0; }
 
 TEST(LetterLibrary, EveryLetterAndDigitIsABuiltInGlyphFoundByItsCharacter) {
   HATTR_STARTS_NO_THREAD();
@@ -84,8 +87,8 @@ TEST(LetterLibrary, EachGlyphSitsOnTheSchoolLines) {
   const std::string ascenders = "bdfhklt";
   for (const std::string& c : letterCharacters()) {
     const GlyphBounds box = glyphBounds(findGlyph(c));
-    const double top = toMm(box.max.y()), bottom = toMm(box.min.y());
-    const double centre = toMm(box.min.x() + box.max.x()) / 2.0;
+    const double top = units::metresToMillimetres(box.max.y()), bottom = units::metresToMillimetres(box.min.y());
+    const double centre = units::metresToMillimetres(box.min.x() + box.max.x()) / 2.0;
     EXPECT_NEAR(centre, 0.0, 0.05) << c << " is centred on x = 0";
     EXPECT_LE(top, kTopLine_mm + 0.05) << c;
     const char ch = c[0];
@@ -94,19 +97,19 @@ TEST(LetterLibrary, EachGlyphSitsOnTheSchoolLines) {
       const bool ascends = ascenders.find(ch) != std::string::npos;
       // Letters reach the baseline, or the descender line; short ones the midline, tall ones above it.
       if (descends) {
-        EXPECT_NEAR(bottom, kDescender_mm, 1.0) << c;
+        EXPECT_NEAR(bottom, kDescender_mm, 0.05) << c;
       } else {
         EXPECT_NEAR(bottom, kBaseline_mm, 0.05) << c;
       }
       if (ascends) {
         EXPECT_GT(top, kMidline_mm + 5.0) << c;
       } else if (ch != 'i' && ch != 'j') {  // their dots are above the midline
-        EXPECT_NEAR(top, kMidline_mm, 0.3) << c;
+        EXPECT_NEAR(top, kMidline_mm, 0.05) << c;
       }
     } else {
-      // Capitals and digits stand from the baseline to the top line (Q's tail may dip below).
-      EXPECT_NEAR(top, kTopLine_mm, 0.3) << c;
-      EXPECT_NEAR(bottom, kBaseline_mm, ch == 'Q' ? 2.0 : 0.3) << c;
+      // Capitals and digits stand from the baseline to the top line.
+      EXPECT_NEAR(top, kTopLine_mm, 0.05) << c;
+      EXPECT_NEAR(bottom, kBaseline_mm, 0.05) << c;
     }
   }
 }
@@ -134,6 +137,59 @@ TEST(LetterLibrary, StrokesArePulledDownAndSlidRight) {
   EXPECT_GT(horizontal, 8);
 }
 
+// Circles go back (counter-clockwise) or forward (clockwise) as each stroke's note says: the
+// stroke's turning, summed over its curve (turns under 90°; a retrace or a corner is not curve),
+// is at least half a turn that way.
+TEST(LetterLibrary, CirclesGoBackOrForwardAsTheModelSays) {
+  HATTR_STARTS_NO_THREAD();
+  int back = 0, forward = 0;
+  for (const std::string& c : letterCharacters()) {
+    const Glyph glyph = findGlyph(c);
+    for (std::size_t s = 0; s < glyph.strokes.size(); ++s) {
+      const auto& p = glyph.strokes[s].points;
+      double turning = 0.0;
+      for (std::size_t i = 1; i + 1 < p.size(); ++i) {
+        const Vec2 u = p[i] - p[i - 1], v = p[i + 1] - p[i];
+        const double turn = std::atan2(u.x() * v.y() - u.y() * v.x(), u.dot(v));
+        if (std::abs(turn) < std::numbers::pi / 2.0) turning += turn;
+      }
+      const std::string& note = glyph.strokes[s].note;
+      if (note.find("circle back") != std::string::npos) {
+        EXPECT_GT(turning, std::numbers::pi) << c << " stroke " << s + 1 << ": " << note;
+        ++back;
+      }
+      if (note.find("circle forward") != std::string::npos) {
+        EXPECT_LT(turning, -std::numbers::pi) << c << " stroke " << s + 1 << ": " << note;
+        ++forward;
+      }
+    }
+  }
+  EXPECT_GE(back, 10);
+  EXPECT_GE(forward, 2);
+}
+
+// The box of a glyph's via points, and a letter found before a file of the same name in the
+// working folder (a file is still found when no built-in glyph has its name).
+TEST(LetterLibrary, BoundsAndALetterBeforeAFileOfItsName) {
+  HATTR_STARTS_NO_THREAD();
+  const GlyphBounds a = glyphBounds(findGlyph("A"));
+  EXPECT_NEAR(units::metresToMillimetres(a.min.x()), -6.5, 1e-9);
+  EXPECT_NEAR(units::metresToMillimetres(a.max.x()), 6.5, 1e-9);
+  EXPECT_NEAR(units::metresToMillimetres(a.min.y()), kBaseline_mm, 1e-9);
+  EXPECT_NEAR(units::metresToMillimetres(a.max.y()), kTopLine_mm, 1e-9);
+  const test::TempDir dir;
+  const std::filesystem::path before = std::filesystem::current_path();
+  std::filesystem::current_path(dir.path());
+  const std::string mine = R"({"format": "hattr-glyph", "version": 1, "name": "mine", "strokes": [{"points": [[0, 0], [5, 5]]}]})";
+  test::writeText(dir / "a", mine);
+  test::writeText(dir / "my-letter", mine);
+  const std::string by_a = findGlyph("a").name;
+  const std::string by_file = findGlyph("my-letter").name;
+  std::filesystem::current_path(before);
+  EXPECT_EQ(by_a, "small-a");
+  EXPECT_EQ(by_file, "mine");
+}
+
 /// One glyph of the library written by the simulated expert on the simulated pen.
 class LetterWritten : public ::testing::TestWithParam<std::string> {};
 
@@ -151,44 +207,13 @@ TEST_P(LetterWritten, ByTheSimulatedExpertOnTheSimulatedPen) {
   }
   const Glyph glyph = findGlyph(GetParam());
   const HapticProfile script = expertScript(glyph);
-  // The script writes each stroke as one pen-down run, through every via point.
-  std::vector<std::pair<std::size_t, std::size_t>> runs;
-  for (std::size_t i = 0; i < script.size(); ++i) {
-    if (!script[i].pen_down) continue;
-    if (runs.empty() || runs.back().second + 1 != i) runs.emplace_back(i, i);
-    runs.back().second = i;
-  }
-  ASSERT_EQ(runs.size(), glyph.strokes.size());
-  for (std::size_t s = 0; s < runs.size(); ++s) {
-    for (const Vec2& via : glyph.strokes[s].points) {
-      double nearest = INFINITY;
-      for (std::size_t i = runs[s].first; i <= runs[s].second; ++i) {
-        nearest = std::min(nearest, (script[i].p_WT.head<2>() - via).norm());
-      }
-      EXPECT_LT(nearest, 5e-5) << "stroke " << s + 1;
-    }
-  }
-
-  // Played on the simulated pen: on the paper wherever the script presses at its plateau, close
-  // to the script's path, pressing with about the planned force.
+  checks::expectPassesEveryViaPointInOrder(glyph, script);
+  // Played on the simulated pen, the recording follows the script.
   render::WorldConfig world;
   world.relief.kind = render::ReliefConfig::Kind::kFlat;
   session::TrialEnvironment environment("sim://pen", world, 1000.0);
   const HapticProfile expert = recordExpert(environment, script, {.subject = "expert", .skill = glyph.name});
-  const double plateau_N = ExpertConfig{}.axial_force_N * std::sin(ExpertConfig{}.altitude_rad);
-  double squared = 0.0, normal = 0.0;
-  std::size_t n = 0, in_contact = 0;
-  for (std::size_t i = 0; i < std::min(script.size(), expert.size()); ++i) {
-    if (!script[i].pen_down || -script[i].f_user_W.z() < plateau_N - 1e-9) continue;
-    squared += (expert[i].p_WT.head<2>() - script[i].p_WT.head<2>()).squaredNorm();
-    normal += -expert[i].f_user_W.z();
-    in_contact += expert[i].in_contact ? 1 : 0;
-    ++n;
-  }
-  ASSERT_GT(n, 200u);
-  EXPECT_EQ(in_contact, n);
-  EXPECT_LT(std::sqrt(squared / static_cast<double>(n)), 0.0015);
-  EXPECT_NEAR(normal / static_cast<double>(n), plateau_N, 0.1 * plateau_N);
+  checks::expectRecordingFollowsScript(script, expert, 200);
 }
 
 INSTANTIATE_TEST_SUITE_P(Library, LetterWritten, ::testing::ValuesIn(letterCharacters()),

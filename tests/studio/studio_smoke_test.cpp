@@ -540,7 +540,7 @@ class StudioSmokeTest : public QObject {
     QVERIFY2(label.contains("the letter <b>a</b> (small-a) written by the simulated expert"), qPrintable(label));
     QVERIFY2(w.startTrial(), qPrintable(w.lastError()));
     QCOMPARE(w.rig().spec().metadata.skill, std::string("small-a"));
-    QCOMPARE(w.rig().spec().metadata.extra.at("reference_file"), std::string("small-a"));
+    QCOMPARE(w.rig().spec().metadata.extra.at("reference_file"), std::string("glyph:small-a"));
     w.abortActivity();
     // A name that is no built-in glyph is refused, and the reference stays.
     QVERIFY(!w.trainTab()->useLetter("zz"));
@@ -570,7 +570,17 @@ class StudioSmokeTest : public QObject {
     QVERIFY(again.startTrial());  // the reference of last time is written again: the letter a
     QCOMPARE(again.trainTab()->reference()->metadata().skill, std::string("small-a"));
     again.abortActivity();
+    {
+      const QSettings letter(ini, QSettings::IniFormat);
+      QCOMPARE(letter.value("train/reference_letter").toString(), QString("small-a"));
+      QVERIFY(!letter.contains("train/reference_file"));
+    }
+    // A file after the letter: the file is remembered, the letter forgotten.
+    QVERIFY2(again.loadReference(QString::fromStdString(expert_file_.string())), qPrintable(again.lastError()));
+    QVERIFY(again.close());
     QSettings settings(ini, QSettings::IniFormat);
+    QCOMPARE(settings.value("train/reference_file").toString(), QString::fromStdString(expert_file_.string()));
+    QVERIFY(!settings.contains("train/reference_letter"));
     QCOMPARE(settings.value("record/name").toString(), QString("Ana"));
     QCOMPARE(settings.value("train/settle_s").toDouble(), 0.5);
   }

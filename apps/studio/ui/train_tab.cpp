@@ -169,7 +169,8 @@ bool TrainTab::useLetter(const QString& glyph_name) {
     const QString shown = glyph.character.empty() ? qs(glyph.name) : qs(glyph.character);
     const QString label = tr("Reference: the letter <b>%1</b> (%2) written by the simulated expert: %3")
                               .arg(shown.toHtmlEscaped(), qs(glyph.name).toHtmlEscaped(), describeProfile(profile));
-    setReference(std::move(profile), QString(), qs(glyph.name), label);
+    // Named "glyph:NAME" in the trials' metadata, so that it is not taken for a file's name.
+    setReference(std::move(profile), QString(), QStringLiteral("glyph:%1").arg(qs(glyph.name)), label);
     reference_letter_ = qs(glyph.name);
     w_.letter->setCurrentIndex(std::max(0, w_.letter->findData(reference_letter_)));
     return true;

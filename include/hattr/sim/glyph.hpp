@@ -47,9 +47,10 @@ Glyph parseGlyph(std::string_view json_text, std::string_view source_name);
 /// Loads a glyph file (parseGlyph); throws InputError if it cannot be read.
 Glyph loadGlyph(const std::filesystem::path& file);
 
-/// A glyph as people name it: a file path (an existing file, or any name with a '/' or ending
-/// in .json), a built-in glyph's name (data/glyphs/NAME.json: "na", "loop", "small-a"), or the character
-/// itself ("ந"). Throws InputError naming what was tried and listing the built-in glyphs.
+/// A glyph as people name it: a file path (any name with a '/' or ending in .json), a built-in
+/// glyph's name (data/glyphs/NAME.json: "na", "loop", "small-a") or the character itself ("ந",
+/// "a", "A", "7"), or else an existing file of that name (a file "a" in the working folder does
+/// not hide the letter a). Throws InputError naming what was tried and listing the built-in glyphs.
 Glyph findGlyph(std::string_view name);
 /// A built-in glyph by its name or character only (no file is looked for); InputError listing
 /// the built-in glyphs otherwise.
@@ -61,7 +62,8 @@ std::vector<Glyph> builtInGlyphs();
 /// Total pen-down path length of a glyph [m] (the sum of its strokes' polyline lengths).
 double glyphPathLength(const Glyph& glyph);
 
-/// The smallest axis-aligned box holding every via point of a glyph [m].
+/// The smallest axis-aligned box holding every via point of a glyph [m] (the written path may
+/// bulge a little past it between via points). A glyph without points gives min = +inf, max = -inf.
 struct GlyphBounds {
   Vec2 min;
   Vec2 max;
