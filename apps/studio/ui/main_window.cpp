@@ -253,10 +253,11 @@ void MainWindow::loadSettings() {
   // in) just leaves none loaded.
   const QString reference = s.value("train/reference_file").toString();
   const QString letter = s.value("train/reference_letter").toString();
-  if ((!reference.isEmpty() && QFileInfo::exists(reference)) || !letter.isEmpty()) {
+  const bool file_there = !reference.isEmpty() && QFileInfo::exists(reference);
+  if (file_there || !letter.isEmpty()) {
     const bool was = interactive_;
     interactive_ = false;
-    if (!reference.isEmpty()) {
+    if (file_there) {
       loadReference(reference);
     } else {
       train_tab_->useLetter(letter);

@@ -166,9 +166,13 @@ bool TrainTab::useLetter(const QString& glyph_name) {
     session::TrialEnvironment pen("sim://pen", render::WorldConfig{}, host_.rate_hz());
     HapticProfile profile =
         sim::recordExpert(pen, sim::expertScript(glyph), {.subject = "expert", .skill = glyph.name, .source = "sim:expert"});
-    const QString shown = glyph.character.empty() ? qs(glyph.name) : qs(glyph.character);
-    const QString label = tr("Reference: the letter <b>%1</b> (%2) written by the simulated expert: %3")
-                              .arg(shown.toHtmlEscaped(), qs(glyph.name).toHtmlEscaped(), describeProfile(profile));
+    // A character is "the letter a (small-a)"; a shape that is none, "the glyph loop".
+    const QString label =
+        glyph.character.empty()
+            ? tr("Reference: the glyph <b>%1</b> written by the simulated expert: %2")
+                  .arg(qs(glyph.name).toHtmlEscaped(), describeProfile(profile))
+            : tr("Reference: the letter <b>%1</b> (%2) written by the simulated expert: %3")
+                  .arg(qs(glyph.character).toHtmlEscaped(), qs(glyph.name).toHtmlEscaped(), describeProfile(profile));
     // Named "glyph:NAME" in the trials' metadata, so that it is not taken for a file's name.
     setReference(std::move(profile), QString(), QStringLiteral("glyph:%1").arg(qs(glyph.name)), label);
     reference_letter_ = qs(glyph.name);
