@@ -43,6 +43,8 @@ void registerServoCheckCommand(CLI::App& app);
 void registerWorldCommands(CLI::App& app);
 void registerRecordTrainCommands(CLI::App& app);
 void registerStudyCommands(CLI::App& app);
+/// `hattr learner plan | list | progress` (cmd_learner.cpp).
+void registerLearnerCommands(CLI::App& app);
 void registerAnalysisCommands(CLI::App& app);
 void registerLmmCommand(CLI::App& app);
 void registerSimCommands(CLI::App& app);

@@ -35,6 +35,7 @@ struct StudyOptions {
   bool json = false;
   bool quiet = false;
   bool force = false;
+  bool identified = false;
 };
 
 nlohmann::json statusJson(const session::StudyDatabase& db) {
@@ -149,8 +150,9 @@ void runStatus(const StudyOptions& opt) {
 
 void runExport(const StudyOptions& opt) {
   const session::StudyDatabase db = session::StudyDatabase::open(opt.db, session::OpenMode::kReadOnly);
-  const std::size_t n = session::exportStudy(db, opt.out);
-  std::cout << fmt::format("exported {} trial profiles to {}/\n", n, opt.out);
+  const std::size_t n = session::exportStudy(db, opt.out, {.identified = opt.identified});
+  std::cout << fmt::format("exported {} trial profiles to {}/{}\n", n, opt.out,
+                           opt.identified ? " (with learners' names and notes)" : "");
 }
 
 /// The analysis options, scoring progress drawn on `progress` (a terminal only).
@@ -301,6 +303,8 @@ void addStudyDataCommands(CLI::App* study, const std::shared_ptr<StudyOptions>& 
   auto* exp = study->add_subcommand("export", "Write the study as files: definition, experts, trials table, one CSV per trial");
   exp->add_option("--db", opt->db, "Study database")->required();
   exp->add_option("--out", opt->out, "Folder to create")->required();
+  exp->add_flag("--identified", opt->identified,
+                "Keep learners' names and notes in study.json (left out by default: learners are named by their code)");
   exp->callback([opt] { runExport(*opt); });
 
   auto* imp = study->add_subcommand("import", "Create a study database from an export folder");

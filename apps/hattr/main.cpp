@@ -89,6 +89,7 @@ int main(int argc, char** argv) {
   registerWorldCommands(app);
   registerRecordTrainCommands(app);
   registerStudyCommands(app);
+  registerLearnerCommands(app);
   registerAnalysisCommands(app);
   registerLmmCommand(app);
   registerSimCommands(app);

@@ -11,6 +11,7 @@
 #include "hattr/core/error.hpp"
 #include "hattr/core/text_file.hpp"
 #include "hattr/io/profile_csv.hpp"
+#include "hattr/session/learner.hpp"
 
 namespace hattr::session {
 namespace {
@@ -78,13 +79,14 @@ std::size_t writeExport(const StudyDatabase& db, StudyDefinition study, const st
 
 }  // namespace
 
-std::size_t exportStudy(const StudyDatabase& db, const std::filesystem::path& out) {
+std::size_t exportStudy(const StudyDatabase& db, const std::filesystem::path& out, const ExportOptions& options) {
   namespace fs = std::filesystem;
   HATTR_THROW_UNLESS(!fs::exists(out) || (fs::is_directory(out) && fs::is_empty(out)),
                      "{}: exists and is not an empty folder; choose a new folder", out.string());
 
   // Every name checked before anything is written.
   StudyDefinition study = db.study();
+  if (!options.identified) pseudonymize(study);  // learners' names and notes stay in the database
   for (const auto& [skill, path] : study.experts) (void)checkedName(skill, "skill");
   for (const SubjectRecord& s : db.subjects()) (void)checkedName(s.id, "subject id");
 

@@ -82,9 +82,11 @@ std::unique_ptr<session::Participant> makeSimulatedParticipant(const session::Su
                                                                const HapticProfile& expert, const TraineeModel& model) {
   const auto& options = subject.spec.options;
   for (const auto& item : options.items()) {
-    HATTR_THROW_UNLESS(item.key() == "template" || item.key() == "model" || item.key() == "hypothesis",
+    // "learner": a learner's details (session/learner.hpp), which a simulated learner may have too.
+    HATTR_THROW_UNLESS(item.key() == "template" || item.key() == "model" || item.key() == "hypothesis" ||
+                           item.key() == "learner",
                        "subject {}: unknown option \"{}\" for a simulated participant: expected template, model, "
-                       "hypothesis",
+                       "hypothesis or learner",
                        subject.id, item.key());
   }
   const HapticProfile script =

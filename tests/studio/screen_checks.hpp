@@ -3,10 +3,14 @@
 // the X server's pixels under Xvfb), and a mouse event sent to a widget.
 
 #include <QCoreApplication>
+#include <QElapsedTimer>
 #include <QImage>
 #include <QMouseEvent>
+#include <QtTest>
+#include <algorithm>
 #include <cstdlib>
 
+#include "core/series.hpp"
 #include "hattr/core/haptic_profile.hpp"
 #include "ui/main_window.hpp"
 #include "ui/paper_view.hpp"
@@ -48,6 +52,42 @@ inline double shareDrawn(const QImage& shot, const MainWindow& window, const Hap
 inline void sendMouse(QWidget* widget, QEvent::Type type, QPointF at, Qt::MouseButton button, Qt::MouseButtons buttons) {
   QMouseEvent event(type, at, widget->mapToGlobal(at), button, buttons, Qt::NoModifier);
   QCoreApplication::sendEvent(widget, &event);
+}
+
+/// A scripted hand: holds the left button and moves the mouse along `path` (an expert's
+/// profile, shifted by `offset`) on the trial's clock while the window's activity is `during`,
+/// lifting the pen when the path ends. With `mid_shot`, the window is saved there 0.6 s into
+/// the trial. `ran_s`: the last trial time [s] seen while the activity ran.
+inline void writeAlong(MainWindow& w, const HapticProfile& path, const Vec3& offset, MainWindow::Activity during,
+                       const char* mid_shot = nullptr, double* ran_s = nullptr) {
+  PaperView* view = w.paperView();
+  const auto at = [&](double t_trial) {
+    Playback where;
+    where.load(&path);
+    const Vec3 p = path[where.indexAt(std::max(0.0, t_trial))].p_WT + offset;
+    return view->mapping().toWidget(p);
+  };
+  sendMouse(view, QEvent::MouseMove, at(0.0), Qt::NoButton, Qt::NoButton);
+  sendMouse(view, QEvent::MouseButtonPress, at(0.0), Qt::LeftButton, Qt::LeftButton);
+  const double lift_at_s = path.samples().back().t_s - path.samples().front().t_s;
+  bool down = true;
+  QElapsedTimer timer;
+  timer.start();
+  while (w.activity() == during && timer.elapsed() < 15000) {
+    const double t_trial = w.rig().status().loop_time_s - w.rig().spec().settle_s;
+    if (ran_s != nullptr) *ran_s = t_trial;
+    if (down && t_trial > lift_at_s) {
+      sendMouse(view, QEvent::MouseButtonRelease, at(t_trial), Qt::LeftButton, Qt::NoButton);
+      down = false;
+    }
+    sendMouse(view, QEvent::MouseMove, at(t_trial), Qt::NoButton, down ? Qt::LeftButton : Qt::NoButton);
+    if (mid_shot != nullptr && t_trial > 0.6) {
+      QVERIFY(w.grab().save(QString::fromLatin1(mid_shot)));
+      mid_shot = nullptr;
+    }
+    QTest::qWait(8);
+  }
+  if (down) sendMouse(view, QEvent::MouseButtonRelease, at(10.0), Qt::LeftButton, Qt::NoButton);
 }
 
 }  // namespace hattr::studio::test

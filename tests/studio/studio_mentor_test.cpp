@@ -436,7 +436,7 @@ class StudioMentorTest : public QObject {
     w.resize(1280, 820);
     w.show();
     QVERIFY(QTest::qWaitForWindowExposed(&w));
-    QCOMPARE(w.tabs()->count(), 6);
+    QCOMPARE(w.tabs()->count(), 7);
     QCOMPARE(w.tabs()->tabText(MainWindow::kTabMentor), QStringLiteral("Mentor"));
     QVERIFY(w.mentorTab() != nullptr);
     QCOMPARE(w.tabs()->widget(MainWindow::kTabMentor), static_cast<QWidget*>(w.mentorTab()));

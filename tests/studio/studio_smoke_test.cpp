@@ -586,40 +586,10 @@ class StudioSmokeTest : public QObject {
   }
 
  private:
-  /// Holds the left button and moves the mouse along the expert's path (shifted), on the
-  /// trial's clock, lifts the pen when the expert's path ends and waits for the activity to end.
-  /// With `mid_shot`, the window is saved there 0.6 s into the trial. `ran_s`: the last trial
-  /// time [s] seen while the activity ran.
+  /// The scripted hand writing the expert (test::writeAlong).
   void driveAlongExpert(MainWindow& w, const Vec3& offset, MainWindow::Activity during,
                         const char* mid_shot = nullptr, double* ran_s = nullptr) {
-    PaperView* view = w.paperView();
-    const auto at = [&](double t_trial) {
-      Playback where;
-      where.load(&expert_);
-      const Vec3 p = expert_[where.indexAt(std::max(0.0, t_trial))].p_WT + offset;
-      return view->mapping().toWidget(p);
-    };
-    sendMouse(view, QEvent::MouseMove, at(0.0), Qt::NoButton, Qt::NoButton);
-    sendMouse(view, QEvent::MouseButtonPress, at(0.0), Qt::LeftButton, Qt::LeftButton);
-    const double lift_at_s = expert_.samples().back().t_s - expert_.samples().front().t_s;
-    bool down = true;
-    QElapsedTimer timer;
-    timer.start();
-    while (w.activity() == during && timer.elapsed() < 15000) {
-      const double t_trial = w.rig().status().loop_time_s - w.rig().spec().settle_s;
-      if (ran_s != nullptr) *ran_s = t_trial;
-      if (down && t_trial > lift_at_s) {
-        sendMouse(view, QEvent::MouseButtonRelease, at(t_trial), Qt::LeftButton, Qt::NoButton);
-        down = false;
-      }
-      sendMouse(view, QEvent::MouseMove, at(t_trial), Qt::NoButton, down ? Qt::LeftButton : Qt::NoButton);
-      if (mid_shot != nullptr && t_trial > 0.6) {
-        QVERIFY(w.grab().save(QString::fromLatin1(mid_shot)));
-        mid_shot = nullptr;
-      }
-      QTest::qWait(8);
-    }
-    if (down) sendMouse(view, QEvent::MouseButtonRelease, at(10.0), Qt::LeftButton, Qt::NoButton);
+    test::writeAlong(w, expert_, offset, during, mid_shot, ran_s);
   }
 
   /// Holds the left button and writes along the expert's path (on the trial's clock) until

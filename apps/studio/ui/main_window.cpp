@@ -114,6 +114,7 @@ void MainWindow::buildUi() {
   buildStudyTab();
   buildReviewTab();
   buildMentorTab();
+  buildLearnersTab();
   // Every tab's name in view: without scroll arrows (a small window hid the last tabs behind
   // them) the tab bar's minimum is the whole bar, and so the panel's, whatever the font.
   tabs_->tabBar()->setUsesScrollButtons(false);

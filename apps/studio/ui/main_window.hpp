@@ -36,6 +36,7 @@ class QTimer;
 
 namespace hattr::studio {
 
+class LearnersTab;
 class LearningCurve;
 class MentorTab;
 class PaperView;
@@ -54,7 +55,7 @@ class MainWindow final : public QMainWindow {
  public:
   /// What the rig and the view are doing.
   enum class Activity { kFree, kRecording, kTrial, kStudyTrial, kPlayback, kMentoring };
-  enum Tab : int { kTabWrite = 0, kTabRecord, kTabTrain, kTabStudy, kTabReview, kTabMentor };
+  enum Tab : int { kTabWrite = 0, kTabRecord, kTabTrain, kTabStudy, kTabReview, kTabMentor, kTabLearners };
 
   /// `settings`: where settings are remembered (null: QSettings "hattr"/"studio").
   explicit MainWindow(std::unique_ptr<QSettings> settings = nullptr, QWidget* parent = nullptr);
@@ -136,6 +137,7 @@ class MainWindow final : public QMainWindow {
   [[nodiscard]] RecordTab* recordTab() const { return record_tab_; }
   [[nodiscard]] LearningCurve* learningCurve() const;
   [[nodiscard]] TrainTab* trainTab() const { return train_tab_; }
+  [[nodiscard]] LearnersTab* learnersTab() const { return learners_tab_; }
 
  protected:
   void closeEvent(QCloseEvent* event) override;
@@ -151,6 +153,10 @@ class MainWindow final : public QMainWindow {
   void buildStudyTab();
   void buildReviewTab();
   void buildMentorTab();
+  void buildLearnersTab();
+  /// The Learners tab's Continue: the plan open in the Study tab, the learner picked, their next
+  /// session begun (asking first when it is early).
+  bool continuePlan(const QString& file, const QString& learner);
   void buildActions();
   void buildFileMenu();
   void buildActionsMenu();
@@ -265,6 +271,8 @@ class MainWindow final : public QMainWindow {
   ReviewTab* review_ = nullptr;
   // Mentor tab (it has the device and the hand while a session runs: Activity::kMentoring).
   MentorTab* mentor_ = nullptr;
+  // Learners tab (the practice folder and the plan picked are its own).
+  LearnersTab* learners_tab_ = nullptr;
 };
 
 }  // namespace hattr::studio

@@ -4,6 +4,7 @@
 
 #include <QAction>
 #include <QApplication>
+#include <QFileDialog>
 #include <QLabel>
 #include <QMenuBar>
 #include <QMessageBox>
@@ -12,6 +13,8 @@
 #include <QStatusBar>
 #include <QTabWidget>
 
+#include "core/study_session.hpp"
+#include "ui/learners_tab.hpp"
 #include "ui/learning_curve.hpp"
 #include "ui/mentor_tab.hpp"
 #include "ui/paper_view.hpp"
@@ -228,6 +231,43 @@ void MainWindow::buildMentorTab() {
   host.ask_open_file = [this](const QString& title, const QString& filter) { return askOpenFile(title, filter); };
   mentor_ = new MentorTab(hand_, *paper_, *settings_, std::move(host));
   tabs_->addTab(mentor_, tr("Mentor"));
+}
+
+// The Learners tab makes plans and shows progress; Continue runs a plan in the Study tab.
+void MainWindow::buildLearnersTab() {
+  LearnersHost host;
+  host.continue_plan = [this](const QString& file, const QString& learner) { return continuePlan(file, learner); };
+  host.error = [this](const QString& what, const QString& detail) { showError(what, detail); };
+  host.ask_save_file = [this](const QString& title, const QString& suggested) -> QString {
+    if (!interactive_) return {};
+    return QFileDialog::getSaveFileName(this, title, suggested, tr("Web page (*.html)"));
+  };
+  host.ask_folder = [this](const QString& title, const QString& start) -> QString {
+    if (!interactive_) return {};
+    return QFileDialog::getExistingDirectory(this, title, start);
+  };
+  host.open_url = [this](const QUrl& url) { return !url_opener_ || url_opener_(url); };
+  host.note = [this](const QString& message, int ms) { statusBar()->showMessage(message, ms); };
+  learners_tab_ = new LearnersTab(*settings_, std::move(host));
+  tabs_->addTab(learners_tab_, tr("Learners"));
+}
+
+bool MainWindow::continuePlan(const QString& file, const QString& learner) {
+  if (!idle()) {
+    showError(tr("The plan cannot continue now"), tr("finish the trial, recording or session that runs first"));
+    return false;
+  }
+  // The plan open in the Study tab already goes on where it is (opening it again would wait on
+  // its own runner lock).
+  const bool open = study() != nullptr && study()->file() == std::filesystem::path(file.toStdString());
+  if (open) {
+    tabs_->setCurrentIndex(kTabStudy);
+  } else if (!openStudy(file)) {
+    return false;
+  }
+  if (study()->subject() != learner.toStdString() && !selectStudySubject(learner)) return false;
+  if (study()->state() == StudySession::State::kNextSession) return studyNext();
+  return true;
 }
 
 void MainWindow::buildActions() {

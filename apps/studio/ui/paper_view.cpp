@@ -26,7 +26,7 @@ constexpr double kBannerMargin_px = 8.0;
 
 PaperView::PaperView(QWidget* parent) : QWidget(parent) {
   setMouseTracking(true);
-  setMinimumSize(480, 360);
+  setMinimumSize(400, 300);  // 2.5 px a millimetre: with the 3-D view and seven tabs, 1024 px still fit
   setFocusPolicy(Qt::StrongFocus);
   setCursor(Qt::CrossCursor);
   mapping_.setWidgetSize(width(), height());

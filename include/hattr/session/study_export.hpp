@@ -17,9 +17,15 @@ namespace hattr::session {
 /// Throws InputError for a subject id that would leave the folder.
 std::string trialFileName(const TrialPlan& plan);
 
+struct ExportOptions {
+  /// Keep learners' names and notes (session/learner.hpp) in study.json. Off by default: the
+  /// export is pseudonymized, each learner named by their code only.
+  bool identified = false;
+};
+
 /// Writes the export folder (created; refuses an existing non-empty folder). Returns the
 /// number of trial profiles written.
-std::size_t exportStudy(const StudyDatabase& db, const std::filesystem::path& out_dir);
+std::size_t exportStudy(const StudyDatabase& db, const std::filesystem::path& out_dir, const ExportOptions& options = {});
 
 /// Creates a new study database from an export folder: the definition, the experts, the
 /// plan, and every completed trial's profile, exactly as exported. Returns the number of
