@@ -9,7 +9,8 @@ int main(int argc, char** argv) {
   QApplication::setOrganizationName(QStringLiteral("hattr"));
   QApplication::setApplicationName(QStringLiteral("studio"));
   hattr::studio::MainWindow window;
-  window.resize(1280, 820);
+  window.fitToScreen();  // the size remembered or 1280 × 820, within the screen
   window.show();
+  window.fitToScreen();  // again, now that the frame is known
   return QApplication::exec();
 }

@@ -11,6 +11,7 @@
 #include "core/relief_image.hpp"
 #include "core/scene_camera.hpp"
 #include "core/series.hpp"
+#include "core/window_fit.hpp"
 #include "core/trial_scoring.hpp"
 #include "hattr/analysis/dtw.hpp"
 #include "hattr/analysis/preprocess.hpp"
@@ -389,6 +390,17 @@ class StudioCoreTest : public QObject {
     // The far edge is deeper than the near one.
     QVERIFY(camera.depth(Vec3(0, 0.05, 0)) > camera.depth(Vec3(0, -0.05, 0)));
   }
+  // The first window on a screen: 1280 x 820 where it fits; on a 1280 x 800 screen with a
+  // panel, or a 1024 x 680 one, within it less the frame (so the status bar shows), never
+  // below the window's smallest size.
+  void theFirstWindowFitsTheScreenWithItsFrame() {
+    const QSize frame(8, 40), minimum(853, 600);
+    QCOMPARE(fitWindow(kPreferredWindowSize, QSize(1920, 1050), frame, minimum), QSize(1280, 820));
+    QCOMPARE(fitWindow(kPreferredWindowSize, QSize(1280, 768), frame, minimum), QSize(1272, 728));
+    QCOMPARE(fitWindow(kPreferredWindowSize, QSize(1024, 680), QSize(0, 0), minimum), QSize(1024, 680));
+    QCOMPARE(fitWindow(kPreferredWindowSize, QSize(800, 500), frame, minimum), minimum);
+  }
+
   void aMicrometreReliefIsRaisedAndFlatPaperIsNot() {
     QCOMPARE(reliefExaggeration(render::HeightField{}, 0.16), 1.0);
     // Heights from 0 to 20 µm on a 0.16 m paper: raised to 3 % of it (4.8 mm), 240 times.

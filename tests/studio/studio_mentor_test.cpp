@@ -626,8 +626,11 @@ class StudioMentorTest : public QObject {
     return true;
   }
 
+  /// The window's settings, in the engineer view: these tests read the station's counters.
   std::unique_ptr<QSettings> settingsFile(const char* name) const {
-    return std::make_unique<QSettings>(QString::fromStdString((dir_ / name).string()), QSettings::IniFormat);
+    auto settings = std::make_unique<QSettings>(QString::fromStdString((dir_ / name).string()), QSettings::IniFormat);
+    settings->setValue("view/engineer", true);
+    return settings;
   }
 
   std::filesystem::path dir_;

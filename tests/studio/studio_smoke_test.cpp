@@ -59,6 +59,7 @@ class StudioSmokeTest : public QObject {
     // as the reference must stay within the pen's 1.75 N whatever the load.
     settings->setValue("input/press_N", 0.8);
     settings->setValue("record/character", "eight");
+    settings->setValue("view/engineer", true);  // it reads the loop's counters and the technical names
     window_ = std::make_unique<MainWindow>(std::move(settings));
     window_->setInteractive(false);
     window_->resize(1280, 820);

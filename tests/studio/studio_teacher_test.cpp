@@ -3,6 +3,7 @@
 // learner, makes a practice plan for the letter a, runs two sessions with the simulated pen and
 // a scripted hand (the mouse moved along the model letter), opens the learner's progress and
 // prints it to a file. The screen is read back at 1280 x 800 and 1024 x 680 and checked.
+#include <QCheckBox>
 #include <QComboBox>
 #include <QDialogButtonBox>
 #include <QGuiApplication>
@@ -26,11 +27,16 @@
 #include "hattr/session/study_database.hpp"
 #include "screen_checks.hpp"
 #include "studio_test_support.hpp"
+#include "hattr/sim/glyph.hpp"
 #include "ui/learner_dialogs.hpp"
 #include "ui/learners_tab.hpp"
 #include "ui/main_window.hpp"
+#include "ui/mentor_tab.hpp"
+#include "ui/paper_view.hpp"
 #include "ui/progress_curve.hpp"
+#include "ui/record_tab.hpp"
 #include "ui/study_tab.hpp"
+#include "ui/train_tab.hpp"
 
 using namespace hattr;
 using namespace hattr::studio;
@@ -78,14 +84,30 @@ class StudioTeacherTest : public QObject {
       opened_.push_back(url);
       return true;
     });
-    window_->resize(1280, 800);
+    window_->fitToScreen();  // as hattr-studio opens it: nothing remembered yet
     window_->show();
     QVERIFY(QTest::qWaitForWindowExposed(window_.get()));
+    window_->fitToScreen();
   }
 
   void cleanupTestCase() {
     window_.reset();
     std::filesystem::remove_all(dir_);
+  }
+
+  // Opened as hattr-studio opens it on the 1280 x 800 screen: within it, the status bar on it
+  // (1280 x 820, the size it asks for, would put the status bar off the screen).
+  void theFirstWindowFitsTheScreen() {
+    MainWindow& w = *window_;
+    const QRect screen = w.screen()->availableGeometry();
+    QVERIFY2(screen.contains(w.frameGeometry()),
+             qPrintable(QString("window %1,%2 %3x%4 on a screen of %5x%6")
+                            .arg(w.frameGeometry().x()).arg(w.frameGeometry().y())
+                            .arg(w.frameGeometry().width()).arg(w.frameGeometry().height())
+                            .arg(screen.width()).arg(screen.height())));
+    const QRect status(w.statusBar()->mapToGlobal(QPoint(0, 0)), w.statusBar()->size());
+    QVERIFY(w.statusBar()->isVisible() && screen.contains(status));
+    w.resize(1280, 800);
   }
 
   // New learner, then the plan for her: the two forms filled in and accepted with clicks.
@@ -244,6 +266,118 @@ class StudioTeacherTest : public QObject {
       }
       QVERIFY2(dark_points > 20, qPrintable(QString("%1: %2 pixels of the curve's points").arg(name).arg(dark_points)));
     }
+  }
+
+  // Plain by default: the strategies' plain names, the pen's state without the loop's counters,
+  // no passivity or deadband. Ctrl+E shows the engineer's view, and it is remembered.
+  void thePlainViewSpeaksPlainlyAndTheEngineerViewIsRemembered() {
+    MainWindow& w = *window_;
+    QVERIFY(!w.engineerView());
+    QComboBox* modes = w.trainTab()->widgets().mode;
+    const int pcontrol = modes->findData(static_cast<int>(guidance::TrainingMode::kPositionControl));
+    QCOMPARE(modes->itemText(pcontrol), QStringLiteral("Guided path"));
+    QVERIFY(modes->itemData(pcontrol, Qt::ToolTipRole).toString().startsWith("PCONTROL: "));
+    auto* loop = w.findChild<QLabel*>("status_loop");
+    QVERIFY(loop != nullptr);
+    QTRY_VERIFY2(loop->text().startsWith("Pen: "), qPrintable(loop->text()));
+    const MentorTab::Widgets& mentor = w.mentorTab()->widgets();
+    QVERIFY(!mentor.passivity->isVisibleTo(w.mentorTab()));
+    QVERIFY(!mentor.deadband->isVisibleTo(w.mentorTab()));
+
+    w.activateWindow();  // a shortcut acts in the active window
+    QVERIFY(QTest::qWaitForWindowActive(&w));
+    QTest::keyClick(&w, Qt::Key_E, Qt::ControlModifier);
+    QVERIFY(w.engineerView());
+    QCOMPARE(modes->itemText(pcontrol), QStringLiteral("Guided path — PCONTROL"));
+    QTRY_VERIFY2(loop->text().startsWith("Loop: ") && loop->text().contains("overruns"), qPrintable(loop->text()));
+    QVERIFY(mentor.passivity->isVisibleTo(w.mentorTab()));
+    QTest::keyClick(&w, Qt::Key_E, Qt::ControlModifier);
+    QVERIFY(!w.engineerView());
+
+    // Remembered: a window that closes in the engineer view opens in it.
+    const QString ini = QString::fromStdString((dir_ / "engineer.ini").string());
+    {
+      MainWindow other(std::make_unique<QSettings>(ini, QSettings::IniFormat));
+      other.setInteractive(false);
+      QVERIFY(!other.engineerView());
+      other.setEngineerView(true);
+      QVERIFY(other.close());
+    }
+    MainWindow again(std::make_unique<QSettings>(ini, QSettings::IniFormat));
+    QVERIFY(again.engineerView());
+    QCOMPARE(again.trainTab()->widgets().mode->itemText(pcontrol), QStringLiteral("Guided path — PCONTROL"));
+    QVERIFY(again.close());
+  }
+
+  // The Record tab's letter guide: the letter's strokes on the paper while the tab is shown, the
+  // character named after it; none, and the name goes with it.
+  void theRecordTabGuidesALetterStrokeByStroke() {
+    MainWindow& w = *window_;
+    clickTab(MainWindow::kTabRecord);
+    RecordTab& record = *w.recordTab();
+    QVERIFY(w.paperView()->letterGuide().empty());
+    QVERIFY2(record.setLetterGuide("small-a"), qPrintable(w.lastError()));
+    const sim::Glyph a = sim::findBuiltInGlyph("a");
+    QCOMPARE(w.paperView()->letterGuide().size(), a.strokes.size());
+    QCOMPARE(record.widgets().character->text(), QStringLiteral("small-a"));
+    QCOMPARE(record.widgets().guide->currentData().toString(), QStringLiteral("small-a"));
+    // On the screen: the guide's colour along the letter's via points (its numbered starts and
+    // arrowheads cover a few), on the whole paper and four times larger (the Paper box).
+    const PaperView* view = w.paperView();
+    const double whole_px_per_m = view->mapping().pixelsPerMetre();
+    for (const int zoom : {1, 4}) {
+      w.zoomBox()->setCurrentIndex(w.zoomBox()->findData(zoom));
+      QCOMPARE(view->zoom(), zoom);
+      QVERIFY(std::abs(view->mapping().pixelsPerMetre() - zoom * whole_px_per_m) < 1e-6 * whole_px_per_m);
+      const QImage shot = screenShot(QString("studio_teacher_record_guide_%1x.png").arg(zoom));
+      const QPoint origin = view->mapTo(&w, QPoint(0, 0));
+      int points = 0, drawn = 0;
+      for (const auto& stroke : a.strokes) {
+        for (const auto& p : stroke.points) {
+          ++points;
+          drawn += test::colourNear(shot, (view->mapping().toWidget(p.x(), p.y()) + QPointF(origin)).toPoint(),
+                                    PaperView::guideColour(), 2, 30)
+                       ? 1
+                       : 0;
+        }
+      }
+      QVERIFY2(drawn >= 0.6 * points,
+               qPrintable(QString("zoom %1: %2 of %3 via points in the guide's colour").arg(zoom).arg(drawn).arg(points)));
+    }
+    clickTab(MainWindow::kTabTrain);
+    QVERIFY(w.paperView()->letterGuide().empty());
+    clickTab(MainWindow::kTabRecord);
+    QCOMPARE(w.paperView()->letterGuide().size(), a.strokes.size());
+    QVERIFY(record.setLetterGuide(""));
+    QVERIFY(w.paperView()->letterGuide().empty());
+    QVERIFY(record.widgets().character->text().isEmpty());
+    QVERIFY(!record.setLetterGuide("no-such-letter"));
+    QVERIFY2(w.lastError().contains("no-such-letter"), qPrintable(w.lastError()));
+    w.zoomBox()->setCurrentIndex(0);  // the whole paper again
+  }
+
+  // Guidance past what the pen renders: the arrow stops at the pen's continuous force (10 mm a
+  // newton) and the read-out says the help is capped.
+  void aGuidanceArrowIsCappedAtWhatThePenRenders() {
+    MainWindow& w = *window_;
+    clickTab(MainWindow::kTabTrain);
+    PaperView* view = w.paperView();
+    Sample pen;
+    pen.p_WT = Vec3(0.0, 0.0, 0.003);
+    pen.f_guide_W = Vec3(9.15, 0.0, 0.0);
+    view->setPen(pen);
+    QCOMPARE(view->readout(), QStringLiteral("pen 3.0 mm up · pressing 0.0 N · help 1.8 N (the pen's most)"));
+    view->setEngineerView(true);
+    QVERIFY2(view->readout().contains("guidance 9.15 N (capped at 1.75 N)"), qPrintable(view->readout()));
+    view->setEngineerView(false);
+    const QImage image = view->grab().toImage();  // painted now, with this pen
+    const QPointF at = view->mapping().toWidget(0.0, 0.0);
+    const double px_per_mm = view->mapping().pixelsPerMetre() / 1000.0;
+    const auto green = [&](double mm) {
+      return test::colourNear(image, (at + QPointF(mm * px_per_mm, 0.0)).toPoint(), PaperColours::guideForce(), 1, 40);
+    };
+    QVERIFY2(green(10.0), "the arrow's shaft 10 mm out");
+    QVERIFY2(!green(25.0) && !green(40.0), "the arrow runs past 17.5 mm (1.75 N)");
   }
 
  private:

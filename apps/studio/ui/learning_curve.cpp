@@ -4,6 +4,10 @@
 #include <QPainterPath>
 #include <algorithm>
 #include <cmath>
+#include <vector>
+
+#include "hattr/guidance/strategy_catalog.hpp"
+#include "ui/ui_text.hpp"
 
 namespace hattr::studio {
 
@@ -11,7 +15,7 @@ LearningCurve::LearningCurve(QWidget* parent) : QWidget(parent) {
   setSizePolicy(QSizePolicy::Preferred, QSizePolicy::Fixed);
   setMinimumHeight(minimumSizeHint().height());
   setToolTip(tr("Your training trials' scores against this reference, in order; lower is closer. "
-                "Each point in its strategy's colour: grey BASIC, blue PCONTROL, green ALPHA, ..."));
+                "Each point in its strategy's colour (the legend on top); at the left, the latest trial's scores."));
 }
 
 void LearningCurve::add(guidance::TrainingMode mode, const analysis::TrialScore& score) {
@@ -39,6 +43,25 @@ QColor LearningCurve::modeColour(guidance::TrainingMode mode) {
   }
 }
 
+// The legend of the strategies on the curve, in a row at the top: a dot in each one's colour.
+void LearningCurve::drawLegend(QPainter& painter, int line_h) {
+  std::vector<guidance::TrainingMode> modes;
+  for (const Point& p : points_) {
+    if (std::find(modes.begin(), modes.end(), p.mode) == modes.end()) modes.push_back(p.mode);
+  }
+  const QFontMetrics metrics(font());
+  double x = 4.0;
+  for (const auto mode : modes) {
+    const QString name = qs(guidance::strategyInfo(mode).plain_name);
+    painter.setPen(Qt::NoPen);
+    painter.setBrush(modeColour(mode));
+    painter.drawEllipse(QPointF(x + 4.0, 2.0 + line_h / 2.0), 3.5, 3.5);
+    painter.setPen(palette().color(QPalette::Text));
+    painter.drawText(QPointF(x + 11.0, 2.0 + metrics.ascent()), name);
+    x += 11.0 + metrics.horizontalAdvance(name) + 10.0;
+  }
+}
+
 void LearningCurve::paintEvent(QPaintEvent*) {
   QPainter painter(this);
   painter.setRenderHint(QPainter::Antialiasing);
@@ -50,11 +73,15 @@ void LearningCurve::paintEvent(QPaintEvent*) {
     return;
   }
 
-  // Two panels, shape above force, each with its name and its largest score at the left.
-  const int label_w = metrics.horizontalAdvance(QStringLiteral("Force 00.00")) + 6;
-  const int panel_h = (height() - 4) / 2;
+  // The legend on top; two panels, shape above force, each with its name and its latest score
+  // at the left and its top value inside its corner; the trial numbers under the lower one.
+  const int line_h = metrics.height();
+  drawLegend(painter, line_h);
+  const int label_w = metrics.horizontalAdvance(QStringLiteral("latest 000.0")) + 6;
+  const double top_y = line_h + 4.0;
+  const double panel_h = (height() - top_y - line_h - 4.0) / 2.0;
   const auto panel = [&](int row, const QString& name, auto value) {
-    const QRectF area(label_w, 2 + row * panel_h + 4, width() - label_w - 8, panel_h - 8);
+    const QRectF area(label_w, top_y + row * panel_h + 3, width() - label_w - 8, panel_h - 6);
     double largest = 0.0;
     for (const Point& p : points_) {
       if (std::isfinite(value(p))) largest = std::max(largest, value(p));
@@ -62,10 +89,11 @@ void LearningCurve::paintEvent(QPaintEvent*) {
     const double top = largest > 0.0 ? largest * 1.1 : 1.0;
     painter.setPen(palette().color(QPalette::Text));
     painter.drawText(QRectF(2, area.top(), label_w - 6, area.height()), Qt::AlignLeft | Qt::AlignVCenter,
-                     QStringLiteral("%1\n%2").arg(name).arg(largest, 0, 'g', 3));
+                     tr("%1\nlatest %2").arg(name).arg(value(points_.back()), 0, 'f', 1));
     painter.setPen(palette().color(QPalette::Mid));
     painter.setBrush(Qt::NoBrush);
     painter.drawRect(area);
+    painter.drawText(area.adjusted(3, 1, -3, -1), Qt::AlignRight | Qt::AlignTop, QString::number(top, 'f', 0));
     // x: trial 1 at the left edge, the last at the right (one trial: the middle).
     // A score that is not a number (a trial the scorer could not take) is left out.
     const auto at = [&](std::size_t i) {
@@ -91,9 +119,14 @@ void LearningCurve::paintEvent(QPaintEvent*) {
       painter.setBrush(modeColour(points_[i].mode));
       painter.drawEllipse(at(i), 3.5, 3.5);
     }
+    return area;
   };
   panel(0, tr("Shape"), [](const Point& p) { return p.shape; });
-  panel(1, tr("Force"), [](const Point& p) { return p.force; });
+  const QRectF lower = panel(1, tr("Force"), [](const Point& p) { return p.force; });
+  painter.setPen(palette().color(QPalette::Text));
+  const QRectF numbers(lower.left(), lower.bottom() + 1, lower.width(), line_h);
+  painter.drawText(numbers, Qt::AlignLeft | Qt::AlignTop, tr("trial 1"));
+  if (points_.size() > 1) painter.drawText(numbers, Qt::AlignRight | Qt::AlignTop, QString::number(points_.size()));
 }
 
 }  // namespace hattr::studio

@@ -1,9 +1,12 @@
 #pragma once
 /// The Train tab's learning curve: the shape and force scores of this session's training
-/// trials against the current reference, trial by trial, each point in its mode's colour. Two
-/// small panels, one a metric, each from 0 to just above its largest score (lower is closer).
+/// trials against the current reference, trial by trial, each point in its mode's colour (a
+/// legend of the strategies on top). Two small panels, one a metric, each from 0 to just above
+/// its largest score (the top value in its corner), the latest scores at the left, the trial
+/// numbers under them (lower is closer).
 /// A new reference starts a new curve: scores against another expert do not compare.
 
+#include <QPainter>
 #include <QWidget>
 #include <vector>
 
@@ -31,13 +34,14 @@ class LearningCurve final : public QWidget {
   /// The colour a mode's points are drawn in.
   [[nodiscard]] static QColor modeColour(guidance::TrainingMode mode);
 
-  [[nodiscard]] QSize sizeHint() const override { return {260, 130}; }
-  [[nodiscard]] QSize minimumSizeHint() const override { return {160, 110}; }
+  [[nodiscard]] QSize sizeHint() const override { return {260, 170}; }
+  [[nodiscard]] QSize minimumSizeHint() const override { return {160, 150}; }
 
  protected:
   void paintEvent(QPaintEvent* event) override;
 
  private:
+  void drawLegend(QPainter& painter, int line_h);
   std::vector<Point> points_;
 };
 

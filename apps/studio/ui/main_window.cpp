@@ -5,12 +5,14 @@
 #include <QApplication>
 #include <QCheckBox>
 #include <QCloseEvent>
+#include <QComboBox>
 #include <QDesktopServices>
 #include <QFileInfo>
 #include <QHBoxLayout>
 #include <QLabel>
 #include <QMenuBar>
 #include <QPushButton>
+#include <QScreen>
 #include <QSlider>
 #include <QSplitter>
 #include <QStatusBar>
@@ -19,9 +21,11 @@
 #include <QTimer>
 #include <QToolBar>
 #include <QVBoxLayout>
+#include <algorithm>
 #include <cmath>
 
 #include "core/device_choice.hpp"
+#include "core/window_fit.hpp"
 #include "hattr/render/world_config.hpp"
 #include "ui/learning_curve.hpp"
 #include "ui/mentor_tab.hpp"
@@ -118,7 +122,11 @@ void MainWindow::buildUi() {
   // Every tab's name in view: without scroll arrows (a small window hid the last tabs behind
   // them) the tab bar's minimum is the whole bar, and so the panel's, whatever the font.
   tabs_->tabBar()->setUsesScrollButtons(false);
-  connect(tabs_, &QTabWidget::currentChanged, this, [this] { refreshButtons(); });
+  connect(tabs_, &QTabWidget::currentChanged, this, [this](int tab) {
+    // The Record tab's letter guide is on the paper while that tab is.
+    paper_->setLetterGuide(tab == kTabRecord ? record_tab_->guideStrokes() : std::vector<std::vector<Eigen::Vector2d>>{});
+    refreshButtons();
+  });
 
   splitter_ = new QSplitter(Qt::Horizontal);
   splitter_->addWidget(left_splitter_);
@@ -161,6 +169,17 @@ void MainWindow::buildToolBar() {
     press_label_->setText(tr("%1 N").arg(press_N, 0, 'f', 1));
   });
   tools->addSeparator();
+  // How much of the paper the top view shows (letters are 10 to 20 mm tall).
+  tools->addWidget(new QLabel(tr(" Paper ")));
+  zoom_box_ = new QComboBox;
+  zoom_box_->setObjectName("paper_zoom");
+  zoom_box_->addItem(tr("whole"), 1);
+  for (int k = 2; k <= PaperView::kMaxZoom; ++k) zoom_box_->addItem(tr("%1×").arg(k), k);
+  zoom_box_->setToolTip(tr("Show the whole paper, or its middle larger: for letters (the hand's strokes get finer too)"));
+  connect(zoom_box_, &QComboBox::currentIndexChanged, this,
+          [this](int index) { paper_->setZoom(zoom_box_->itemData(index).toInt()); });
+  tools->addWidget(zoom_box_);
+  tools->addSeparator();
   arrows_check_ = new QCheckBox(tr("Force arrows"));
   arrows_check_->setChecked(true);
   connect(arrows_check_, &QCheckBox::toggled, this, [this](bool on) { paper_->setForceArrowsShown(on); });
@@ -180,6 +199,7 @@ void MainWindow::buildToolBar() {
 void MainWindow::buildStatusBar() {
   status_input_ = new QLabel;
   status_loop_ = new QLabel;
+  status_loop_->setObjectName("status_loop");
   status_activity_ = new QLabel;
   status_activity_->setObjectName("status_activity");
   statusBar()->addWidget(status_activity_, 1);
@@ -225,9 +245,25 @@ void MainWindow::buildWriteTab() {
 
 void MainWindow::setSceneShown(bool shown) { scene_check_->setChecked(shown); }
 
+void MainWindow::fitToScreen() {
+  const QScreen* on = screen();
+  if (on == nullptr) return;
+  const QRect available = on->availableGeometry();
+  // The frame is known once the window is shown; before, allow a title bar's and borders' room.
+  const QSize frame = isVisible() ? frameGeometry().size() - geometry().size() : QSize(8, 40);
+  const QSize wanted = geometry_restored_ || isVisible() ? size() : kPreferredWindowSize;
+  resize(fitWindow(wanted, available.size(), frame, minimumSizeHint()));
+  // Onto the screen, its frame too.
+  const QRect frame_rect(frameGeometry().topLeft(), size() + frame);
+  QPoint at = frame_rect.topLeft();
+  at.setX(std::clamp(at.x(), available.left(), std::max(available.left(), available.right() - frame_rect.width() + 1)));
+  at.setY(std::clamp(at.y(), available.top(), std::max(available.top(), available.bottom() - frame_rect.height() + 1)));
+  if (at != frame_rect.topLeft()) move(at);
+}
+
 void MainWindow::loadSettings() {
   QSettings& s = *settings_;
-  restoreGeometry(s.value("window/geometry").toByteArray());
+  geometry_restored_ = restoreGeometry(s.value("window/geometry").toByteArray());
   restoreState(s.value("window/state").toByteArray());
   splitter_->restoreState(s.value("window/splitter").toByteArray());
   left_splitter_->restoreState(s.value("window/left_splitter").toByteArray());
@@ -240,6 +276,8 @@ void MainWindow::loadSettings() {
   hand_.setInput(input);
   press_label_->setText(tr("%1 N").arg(input.press_N, 0, 'f', 1));
   arrows_check_->setChecked(s.value("view/arrows", true).toBool());
+  zoom_box_->setCurrentIndex(std::max(0, zoom_box_->findData(s.value("view/zoom", 1).toInt())));
+  setEngineerView(s.value("view/engineer", false).toBool());
   scene_check_->setChecked(s.value("view/scene_3d", false).toBool());
   // The tablet calibration of last time, quietly (a file that went bad: the defaults).
   const QString calibration = s.value("input/tablet_calibration").toString();
@@ -277,7 +315,9 @@ void MainWindow::saveSettings() {
   s.setValue("window/tab", tabs_->currentIndex());
   s.setValue("input/press_N", hand_.input().press_N);
   s.setValue("view/arrows", arrows_check_->isChecked());
+  s.setValue("view/zoom", paper_->zoom());
   s.setValue("view/scene_3d", scene_check_->isChecked());
+  s.setValue("view/engineer", engineer_view_);
   s.setValue("window/view_splitter", view_splitter_->saveState());
   record_tab_->saveSettings();
   train_tab_->saveSettings();

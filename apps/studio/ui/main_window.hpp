@@ -113,6 +113,16 @@ class MainWindow final : public QMainWindow {
   void setUrlOpener(std::function<bool(const QUrl&)> opener) { url_opener_ = std::move(opener); }
   /// The tab's main action (Space): record/stop, start/stop a trial, the study's next step, play/pause.
   void primaryAction();
+  /// The first size and place on the window's screen: the size remembered, else 1280 × 820,
+  /// within the screen's available area (less the frame) so the status bar is on the screen,
+  /// and moved onto it. Called by hattr-studio before and after show().
+  void fitToScreen();
+  /// View ▸ Engineer view (Ctrl+E, remembered): the loop's counters, DTW units, technical
+  /// strategy names, the mentoring station's passivity and deadband. Off (the default), the
+  /// studio speaks plainly: strategies by their plain names, scores as "lower is closer", the
+  /// loop only when it does not keep time.
+  void setEngineerView(bool on);
+  [[nodiscard]] bool engineerView() const { return engineer_view_; }
 
   [[nodiscard]] Activity activity() const { return activity_; }
   /// The Train tab's mode.
@@ -124,6 +134,8 @@ class MainWindow final : public QMainWindow {
   /// The open study session (null: none); the Study tab owns it.
   [[nodiscard]] StudySession* study() const;
   [[nodiscard]] PaperView* paperView() const { return paper_; }
+  /// The tool bar's Paper box: the whole paper or its middle 2, 3 or 4 times larger (remembered).
+  [[nodiscard]] QComboBox* zoomBox() const { return zoom_box_; }
   /// The 3-D view beside the paper (shown with the tool bar's "3-D view", remembered).
   [[nodiscard]] PenSceneView* sceneView() const { return scene_; }
   void setSceneShown(bool shown);
@@ -189,6 +201,8 @@ class MainWindow final : public QMainWindow {
   /// How the Record tab names its take, for the Train tab's reference.
   [[nodiscard]] TakeName takeName() const;
   void refreshButtons();
+  /// The Write tab's device and world line (the clamps in the engineer view).
+  void refreshWorldLabel();
   [[nodiscard]] double now_s() const;
 
   // Dialogs.
@@ -209,6 +223,9 @@ class MainWindow final : public QMainWindow {
   QElapsedTimer clock_;
   bool interactive_ = true;
   bool answer_ = false;
+  bool engineer_view_ = false;
+  QAction* engineer_action_ = nullptr;
+  bool geometry_restored_ = false;  // a size was remembered
   QString last_error_;
 
   // The live rig on the mouse's hand.
@@ -255,6 +272,7 @@ class MainWindow final : public QMainWindow {
   QSlider* press_slider_ = nullptr;
   QLabel* press_label_ = nullptr;
   QCheckBox* arrows_check_ = nullptr;
+  QComboBox* zoom_box_ = nullptr;
   QCheckBox* scene_check_ = nullptr;
   QLabel* status_input_ = nullptr;
   QLabel* status_loop_ = nullptr;

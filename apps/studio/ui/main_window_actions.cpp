@@ -216,6 +216,12 @@ void MainWindow::showScores(const HapticProfile& expert, const HapticProfile& tr
     const analysis::TrialScorer scorer(expert);
     const analysis::TrialScore scores = scorer.score(trial);
     last_scores_ = scores;
+    if (!engineer_view_) {
+      where->setText(tr("<b>Shape</b> %1 &nbsp; <b>Force</b> %2 &nbsp; <small>lower is closer to the model</small>")
+                         .arg(scores.shape(), 0, 'f', 1)
+                         .arg(scores.force(), 0, 'f', 1));
+      return;
+    }
     where->setText(tr("<b>Shape</b> (DTW x + y): %1 &nbsp; <b>Force</b> (DTW fx + fy + fz): %2<br>"
                       "<small>x %3 · y %4 · fx %5 · fy %6 · fz %7 · pen height z %9 (not in the shape) — the "
                       "paper's normalization, on the expert's %8 time steps; lower is closer</small>")

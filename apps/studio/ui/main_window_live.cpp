@@ -2,6 +2,8 @@
 // bar, the buttons; and its dialogs.
 #include "ui/main_window.hpp"
 
+#include "hattr/guidance/strategy_catalog.hpp"
+
 #include <QApplication>
 #include <QFileDialog>
 #include <QFileInfo>
@@ -13,6 +15,7 @@
 #include <cmath>
 
 #include "core/device_choice.hpp"
+#include "hattr/guidance/strategy_catalog.hpp"
 #include "ui/mentor_tab.hpp"
 #include "ui/paper_view.hpp"
 #include "ui/pen_scene_view.hpp"
@@ -83,6 +86,18 @@ void MainWindow::askDevice() {
 
 // ---- The live rig and the display -----------------------------------------------------------
 
+void MainWindow::refreshWorldLabel() {
+  if (environment_ == nullptr) return;
+  QString clamps;
+  for (const auto& line : environment_->worldClamps()) clamps += QStringLiteral("<br>· ") + qs(line).toHtmlEscaped();
+  if (!engineer_view_) clamps.clear();  // the passivity bounds' detail is the engineer's
+  world_label_->setText(tr("Device <tt>%1</tt> at %2 Hz; world: %3%4")
+                            .arg(qs(environment_->deviceUri()).toHtmlEscaped())
+                            .arg(environment_->rate_hz())
+                            .arg(world_file_.isEmpty() ? tr("defaults") : world_file_.toHtmlEscaped())
+                            .arg(clamps.isEmpty() ? QString() : tr("<br>Clamped to the device:%1").arg(clamps)));
+}
+
 void MainWindow::useEnvironment(session::TrialEnvironment& environment) {
   environment_ = &environment;
   const DeviceLimits& limits = environment.limits();
@@ -90,13 +105,8 @@ void MainWindow::useEnvironment(session::TrialEnvironment& environment) {
                    limits.workspace_max_m.x(), limits.workspace_max_m.y());
   scene_->setPaper(environment.paper().relief(), limits.workspace_min_m.x(), limits.workspace_min_m.y(),
                    limits.workspace_max_m.x(), limits.workspace_max_m.y());
-  QString clamps;
-  for (const auto& line : environment.worldClamps()) clamps += QStringLiteral("<br>· ") + qs(line).toHtmlEscaped();
-  world_label_->setText(tr("Device <tt>%1</tt> at %2 Hz; world: %3%4")
-                            .arg(qs(environment.deviceUri()).toHtmlEscaped())
-                            .arg(environment.rate_hz())
-                            .arg(world_file_.isEmpty() ? tr("defaults") : world_file_.toHtmlEscaped())
-                            .arg(clamps.isEmpty() ? QString() : tr("<br>Clamped to the device:%1").arg(clamps)));
+  paper_->setForceLimit(limits.continuous_force_N);
+  refreshWorldLabel();
   startFreeRun();
 }
 
@@ -229,33 +239,55 @@ void MainWindow::onStatus() {
                              .arg(input.y_m * 1000.0, 0, 'f', 1)
                              .arg(input.pen_down ? tr("pen down") : tr("pen up"))
                              .arg(input.tablet ? input.tablet_press_N : input.press_N, 0, 'f', 1));
-  // The loop: measured rate, overruns, faults, drops, stalls.
+  // The loop: measured rate, overruns, faults, drops, stalls (the engineer view); plainly, only
+  // whether it keeps time.
   const bool mentoring = activity_ == Activity::kMentoring;
   const servo::LiveCounters* counters = mentoring ? mentor_->counters() : rig_.counters();
   if (counters == nullptr) {
-    status_loop_->setText(tr("Loop: stopped"));
+    status_loop_->setText(engineer_view_ ? tr("Loop: stopped") : tr("Pen: stopped"));
   } else {
     const std::uint64_t ticks = counters->ticks.load();
     if (ticks >= last_ticks_ && now > last_status_s_) {
       loop_rate_hz_ = static_cast<double>(ticks - last_ticks_) / (now - last_status_s_);
     }
     last_ticks_ = ticks;
-    status_loop_->setText(tr("Loop: %1 Hz · overruns %2 · faults %3 · drops %4 · stalls %5 · %6")
-                              .arg(loop_rate_hz_, 0, 'f', 0)
-                              .arg(counters->overruns.load())
-                              .arg(counters->faults.load())
-                              .arg(counters->dropped_samples.load())
-                              .arg(counters->stalls.load() + counters->consumer_stalls.load())
-                              .arg(mentoring ? tr("mentoring station") : qs(rig_.realtimeSummary())));
+    const double rate_hz = environment_ != nullptr ? environment_->rate_hz() : 1000.0;
+    const bool keeps_time = counters->faults.load() == 0 && loop_rate_hz_ >= 0.9 * rate_hz;
+    status_loop_->setText(engineer_view_ ? tr("Loop: %1 Hz · overruns %2 · faults %3 · drops %4 · stalls %5 · %6")
+                                               .arg(loop_rate_hz_, 0, 'f', 0)
+                                               .arg(counters->overruns.load())
+                                               .arg(counters->faults.load())
+                                               .arg(counters->dropped_samples.load())
+                                               .arg(counters->stalls.load() + counters->consumer_stalls.load())
+                                               .arg(mentoring ? tr("mentoring station") : qs(rig_.realtimeSummary()))
+                         : keeps_time ? tr("Pen: ready")
+                                      : tr("Pen: not keeping time (View ▸ Engineer view says why)"));
   }
   last_status_s_ = now;
   static const char* kNames[] = {"writing", "recording", "training trial", "study trial", "playback", "mentoring"};
   // The mode the loop runs: a study trial's own (a recall trial is BASIC whatever its mode),
   // otherwise the Train tab's.
   const guidance::TrainingMode shown = activity_ == Activity::kStudyTrial ? rig_.spec().guidance.mode : train_tab_->mode();
-  status_activity_->setText(tr("Activity: %1 · mode %2")
+  const QString strategy = engineer_view_ ? qs(std::string(guidance::modeName(shown)))
+                                          : qs(guidance::strategyInfo(shown).plain_name);
+  status_activity_->setText(tr("Activity: %1 · %2 %3")
                                 .arg(QString::fromLatin1(kNames[static_cast<int>(activity_)]))
-                                .arg(qs(std::string(guidance::modeName(shown)))));
+                                .arg(engineer_view_ ? tr("mode") : tr("help:"), strategy));
+}
+
+void MainWindow::setEngineerView(bool on) {
+  engineer_view_ = on;
+  if (engineer_action_ != nullptr) {
+    const QSignalBlocker block(engineer_action_);
+    engineer_action_->setChecked(on);
+  }
+  paper_->setEngineerView(on);
+  train_tab_->setEngineerView(on);
+  study_tab_->setEngineerView(on);
+  mentor_->setEngineerView(on);
+  refreshWorldLabel();
+  onStatus();
+  paper_->update();
 }
 
 void MainWindow::refreshButtons() {

@@ -71,6 +71,10 @@ void MainWindow::buildRecordTab() {
     plot_holds_result_ = true;
   };
   host.play = [this](const HapticProfile& take) { startPlayback(&take, nullptr); };
+  // The guide is on the paper while the Record tab is (buildUi switches it with the tabs).
+  host.show_guide = [this](const std::vector<std::vector<Eigen::Vector2d>>& strokes_m) {
+    if (tabs_->currentIndex() == kTabRecord) paper_->setLetterGuide(strokes_m);
+  };
   host.use_as_reference = [this](const HapticProfile& take) {
     if (!train_tab_->useTake(take, takeName())) return false;
     tabs_->setCurrentIndex(kTabTrain);
@@ -354,6 +358,12 @@ void MainWindow::buildViewMenu() {
     addMenuAction(this, view, tabs_->tabText(tab), QKeySequence(Qt::CTRL | static_cast<Qt::Key>(Qt::Key_1 + tab)),
                   [this, tab] { tabs_->setCurrentIndex(tab); });
   }
+  view->addSeparator();
+  engineer_action_ = addMenuAction(this, view, tr("Engineer view"), QKeySequence(Qt::CTRL | Qt::Key_E),
+                                   [this](bool checked) { setEngineerView(checked); });
+  engineer_action_->setCheckable(true);
+  engineer_action_->setToolTip(tr("The loop's counters, DTW units, technical strategy names, the mentoring "
+                                   "station's passivity and deadband"));
 }
 
 // Help: the table of shortcuts.
@@ -380,7 +390,8 @@ void MainWindow::buildHelpMenu() {
            "<tr><td><b>Ctrl+D</b>, <b>Ctrl+Shift+D</b></td><td>open a study, open a study for review</td></tr>"
            "<tr><td><b>Ctrl+W</b></td><td>load a world configuration</td></tr>"
            "<tr><td><b>Ctrl+Shift+R</b></td><td>review: open the study's report</td></tr>"
-           "<tr><td><b>Ctrl+1…6</b></td><td>the tabs</td></tr>"
+           "<tr><td><b>Ctrl+1…7</b></td><td>the tabs</td></tr>"
+           "<tr><td><b>Ctrl+E</b></td><td>the engineer view (on / off)</td></tr>"
            "</table>"));
   });
 }

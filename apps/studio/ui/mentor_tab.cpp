@@ -125,6 +125,7 @@ void MentorTab::buildChoices(QVBoxLayout* layout) {
   form->addRow(tr("Deadband"), w_.deadband);
   form->addRow(tr("Wait"), w_.wait);
   layout->addLayout(form);
+  form_ = form;
   connect(w_.role, &QComboBox::activated, this, [this] { onRoleChanged(); });
 }
 
@@ -350,6 +351,13 @@ void MentorTab::setRole(net::MentorRole r) {
   onRoleChanged();
 }
 
+void MentorTab::setEngineerView(bool on) {
+  engineer_view_ = on;
+  form_->setRowVisible(w_.passivity, on);
+  form_->setRowVisible(w_.deadband, on);
+  refreshStatus();
+}
+
 // ---- Display -------------------------------------------------------------------------------
 
 QString MentorTab::peerLabel() const {
@@ -397,6 +405,10 @@ void MentorTab::refreshStatus() {
                                                                                                : tr("Disconnect"));
   if (s.phase == MentorPhase::kIdle) {
     w_.status->clear();
+  } else if (!engineer_view_) {
+    w_.status->setText(tr("<b>Link</b> %1 · round trip %2 ms")
+                           .arg(s.stats.link_up ? tr("up") : tr("down"))
+                           .arg(s.stats.rtt_s * 1e3, 0, 'f', 1));
   } else {
     const net::MentorStats& m = s.stats;
     w_.status->setText(
@@ -423,6 +435,7 @@ void MentorTab::refreshStatus() {
   }
   QString clamps;
   for (const auto& line : session_.clamps()) clamps += QStringLiteral("<br>· ") + qs(line).toHtmlEscaped();
+  w_.clamps->setVisible(engineer_view_);
   w_.clamps->setText(s.phase == MentorPhase::kIdle ? QString()
                      : clamps.isEmpty()            ? tr("Clamped to the device: nothing")
                                                    : tr("Clamped to the device:%1").arg(clamps));

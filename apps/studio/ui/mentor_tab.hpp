@@ -17,6 +17,7 @@
 
 class QCheckBox;
 class QComboBox;
+class QFormLayout;
 class QDoubleSpinBox;
 class QLabel;
 class QLineEdit;
@@ -74,6 +75,9 @@ class MentorTab final : public QWidget {
   void clearPeerTrail();
   /// Lead or follow, as the role box would (its address shown).
   void setRole(net::MentorRole role);
+  /// The passivity controller, the deadband and the station's counters (packets, energies, loop,
+  /// clamps) in the engineer view only; plainly, the link and its round trip.
+  void setEngineerView(bool on);
 
   [[nodiscard]] MentorSession& session() { return session_; }
   [[nodiscard]] bool running() const { return session_.active(); }
@@ -125,6 +129,8 @@ class MentorTab final : public QWidget {
   QString connect_address_;
   int shown_role_ = -1;      // the role whose address the field shows
   QElapsedTimer status_clock_;
+  QFormLayout* form_ = nullptr;
+  bool engineer_view_ = false;
 };
 
 }  // namespace hattr::studio

@@ -11,7 +11,9 @@
 #include <QRectF>
 #include <QString>
 #include <QWidget>
+#include <limits>
 #include <optional>
+#include <vector>
 
 #include "core/mouse_hand.hpp"
 #include "core/paper_mapping.hpp"
@@ -80,6 +82,29 @@ class PaperView final : public QWidget {
   };
   [[nodiscard]] BannerLayout bannerLayout() const;
   void setForceArrowsShown(bool shown) { arrows_shown_ = shown; }
+  /// How much of the paper is shown: all of it (1), or its middle half (2), third (3) or quarter
+  /// (4), larger on the screen: letters are 10 to 20 mm tall. The mouse's hand moves over the
+  /// part shown, so a zoom also makes the hand's strokes finer. Clamped to 1..kMaxZoom.
+  void setZoom(int zoom);
+  [[nodiscard]] int zoom() const { return zoom_; }
+  static constexpr int kMaxZoom = 4;
+  /// A letter to trace (the Record tab's guide): its strokes in the paper plane [m], drawn wide
+  /// and faint under everything else, each stroke's start numbered in writing order and its
+  /// direction arrowed (empty: none).
+  void setLetterGuide(std::vector<std::vector<Eigen::Vector2d>> strokes_m) {
+    guide_m_ = std::move(strokes_m);
+    update();
+  }
+  [[nodiscard]] const std::vector<std::vector<Eigen::Vector2d>>& letterGuide() const { return guide_m_; }
+  /// The guide's colour.
+  [[nodiscard]] static QColor guideColour() { return {196, 202, 226}; }
+  /// The largest force the pen renders [N] (its continuous force, which the safety path clamps
+  /// the total to): the guidance arrow is drawn no longer, marked where the guidance asks more.
+  void setForceLimit(double force_N) { force_limit_N_ = force_N; }
+  /// Engineering read-outs (pen z, fz, guidance) or plain ones (how high, how hard, the help).
+  void setEngineerView(bool on) { engineer_view_ = on; }
+  /// The read-out line as it is drawn now (for tests and screen readers).
+  [[nodiscard]] QString readout() const;
 
   [[nodiscard]] const PaperMapping& mapping() const { return mapping_; }
 
@@ -105,10 +130,14 @@ class PaperView final : public QWidget {
  private:
   void publish(const QPointF& px, std::optional<bool> pen_down);
   void drawTrail(QPainter& painter, const Trail& trail, const QColor& colour, double width_px) const;
-  void drawArrow(QPainter& painter, const QPointF& from, const Eigen::Vector2d& f_N, const QColor& colour) const;
+  /// An arrow of `f_N` at 10 mm a newton, no longer than `cap_N` (two bars across it where capped).
+  void drawArrow(QPainter& painter, const QPointF& from, const Eigen::Vector2d& f_N, const QColor& colour,
+                 double cap_N = std::numeric_limits<double>::infinity()) const;
   void drawPeerPen(QPainter& painter) const;
   void drawPaper(QPainter& painter, const QRectF& paper) const;
   void drawPen(QPainter& painter) const;
+  void drawLetterGuide(QPainter& painter) const;
+  [[nodiscard]] QRectF reliefSourceRect() const;
   void drawReadouts(QPainter& painter, const QRectF& paper) const;
   void drawLegend(QPainter& painter, const QRectF& paper) const;
   void drawBanner(QPainter& painter) const;
@@ -123,6 +152,11 @@ class PaperView final : public QWidget {
   Trail overlay_;
   bool reference_shown_ = true;
   bool arrows_shown_ = true;
+  double force_limit_N_ = 1.75;
+  bool engineer_view_ = false;
+  std::vector<std::vector<Eigen::Vector2d>> guide_m_;
+  QRectF full_paper_{QPointF(-0.08, -0.06), QPointF(0.08, 0.06)};  // the whole paper in W [m]
+  int zoom_ = 1;
   std::optional<Eigen::Vector2d> cue_m_;
   const Trail* peer_trail_ = nullptr;
   std::optional<Sample> peer_pen_;

@@ -7,8 +7,11 @@
 #include <QPushButton>
 #include <QSettings>
 #include <QVBoxLayout>
+#include <algorithm>
 
 #include "core/profile_files.hpp"
+#include "hattr/core/error.hpp"
+#include "hattr/sim/glyph.hpp"
 #include "ui/ui_text.hpp"
 
 namespace hattr::studio {
@@ -19,6 +22,7 @@ RecordTab::RecordTab(LiveRig& rig, QSettings& settings, RecordHost host, QWidget
   w_.expert->setText(settings_.value("record/name").toString());
   w_.character->setText(settings_.value("record/character").toString());
   w_.trigger->setCurrentIndex(settings_.value("record/trigger", 0).toInt());
+  (void)setLetterGuide(settings_.value("record/guide").toString());
 }
 
 RecordTab::~RecordTab() = default;
@@ -43,6 +47,19 @@ void RecordTab::buildUi() {
   form->addRow(tr("Expert"), w_.expert);
   form->addRow(tr("Character"), w_.character);
   form->addRow(tr("Trigger"), w_.trigger);
+  // A letter of the library to trace: its strokes numbered and arrowed on the paper.
+  w_.guide = new QComboBox;
+  w_.guide->setObjectName("record_guide");
+  w_.guide->addItem(tr("none"), QString());
+  for (const sim::Glyph& glyph : sim::builtInGlyphs()) {
+    const QString name = qs(glyph.name);
+    w_.guide->addItem(glyph.character.empty() ? name : tr("%1   (%2)").arg(qs(glyph.character), name), name);
+  }
+  w_.guide->setToolTip(tr("A letter of hattr's print script drawn on the paper to trace: each stroke numbered in "
+                          "writing order, its direction arrowed"));
+  connect(w_.guide, &QComboBox::activated, this,
+          [this](int index) { (void)setLetterGuide(w_.guide->itemData(index).toString()); });
+  form->addRow(tr("Letter guide"), w_.guide);
   layout->addLayout(form);
 
   // The take's buttons.
@@ -211,6 +228,29 @@ void RecordTab::saveSettings() {
 QString RecordTab::expertName() const {
   const QString name = w_.expert->text().trimmed();
   return name.isEmpty() ? tr("unnamed") : name;
+}
+
+bool RecordTab::setLetterGuide(const QString& glyph_name) {
+  std::vector<std::vector<Eigen::Vector2d>> strokes;
+  if (!glyph_name.isEmpty()) {
+    try {
+      for (const auto& stroke : sim::findBuiltInGlyph(glyph_name.toStdString()).strokes) {
+        strokes.emplace_back(stroke.points.begin(), stroke.points.end());
+      }
+    } catch (const Error& e) {
+      host_.error(tr("No such letter"), what(e));
+      return false;
+    }
+  }
+  // The character field follows the guide unless the expert typed another name.
+  const QString typed = w_.character->text().trimmed();
+  if (typed.isEmpty() || typed == guide_name_) w_.character->setText(glyph_name);
+  guide_name_ = glyph_name;
+  guide_m_ = std::move(strokes);
+  w_.guide->setCurrentIndex(std::max(0, w_.guide->findData(glyph_name)));
+  settings_.setValue("record/guide", glyph_name);
+  host_.show_guide(guide_m_);
+  return true;
 }
 
 QString RecordTab::character() const {

@@ -8,6 +8,9 @@
 #include <QWidget>
 #include <functional>
 #include <optional>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include "core/live_rig.hpp"
 #include "hattr/core/haptic_profile.hpp"
@@ -35,6 +38,8 @@ struct RecordHost {
   std::function<void(const HapticProfile& take)> show;
   /// Plays `take` back.
   std::function<void(const HapticProfile& take)> play;
+  /// A letter guide to trace while recording (its strokes in the paper plane [m]; empty: none).
+  std::function<void(const std::vector<std::vector<Eigen::Vector2d>>& strokes_m)> show_guide;
   /// Makes `take` the Train tab's reference (false: refused, the window said why).
   std::function<bool(const HapticProfile& take)> use_as_reference;
   /// The take was saved to a file, or went: a reference made of it is renamed, or stays as an
@@ -72,6 +77,11 @@ class RecordTab final : public QWidget {
   bool useAsReference();
   /// The window aborted the recording: nothing is kept.
   void aborted();
+  /// A letter of the library (a built-in glyph's name, "small-a"; "" none) drawn on the paper to
+  /// trace, numbered and arrowed stroke by stroke; the character field takes its name when it
+  /// was empty or the last guide's. Remembered.
+  bool setLetterGuide(const QString& glyph_name);
+  [[nodiscard]] const std::vector<std::vector<Eigen::Vector2d>>& guideStrokes() const { return guide_m_; }
 
   /// While recording: arms the Record/Stop trigger once the pen has settled, stops a pen-down
   /// take once the pen is up, and says what the expert sees over the paper.
@@ -95,6 +105,7 @@ class RecordTab final : public QWidget {
     QLineEdit* expert = nullptr;
     QLineEdit* character = nullptr;
     QComboBox* trigger = nullptr;
+    QComboBox* guide = nullptr;
     QPushButton* record = nullptr;
     QPushButton* replay = nullptr;
     QPushButton* retake = nullptr;
@@ -116,6 +127,8 @@ class RecordTab final : public QWidget {
   bool take_saved_ = true;
   QString take_file_;             // where the take was saved (empty: not saved)
   bool armed_ = false;            // Record/Stop trigger: armed once the settle phase is over
+  QString guide_name_;            // the letter guide's glyph ("" none)
+  std::vector<std::vector<Eigen::Vector2d>> guide_m_;
 };
 
 }  // namespace hattr::studio

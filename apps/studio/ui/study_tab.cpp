@@ -183,7 +183,7 @@ bool StudyTab::next() {
     setup.settle_s = host_.settle_s();  // the person's "get ready" (not recorded)
     study_->beginTrial();
     try {
-      host_.start_trial(study_->environment(), setup, study_->expert(), shows_reference, qs(study_->prompt()), w_.scores);
+      host_.start_trial(study_->environment(), setup, study_->expert(), shows_reference, promptText(), w_.scores);
     } catch (...) {
       study_->abandonTrial();
       throw;
@@ -253,6 +253,16 @@ StudyTab::Stored StudyTab::trialEnded(session::TrialResult result) {
 
 // ---- What the subject sees ------------------------------------------------------------------
 
+void StudyTab::setEngineerView(bool on) {
+  engineer_view_ = on;
+  refreshPanel();
+}
+
+QString StudyTab::promptText() const {
+  const QString prompt = qs(study_->prompt());
+  return engineer_view_ ? prompt : plainStrategyNames(prompt);
+}
+
 QString StudyTab::idleBanner() {
   if (!study_ || study_->state() == StudySession::State::kNoSubject) return {};
   const double now = host_.now_s();
@@ -262,8 +272,8 @@ QString StudyTab::idleBanner() {
     case StudySession::State::kResting:
       banner = tr("Rest: %1 s").arg(std::ceil(study_->restRemaining_s(now)), 0, 'f', 0);
       break;
-    case StudySession::State::kReady: banner = qs(study_->prompt()) + tr(" — Space to start"); break;
-    case StudySession::State::kNextSession: banner = qs(study_->prompt()); break;
+    case StudySession::State::kReady: banner = promptText() + tr(" — Space to start"); break;
+    case StudySession::State::kNextSession: banner = promptText(); break;
     case StudySession::State::kFinished: banner = tr("Every trial is done. Thank you!"); break;
     default: break;
   }
@@ -285,7 +295,7 @@ void StudyTab::refreshPanel() {
                                                                       .arg(study_->completedCount())
                                                                       .arg(study_->totalCount())
                                                                       .arg(qs(stateName(state))));
-  QString prompt = qs(study_->prompt());
+  QString prompt = promptText();
   if (state == StudySession::State::kResting) {
     prompt = tr("Rest %1 s, then: %2").arg(std::ceil(study_->restRemaining_s(host_.now_s())), 0, 'f', 0).arg(prompt);
   }

@@ -100,6 +100,9 @@ class StudyTab final : public QWidget {
   QString idleBanner();
   /// Enables the buttons for what the window does now.
   void refresh();
+  /// The prompts name strategies technically ("Training with ALPHA") or plainly ("Training with
+  /// Guided pressure").
+  void setEngineerView(bool on);
 
   [[nodiscard]] StudySession* session() const { return study_.get(); }
   /// Where a study trial's scores are shown.
@@ -125,11 +128,14 @@ class StudyTab final : public QWidget {
   void fillSubjects();
   /// The progress and the prompt; a recall trial's reference hidden from its announcement on.
   void refreshPanel();
+  /// The runner's prompt as this view words it.
+  [[nodiscard]] QString promptText() const;
 
   QSettings& settings_;
   StudyHost host_;
   Widgets w_;
   std::unique_ptr<StudySession> study_;
+  bool engineer_view_ = false;
 };
 
 }  // namespace hattr::studio

@@ -43,9 +43,8 @@ TrainTab::~TrainTab() = default;
 void TrainTab::buildUi() {
   auto* layout = new QVBoxLayout(this);
   layout->addWidget(
-      wrappedLabel(tr("<b>Train</b> against an expert's haptic profile. After the trial, DTW scores "
-                      "compare your trace (shape: x, y) and your force (fx, fy, fz) with the "
-                      "expert's; lower is closer.")));
+      wrappedLabel(tr("<b>Train</b> against a reference: an expert's haptic profile or a letter. After each "
+                      "trial two scores compare your writing with it, its shape and its force; lower is closer.")));
   buildReferenceChoice(*layout);
 
   // The mode, its indexing, the get-ready time and whether the reference is drawn.
@@ -55,9 +54,10 @@ void TrainTab::buildUi() {
   w_.mode = new QComboBox;
   for (const auto& strategy : guidance::strategyCatalog()) {
     if (strategy.mentored) continue;
-    w_.mode->addItem(tr("%1 — %2").arg(qs(strategy.plain_name), qs(guidance::modeName(strategy.mode))),
-                     static_cast<int>(strategy.mode));
-    w_.mode->setItemData(w_.mode->count() - 1, qs(strategy.description), Qt::ToolTipRole);
+    w_.mode->addItem(qs(strategy.plain_name), static_cast<int>(strategy.mode));  // setEngineerView names it
+    w_.mode->setItemData(w_.mode->count() - 1,
+                         qs(guidance::modeName(strategy.mode)) + QStringLiteral(": ") + qs(strategy.description),
+                         Qt::ToolTipRole);
   }
   // The longest names are shown elided: the tab keeps its width on a small screen.
   w_.mode->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
@@ -298,11 +298,21 @@ void TrainTab::trialEnded(const std::optional<analysis::TrialScore>& scores, con
     const guidance::ReferenceTrajectory expert(*reference_, host_.rate_hz());
     scheduled_errors_[trial_mode_].push_back(guidance::trackingErrorRms(expert, result.profile));
   }
+  if (!engineer_view_) return;
   w_.scores->setText(w_.scores->text() + tr("<br>%1 ticks, %2 overruns, %3 missed samples, %4 faults")
                                              .arg(result.ticks)
                                              .arg(result.overruns)
                                              .arg(result.missed_samples)
                                              .arg(result.faults));
+}
+
+void TrainTab::setEngineerView(bool on) {
+  engineer_view_ = on;
+  for (int i = 0; i < w_.mode->count(); ++i) {
+    const auto& info = guidance::strategyInfo(static_cast<guidance::TrainingMode>(w_.mode->itemData(i).toInt()));
+    w_.mode->setItemText(i, on ? tr("%1 — %2").arg(qs(info.plain_name), qs(guidance::modeName(info.mode)))
+                               : qs(info.plain_name));
+  }
 }
 
 void TrainTab::aborted() { w_.scores->setText(tr("Trial aborted; nothing kept.")); }

@@ -102,6 +102,9 @@ class TrainTab final : public QWidget {
   void trialEnded(const std::optional<analysis::TrialScore>& scores, const session::TrialResult& result);
   /// The trial was aborted: nothing kept.
   void aborted();
+  /// Strategies by their plain names only, or with the technical name beside; the loop's
+  /// counters after a trial only in the engineer view.
+  void setEngineerView(bool on);
 
   /// Enables the buttons for what the window does now.
   void refresh();
@@ -150,6 +153,7 @@ class TrainTab final : public QWidget {
   QString reference_letter_;  // the built-in glyph written as the reference (remembered), or empty
   QString reference_name_;  // in the trials' metadata (reference_file)
   bool reference_is_take_ = false;  // the reference is the Record tab's take
+  bool engineer_view_ = false;
   guidance::TrainingMode mode_ = guidance::TrainingMode::kBasic;
   guidance::TrainingMode trial_mode_ = guidance::TrainingMode::kBasic;  // the mode the trial started in
   // A scheduled strategy's tracking errors of this reference's trials in it, in order.
