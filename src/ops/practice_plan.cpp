@@ -1,6 +1,7 @@
 #include "hattr/ops/practice_plan.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <set>
 
 #include <fmt/format.h>
@@ -33,7 +34,9 @@ std::vector<std::string> optionProblems(const PracticePlanOptions& o) {
   checkRange(problems, "retention after (days)", o.retention_after_days, 0, 90);
   checkRange(problems, "rest (s)", o.rest_s, 0.0, 600.0);
   if (o.retention_after_days > 0 && o.check_trials == 0) {
-    problems.push_back("retention: it is made of check trials; with no check trials, set retention after 0 days");
+    problems.push_back(fmt::format("retention after {} days: it is made of check trials; expected check trials above 0 "
+                                   "(or retention after 0 days), got 0 check trials",
+                                   o.retention_after_days));
   }
   if (guidance::isMentored(o.strategy)) {
     problems.push_back(fmt::format("strategy {}: a mentored strategy needs a live expert; a practice plan uses the "
@@ -105,16 +108,7 @@ std::string letterList(const std::vector<std::string>& letters) {
 
 session::StudyDefinition practicePlanStudy(const PracticePlanOptions& options) {
   std::vector<std::string> problems;
-  try {
-    session::checkLearner(options.learner);
-  } catch (const InputError& e) {
-    const std::string text = e.what();
-    for (std::size_t at = text.find("\n  - "); at != std::string::npos;) {
-      const std::size_t next = text.find("\n  - ", at + 1);
-      problems.push_back("learner " + text.substr(at + 5, next == std::string::npos ? next : next - at - 5));
-      at = next;
-    }
-  }
+  for (const auto& p : session::learnerProblems(options.learner)) problems.push_back("learner " + p);
   for (auto& p : optionProblems(options)) problems.push_back(std::move(p));
   const auto skills = letterSkills(options.letters, problems);
   if (!problems.empty()) {
@@ -147,7 +141,11 @@ std::filesystem::path createPracticePlan(const std::filesystem::path& folder, co
   sim::recordNamedExperts(study);
   (void)session::checkExpertsRenderable(study);
   const std::filesystem::path dir = folder / options.learner.code;
-  std::filesystem::create_directories(dir);
+  std::error_code failed;
+  std::filesystem::create_directories(dir, failed);
+  HATTR_THROW_UNLESS(!failed && std::filesystem::is_directory(dir),
+                     "practice plan: the learner's folder {}: expected a folder that can be made and written, got {}",
+                     dir.string(), failed ? failed.message() : "a file of that name");
   for (int n = 1;; ++n) {
     const std::filesystem::path file = dir / fmt::format("plan-{}.sqlite", n);
     if (std::filesystem::exists(file)) continue;
@@ -156,46 +154,77 @@ std::filesystem::path createPracticePlan(const std::filesystem::path& folder, co
   }
 }
 
+namespace {
+
+/// N of a plan file's name "plan-N.sqlite" (N a whole number below a million), or 0 for any other.
+int planNumber(const std::string& file_name) {
+  constexpr std::string_view kPrefix = "plan-", kSuffix = ".sqlite";
+  if (!file_name.starts_with(kPrefix) || !file_name.ends_with(kSuffix)) return 0;
+  const std::string_view digits(file_name.data() + kPrefix.size(), file_name.size() - kPrefix.size() - kSuffix.size());
+  int n = 0;
+  const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), n);
+  const bool whole = error == std::errc() && end == digits.data() + digits.size() && !digits.empty();
+  return whole && n > 0 && n < 1'000'000 ? n : 0;
+}
+
+/// The plan files of a practice folder: FOLDER/<code>/plan-N.sqlite. InputError for a folder
+/// that is not there or cannot be read; a learner's folder that cannot be read is skipped.
+std::vector<std::filesystem::path> planFiles(const std::filesystem::path& folder, std::vector<std::string>* skipped) {
+  namespace fs = std::filesystem;
+  std::error_code failed;
+  HATTR_THROW_UNLESS(fs::is_directory(folder, failed), "practice folder {}: expected a folder, got {}", folder.string(),
+                     fs::exists(folder) ? "a file" : "nothing there");
+  std::vector<fs::path> files;
+  for (fs::directory_iterator learner(folder, failed), end; !failed && learner != end; learner.increment(failed)) {
+    if (!learner->is_directory(failed)) continue;
+    std::error_code unreadable;
+    for (fs::directory_iterator entry(learner->path(), unreadable); !unreadable && entry != end;
+         entry.increment(unreadable)) {
+      if (planNumber(entry->path().filename().string()) > 0) files.push_back(entry->path());
+    }
+    if (unreadable && skipped != nullptr) skipped->push_back(fmt::format("{}: {}", learner->path().string(), unreadable.message()));
+  }
+  HATTR_THROW_UNLESS(!failed, "practice folder {}: cannot be read: {}", folder.string(), failed.message());
+  return files;
+}
+
+/// One plan's summary; InputError for a study that is not one learner's.
+PracticePlanSummary summarize(const std::filesystem::path& file, const session::LocalDate& today) {
+  const auto db = session::StudyDatabase::open(file, session::OpenMode::kReadOnly);
+  const auto subjects = db.subjects();
+  const bool one_person = subjects.size() == 1 && subjects.front().spec.participant == "person";
+  HATTR_THROW_UNLESS(one_person, "{}: expected a practice plan (one learner, a person), got {} subjects{}", file.string(),
+                     subjects.size(), subjects.size() == 1 ? " (a " + subjects.front().spec.participant + " one)" : "");
+  PracticePlanSummary p{.file = file, .learner = session::learnerOf(subjects.front().spec), .name = db.study().name};
+  for (const auto& block : db.study().schedule.front().blocks) {
+    const std::string letter = session::letterName(block.skill);
+    if (std::find(p.letters.begin(), p.letters.end(), letter) == p.letters.end()) p.letters.push_back(letter);
+  }
+  p.strategy = db.study().groups.front().strategies.front();
+  const auto trials = db.trials(subjects.front().id);
+  p.trials_total = static_cast<int>(trials.size());
+  p.trials_completed = static_cast<int>(std::count_if(
+      trials.begin(), trials.end(), [](const auto& t) { return t.status == session::TrialStatus::kCompleted; }));
+  p.schedule = session::subjectSchedule(db.study(), trials, today);
+  return p;
+}
+
+}  // namespace
+
 std::vector<PracticePlanSummary> listPracticePlans(const std::filesystem::path& folder, const session::LocalDate& today,
                                                    std::vector<std::string>* skipped) {
-  namespace fs = std::filesystem;
-  std::vector<fs::path> files;
-  std::error_code missing;
-  for (const auto& learner : fs::directory_iterator(folder, missing)) {
-    if (!learner.is_directory()) continue;
-    for (const auto& entry : fs::directory_iterator(learner.path())) {
-      const std::string name = entry.path().filename().string();
-      if (name.starts_with("plan-") && name.ends_with(".sqlite")) files.push_back(entry.path());
-    }
-  }
   std::vector<PracticePlanSummary> plans;
-  for (const fs::path& file : files) {
+  for (const auto& file : planFiles(folder, skipped)) {
     try {
-      const auto db = session::StudyDatabase::open(file, session::OpenMode::kReadOnly);
-      const auto subjects = db.subjects();
-      HATTR_THROW_UNLESS(subjects.size() == 1 && subjects.front().spec.participant == "person",
-                         "{}: not a practice plan (one learner)", file.string());
-      PracticePlanSummary p{.file = file, .learner = session::learnerOf(subjects.front().spec), .name = db.study().name};
-      for (const auto& block : db.study().schedule.front().blocks) {
-        const std::string letter = session::letterName(block.skill);
-        if (std::find(p.letters.begin(), p.letters.end(), letter) == p.letters.end()) p.letters.push_back(letter);
-      }
-      p.strategy = db.study().groups.front().strategies.front();
-      const auto trials = db.trials(subjects.front().id);
-      p.trials_total = static_cast<int>(trials.size());
-      p.trials_completed = static_cast<int>(std::count_if(
-          trials.begin(), trials.end(), [](const auto& t) { return t.status == session::TrialStatus::kCompleted; }));
-      p.schedule = session::subjectSchedule(db.study(), trials, today);
-      plans.push_back(std::move(p));
+      plans.push_back(summarize(file, today));
     } catch (const Error& e) {
       if (skipped != nullptr) skipped->push_back(e.what());
     }
   }
   // By learner, then by plan number (plan-10 after plan-9).
-  const auto number = [](const fs::path& f) { return std::stoi(f.stem().string().substr(5)); };
-  std::sort(plans.begin(), plans.end(), [&](const auto& a, const auto& b) {
+  std::sort(plans.begin(), plans.end(), [](const auto& a, const auto& b) {
     if (a.learner.code != b.learner.code) return a.learner.code < b.learner.code;
-    return number(a.file) < number(b.file);
+    return planNumber(a.file.filename().string()) < planNumber(b.file.filename().string());
   });
   return plans;
 }

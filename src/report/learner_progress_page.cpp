@@ -1,7 +1,10 @@
 // The printable page of a learner's progress (learner_progress.hpp): one self-contained HTML
 // file, the learning curve inline SVG, laid out for A4 or Letter paper when printed.
 #include <cmath>
+#include <iterator>
+#include <map>
 #include <string>
+#include <vector>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -28,22 +31,38 @@ std::string number(double v, const char* format = "{:.1f}") {
   return std::isfinite(v) ? fmt::format(fmt::runtime(format), v) : "–";
 }
 
-/// The curve: every trial's shape cost in the order written, guided and alone apart, the best
-/// and the latest ringed.
+/// The curve: every trial's shape cost in the order written, guided trials apart, the compared
+/// ones joined letter by letter, the best and the latest marked.
 std::string curveSvg(const LearnerProgress& p) {
+  static const char* kLetterColours[] = {"#1f4e79", "#2e7d32", "#6a1b9a", "#8d6e63", "#00838f"};
+  const std::string compared = p.compares_alone ? "written alone" : "guided";
   detail::SvgPlot plot("Shape of each letter written (lower is closer to the model)", "trial", "shape cost");
   plot.integerX();
   detail::Series guided{.label = "guided", .colour = "#8fb3d9", .width = 0.0, .markers = true};
-  detail::Series alone{.label = "written alone", .colour = "#1f4e79", .width = 1.0, .markers = true};
-  detail::Series best{.label = "best (written alone)", .colour = "#d4a017", .width = 0.0, .markers = true};
-  detail::Series latest{.label = "latest (written alone)", .colour = "#c0392b", .width = 0.0, .markers = true};
+  detail::Series best{.label = "best (" + compared + ")", .colour = "#d4a017", .width = 0.0, .markers = true};
+  detail::Series latest{.label = "latest (" + compared + ")", .colour = "#c0392b", .width = 0.0, .markers = true};
+  std::map<std::string, detail::Series> by_letter;
   for (const auto& t : p.trials) {
+    if (!std::isfinite(t.shape)) continue;
     const std::pair<double, double> point{t.number, t.shape};
-    (t.guided ? guided : alone).points.push_back(point);
+    if (t.guided && p.compares_alone) {
+      guided.points.push_back(point);
+    } else {
+      auto [it, fresh] = by_letter.try_emplace(t.skill);
+      if (fresh) {
+        it->second = {.label = (p.letters.size() > 1 ? t.skill + " " : "") + compared,
+                      .colour = kLetterColours[(by_letter.size() - 1) % std::size(kLetterColours)],
+                      .width = 1.0,
+                      .markers = true};
+      }
+      it->second.points.push_back(point);
+    }
     if (t.best) best.points.push_back(point);
     if (t.latest) latest.points.push_back(point);
   }
-  for (auto* s : {&guided, &alone, &best, &latest}) {
+  if (!guided.points.empty()) plot.add(guided);
+  for (auto& [letter, series] : by_letter) plot.add(series);
+  for (auto* s : {&best, &latest}) {
     if (!s->points.empty()) plot.add(*s);
   }
   return plot.svg();
@@ -51,7 +70,7 @@ std::string curveSvg(const LearnerProgress& p) {
 
 std::string learnerHeader(const LearnerProgress& p, const ProgressPageOptions& o) {
   const session::Learner& l = p.learner;
-  const std::string who = o.identified && !l.name.empty() ? l.name + " (" + l.code + ")" : "learner " + l.code;
+  const std::string who = o.identified && !l.name.empty() ? session::displayName(l) : "learner " + l.code;
   std::string facts;
   if (l.age_years) facts += fmt::format("age {}", *l.age_years);
   if (!l.handedness.empty()) facts += (facts.empty() ? "" : " · ") + l.handedness + "-handed";
@@ -65,11 +84,13 @@ std::string learnerHeader(const LearnerProgress& p, const ProgressPageOptions& o
 
 std::string sessionsTable(const LearnerProgress& p) {
   std::string out =
-      "<table><tr><th>session</th><th>date</th><th>trials</th><th>shape written alone</th><th>change from the "
-      "start</th><th>seconds a letter</th><th>pen lifts</th><th>speed changes</th></tr>\n";
+      fmt::format("<table><tr><th>session</th><th>date</th><th>trials</th><th>shape {}</th><th>change from the "
+                  "start</th><th>seconds a letter</th><th>pen lifts</th><th>speed changes</th></tr>\n",
+                  p.compares_alone ? "written alone" : "guided");
   for (const auto& s : p.sessions) {
-    const std::string change =
-        std::isfinite(s.change) ? fmt::format("{:+.0f} %{}", s.change * 100.0, s.best_so_far ? " ★" : "") : "–";
+    const std::string change = s.is_start                ? std::string("the start")
+                               : std::isfinite(s.change) ? fmt::format("{:+.0f} %{}", s.change * 100.0, s.best_so_far ? " ★" : "")
+                                                         : std::string("–");
     out += fmt::format("<tr><td>{}</td><td>{}</td><td>{} of {}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>"
                        "<td>{}</td></tr>\n",
                        s.session, escape(s.date.empty() ? "–" : s.date), s.completed, s.planned, number(s.alone_shape),
@@ -84,8 +105,11 @@ std::string trialsTable(const LearnerProgress& p, bool compact) {
                             : "<table><tr><th>#</th><th>session</th><th>date</th><th>letter</th><th>how</th><th>shape</th>"
                               "<th>pressure</th><th>seconds</th><th>pen lifts</th><th>speed changes</th><th></th></tr>\n";
   for (const auto& t : p.trials) {
-    std::string mark = t.best ? "★ best" : "";
-    if (t.latest) mark += mark.empty() ? "● latest" : ", ● latest";
+    std::vector<std::string> marks;
+    if (t.best) marks.emplace_back("★ best");
+    if (t.latest) marks.emplace_back("● latest");
+    if (t.disturbed) marks.emplace_back("disturbed: not compared");
+    const std::string mark = fmt::format("{}", fmt::join(marks, ", "));
     const std::string row = t.guided ? "<tr class=\"guided\">" : "<tr>";
     if (compact) {
       out += fmt::format("{}<td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n", row, t.number,
@@ -121,9 +145,10 @@ std::string progressPageHtml(const LearnerProgress& p, const ProgressPageOptions
   if (o.whole_page) body += fmt::format(
       "<p class=\"about\">Shape and pressure are hattr's scores of each letter against the model letter (the paper's "
       "dynamic time warping of the pen's path and of its force, after scaling to the model's size and time): lower is "
-      "closer. “Written alone”: without guidance, the way the learner writes. ★ the best, ● the latest letter written "
-      "alone. Training strategy: {} ({}). Study file: {}.</p>\n",
-      escape(p.strategy), escape(p.strategy_name), escape(p.file.filename().string()));
+      "closer. “Written alone”: without guidance, the way the learner writes. ★ the best, ● the latest letter {}. "
+      "Training strategy: {} ({}). Study file: {}.</p>\n",
+      p.compares_alone ? "written alone" : "(every trial of this plan is guided)", escape(p.strategy),
+      escape(p.strategy_name), escape(p.file.filename().string()));
   return fmt::format("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>Progress of {}</title>\n"
                      "<style>{}</style></head><body>\n{}</body></html>\n",
                      escape(o.identified && !p.learner.name.empty() ? p.learner.name : p.learner.code), kStyle, body);

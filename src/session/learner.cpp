@@ -51,7 +51,7 @@ Learner learnerOf(const SubjectSpec& subject) {
   return out;
 }
 
-void checkLearner(const Learner& learner) {
+std::vector<std::string> learnerProblems(const Learner& learner) {
   std::vector<std::string> problems;
   if (!isSafeFileName(learner.code)) {
     problems.push_back(fmt::format("code \"{}\": expected {} (it names the learner in files and exports)",
@@ -64,10 +64,19 @@ void checkLearner(const Learner& learner) {
     problems.push_back(fmt::format("handedness: expected right, left or both (or nothing), got \"{}\"",
                                    textExcerpt(learner.handedness)));
   }
+  return problems;
+}
+
+void checkLearner(const Learner& learner) {
+  const auto problems = learnerProblems(learner);
   if (problems.empty()) return;
   std::string message = fmt::format("learner: {} problem{}:", problems.size(), problems.size() == 1 ? "" : "s");
   for (const auto& p : problems) message += "\n  - " + p;
   throw InputError(message);
+}
+
+std::string displayName(const Learner& learner, bool identified) {
+  return identified && !learner.name.empty() ? learner.name + " (" + learner.code + ")" : learner.code;
 }
 
 std::string letterName(const std::string& skill) {

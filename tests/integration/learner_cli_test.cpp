@@ -58,7 +58,9 @@ TEST(LearnerCli, ABadPlanIsRefusedWithEveryProblem) {
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_THAT(bad.err, HasSubstr("practice plan: 4 problems:"));
   EXPECT_THAT(bad.err, HasSubstr("letters: \"zz\": not a letter of the library or a glyph file"));
-  EXPECT_FALSE(std::filesystem::exists(dir / "p" / "a b"));
+  const auto missing = test::runCommand(dir, test::hattrCli(), "learner list --folder " + (dir / "nowhere").string(), "list");
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_THAT(missing.err, HasSubstr("nowhere: expected a folder, got nothing there"));
 }
 
 }  // namespace

@@ -80,7 +80,7 @@ TEST(PracticePlan, EveryProblemOfTheOptionsIsListedAtOnce) {
     EXPECT_THAT(m, HasSubstr("practice plan: 6 problems:"));
     EXPECT_THAT(m, HasSubstr("learner code \"m i\""));
     EXPECT_THAT(m, HasSubstr("sessions: expected 1 to 60, got 0"));
-    EXPECT_THAT(m, HasSubstr("retention: it is made of check trials"));
+    EXPECT_THAT(m, HasSubstr("retention after 7 days: it is made of check trials; expected check trials above 0"));
     EXPECT_THAT(m, HasSubstr("strategy MENTOR-FORCE: a mentored strategy needs a live expert"));
     EXPECT_THAT(m, HasSubstr("letters: \"zz\": not a letter of the library"));
     EXPECT_THAT(m, HasSubstr("letters: \"a\" given twice"));
@@ -97,6 +97,10 @@ TEST(PracticePlan, PlansAreNumberedPerLearnerAndListedInOrder) {
   EXPECT_EQ(createPracticePlan(dir.path(), plan), dir / "mia" / "plan-2.sqlite");
   EXPECT_EQ(createPracticePlan(dir.path(), planFor("ada", {"7"})), dir / "ada" / "plan-1.sqlite");
   test::writeText(dir / "mia" / "plan-9.sqlite", "not a study");
+  // Not plan files: left alone, neither listed nor skipped.
+  for (const char* other : {"plan-old.sqlite", "plan-.sqlite", "plan-1 copy.sqlite", "plan-99999999999.sqlite"}) {
+    test::writeText(dir / "mia" / other, "whatever");
+  }
   std::vector<std::string> skipped;
   const auto plans = listPracticePlans(dir.path(), session::localToday(), &skipped);
   ASSERT_EQ(plans.size(), 3u);
@@ -111,6 +115,9 @@ TEST(PracticePlan, PlansAreNumberedPerLearnerAndListedInOrder) {
   ASSERT_EQ(skipped.size(), 1u);
   EXPECT_THAT(skipped[0], HasSubstr("plan-9.sqlite"));
   EXPECT_EQ(toJson(plans[2])["plain_strategy"], "Guided path");
+  // A folder that is not there is refused, naming it.
+  EXPECT_THAT([&] { (void)listPracticePlans(dir / "missing", session::localToday()); },
+              ::testing::ThrowsMessage<InputError>(HasSubstr("missing: expected a folder, got nothing there")));
 }
 
 // A simulated learner writes the whole plan; the progress is derived again here from its trials.
@@ -162,7 +169,8 @@ TEST_F(LearnerProgressTest, EachSessionIsMeasuredAgainstTheStart) {
     EXPECT_NEAR(s.alone_shape, meanOf(alone.at(s.session)), 1e-9);
     const double change = (start - s.alone_shape) / start;
     EXPECT_NEAR(s.change, change, 1e-9);
-    EXPECT_THAT(s.sentence, HasSubstr("Session " + std::to_string(s.session) + " (" + session::localToday().iso() + ")"));
+    EXPECT_THAT(s.sentence, HasSubstr("Session " + std::to_string(s.session) + " (" + p.trials.front().date + ")"));
+    EXPECT_FALSE(s.is_start) << "session 1 has a baseline and trials after it";
     if (std::abs(change) < 0.05) {
       EXPECT_THAT(s.sentence, HasSubstr("the shape was about the same as at the start"));
     } else {
@@ -188,11 +196,14 @@ TEST_F(LearnerProgressTest, TheBestAndTheLatestAreAmongTheLettersWrittenAlone) {
     EXPECT_EQ(t.best, &t == best) << t.number;
     EXPECT_EQ(t.latest, &t == last_alone) << t.number;
   }
-  // A session is the best so far when its shape is below every earlier session's.
-  double lowest = std::numeric_limits<double>::infinity();
+  // A session is the best so far when its change from the start is at least 5 % and above every
+  // earlier session's; the sentence says so only then.
+  double best_change = 0.0;
   for (const auto& s : p.sessions) {
-    EXPECT_EQ(s.best_so_far, s.alone_shape < lowest) << s.session;
-    lowest = std::min(lowest, s.alone_shape);
+    const bool best_so_far = s.change >= 0.05 && s.change > best_change;
+    EXPECT_EQ(s.best_so_far, best_so_far) << s.session;
+    EXPECT_EQ(s.sentence.find("the best so far") != std::string::npos, best_so_far) << s.sentence;
+    if (best_so_far) best_change = s.change;
   }
   EXPECT_THAT([&] { (void)report::learnerProgress(db, "ana"); },
               ::testing::ThrowsMessage<InputError>(HasSubstr("no subject \"ana\"")));
@@ -207,7 +218,7 @@ TEST_F(LearnerProgressTest, ThePrintablePageNamesTheLearnerOnlyWhenAsked) {
                                "● latest", "before practice", "alone, days later"}) {
     EXPECT_THAT(page, HasSubstr(expected));
   }
-  for (const auto& s : p.sessions) EXPECT_THAT(page, HasSubstr(s.sentence.substr(0, 20)));
+  for (const auto& s : p.sessions) EXPECT_THAT(page, HasSubstr(s.sentence));
   const std::string plain = report::progressPageHtml(p, {.identified = false});
   EXPECT_THAT(plain, HasSubstr("Progress of learner mia"));
   EXPECT_THAT(plain, Not(HasSubstr("Mia Example")));
@@ -216,6 +227,42 @@ TEST_F(LearnerProgressTest, ThePrintablePageNamesTheLearnerOnlyWhenAsked) {
   EXPECT_THAT(view, Not(HasSubstr("<svg")));
   EXPECT_THAT(view, Not(HasSubstr("<h1>")));
   EXPECT_THAT(view, HasSubstr("★ best"));
+}
+
+// Two letters, every trial guided (no trials written alone): the guided trials are compared,
+// session 1 is the start, session 2's change is the letters' changes averaged.
+TEST(LearnerProgress, APlanWithoutTrialsWrittenAloneComparesItsGuidedTrialsLetterByLetter) {
+  test::TempDir dir;
+  PracticePlanOptions plan = planFor("ada", {"a", "b"});
+  plan.sessions = 2;
+  plan.check_trials = 0;
+  plan.retention_after_days = 0;
+  session::StudyDefinition study = practicePlanStudy(plan);
+  study.subjects[0].participant = "simulated";
+  sim::recordNamedExperts(study);
+  (void)session::StudyDatabase::create(dir / "plan.sqlite", study);
+  (void)runStudy({.db = dir / "plan.sqlite"});
+  const auto db = session::StudyDatabase::open(dir / "plan.sqlite", session::OpenMode::kReadOnly);
+  const report::LearnerProgress p = report::learnerProgress(db);
+  EXPECT_FALSE(p.compares_alone);
+  ASSERT_EQ(p.trials.size(), 8u);
+  ASSERT_EQ(p.sessions.size(), 2u);
+  EXPECT_TRUE(p.sessions[0].is_start);
+  EXPECT_THAT(p.sessions[0].sentence, HasSubstr("4 guided trials (a, b); with guidance, this is the starting point"));
+  std::map<std::string, std::vector<double>> first, second;
+  for (const auto& t : p.trials) (t.session == 1 ? first : second)[t.skill].push_back(t.shape);
+  const double change_a = (meanOf(first["a"]) - meanOf(second["a"])) / meanOf(first["a"]);
+  const double change_b = (meanOf(first["b"]) - meanOf(second["b"])) / meanOf(first["b"]);
+  EXPECT_FALSE(p.sessions[1].is_start);
+  EXPECT_NEAR(p.sessions[1].change, (change_a + change_b) / 2.0, 1e-9);
+  EXPECT_NEAR(p.sessions[1].alone_shape, (meanOf(second["a"]) + meanOf(second["b"])) / 2.0, 1e-9);
+  int best = 0;
+  for (const auto& t : p.trials) best += t.best ? 1 : 0;
+  EXPECT_EQ(best, 2) << "one best a letter, among the guided trials";
+  const std::string page = report::progressPageHtml(p);
+  EXPECT_THAT(page, HasSubstr("best (guided)"));
+  EXPECT_THAT(page, HasSubstr("every trial of this plan is guided"));
+  EXPECT_THAT(page, Not(HasSubstr("best (written alone)")));
 }
 
 TEST(LearnerProgress, APlanNotBegunSaysSo) {

@@ -26,6 +26,24 @@ QSpinBox* spin(int lo, int hi, int value, const QString& suffix = {}) {
   return box;
 }
 
+/// The form's problem list: red, empty until a check finds something.
+QLabel* problemList() {
+  QLabel* label = wrappedLabel();
+  label->setObjectName("form_problems");
+  label->setStyleSheet(QStringLiteral("color: #b00020"));
+  label->hide();
+  return label;
+}
+
+/// Shows `problems` in `label`; true when there are none.
+bool showProblems(QLabel* label, const std::vector<std::string>& problems) {
+  QString text;
+  for (const auto& p : problems) text += (text.isEmpty() ? "" : "<br>") + QStringLiteral("• ") + qs(p).toHtmlEscaped();
+  label->setText(text);
+  label->setVisible(!problems.empty());
+  return problems.empty();
+}
+
 QDialogButtonBox* okCancel(QDialog* dialog, const QString& ok) {
   auto* buttons = new QDialogButtonBox(QDialogButtonBox::Ok | QDialogButtonBox::Cancel);
   buttons->button(QDialogButtonBox::Ok)->setText(ok);
@@ -36,6 +54,19 @@ QDialogButtonBox* okCancel(QDialog* dialog, const QString& ok) {
 
 }  // namespace
 
+std::vector<std::string> splitProblems(const std::string& message) {
+  constexpr std::string_view kItem = "\n  - ";
+  std::vector<std::string> lines;
+  std::size_t at = message.find(kItem);
+  if (at == std::string::npos) return {message};
+  while (at != std::string::npos) {
+    const std::size_t next = message.find(kItem, at + kItem.size());
+    lines.push_back(message.substr(at + kItem.size(), next == std::string::npos ? next : next - at - kItem.size()));
+    at = next;
+  }
+  return lines;
+}
+
 std::vector<std::string> splitLetters(const QString& text) {
   std::vector<std::string> out;
   for (const QString& part : text.split(QRegularExpression("[\\s,]+"), Qt::SkipEmptyParts)) {
@@ -44,7 +75,8 @@ std::vector<std::string> splitLetters(const QString& text) {
   return out;
 }
 
-LearnerDialog::LearnerDialog(QWidget* parent) : QDialog(parent) {
+LearnerDialog::LearnerDialog(FormCheck<session::Learner> check, QWidget* parent)
+    : QDialog(parent), check_(std::move(check)) {
   setWindowTitle(tr("New learner"));
   setObjectName("learner_dialog");
   w_.code = new QLineEdit;
@@ -77,7 +109,13 @@ LearnerDialog::LearnerDialog(QWidget* parent) : QDialog(parent) {
   auto* layout = new QVBoxLayout(this);
   layout->addLayout(form);
   layout->addWidget(wrappedLabel(tr("The learner is kept with their first practice plan, made next.")));
+  w_.problems = problemList();
+  layout->addWidget(w_.problems);
   layout->addWidget(w_.buttons);
+}
+
+void LearnerDialog::accept() {
+  if (showProblems(w_.problems, check_(learner()))) QDialog::accept();
 }
 
 session::Learner LearnerDialog::learner() const {
@@ -89,7 +127,8 @@ session::Learner LearnerDialog::learner() const {
   return l;
 }
 
-PlanDialog::PlanDialog(const session::Learner& learner, QWidget* parent) : QDialog(parent), learner_(learner) {
+PlanDialog::PlanDialog(const session::Learner& learner, FormCheck<ops::PracticePlanOptions> check, QWidget* parent)
+    : QDialog(parent), learner_(learner), check_(std::move(check)) {
   setWindowTitle(tr("New practice plan"));
   setObjectName("plan_dialog");
   const ops::PracticePlanOptions defaults;
@@ -125,7 +164,7 @@ PlanDialog::PlanDialog(const session::Learner& learner, QWidget* parent) : QDial
   w_.buttons = okCancel(this, tr("Make the plan"));
 
   auto* form = new QFormLayout;
-  form->addRow(tr("For"), new QLabel(qs(learner.name.empty() ? learner.code : learner.name + " (" + learner.code + ")")));
+  form->addRow(tr("For"), new QLabel(qs(session::displayName(learner))));
   form->addRow(tr("Letters"), w_.letters);
   form->addRow(tr("Help while practising"), w_.strategy);
   form->addRow(tr("Sessions"), w_.sessions);
@@ -138,7 +177,13 @@ PlanDialog::PlanDialog(const session::Learner& learner, QWidget* parent) : QDial
   layout->addLayout(form);
   layout->addWidget(wrappedLabel(tr("Each session: each letter written with help, then alone from memory. The first "
                                     "session begins with each letter written alone with the model shown.")));
+  w_.problems = problemList();
+  layout->addWidget(w_.problems);
   layout->addWidget(w_.buttons);
+}
+
+void PlanDialog::accept() {
+  if (showProblems(w_.problems, check_(options()))) QDialog::accept();
 }
 
 ops::PracticePlanOptions PlanDialog::options() const {

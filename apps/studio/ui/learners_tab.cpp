@@ -28,7 +28,7 @@ namespace {
 constexpr int kFileRole = Qt::UserRole;
 
 QString learnerTitle(const session::Learner& l) {
-  QString text = qs(l.name.empty() ? l.code : l.name + " (" + l.code + ")");
+  QString text = qs(session::displayName(l));
   if (l.age_years) text += QObject::tr(", %1 years").arg(*l.age_years);
   return text;
 }
@@ -130,8 +130,14 @@ bool LearnersTab::setFolder(const QString& folder) {
 
 void LearnersTab::refresh() {
   std::vector<std::string> skipped;
-  plans_ = ops::listPracticePlans(folder_.toStdString(), session::localToday(), &skipped);
-  if (!skipped.empty()) host_.note(tr("Not a practice plan, left out: %1").arg(qs(skipped.front())), 8000);
+  try {
+    QDir().mkpath(folder_);  // the first time, the folder chosen (or the default) is made
+    plans_ = ops::listPracticePlans(folder_.toStdString(), session::localToday(), &skipped);
+  } catch (const std::exception& e) {
+    plans_.clear();
+    w_.summary->setText(tr("The practice folder cannot be read: %1").arg(what(e).toHtmlEscaped()));
+  }
+  if (!skipped.empty()) host_.note(tr("Left out: %1").arg(qs(skipped.front())), 8000);
   fillList();
   if (!selected_.isEmpty()) (void)showProgress();
   refreshButtons();
@@ -191,31 +197,36 @@ void LearnersTab::refreshButtons() {
 }
 
 bool LearnersTab::newLearner() {
-  LearnerDialog dialog(this);
-  if (dialog.exec() != QDialog::Accepted) return false;
-  const session::Learner learner = dialog.learner();
-  for (const auto& p : plans_) {
-    if (p.learner.code == learner.code) {
-      host_.error(tr("This learner is here already"),
-                  tr("A learner with the code %1 has a plan in %2: pick them and make a new plan").arg(qs(learner.code), folder_));
-      return false;
+  // The form stays open until the learner can be kept: a new code, the rules of learnerProblems.
+  LearnerDialog dialog([this](const session::Learner& learner) {
+    std::vector<std::string> problems = session::learnerProblems(learner);
+    for (const auto& p : plans_) {
+      if (p.learner.code == learner.code) {
+        problems.push_back("code \"" + learner.code + "\": a learner has it already; pick them and make a new plan");
+        break;
+      }
     }
-  }
-  try {
-    session::checkLearner(learner);
-  } catch (const InputError& e) {
-    host_.error(tr("This learner cannot be kept"), what(e));
-    return false;
-  }
-  PlanDialog plan(learner, this);
-  if (plan.exec() != QDialog::Accepted) return false;
-  return createPlan(plan.options());
+    return problems;
+  }, this);
+  if (dialog.exec() != QDialog::Accepted) return false;
+  return askPlan(dialog.learner());
 }
 
 bool LearnersTab::newPlan() {
   const auto learner = selectedLearner();
-  if (!learner) return false;
-  PlanDialog plan(*learner, this);
+  return learner && askPlan(*learner);
+}
+
+bool LearnersTab::askPlan(const session::Learner& learner) {
+  // The form stays open until the plan can be made (ops::practicePlanStudy's problems).
+  PlanDialog plan(learner, [](const ops::PracticePlanOptions& options) {
+    try {
+      (void)ops::practicePlanStudy(options);
+    } catch (const InputError& e) {
+      return splitProblems(e.what());
+    }
+    return std::vector<std::string>{};
+  }, this);
   if (plan.exec() != QDialog::Accepted) return false;
   return createPlan(plan.options());
 }
@@ -224,7 +235,7 @@ bool LearnersTab::createPlan(const ops::PracticePlanOptions& options) {
   std::filesystem::path file;
   try {
     file = ops::createPracticePlan(folder_.toStdString(), options);
-  } catch (const Error& e) {
+  } catch (const std::exception& e) {
     host_.error(tr("The plan was not made"), what(e));
     return false;
   }
@@ -251,8 +262,11 @@ bool LearnersTab::showProgress() {
   if (plan == nullptr) return false;
   try {
     const auto db = session::StudyDatabase::open(plan->file, session::OpenMode::kReadOnly);
-    progress_ = report::learnerProgress(db);
-  } catch (const Error& e) {
+    // Scores already computed are kept per plan: a trial is scored once.
+    report::ScoreCache& cache = scores_[plan->file.string()];
+    progress_ = report::learnerProgress(db, "", &cache);
+    for (const auto& t : progress_->trials) cache.emplace(t.trial_id, t.score);
+  } catch (const std::exception& e) {
     progress_.reset();
     host_.error(tr("The progress cannot be read"), what(e));
     refreshButtons();
@@ -260,7 +274,7 @@ bool LearnersTab::showProgress() {
   }
   w_.summary->setText(tr("%1 · %2 · next: %3").arg(learnerTitle(plan->learner), planLine(*plan), qs(progress_->next)));
   w_.sessions->setHtml(qs(report::progressPageHtml(*progress_, {.identified = true, .whole_page = false})));
-  w_.curve->setTrials(progress_->trials);
+  w_.curve->setTrials(progress_->trials, progress_->compares_alone);
   refreshButtons();
   return true;
 }

@@ -10,7 +10,9 @@
 #include <QString>
 #include <QWidget>
 #include <functional>
+#include <map>
 #include <optional>
+#include <string>
 
 #include "hattr/ops/practice_plan.hpp"
 #include "hattr/report/learner_progress.hpp"
@@ -96,6 +98,8 @@ class LearnersTab final : public QWidget {
   void refreshButtons();
   /// The learner of the plan picked (with the details of their latest plan).
   [[nodiscard]] std::optional<session::Learner> selectedLearner() const;
+  /// The New plan form for `learner`, kept open until the plan can be made; then makes it.
+  bool askPlan(const session::Learner& learner);
 
   QSettings& settings_;
   LearnersHost host_;
@@ -104,6 +108,7 @@ class LearnersTab final : public QWidget {
   std::vector<ops::PracticePlanSummary> plans_;
   QString selected_;  ///< the plan picked (its file)
   std::optional<report::LearnerProgress> progress_;
+  std::map<std::string, report::ScoreCache> scores_;  ///< by plan file: its trials' scores so far
 };
 
 /// The practice folder when none was chosen: "hattr practice" in the user's documents.

@@ -260,8 +260,9 @@ void MainWindow::onStatus() {
                                                .arg(counters->dropped_samples.load())
                                                .arg(counters->stalls.load() + counters->consumer_stalls.load())
                                                .arg(mentoring ? tr("mentoring station") : qs(rig_.realtimeSummary()))
-                         : keeps_time ? tr("Pen: ready")
-                                      : tr("Pen: not keeping time (View ▸ Engineer view says why)"));
+                         : loop_rate_hz_ <= 0.0 ? tr("Pen: starting")
+                         : keeps_time          ? tr("Pen: ready")
+                                               : tr("Pen: not keeping time (View ▸ Engineer view says why)"));
   }
   last_status_s_ = now;
   static const char* kNames[] = {"writing", "recording", "training trial", "study trial", "playback", "mentoring"};
@@ -285,6 +286,7 @@ void MainWindow::setEngineerView(bool on) {
   train_tab_->setEngineerView(on);
   study_tab_->setEngineerView(on);
   mentor_->setEngineerView(on);
+  review_->setEngineerView(on);
   refreshWorldLabel();
   onStatus();
   paper_->update();

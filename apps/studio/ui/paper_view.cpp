@@ -246,11 +246,10 @@ QString PaperView::readout() const {
         .arg(capped ? tr(" (capped at %1 N)").arg(force_limit_N_, 0, 'f', 2) : QString());
   }
   const double up_mm = std::max(0.0, pen_->p_WT.z() * 1000.0);
-  return tr("%1 · pressing %2 N · help %3 N%4")
+  return tr("%1 · pressing %2 N · help %3")
       .arg(pen_->in_contact ? tr("pen on the paper") : tr("pen %1 mm up").arg(up_mm, 0, 'f', 1))
       .arg(std::max(0.0, -pen_->f_user_W.z()), 0, 'f', 1)
-      .arg(std::min(guide_N, force_limit_N_), 0, 'f', 1)
-      .arg(capped ? tr(" (the pen's most)") : QString());
+      .arg(capped ? tr("%1 N (the pen's most)").arg(force_limit_N_, 0, 'f', 2) : tr("%1 N").arg(guide_N, 0, 'f', 1));
 }
 
 // Read-outs (millimetres and newtons for people), in a smaller font that the legend keeps.

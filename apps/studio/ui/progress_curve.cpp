@@ -4,6 +4,8 @@
 #include <QPainterPath>
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <string>
 
 namespace hattr::studio {
 namespace {
@@ -21,8 +23,9 @@ ProgressCurve::ProgressCurve(QWidget* parent) : QWidget(parent) {
                 "dark: written alone; ringed: the best and the latest written alone."));
 }
 
-void ProgressCurve::setTrials(std::vector<report::ProgressTrial> trials) {
+void ProgressCurve::setTrials(std::vector<report::ProgressTrial> trials, bool compares_alone) {
   trials_ = std::move(trials);
+  compares_alone_ = compares_alone;
   update();
 }
 
@@ -39,8 +42,8 @@ void ProgressCurve::drawLegend(QPainter& painter, double x) {
     painter.drawText(QPointF(x + 13, 4 + metrics.ascent()), text);
     x += 13 + metrics.horizontalAdvance(text) + 14;
   };
-  key(kGuided, false, tr("guided"));
-  key(kAlone, false, tr("written alone"));
+  if (compares_alone_) key(kGuided, false, tr("guided"));
+  key(kAlone, false, compares_alone_ ? tr("written alone") : tr("guided"));
   key(kBest, true, tr("best"));
   key(kLatest, true, tr("latest"));
 }
@@ -82,23 +85,25 @@ void ProgressCurve::paintEvent(QPaintEvent*) {
   painter.drawText(QRectF(area.left(), area.bottom() + 2, area.width(), line_h), Qt::AlignHCenter,
                    tr("trial (lower is closer to the model)"));
 
-  // Written alone, joined in order; then every point; then the rings.
-  QPainterPath alone;
+  // The compared trials joined in order, letter by letter; then every point; then the rings.
+  const auto light = [&](const report::ProgressTrial& t) { return t.guided && compares_alone_; };
+  std::map<std::string, QPainterPath> by_letter;
   for (const auto& t : trials_) {
-    if (t.guided || !std::isfinite(t.shape)) continue;
-    if (alone.elementCount() == 0) {
-      alone.moveTo(at(t));
+    if (light(t) || !std::isfinite(t.shape)) continue;
+    QPainterPath& line = by_letter[t.skill];
+    if (line.elementCount() == 0) {
+      line.moveTo(at(t));
     } else {
-      alone.lineTo(at(t));
+      line.lineTo(at(t));
     }
   }
   painter.setPen(QPen(kAlone, 1.2));
   painter.setBrush(Qt::NoBrush);
-  painter.drawPath(alone);
+  for (const auto& [letter, line] : by_letter) painter.drawPath(line);
   painter.setPen(Qt::NoPen);
   for (const auto& t : trials_) {
     if (!std::isfinite(t.shape)) continue;
-    painter.setBrush(t.guided ? kGuided : kAlone);
+    painter.setBrush(light(t) ? kGuided : kAlone);
     painter.drawEllipse(at(t), 3.5, 3.5);
   }
   painter.setBrush(Qt::NoBrush);

@@ -51,10 +51,7 @@ void RecordTab::buildUi() {
   w_.guide = new QComboBox;
   w_.guide->setObjectName("record_guide");
   w_.guide->addItem(tr("none"), QString());
-  for (const sim::Glyph& glyph : sim::builtInGlyphs()) {
-    const QString name = qs(glyph.name);
-    w_.guide->addItem(glyph.character.empty() ? name : tr("%1   (%2)").arg(qs(glyph.character), name), name);
-  }
+  addGlyphItems(w_.guide);
   w_.guide->setToolTip(tr("A letter of hattr's print script drawn on the paper to trace: each stroke numbered in "
                           "writing order, its direction arrowed"));
   connect(w_.guide, &QComboBox::activated, this,

@@ -16,6 +16,7 @@
 #include <QVBoxLayout>
 
 #include "core/study_report_export.hpp"
+#include "hattr/guidance/strategy_catalog.hpp"
 #include "hattr/guidance/training_guidance.hpp"
 #include "ui/ui_text.hpp"
 
@@ -165,7 +166,8 @@ void ReviewTab::fillTree() {
         // A completed trial is ticked (the narrow panel keeps room for the costs); others say why not.
         const bool completed = t.status == session::TrialStatus::kCompleted;
         auto* item = new QTreeWidgetItem(
-            top, {tr("#%1 (%2)").arg(t.plan.sequence + 1).arg(t.plan.index), qs(guidance::modeName(t.plan.mode)),
+            top, {tr("#%1 (%2)").arg(t.plan.sequence + 1).arg(t.plan.index),
+                  engineer_view_ ? qs(guidance::modeName(t.plan.mode)) : qs(guidance::strategyInfo(t.plan.mode).plain_name),
                   qs(t.plan.phase)});
         item->setText(kStatus, completed ? QStringLiteral("✓") : qs(session::trialStatusName(t.status)));
         item->setToolTip(kStatus, qs(session::trialStatusName(t.status)));
@@ -231,6 +233,13 @@ bool ReviewTab::openReport() {
     return false;
   }
   return true;
+}
+
+void ReviewTab::setEngineerView(bool on) {
+  engineer_view_ = on;
+  if (!db_) return;
+  const QSignalBlocker quiet(w_.tree);
+  fillTree();
 }
 
 }  // namespace hattr::studio

@@ -68,6 +68,8 @@ class ReviewTab final : public QWidget {
   /// report.html, and shows the analysis's costs in the tree.
   bool openReport();
 
+  /// The tree names strategies plainly ("Guided path") or technically ("PCONTROL").
+  void setEngineerView(bool on);
   /// The trial on show and its expert (null when none).
   [[nodiscard]] const HapticProfile* trial() const { return trial_ ? &*trial_ : nullptr; }
   [[nodiscard]] const HapticProfile* expert() const { return expert_ ? &*expert_ : nullptr; }
@@ -103,6 +105,7 @@ class ReviewTab final : public QWidget {
   std::optional<HapticProfile> trial_;
   std::optional<HapticProfile> expert_;
   std::map<std::int64_t, report::TrialCost> costs_;
+  bool engineer_view_ = false;
 };
 
 }  // namespace hattr::studio

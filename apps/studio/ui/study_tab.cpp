@@ -260,7 +260,7 @@ void StudyTab::setEngineerView(bool on) {
 
 QString StudyTab::promptText() const {
   const QString prompt = qs(study_->prompt());
-  return engineer_view_ ? prompt : plainStrategyNames(prompt);
+  return engineer_view_ ? prompt : plainPrompt(prompt);
 }
 
 QString StudyTab::idleBanner() {

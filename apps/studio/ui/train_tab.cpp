@@ -122,10 +122,7 @@ void TrainTab::buildReferenceChoice(QVBoxLayout& layout) {
   // Or a letter of the library (or another built-in glyph), written by the simulated expert.
   w_.letter = new QComboBox;
   w_.letter->addItem(tr("Or write a letter: choose one"), QString());
-  for (const sim::Glyph& glyph : sim::builtInGlyphs()) {
-    const QString name = qs(glyph.name);
-    w_.letter->addItem(glyph.character.empty() ? name : tr("%1   (%2)").arg(qs(glyph.character), name), name);
-  }
+  addGlyphItems(w_.letter);
   w_.letter->setToolTip(tr("The simulated expert writes the letter in hattr's print script on the simulated pen "
                            "(as hattr sim expert --glyph does), and that becomes the reference"));
   connect(w_.letter, &QComboBox::activated, this, [this](int index) {
@@ -278,7 +275,9 @@ bool TrainTab::start() {
     setup.metadata.extra["reference_file"] = reference_name_.toStdString();
     QString title = tr("Trial: %1").arg(qs(guidance::strategyInfo(mode_).plain_name));
     if (guidance::isScheduled(mode_)) {
-      title += tr(" (%1 at %2 %)").arg(qs(guidance::modeName(setup.guidance.scheduled.law)))
+      const guidance::TrainingMode law = setup.guidance.scheduled.law;
+      title += tr(" (%1 at %2 %)")
+                   .arg(engineer_view_ ? qs(guidance::modeName(law)) : qs(guidance::strategyInfo(law).plain_name))
                    .arg(std::round(100.0 * setup.guidance.scheduled.gain));
     }
     host_.start_trial(setup, *reference_, referenceShown(), title, w_.scores);

@@ -45,8 +45,8 @@ struct PracticePlanOptions {
 [[nodiscard]] session::StudyDefinition practicePlanStudy(const PracticePlanOptions& options);
 
 /// Makes a plan in `folder`: FOLDER/<code>/plan-N.sqlite, N the first number not taken (the
-/// folders are created). The experts are recorded first, so nothing is left behind when a
-/// letter cannot be written. Returns the new file.
+/// folders are created; InputError when they cannot be). The experts are recorded first, so
+/// nothing is left behind when a letter cannot be written. Returns the new file.
 std::filesystem::path createPracticePlan(const std::filesystem::path& folder, const PracticePlanOptions& options);
 
 /// One plan in a practice folder, as the learners' list shows it.
@@ -61,8 +61,10 @@ struct PracticePlanSummary {
   session::SubjectSchedule schedule;  ///< on `today`
 };
 
-/// Every plan of a practice folder, by learner code then plan number; a file that is not a
-/// practice plan (not a study, or not of one learner) is skipped and named in `skipped`.
+/// Every plan of a practice folder, by learner code then plan number. InputError for a folder
+/// that is not there or cannot be read. A plan-N.sqlite that is not a practice plan (not a
+/// study, or not of one learner), and a learner's folder that cannot be read, are skipped and
+/// named in `skipped`.
 [[nodiscard]] std::vector<PracticePlanSummary> listPracticePlans(const std::filesystem::path& folder,
                                                                  const session::LocalDate& today,
                                                                  std::vector<std::string>* skipped = nullptr);

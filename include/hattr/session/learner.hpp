@@ -11,6 +11,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -31,9 +32,14 @@ struct Learner {
 /// The learner a subject is: its id and its options["learner"] (all empty but the code when
 /// there are none). Throws InputError naming the subject and the field for a malformed one.
 [[nodiscard]] Learner learnerOf(const SubjectSpec& subject);
-/// Throws InputError listing every problem of a new learner, one a line: an empty or unsafe
-/// code (isSafeFileName), an age outside 1–120, an unknown handedness.
+/// Every problem of a new learner, one a line: an empty or unsafe code (isSafeFileName), an age
+/// outside 1–120, an unknown handedness. Empty when there is none.
+[[nodiscard]] std::vector<std::string> learnerProblems(const Learner& learner);
+/// Throws InputError listing learnerProblems, one a line, when there are any.
 void checkLearner(const Learner& learner);
+/// How people see the learner: "Mia (mia)", or the code alone when no name is given or
+/// `identified` is false.
+[[nodiscard]] std::string displayName(const Learner& learner, bool identified = true);
 /// A skill as people write it, when the letter library names it: "small-a" -> "a", "capital-a"
 /// -> "A", "digit-7" -> "7"; any other skill as it is ("na", "loop").
 [[nodiscard]] std::string letterName(const std::string& skill);
