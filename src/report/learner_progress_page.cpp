@@ -101,7 +101,9 @@ std::string sessionsTable(const LearnerProgress& p) {
 
 /// Every trial; `compact`: the columns a narrow panel has room for.
 std::string trialsTable(const LearnerProgress& p, bool compact) {
-  std::string out = compact ? "<table><tr><th>#</th><th>session</th><th>letter</th><th>how</th><th>shape</th><th></th></tr>\n"
+  // The narrow table's short headers do not wrap (a narrow view broke "session" letter by letter).
+  std::string out = compact ? "<table width=\"100%\"><tr style=\"white-space:nowrap\"><th>#</th><th>session</th>"
+                              "<th>letter</th><th>how</th><th>shape</th><th></th></tr>\n"
                             : "<table><tr><th>#</th><th>session</th><th>date</th><th>letter</th><th>how</th><th>shape</th>"
                               "<th>pressure</th><th>seconds</th><th>pen lifts</th><th>speed changes</th><th></th></tr>\n";
   for (const auto& t : p.trials) {

@@ -1,11 +1,15 @@
 #pragma once
 // What the studio tests look for in a screenshot of the main window (a widget grab offscreen,
-// the X server's pixels under Xvfb), and a mouse event sent to a widget.
+// the X server's pixels under Xvfb), a mouse event sent to a widget, a tab clicked, the screen
+// read back, and a scripted hand.
 
 #include <QCoreApplication>
 #include <QElapsedTimer>
 #include <QImage>
 #include <QMouseEvent>
+#include <QScreen>
+#include <QTabBar>
+#include <QTabWidget>
 #include <QtTest>
 #include <algorithm>
 #include <cstdlib>
@@ -52,6 +56,23 @@ inline double shareDrawn(const QImage& shot, const MainWindow& window, const Hap
 inline void sendMouse(QWidget* widget, QEvent::Type type, QPointF at, Qt::MouseButton button, Qt::MouseButtons buttons) {
   QMouseEvent event(type, at, widget->mapToGlobal(at), button, buttons, Qt::NoModifier);
   QCoreApplication::sendEvent(widget, &event);
+}
+
+/// Clicks the tab bar's tab `index` as a person does, and waits until it is the current one.
+inline void clickTab(MainWindow& w, int index) {
+  QTabBar* bar = w.tabs()->tabBar();
+  QTest::mouseClick(bar, Qt::LeftButton, Qt::NoModifier, bar->tabRect(index).center());
+  QTRY_COMPARE(w.tabs()->currentIndex(), index);
+}
+
+/// The window as the screen shows it (the X server's pixels under Xvfb), after it repainted;
+/// saved as `file` in the working folder (the test's build folder).
+inline QImage screenShot(MainWindow& w, const QString& file) {
+  w.update();
+  QTest::qWait(200);
+  const QImage shot = w.screen()->grabWindow(w.winId()).toImage();
+  shot.save(file);
+  return shot;
 }
 
 /// A scripted hand: holds the left button and moves the mouse along `path` (an expert's

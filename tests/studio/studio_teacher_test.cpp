@@ -430,20 +430,9 @@ class StudioTeacherTest : public QObject {
     }
   }
 
-  void clickTab(int index) {
-    QTabBar* bar = window_->tabs()->tabBar();
-    QTest::mouseClick(bar, Qt::LeftButton, Qt::NoModifier, bar->tabRect(index).center());
-    QTRY_COMPARE(window_->tabs()->currentIndex(), index);
-  }
+  void clickTab(int index) { test::clickTab(*window_, index); }
 
-  /// The window as the X server shows it, after a repaint; saved as `file`.
-  QImage screenShot(const QString& file) {
-    window_->update();
-    QTest::qWait(200);
-    const QImage shot = window_->screen()->grabWindow(window_->winId()).toImage();
-    shot.save(QStringLiteral(HATTR_STUDIO_SCREENSHOT_DIR "/") + file);
-    return shot;
-  }
+  QImage screenShot(const QString& file) { return test::screenShot(*window_, file); }
 
   std::filesystem::path dir_;
   std::filesystem::path plan_file_;
