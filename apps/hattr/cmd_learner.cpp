@@ -31,13 +31,10 @@ void runPlan(LearnerOptions& opt) {
   if (opt.age > 0) opt.plan.learner.age_years = opt.age;
   opt.plan.strategy = guidance::parseMode(opt.strategy);
   const auto file = ops::createPracticePlan(opt.folder, opt.plan);
-  const auto plans = ops::listPracticePlans(opt.folder, session::localToday());
-  for (const auto& p : plans) {
-    if (p.file != file) continue;
-    if (opt.json) return printJson(ops::toJson(p));
-    std::cout << fmt::format("created {}: {} trials planned over {} sessions; {}\n", file.string(), p.trials_total,
-                             p.schedule.sessions, session::scheduleText(p.schedule));
-  }
+  const ops::PracticePlanSummary p = ops::summarizePracticePlan(file, session::localToday());
+  if (opt.json) return printJson(ops::toJson(p));
+  std::cout << fmt::format("created {}: {} trials planned over {} sessions; {}\n", file.string(), p.trials_total,
+                           p.schedule.sessions, session::scheduleText(p.schedule));
 }
 
 void runList(const LearnerOptions& opt) {

@@ -5,6 +5,7 @@
 #include <set>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "hattr/core/error.hpp"
 #include "hattr/core/text_file.hpp"
@@ -98,12 +99,6 @@ json planSessions(const PracticePlanOptions& o, const std::vector<std::pair<std:
   return sessions;
 }
 
-std::string letterList(const std::vector<std::string>& letters) {
-  std::string out;
-  for (const auto& l : letters) out += (out.empty() ? "" : ", ") + l;
-  return out;
-}
-
 }  // namespace
 
 session::StudyDefinition practicePlanStudy(const PracticePlanOptions& options) {
@@ -121,7 +116,7 @@ session::StudyDefinition practicePlanStudy(const PracticePlanOptions& options) {
   json plan = json::parse(session::exampleDesign("learner").json);
   std::vector<std::string> letters;
   for (const auto& [skill, _] : skills) letters.push_back(session::letterName(skill));
-  plan["name"] = fmt::format("Practice of {} for {}", letterList(letters), options.learner.code);
+  plan["name"] = fmt::format("Practice of {} for {}", fmt::join(letters, ", "), options.learner.code);
   plan["skill"] = skills.front().first;
   plan["experts"] = json::object();
   for (const auto& [skill, expert] : skills) plan["experts"][skill] = expert;
@@ -188,8 +183,9 @@ std::vector<std::filesystem::path> planFiles(const std::filesystem::path& folder
   return files;
 }
 
-/// One plan's summary; InputError for a study that is not one learner's.
-PracticePlanSummary summarize(const std::filesystem::path& file, const session::LocalDate& today) {
+}  // namespace
+
+PracticePlanSummary summarizePracticePlan(const std::filesystem::path& file, const session::LocalDate& today) {
   const auto db = session::StudyDatabase::open(file, session::OpenMode::kReadOnly);
   const auto subjects = db.subjects();
   const bool one_person = subjects.size() == 1 && subjects.front().spec.participant == "person";
@@ -209,14 +205,12 @@ PracticePlanSummary summarize(const std::filesystem::path& file, const session::
   return p;
 }
 
-}  // namespace
-
 std::vector<PracticePlanSummary> listPracticePlans(const std::filesystem::path& folder, const session::LocalDate& today,
                                                    std::vector<std::string>* skipped) {
   std::vector<PracticePlanSummary> plans;
   for (const auto& file : planFiles(folder, skipped)) {
     try {
-      plans.push_back(summarize(file, today));
+      plans.push_back(summarizePracticePlan(file, today));
     } catch (const Error& e) {
       if (skipped != nullptr) skipped->push_back(e.what());
     }

@@ -7,6 +7,7 @@
 
 #include "hattr/analysis/kinematics.hpp"
 #include "hattr/core/error.hpp"
+#include "hattr/guidance/strategy_catalog.hpp"
 #include "hattr/guidance/strategy_schedule.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/session/study_export.hpp"
@@ -126,15 +127,30 @@ int SubjectTrials::daysBefore() const noexcept {
   return trials_[next_].plan.day - trials_[next_ - 1].plan.day;
 }
 
-std::string SubjectTrials::prompt() const {
+namespace {
+
+/// A phase as a learner reads it (SubjectTrials::Wording::kPlain); other phases as they are.
+std::string plainPhase(const std::string& phase) {
+  if (phase == kPhaseBaseline) return "before practice";
+  if (phase == kPhasePostTest) return "written alone";
+  if (phase == kPhaseRetention) return "written alone, days later";
+  if (phase == kPhaseTransfer) return "a new letter";
+  return phase;
+}
+
+}  // namespace
+
+std::string SubjectTrials::prompt(Wording wording) const {
   HATTR_DEMAND(current() != nullptr, "subject {}: no trial left to prompt for", subject_.id);
   const TrialPlan& plan = current()->plan;
-  std::string phase = plan.phase;
+  const bool plain = wording == Wording::kPlain;
+  std::string phase = plain ? plainPhase(plan.phase) : plan.phase;
   if (!phase.empty() && phase[0] >= 'a' && phase[0] <= 'z') phase[0] = static_cast<char>(phase[0] - 'a' + 'A');
   // The strategy is named where its force acts, and in the paper's recall (the mode's block).
   const bool named = plan.view.guidance || study_.paper_form;
-  return fmt::format("{}{}: trial {} of {}", phase, named ? fmt::format(" with {}", guidance::modeName(plan.mode)) : "",
-                     plan.index, blockOf(study_, plan).trials);
+  const std::string_view strategy = plain ? guidance::strategyInfo(plan.mode).plain_name : guidance::modeName(plan.mode);
+  return fmt::format("{}{}: trial {} of {}", phase, named ? fmt::format(" with {}", strategy) : "", plan.index,
+                     blockOf(study_, plan).trials);
 }
 
 TrialSetup SubjectTrials::setup(Clock clock, LiveGuidance* mentor) const {

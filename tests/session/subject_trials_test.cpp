@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/guidance/strategy_catalog.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/session/study_runner.hpp"
 #include "hattr/session/subject_trials.hpp"
@@ -75,6 +76,8 @@ TEST(SubjectTrials, PassesCompletedTrialsInOrderAndRestsBeforeEveryTrialButTheFi
   EXPECT_FALSE(fresh.restBefore());
   EXPECT_EQ(fresh.current()->id, all[0].id);
   EXPECT_EQ(fresh.prompt(), fmt::format("Training with {}: trial 1 of 2", guidance::modeName(all[0].plan.mode)));
+  EXPECT_EQ(fresh.prompt(SubjectTrials::Wording::kPlain),
+            fmt::format("Training with {}: trial 1 of 2", guidance::strategyInfo(all[0].plan.mode).plain_name));
 
   // Trials 0, 1 and 3 done (3 after a gap): the steps pass 0 and 1, run 2, then pass 3.
   const std::int64_t session = db.beginSession("S01");

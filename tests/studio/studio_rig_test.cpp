@@ -577,11 +577,14 @@ class StudioRigTest : public QObject {
       session.selectSubject("P01", 0.0);
       QCOMPARE(session.state(), StudySession::State::kReady);
       QCOMPARE(session.prompt(), std::string("Training with PCONTROL: trial 1 of 1"));
+      // The plain wording (the studio's default view): the strategy's plain name.
+      QCOMPARE(session.prompt(session::SubjectTrials::Wording::kPlain), std::string("Training with Guided path: trial 1 of 1"));
       QCOMPARE(session.currentSetup().guidance.mode, guidance::TrainingMode::kPositionControl);
       runOneTrial(session, 0.0);
       QCOMPARE(session.state(), StudySession::State::kResting);
       session.skipRest();
       QCOMPARE(session.prompt(), std::string("Post-test: trial 1 of 1"));
+      QCOMPARE(session.prompt(session::SubjectTrials::Wording::kPlain), std::string("Written alone: trial 1 of 1"));
       QCOMPARE(session.currentSetup().guidance.mode, guidance::TrainingMode::kBasic);
       runOneTrial(session, 10.0);
       QCOMPARE(session.state(), StudySession::State::kNextSession);
@@ -595,6 +598,8 @@ class StudioRigTest : public QObject {
       session.beginNextSession();
       QCOMPARE(session.state(), StudySession::State::kReady);
       QCOMPARE(session.prompt(), std::string("Retention: trial 1 of 1"));
+      QCOMPARE(session.prompt(session::SubjectTrials::Wording::kPlain),
+               std::string("Written alone, days later: trial 1 of 1"));
       QVERIFY(!session.currentTrial()->plan.view.show_reference);
       runOneTrial(session, 0.0);
       QCOMPARE(session.state(), StudySession::State::kFinished);

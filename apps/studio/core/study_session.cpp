@@ -111,14 +111,14 @@ const session::TrialRecord* StudySession::currentTrial() const noexcept {
   return trials_ && state_ != State::kNoSubject ? trials_->current() : nullptr;
 }
 
-std::string StudySession::prompt() const {
+std::string StudySession::prompt(session::SubjectTrials::Wording wording) const {
   if (currentTrial() == nullptr) return state_ == State::kFinished ? "Every trial is done. Thank you!" : "";
   if (state_ == State::kNextSession) {
     std::string next = session::scheduleText(schedule());
     if (next.starts_with("next: ")) next.erase(0, 6);
     return fmt::format("Next session for {}: {}", subject_, next);
   }
-  return trials_->prompt();
+  return trials_->prompt(wording);
 }
 
 session::TrialSetup StudySession::currentSetup() const {

@@ -87,7 +87,7 @@ class StudySession {
   [[nodiscard]] const session::TrialRecord* currentTrial() const noexcept;
   /// The runner's prompt for the current trial ("Training with ALPHA: trial 3 of 11"); between
   /// sessions, the next one ("Next session for S07: session 2 of 3 (day 1), due today").
-  [[nodiscard]] std::string prompt() const;
+  [[nodiscard]] std::string prompt(session::SubjectTrials::Wording wording = session::SubjectTrials::Wording::kTechnical) const;
   /// The runner's set-up of the current trial (session::studyTrialSetup: guidance on in
   /// training, BASIC in recall, the study's end rule and maximum — or an old file's fixed
   /// window —, the study metadata), on the real-time clock. The caller sets the settle time

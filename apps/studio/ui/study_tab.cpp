@@ -259,8 +259,8 @@ void StudyTab::setEngineerView(bool on) {
 }
 
 QString StudyTab::promptText() const {
-  const QString prompt = qs(study_->prompt());
-  return engineer_view_ ? prompt : plainPrompt(prompt);
+  using Wording = session::SubjectTrials::Wording;
+  return qs(study_->prompt(engineer_view_ ? Wording::kTechnical : Wording::kPlain));
 }
 
 QString StudyTab::idleBanner() {

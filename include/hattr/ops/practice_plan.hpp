@@ -41,7 +41,7 @@ struct PracticePlanOptions {
 };
 
 /// The plan's study definition (the letters' experts not yet recorded). Throws InputError
-/// listing every problem of the options, one a line (the learner's too: checkLearner).
+/// listing every problem of the options, one a line (the learner's too: learnerProblems).
 [[nodiscard]] session::StudyDefinition practicePlanStudy(const PracticePlanOptions& options);
 
 /// Makes a plan in `folder`: FOLDER/<code>/plan-N.sqlite, N the first number not taken (the
@@ -60,6 +60,11 @@ struct PracticePlanSummary {
   int trials_completed = 0;
   session::SubjectSchedule schedule;  ///< on `today`
 };
+
+/// One plan's summary on `today`. InputError for a file that is not a study, or a study that is
+/// not one learner's (naming what it has).
+[[nodiscard]] PracticePlanSummary summarizePracticePlan(const std::filesystem::path& file,
+                                                        const session::LocalDate& today);
 
 /// Every plan of a practice folder, by learner code then plan number. InputError for a folder
 /// that is not there or cannot be read. A plan-N.sqlite that is not a practice plan (not a

@@ -79,8 +79,13 @@ class SubjectTrials {
   [[nodiscard]] int daysBefore() const noexcept;
   /// The current trial's attempt: 0, then one more for each disturbed attempt run again.
   [[nodiscard]] int attempt() const noexcept { return attempt_; }
+  /// How a prompt names the strategy and the phase: technically ("Training with ALPHA",
+  /// "Post-test"), or as a teacher and a learner read it ("Training with Guided pressure",
+  /// "Written alone"; the baseline is "Before practice", retention "Written alone, days later",
+  /// transfer "A new letter"; other phases as they are).
+  enum class Wording { kTechnical, kPlain };
   /// "Training with ALPHA: trial 3 of 11", "Retention: trial 2 of 5". Needs a current trial.
-  [[nodiscard]] std::string prompt() const;
+  [[nodiscard]] std::string prompt(Wording wording = Wording::kTechnical) const;
   /// The current attempt's set-up (studyTrialSetup) on `clock`, with the mentored modes' expert
   /// station and its link's seed; for a scheduled strategy's guided trial, the law and gain its
   /// schedule gives from the tracking errors stored with the subject's guided trials of the same
