@@ -72,8 +72,8 @@ int runCheck(const CheckOptions& opt) {
             << fmt::format("jitter      period error p50 {:.1f} µs, p99 {:.1f} µs, max {:.1f} µs\n",
                            us(r.period_error.percentile_ns(0.5)), us(r.period_error.percentile_ns(0.99)),
                            us(r.period_error.max_ns()))
-            << fmt::format("force test  {:.3f} N commanded upward; the pen rose {:.2f} mm; person: {}\n", r.commanded_N,
-                           r.pen_rise_m * 1e3,
+            << fmt::format("force test  {:.3f} N commanded {}; the pen moved {:.2f} mm that way; person: {}\n",
+                           r.commanded_N, r.force_direction, r.pen_rise_m * 1e3,
                            r.confirmed ? (*r.confirmed ? "felt it" : "did NOT feel it") : "not asked")
             << (r.force_reached ? ""
                                 : fmt::format("failed      the {} N test force was not reached{}\n", opt.force_N,
@@ -107,7 +107,7 @@ void registerDevicesCommands(CLI::App& app) {
                "the person holding it confirms (exit 1 if anything fails)");
   check->add_option("uri", opt->uri, "Device URI (see `hattr devices`)")->required();
   check->add_option("--seconds", opt->seconds, "Jitter measurement [s]")->check(CLI::Range(0.1, 60.0))->capture_default_str();
-  check->add_option("--force-N", opt->force_N, "The gentle test force, upward [N]")
+  check->add_option("--force-N", opt->force_N, "The gentle test force [N]: up, or on a planar pen away from the writer")
       ->check(CLI::Range(0.01, 2.0))
       ->capture_default_str();
   check->add_option("--rate", opt->rate_hz, "Servo rate [Hz] (default: the device's nominal rate)")

@@ -8,6 +8,8 @@
 
 #include "hattr/core/error.hpp"
 #include "hattr/device/plugin_device.hpp"
+#include "hattr/device/serial_device.hpp"
+#include "hattr/device/simulated_planar_device.hpp"
 #include "hattr/device/udp_device.hpp"
 
 namespace hattr::device {
@@ -15,7 +17,9 @@ namespace {
 
 constexpr std::string_view kAccepted =
     "sim://pen[?key=value&...] (simulated force-feedback pen); "
+    "sim://planar (the open pen's plant, simulated with ideal electronics); "
     "udp://HOST:PORT?key=FILE[&hold_ms=5&timeout_s=1] (a pen served by `hattr device serve`); "
+    "serial://PORT[?baud=1000000&...] (the open pen on a serial port, docs/hardware.md); "
     "plugin:/path/libX.so[?key=value&...] or plugin:NAME (a driver plugin: hardware, sim, replay)";
 
 struct SimKey {
@@ -143,19 +147,25 @@ SimulatedPenParams simulatedPenParams(const DeviceUri& uri) {
 
 std::unique_ptr<Device> openDevice(std::string_view uri_text, HandScript* hand) {
   const DeviceUri uri = parseDeviceUri(uri_text);
+  if (uri.scheme == "sim" && uri.target == "planar") {
+    return std::make_unique<SimulatedPlanarDevice>(simulatedPlanarParams(uri), hand, std::string(uri_text));
+  }
   if (uri.scheme == "sim") {
-    HATTR_THROW_UNLESS(uri.target == "pen", "device URI \"{}\": the simulator offers sim://pen, got sim://{}",
+    HATTR_THROW_UNLESS(uri.target == "pen", "device URI \"{}\": the simulator offers sim://pen and sim://planar, got sim://{}",
                        uri_text, uri.target);
     return std::make_unique<SimulatedDevice>(simulatedPenParams(uri), hand, std::string(uri_text));
   }
   if (uri.scheme == "plugin") return openPluginDevice(uri, uri_text, hand);
   if (uri.scheme == "udp") return openUdpDevice(uri, uri_text, hand);
+  if (uri.scheme == "serial") return openSerialDevice(uri, uri_text);
   throw InputError(fmt::format("device URI \"{}\": unknown scheme \"{}\"; accepted: {}", uri_text, uri.scheme, kAccepted));
 }
 
 DeviceLimits declaredLimits(std::string_view uri) {
   const DeviceUri parsed = parseDeviceUri(uri);
-  return parsed.scheme == "sim" ? simulatedPenParams(parsed).limits : openDevice(uri, nullptr)->limits();
+  if (parsed.scheme == "sim" && parsed.target == "pen") return simulatedPenParams(parsed).limits;
+  if (parsed.scheme == "sim" && parsed.target == "planar") return planarPenLimits(simulatedPlanarParams(parsed).spec);
+  return openDevice(uri, nullptr)->limits();
 }
 
 std::string deviceUriHelp() {
@@ -165,6 +175,7 @@ std::string deviceUriHelp() {
     text += fmt::format("  {:<24} {} in [{}, {}], default {}\n", k.key, k.help, k.min, k.max, *k.field(defaults));
   }
   text += udpDeviceHelp();
+  text += serialDeviceHelp();
   return text;
 }
 

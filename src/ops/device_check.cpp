@@ -17,10 +17,11 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-/// A constant upward force while switched on through the loop's mailbox (parameter 0 [N]).
+/// A constant force along `direction` while switched on through the loop's mailbox (parameter 0 [N]).
 class TestForce final : public GuidanceController {
  public:
-  Vec3 compute(const PenState&, const ContactForces&, double) noexcept override { return Vec3(0.0, 0.0, force_N_); }
+  explicit TestForce(const Vec3& direction) : direction_(direction) {}
+  Vec3 compute(const PenState&, const ContactForces&, double) noexcept override { return force_N_ * direction_; }
   bool setParameter(int parameter, double value) noexcept override {
     if (parameter != 0) return false;
     force_N_ = value;
@@ -28,8 +29,12 @@ class TestForce final : public GuidanceController {
   }
 
  private:
+  Vec3 direction_;
   double force_N_ = 0.0;
 };
+
+/// The test force's direction: up, or on a planar pen (which cannot push up) away from the writer.
+Vec3 testDirection(const DeviceLimits& limits) { return limits.degrees_of_freedom == 2 ? Vec3::UnitY() : Vec3::UnitZ(); }
 
 nlohmann::json limitsJson(const DeviceLimits& l) {
   return {{"peak_force_N", l.peak_force_N},
@@ -43,12 +48,12 @@ nlohmann::json limitsJson(const DeviceLimits& l) {
 
 // The gentle force: ramped in by the safety path, held 1 s (up to 5 s while stalls of the host
 // keep restarting the ramp, until a latched fault), then off. Fills the force test's figures.
-void applyTestForce(servo::ServoLoop& loop, double force_N, DeviceCheckResult& r) {
+void applyTestForce(servo::ServoLoop& loop, double force_N, const Vec3& direction, DeviceCheckResult& r) {
   Sample before;
   (void)loop.latest().read(before);
   (void)loop.post({servo::ServoCommand::Type::kSetGuidanceParameter, 0, force_N});
   Sample during;
-  const auto reached = [&] { return std::abs(during.f_cmd_W.z() - force_N) < 0.02 * force_N; };
+  const auto reached = [&] { return std::abs(during.f_cmd_W.dot(direction) - force_N) < 0.02 * force_N; };
   const auto faulted = [&] { return loop.counters().faults.load() > 0; };
   const auto held_from = Clock::now();
   while ((Clock::now() - held_from < std::chrono::seconds(1) ||
@@ -56,12 +61,12 @@ void applyTestForce(servo::ServoLoop& loop, double force_N, DeviceCheckResult& r
          !faulted()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
     Sample now;
-    if (loop.latest().read(now) && now.f_cmd_W.z() >= during.f_cmd_W.z()) during = now;
+    if (loop.latest().read(now) && now.f_cmd_W.dot(direction) >= during.f_cmd_W.dot(direction)) during = now;
   }
   (void)loop.post({servo::ServoCommand::Type::kSetGuidanceParameter, 0, 0.0});
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  r.commanded_N = during.f_cmd_W.z();
-  r.pen_rise_m = during.p_WT.z() - before.p_WT.z();
+  r.commanded_N = during.f_cmd_W.dot(direction);
+  r.pen_rise_m = (during.p_WT - before.p_WT).dot(direction);
   r.force_reached = reached();
 }
 
@@ -97,7 +102,8 @@ nlohmann::json DeviceCheckResult::toJson() const {
       {"stalls", figures.stalls},
       {"fault_reason", fault_reason},
       {"force_test",
-       {{"commanded_N", commanded_N},
+       {{"direction", force_direction},
+        {"commanded_N", commanded_N},
         {"pen_rise_m", pen_rise_m},
         {"confirmed", confirmed ? nlohmann::json(*confirmed) : nlohmann::json(nullptr)}}},
       {"verdicts", verdictsJson(judgement)},
@@ -126,7 +132,9 @@ DeviceCheckResult runDeviceCheck(const DeviceCheckOptions& options) {
                      r.device.limits.continuous_force_N, options.force_N);
   if (options.opened) options.opened(r.device);
 
-  TestForce force;
+  const Vec3 direction = testDirection(r.device.limits);
+  r.force_direction = direction.z() > 0.0 ? "up" : "away from the writer";
+  TestForce force(direction);
   servo::ServoLoop loop(*device, servo::ServoConfig{.rate_hz = r.device.rate_hz});
   loop.setGuidance(&force);
   loop.start();
@@ -141,10 +149,11 @@ DeviceCheckResult runDeviceCheck(const DeviceCheckOptions& options) {
   });
   std::this_thread::sleep_for(std::chrono::duration<double>(options.seconds));
   if (options.announce && options.confirm) {
-    options.announce(fmt::format("Hold the pen lightly: a {} N upward force follows for about 1 s.", options.force_N));
+    options.announce(fmt::format("Hold the pen lightly: a {} N {} follows for about 1 s.", options.force_N,
+                                 direction.z() > 0.0 ? "upward force" : "force away from you"));
   }
   r.force_N = options.force_N;
-  applyTestForce(loop, options.force_N, r);
+  applyTestForce(loop, options.force_N, direction, r);
   loop.stop();
   draining = false;
   drain.join();

@@ -111,7 +111,10 @@ ServoCheckResult runServoCheck(const ServoCheckOptions& options) {
   device::CircleHand hand(Vec3::Zero(), 0.015, 1.0, 1.0);
   const auto device = device::openDevice(options.device, &hand);
   result.world_clamps = render::clampToDevice(world.paper, device->limits(), options.rate_hz);
-  if (!result.world_clamps.empty()) paper = std::make_unique<render::PaperRenderer>(world.paper, paper->relief());
+  world.paper.normal_from_pressure = device->limits().degrees_of_freedom == 2;  // a planar pen on its table
+  if (!result.world_clamps.empty() || world.paper.normal_from_pressure) {
+    paper = std::make_unique<render::PaperRenderer>(world.paper, paper->relief());
+  }
   servo::ServoLoop loop(*device, servo::ServoConfig{.rate_hz = options.rate_hz, .realtime = options.realtime});
   loop.setWorld(paper.get());
   std::atomic<bool> done{false};

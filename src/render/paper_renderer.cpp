@@ -62,15 +62,17 @@ void PaperRenderer::render(const PenState& pen, double /*dt_s*/, ContactForces& 
   const SurfacePoint surface = relief_.surfaceAt(pen.p_WT.x(), pen.p_WT.y());
   const Vec3& n = surface.normal_W;
   const double penetration = (surface.height_m - pen.p_WT.z()) * n.z();
-  if (penetration <= 0.0) {
+  const bool on_table = params_.normal_from_pressure;
+  const bool touching = on_table ? pen.has_pressure && pen.pressure_raw > 0.0 : penetration > 0.0;
+  if (!touching) {
     in_contact_ = false;
     detail_ = {.proxy_W = pen.p_WT};
     out = {};
     return;
   }
 
-  // Normal reaction K·δ + C·δ̇, never pulling the pen into the paper.
-  const double normal = normalForce(params_.contact, penetration, -pen.v_WT.dot(n));
+  // Normal reaction K·δ + C·δ̇, never pulling the pen into the paper; on a table, the press.
+  const double normal = on_table ? pen.pressure_raw : normalForce(params_.contact, penetration, -pen.v_WT.dot(n));
 
   // The god-object proxy: on touch-down it sits on the surface above the tip.
   if (!in_contact_) {
@@ -108,6 +110,7 @@ void PaperRenderer::render(const PenState& pen, double /*dt_s*/, ContactForces& 
   out.in_contact = true;
   out.f_on_pen_W = normal * n + friction;
   out.f_on_paper_W = -out.f_on_pen_W;
+  if (on_table) out.f_on_pen_W.z() = 0.0;  // the table gives the normal itself
 }
 
 }  // namespace hattr::render

@@ -135,8 +135,9 @@ TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
   const Vec3 guide = guidance_ ? guidance_->compute(pen, contact, dt_s) : Vec3(Vec3::Zero());
 
   // A consumer the loop depends on has stopped taking samples.
-  const bool consumer_stalled =
-      consumer_time_s_ && pen.t_s - consumer_time_s_->load(std::memory_order_acquire) > seconds(config_.stall_threshold);
+  // (Not on a pausable device clock: its loop time runs ahead of the wall, and the ring holds it.)
+  const bool consumer_stalled = consumer_time_s_ && !device_.pausableClock() &&
+                                pen.t_s - consumer_time_s_->load(std::memory_order_acquire) > seconds(config_.stall_threshold);
   if (consumer_stalled) bump(counters_.consumer_stalls);
 
   // Every force passes the safety path; a stall zeroes it outright.
@@ -245,7 +246,7 @@ void ServoLoop::watchDeviceClock() {
   while (!stop_requested_.load(std::memory_order_acquire)) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
     const auto gap = monotonicNow().count() - last_device_tick_ns_.load(std::memory_order_acquire);
-    const bool now_stalled = gap > config_.stall_threshold.count();
+    const bool now_stalled = gap > config_.stall_threshold.count() && !device_.pausableClock();
     if (now_stalled && !stalled) bump(counters_.stalls);
     stalled = now_stalled;
   }

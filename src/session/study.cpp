@@ -436,7 +436,7 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
 bool checkExpertsRenderable(const StudyDefinition& study) {
   const device::DeviceUri uri = device::parseDeviceUri(study.device);
   if (uri.scheme != "sim") return false;
-  const DeviceLimits limits = device::simulatedPenParams(uri).limits;
+  const DeviceLimits limits = device::declaredLimits(study.device);  // a simulated pen's: nothing is opened
   std::vector<std::string> refused;
   for (const auto& [skill, path] : study.experts) {
     const auto named = study.named_expert_profiles.find(skill);

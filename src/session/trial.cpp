@@ -51,13 +51,17 @@ struct WaitEnd {
 
 /// Waits `seconds` of a real-time run, watching every 2 ms for what ends a trial early
 /// (TrialWatch: a fault, a lost device, a stopped clock, a stuck loop); and, when given, the
-/// recorder's end rule, the end of its window and a stop request.
+/// recorder's end rule, the end of its window and a stop request. On a device whose clock is
+/// simulated and pauses (Device::pausableClock), the seconds are the loop's, not the wall's.
 WaitEnd waitForEnd(const servo::ServoLoop& loop, const device::Device& device, double seconds,
                    const Recorder* recorder = nullptr, const TrialStop* stop = nullptr) {
   using Clock = std::chrono::steady_clock;
   const auto until = Clock::now() + std::chrono::duration<double>(seconds);
+  const auto until_tick = loop.counters().ticks.load() +
+                          static_cast<std::uint64_t>(std::ceil(seconds / std::chrono::duration<double>(loop.period()).count()));
+  const bool loop_time = device.pausableClock();
   TrialWatch watch(loop, device);
-  while (Clock::now() < until) {
+  while (loop_time ? loop.counters().ticks.load() < until_tick : Clock::now() < until) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
     if (std::string failure = watch.check(); !failure.empty()) return {std::move(failure)};
     if (recorder != nullptr && recorder->writingOver()) return {.writing_over = true};
@@ -84,7 +88,7 @@ device::HandCommand SettlingHand::command(double t_s) noexcept {
 
 std::unique_ptr<device::Device> openTrialDevice(const std::string& uri_text, device::HandScript& hand) {
   const device::DeviceUri uri = device::parseDeviceUri(uri_text);
-  if (uri.scheme != "sim") return device::openDevice(uri_text, &hand);
+  if (uri.scheme != "sim" || uri.target != "pen") return device::openDevice(uri_text, &hand);
   device::SimulatedPenParams params = device::simulatedPenParams(uri);
   hand.rewind();
   params.start_position_W = hand.command(0.0).p_target_W;
@@ -148,6 +152,7 @@ TrialEnvironment::TrialEnvironment(std::string device_uri, render::WorldConfig w
                      "servo rate: expected 1 to 10000 Hz, got {}", rate_hz);
   limits_ = device::declaredLimits(device_uri_);
   world_clamps_ = render::clampToDevice(world_.paper, limits_, rate_hz_);
+  world_.paper.normal_from_pressure = limits_.degrees_of_freedom == 2;  // a planar pen on its table
   paper_ = std::make_unique<render::PaperRenderer>(world_.paper, render::buildRelief(world_.relief));
 }
 

@@ -10,9 +10,9 @@ namespace hattr::session {
 TrialWatch::TrialWatch(const servo::ServoLoop& loop, const device::Device& device, Clock::time_point now)
     : loop_(loop),
       device_(device),
-      stopped_after_(loop.clock() == servo::LoopClock::kDevice
-                         ? std::chrono::duration_cast<Clock::duration>(kGiveUpAfter)
-                         : std::chrono::duration_cast<Clock::duration>(kOwnLoopStuckAfter)),
+      stopped_after_(device.pausableClock()                        ? std::chrono::duration_cast<Clock::duration>(kPausedClockGiveUpAfter)
+                     : loop.clock() == servo::LoopClock::kDevice ? std::chrono::duration_cast<Clock::duration>(kGiveUpAfter)
+                                                                 : std::chrono::duration_cast<Clock::duration>(kOwnLoopStuckAfter)),
       last_ticks_(loop.counters().ticks.load()),
       last_tick_seen_(now),
       last_wake_(now) {}

@@ -210,7 +210,7 @@ TEST(DeviceUri, BadUrisListWhatIsAccepted) {
   EXPECT_THAT(openError("udp://10.0.0.1:5000"), HasSubstr("missing key=FILE"));
   EXPECT_THAT(openError("plugin:/opt/lib.so"), HasSubstr("plugin:/opt/lib.so: file not found"));
   EXPECT_THAT(openError("sim://pen?mass_kg=%2"), HasSubstr("expected %XX (two hex digits)"));
-  EXPECT_THAT(openError("sim://arm"), HasSubstr("the simulator offers sim://pen, got sim://arm"));
+  EXPECT_THAT(openError("sim://arm"), HasSubstr("the simulator offers sim://pen and sim://planar, got sim://arm"));
   EXPECT_THAT(openError("sim://pen?mas_kg=1"), HasSubstr("unknown key \"mas_kg\": expected one of mass_kg"));
   EXPECT_EQ(openError("sim://pen?mass_kg=-1"), "sim://pen: key mass_kg: expected a number in [0.001, 10], got \"-1\"");
   EXPECT_THAT(openError("sim://pen?mass_kg"), HasSubstr("expected key=value in the query, got \"mass_kg\""));

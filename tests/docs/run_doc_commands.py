@@ -212,8 +212,9 @@ def make_scratch(source: Path, hattr: Path, build: Path, shared: Path | None) ->
     release = clone / "build" / "release"
     (release / "apps" / "hattr").mkdir(parents=True)
     shutil.copy2(hattr, release / "apps" / "hattr" / "hattr")
-    for sub, pattern in [("bench", "bench_*"), ("plugins", "*.so")]:
-        (release / sub).mkdir()
+    for sub, pattern in [("bench", "bench_*"), ("plugins", "*.so"), ("apps/pen-emulator", "hattr-pen-emulator"),
+                         ("firmware", "*.elf")]:
+        (release / sub).mkdir(parents=True, exist_ok=True)
         for program in sorted((build / sub).glob(pattern)) if (build / sub).is_dir() else []:
             if program.is_file():
                 shutil.copy2(program, release / sub / program.name)

@@ -98,6 +98,34 @@ TEST(PaperRenderer, SticksInsideTheStaticConeThenSlidesOnTheDynamicCone) {
   EXPECT_TRUE(broke_loose);
 }
 
+TEST(PaperRenderer, OnATableTheNormalIsThePressAndOnlyInPlaneForcesAreRendered) {
+  // A planar pen (docs/hardware.md): the table holds it up at z = 0 (or 1 mm up when lifted);
+  // the normal reaction is the pressure reading in newtons, the friction cones scale with it.
+  PaperParams params = plainPaper();
+  params.normal_from_pressure = true;
+  PaperRenderer paper(params);
+  ContactForces out;
+  PenState pen = penAt(Vec3(0, 0, 0.001));
+  paper.render(pen, 1e-3, out);
+  EXPECT_FALSE(out.in_contact) << "no pressure reading: the pen is lifted";
+  pen.has_pressure = true;
+  pen.pressure_raw = 0.8;
+  const double kt = params.tangential_stiffness_N_per_m;
+  for (int step = 0; step <= 1000; ++step) {
+    pen.p_WT = Vec3(step * 1e-6, 0, 0);
+    paper.render(pen, 1e-3, out);
+    ASSERT_TRUE(out.in_contact);
+    EXPECT_EQ(out.f_on_pen_W.z(), 0.0) << "the table gives the normal itself";
+    EXPECT_NEAR(out.f_on_paper_W.z(), -0.8, 1e-12) << "the pen still presses on the paper";
+    if (!paper.detail().sliding) {
+      EXPECT_NEAR(out.f_on_pen_W.x(), -kt * step * 1e-6, 1e-9);
+    }
+  }
+  ASSERT_TRUE(paper.detail().sliding);
+  EXPECT_NEAR(out.f_on_pen_W.head<2>().norm(), params.friction.dynamic_coefficient * 0.8, 1e-9);
+  EXPECT_NEAR(paper.detail().normal_N, 0.8, 1e-12);
+}
+
 TEST(PaperRenderer, SlidingStopsWhenThePullDropsInsideTheDynamicCone) {
   PaperRenderer paper(plainPaper());
   ContactForces out;

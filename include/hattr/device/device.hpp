@@ -50,6 +50,11 @@ class Device {
   /// hattr::Error if the clock cannot start. Not on the servo thread.
   virtual void startClock(DeviceTickFn tick, void* context);
   virtual void stopClock() noexcept {}
+  /// Device clock only: the device's clock is simulated time that may pause in wall time (an
+  /// emulator in lockstep, serial://...?lockstep=1). The loop and the trial then judge it by its
+  /// own time only: no wall-clock stall count, no force zeroed for a consumer's lag in loop time
+  /// (the sample ring holds it), a generous give-up time. Never for real hardware.
+  [[nodiscard]] virtual bool pausableClock() const noexcept { return false; }
   /// Why the device last reported kFault or kDisconnected, for messages ("" if it has not).
   /// Not on the servo thread; safe to call while the loop runs.
   [[nodiscard]] virtual std::string faultReason() const { return {}; }

@@ -33,7 +33,7 @@ struct DeviceDescription {
 struct DeviceCheckOptions {
   std::string uri;
   double seconds = 2.0;           ///< the jitter measurement [s], 0.1 to 60
-  double force_N = 0.2;           ///< the gentle test force, upward [N]: (0, the continuous force]
+  double force_N = 0.2;           ///< the gentle test force [N]: (0, the continuous force]; up, or on a planar pen away from the writer
   double rate_hz = 0.0;           ///< 0: the device's nominal rate
   /// Once the device is open, before the loop runs (a front end describes it).
   std::function<void(const DeviceDescription&)> opened;
@@ -51,15 +51,16 @@ struct DeviceCheckResult {
   servo::LoopFigures figures;
   std::string fault_reason;       ///< the device's last fault, if any
   double force_N = 0.0;           ///< the test force asked for
-  double commanded_N = 0.0;       ///< the largest upward force commanded while it was held
-  double pen_rise_m = 0.0;        ///< how far the pen rose by then
+  std::string force_direction;    ///< "up", or "away from the writer" on a planar pen
+  double commanded_N = 0.0;       ///< the largest force commanded along that direction while it was held
+  double pen_rise_m = 0.0;        ///< how far the pen moved along it by then
   bool force_reached = false;     ///< commanded within 2 % of force_N
   std::optional<bool> confirmed;  ///< the person's answer (nullopt: not asked or no answer)
   servo::LoopJudgement judgement;
   /// No FAIL, the force reached, and the person did not say no.
   [[nodiscard]] bool ok() const noexcept;
   /// {device, clocking, loop_clock, rate_hz, limits, capabilities, period_error_us, ticks,
-  /// overruns, faults, link_faults, stalls, fault_reason, force_test {commanded_N, pen_rise_m,
+  /// overruns, faults, link_faults, stalls, fault_reason, force_test {direction, commanded_N, pen_rise_m,
   /// confirmed}, verdicts, verdict, ok}: the schema of `hattr devices check --json`.
   [[nodiscard]] nlohmann::json toJson() const;
 };

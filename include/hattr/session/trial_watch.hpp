@@ -28,6 +28,10 @@ inline constexpr auto kGiveUpAfter = std::chrono::milliseconds(50);
 /// again. Only a loop stuck this long ends the trial.
 inline constexpr auto kOwnLoopStuckAfter = std::chrono::seconds(1);
 
+/// A device whose clock is simulated and may pause (an emulator in lockstep,
+/// Device::pausableClock) ends the trial only when it has not ticked for this long.
+inline constexpr auto kPausedClockGiveUpAfter = std::chrono::seconds(60);
+
 /// A watcher that itself woke this late was frozen with the process (a host stall): it saw
 /// nothing of that time, so the lost and stopped timers start again instead of blaming the
 /// device or the loop for the host's pause (the loop counts the stall itself).
