@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <cstdlib>
 #include <numbers>
 
 #include <simavr/avr_adc.h>
@@ -39,6 +40,19 @@ void logToStderr(avr_t*, const int level, const char* format, va_list arguments)
   if (level <= LOG_WARNING) std::vfprintf(stderr, format, arguments);
 }
 
+/// What elf_read_firmware allocated for the caller (simavr leaves it to us).
+void releaseFirmware(elf_firmware_t& firmware) {
+  std::free(firmware.flash);
+  std::free(firmware.eeprom);
+  std::free(firmware.fuse);
+  std::free(firmware.lockbits);
+#if ELF_SYMBOLS
+  for (std::uint32_t i = 0; i < firmware.symbolcount; ++i) std::free(firmware.symbol[i]);
+  std::free(firmware.symbol);
+#endif
+  firmware = elf_firmware_t{};
+}
+
 /// The share of the supply a fast-PWM output gives: (OCR + 1) / 256 while the compare output is
 /// connected (COM2x1), else the port bit as a plain output.
 double pwmShare(const std::uint8_t* data, std::uint16_t ocr, std::uint8_t com_bit, bool port_bit) {
@@ -60,6 +74,7 @@ AvrBoard::AvrBoard(BoardOptions options) : options_(std::move(options)), plant_(
   avr_->vcc = avr_->avcc = avr_->aref = kSupply_mV;
   avr_->sleep = skipSleep;
   avr_load_firmware(avr_, &firmware);
+  releaseFirmware(firmware);  // the chip has its own copy of the code
   avr_->frequency = kFrequency_hz;  // the ELF names no clock: the Uno's crystal
 
   // The UART: no console echo, no wall-clock sleeps while the firmware polls.

@@ -108,6 +108,7 @@ static uint8_t sendFrame(uint8_t type, const uint8_t* payload, uint8_t n) {
   const uint8_t length = hpen_frame(g_tx, HPEN_PROTOCOL_VERSION, type, payload, n);
   g_tx_next = 0;
   g_tx_length = length;
+  __asm__ __volatile__("" ::: "memory"); /* the frame is in g_tx before the interrupt may send it */
   UCSR0B |= _BV(UDRIE0);
   return 1;
 }

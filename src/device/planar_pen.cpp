@@ -6,6 +6,7 @@
 
 #include <Eigen/LU>
 
+#include "hattr/core/error.hpp"
 #include "hattr/openpen/protocol.h"
 
 namespace hattr::device {
@@ -95,7 +96,11 @@ DeviceLimits planarPenLimits(const PlanarPenSpec& spec) {
   for (double x = -kAreaHalfWidth_m; x <= kAreaHalfWidth_m + 1e-9; x += 0.005) {
     for (double y = -kAreaHalfDepth_m; y <= kAreaHalfDepth_m + 1e-9; y += 0.005) {
       Vec2 q;
-      if (!fiveBarInverse(spec.geometry, deviceFromPaper(spec.mount, Vec2(x, y)), q)) return limits;
+      HATTR_THROW_UNLESS(fiveBarInverse(spec.geometry, deviceFromPaper(spec.mount, Vec2(x, y)), q),
+                         "the pen's links (base {} m, proximal {} m, distal {} m) cannot reach ({:.0f}, {:.0f}) mm of the "
+                         "writing area, {:.0f} × {:.0f} mm around the home pose",
+                         spec.geometry.base_separation_m, spec.geometry.proximal_m, spec.geometry.distal_m, x * 1e3,
+                         y * 1e3, 2e3 * kAreaHalfWidth_m, 2e3 * kAreaHalfDepth_m);
       continuous = std::min(continuous, forceInEveryDirection(spec, q, spec.continuous_torque_Nm));
       peak = std::min(peak, forceInEveryDirection(spec, q, spec.peak_torque_Nm));
     }

@@ -124,7 +124,15 @@ class SerialDevice::Impl {
       : params_(params), uri_(std::move(uri)), port_(params.port, params.baud) {
     hpen_parser_reset(&parser_);
     handshake();
-    limits_ = planarPenLimits(spec_);
+    HATTR_THROW_UNLESS(homed_ || params_.homing != SerialDeviceParams::Homing::kNever,
+                       "{}: the pen has not been homed since it was powered up, and home=never keeps its counts from "
+                       "power-up: rest the linkage at its home pose and use home=once (the default) or home=always",
+                       uri_);
+    try {
+      limits_ = planarPenLimits(spec_);
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}: {}", uri_, e.what()));
+    }
     if (params_.max_force_N > 0.0) {
       limits_.peak_force_N = std::min(limits_.peak_force_N, params_.max_force_N);
       limits_.continuous_force_N = std::min(limits_.continuous_force_N, limits_.peak_force_N);

@@ -66,7 +66,19 @@ SerialPort::~SerialPort() {
 }
 
 bool SerialPort::write(const std::uint8_t* bytes, std::size_t n) noexcept {
-  return ::write(fd_, bytes, n) == static_cast<ssize_t>(n);
+  // A full output buffer may take part of a frame: finish it (up to 2 ms), never leave half a
+  // frame to corrupt the next.
+  std::size_t sent = 0;
+  for (int wait = 0; sent < n && wait < 3; ++wait) {
+    const ssize_t done = ::write(fd_, bytes + sent, n - sent);
+    if (done > 0) sent += static_cast<std::size_t>(done);
+    if (done < 0 && errno != EAGAIN && errno != EINTR) return false;
+    if (sent < n) {
+      pollfd fd{.fd = fd_, .events = POLLOUT, .revents = 0};
+      (void)::poll(&fd, 1, 1);
+    }
+  }
+  return sent == n;
 }
 
 SerialPort::Wait SerialPort::read(int timeout_ms, std::uint8_t* buffer, std::size_t capacity, std::size_t& n) noexcept {

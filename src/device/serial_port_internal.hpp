@@ -18,7 +18,7 @@ class SerialPort {
   SerialPort(const SerialPort&) = delete;
   SerialPort& operator=(const SerialPort&) = delete;
 
-  /// Writes all of `bytes` or none; false when the port would block or has gone. Never blocks.
+  /// Writes all of `bytes`, waiting up to 2 ms for room; false when the port has gone or stayed full.
   bool write(const std::uint8_t* bytes, std::size_t n) noexcept;
 
   enum class Wait { kBytes, kTimeout, kClosed };

@@ -62,8 +62,11 @@ void PaperRenderer::render(const PenState& pen, double /*dt_s*/, ContactForces& 
   const SurfacePoint surface = relief_.surfaceAt(pen.p_WT.x(), pen.p_WT.y());
   const Vec3& n = surface.normal_W;
   const double penetration = (surface.height_m - pen.p_WT.z()) * n.z();
+  // On a table (a planar pen): touching while the device says the pen is on the paper (z = 0, not
+  // lifted) and it reads a press; the tip then lies on the surface (it cannot sink into it).
   const bool on_table = params_.normal_from_pressure;
-  const bool touching = on_table ? pen.has_pressure && pen.pressure_raw > 0.0 : penetration > 0.0;
+  const bool touching =
+      on_table ? pen.has_pressure && pen.pressure_raw > 0.0 && pen.p_WT.z() <= 0.0 : penetration > 0.0;
   if (!touching) {
     in_contact_ = false;
     detail_ = {.proxy_W = pen.p_WT};
@@ -73,6 +76,8 @@ void PaperRenderer::render(const PenState& pen, double /*dt_s*/, ContactForces& 
 
   // Normal reaction K·δ + C·δ̇, never pulling the pen into the paper; on a table, the press.
   const double normal = on_table ? pen.pressure_raw : normalForce(params_.contact, penetration, -pen.v_WT.dot(n));
+
+  const Vec3 tip = on_table ? Vec3(pen.p_WT.x(), pen.p_WT.y(), surface.height_m) : pen.p_WT;
 
   // The god-object proxy: on touch-down it sits on the surface above the tip.
   if (!in_contact_) {
@@ -86,7 +91,7 @@ void PaperRenderer::render(const PenState& pen, double /*dt_s*/, ContactForces& 
   // static cone μs·Fn; once it breaks loose it slides on the dynamic cone μd·Fn, dragging
   // the proxy behind the tip, until the pull drops inside the dynamic cone again.
   const double kt = params_.tangential_stiffness_N_per_m;
-  Vec3 offset = detail_.proxy_W - pen.p_WT;
+  Vec3 offset = detail_.proxy_W - tip;
   offset -= offset.dot(n) * n;
   Vec3 friction = kt * offset;
   const double pull = friction.norm();
@@ -96,7 +101,7 @@ void PaperRenderer::render(const PenState& pen, double /*dt_s*/, ContactForces& 
   detail_.sliding = pull > limit;
   if (detail_.sliding) {
     friction *= mu_d * normal / pull;
-    const Vec3 proxy = pen.p_WT + friction / kt;
+    const Vec3 proxy = tip + friction / kt;
     detail_.proxy_W = Vec3(proxy.x(), proxy.y(), relief_.heightAt(proxy.x(), proxy.y()));
   }
 

@@ -77,6 +77,29 @@ TEST(OpenPenDevice, AnUnpluggedCableFaultsTheLoopWithin20msAtZeroForce) {
   for (std::size_t i = first_zero; i < samples.size(); ++i) ASSERT_EQ(samples[i].f_cmd_W.norm(), 0.0) << "sample " << i;
 }
 
+TEST(OpenPenDevice, TheEmulatorInRealTimeKeepsToTheWallClock) {
+  // A smoke check of the real-time mode: the firmware's clock follows the wall clock and the loop
+  // runs on it. (On a loaded machine it falls behind, then catches up faster than the wall: so
+  // the loop's time may run ahead of the wall time since START by that lag, bounded here.)
+  HATTR_SKIP_WITHOUT_OPEN_PEN();
+  TempDir dir;
+  PenEmulator emulator(dir, {"--clock", "realtime"});
+  device::SerialDevice pen(device::serialDeviceParams(device::parseDeviceUri("serial://" + emulator.pty() + "?state_timeout_s=1")),
+                           "serial://emulated");
+  servo::ServoLoop loop(pen, servo::ServoConfig{.rate_hz = 1000.0});
+  const auto start = std::chrono::steady_clock::now();
+  loop.start();
+  std::this_thread::sleep_for(1s);
+  Sample last;
+  ASSERT_TRUE(loop.latest().read(last));
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  loop.stop();
+  EXPECT_EQ(loop.counters().link_faults.load(), 0u) << pen.faultReason();
+  EXPECT_GT(last.t_s, 0.3) << "the firmware's clock hardly ran";
+  EXPECT_LE(last.t_s, wall_s + 0.05) << "simulated time ran ahead of the wall clock";
+  EXPECT_EQ(pen.counters().malformed, 0u);
+}
+
 /// A pen played by the test on a pty's master: its IDENTITY, then STATEs as the test writes them.
 class ScriptedPen {
  public:
@@ -167,6 +190,51 @@ TEST(OpenPenDevice, BadStatesAreDroppedAndCountedOnTheHost) {
   EXPECT_EQ(c.out_of_sequence, 2u);
   EXPECT_EQ(c.wrong_version, 1u);
   EXPECT_EQ(c.lost_states, 3u) << "2 (corrupted) then 4 and 5";
+}
+
+/// What the device said at each tick of its clock (the test's stand-in for the servo loop).
+struct TickLog {
+  device::SerialDevice* pen = nullptr;
+  std::vector<std::pair<double, device::DeviceStatus>> ticks;
+  static void tick(void* context, std::chrono::nanoseconds now) noexcept {
+    auto* log = static_cast<TickLog*>(context);
+    PenState state;
+    log->ticks.emplace_back(std::chrono::duration<double>(now).count(), log->pen->read(now, state));
+  }
+};
+
+TEST(OpenPenDevice, APenThatFallsSilentIsLostAfterItsWatchdogTime) {
+  // No lockstep: the pen's 20 ms watchdog time is the host's limit too.
+  ScriptedPen scripted;
+  std::thread answer([&] { scripted.answerHello(); });
+  device::SerialDevice pen(device::serialDeviceParams(device::parseDeviceUri("serial://" + scripted.path())), "serial://quiet");
+  answer.join();
+  TickLog log{.pen = &pen};
+  pen.startClock(&TickLog::tick, &log);
+  ASSERT_TRUE(scripted.port().next());  // START
+  for (std::uint16_t seq = 1; seq <= 5; ++seq) scripted.state(seq);
+  std::this_thread::sleep_for(200ms);
+  pen.stopClock();
+  ASSERT_GE(log.ticks.size(), 6u);
+  std::size_t lost = 0;
+  while (lost < log.ticks.size() && log.ticks[lost].second == device::DeviceStatus::kOk) ++lost;
+  ASSERT_EQ(lost, 5u) << "five STATEs, five good ticks";
+  ASSERT_LT(lost, log.ticks.size());
+  EXPECT_EQ(log.ticks[lost].second, device::DeviceStatus::kDisconnected);
+  const double silence_s = log.ticks[lost].first - log.ticks[lost - 1].first;
+  EXPECT_GE(silence_s, 0.020);
+  EXPECT_LT(silence_s, 0.100) << "the link is declared lost soon after the watchdog time";
+  EXPECT_THAT(pen.faultReason(), HasSubstr("no STATE from the pen for 20 ms"));
+  for (std::size_t i = lost; i < log.ticks.size(); ++i) EXPECT_EQ(log.ticks[i].second, device::DeviceStatus::kDisconnected);
+}
+
+TEST(OpenPenDevice, HomeNeverOnAPenNotYetHomedIsRefused) {
+  ScriptedPen scripted;
+  std::thread answer([&] { scripted.answerHello(); });
+  const std::string message = inputErrorOf(
+      [&] { device::openDevice("serial://" + scripted.path() + "?home=never", nullptr); });
+  answer.join();
+  EXPECT_THAT(message, HasSubstr("has not been homed since it was powered up"));
 }
 
 }  // namespace

@@ -61,7 +61,8 @@ TEST(OpenPenFirmware, DropsAndCountsCorruptedOutOfSequenceAndWrongVersionPackets
   ProtocolPort port(emulator.pty());
   (void)handshake(port, 1);
   port.start(HPEN_START_ZERO_ENCODERS);
-  // Each STATE answered, one kind of bad packet per STATE, then good commands again.
+  // Each STATE answered by exactly one frame (the emulator in lockstep takes one answer a STATE),
+  // one kind of bad packet per STATE, then good commands again.
   std::optional<hpen_state> s = port.nextState();
   ASSERT_TRUE(s);
   auto corrupted = port.command(s->seq, 1000, 1000, false);
@@ -72,9 +73,14 @@ TEST(OpenPenFirmware, DropsAndCountsCorruptedOutOfSequenceAndWrongVersionPackets
   port.command(static_cast<std::uint16_t>(s->seq - 5), 1000, 1000);  // answers a STATE long gone
   s = port.nextState();
   ASSERT_TRUE(s);
-  port.command(s->seq, 1000, 1000);
-  port.command(s->seq, 1000, 1000);  // the same STATE answered twice
-  const hpen_command c{.seq = 0, .effort0 = 0, .effort1 = 0, .flags = HPEN_COMMAND_ENABLE};
+  const std::uint16_t answered = s->seq;
+  port.command(answered, 1000, 1000);
+  s = port.nextState();
+  ASSERT_TRUE(s);
+  port.command(answered, 1000, 1000);  // the STATE before answered again
+  s = port.nextState();
+  ASSERT_TRUE(s);
+  const hpen_command c{.seq = s->seq, .effort0 = 0, .effort1 = 0, .flags = HPEN_COMMAND_ENABLE};
   std::uint8_t p[HPEN_COMMAND_BYTES];
   hpen_encode_command(p, &c);
   port.send(HPEN_COMMAND, p, HPEN_COMMAND_BYTES, HPEN_PROTOCOL_VERSION + 1);

@@ -105,10 +105,14 @@ TEST(PaperRenderer, OnATableTheNormalIsThePressAndOnlyInPlaneForcesAreRendered) 
   params.normal_from_pressure = true;
   PaperRenderer paper(params);
   ContactForces out;
-  PenState pen = penAt(Vec3(0, 0, 0.001));
+  PenState pen = penAt(Vec3(0, 0, 0.0));
   paper.render(pen, 1e-3, out);
   EXPECT_FALSE(out.in_contact) << "no pressure reading: the pen is lifted";
   pen.has_pressure = true;
+  pen.pressure_raw = 0.03;
+  pen.p_WT.z() = 0.001;
+  paper.render(pen, 1e-3, out);
+  EXPECT_FALSE(out.in_contact) << "the device says lifted (a press under its contact threshold)";
   pen.pressure_raw = 0.8;
   const double kt = params.tangential_stiffness_N_per_m;
   for (int step = 0; step <= 1000; ++step) {

@@ -67,7 +67,8 @@ double sensorForce_N(const PlanarPenSpec& spec, double count) noexcept;
 
 /// The planar pen's limits: its writing area in W (a box, z a thin slab about the table), the
 /// force it sustains and peaks at in every direction everywhere in that area, the stiffness and
-/// damping it renders stably. Computed over a grid of the area.
+/// damping it renders stably. Computed over a grid of the area. Throws InputError when the links
+/// cannot reach all of it.
 DeviceLimits planarPenLimits(const PlanarPenSpec& spec);
 
 /// The physical pen the firmware drives (or that sim://planar is): motors, linkage, hand, table.

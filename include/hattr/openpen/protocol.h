@@ -285,6 +285,23 @@ static inline uint8_t hpen_parser_version(const struct hpen_parser* p) { return 
 static inline uint8_t hpen_parser_type(const struct hpen_parser* p) { return p->buffer[3]; }
 static inline const uint8_t* hpen_parser_payload(const struct hpen_parser* p) { return p->buffer + HPEN_HEADER_BYTES; }
 
+/* After a dropped frame, the bytes that followed its first one may hold the next frame's start (a
+ * lost byte makes a frame swallow the next one's sync): keeps them from the first sync on. A kept
+ * header that does not fit, or a kept whole frame, is dropped too (rare: a frame inside a frame). */
+static inline void hpen_parser_resync(struct hpen_parser* p, uint8_t had) {
+  uint8_t i = 1;
+  while (i < had && !(p->buffer[i] == HPEN_SYNC0 && (i + 1u == had || p->buffer[i + 1u] == HPEN_SYNC1))) ++i;
+  const uint8_t keep = (uint8_t)(had - i);
+  memmove(p->buffer, p->buffer + i, keep);
+  p->fill = keep;
+  p->expected = 0;
+  if (keep >= HPEN_HEADER_BYTES) {
+    const uint8_t n = hpen_payload_bytes(p->buffer[3]);
+    p->expected = (uint8_t)(HPEN_HEADER_BYTES + n + HPEN_CRC_BYTES);
+    if (n == 0 || n != p->buffer[4] || keep >= p->expected) hpen_parser_reset(p);
+  }
+}
+
 /* Feeds one byte; returns what it completed. A length that does not fit its type is refused at
  * the header, so a corrupted length never makes the receiver wait for bytes that will not come.
  * The version is checked after the CRC, so a corrupted version byte reads as a bad CRC. */
@@ -302,7 +319,7 @@ static inline enum hpen_event hpen_parser_feed(struct hpen_parser* p, uint8_t by
   if (p->fill == HPEN_HEADER_BYTES) {
     const uint8_t n = hpen_payload_bytes(p->buffer[3]);
     if (n == 0 || n != p->buffer[4]) {
-      hpen_parser_reset(p);
+      hpen_parser_resync(p, HPEN_HEADER_BYTES);
       return HPEN_BAD_LENGTH;
     }
     p->expected = (uint8_t)(HPEN_HEADER_BYTES + n + HPEN_CRC_BYTES);
@@ -312,9 +329,12 @@ static inline enum hpen_event hpen_parser_feed(struct hpen_parser* p, uint8_t by
   {
     const uint8_t n = p->buffer[4];
     const uint16_t crc = hpen_get_u16(p->buffer + HPEN_HEADER_BYTES + n);
+    if (crc != hpen_crc(p->buffer + 2, (uint16_t)(3u + n))) {
+      hpen_parser_resync(p, p->expected);
+      return HPEN_BAD_CRC;
+    }
     p->fill = 0;
     p->expected = 0;
-    if (crc != hpen_crc(p->buffer + 2, (uint16_t)(3u + n))) return HPEN_BAD_CRC;
     return p->buffer[2] == HPEN_PROTOCOL_VERSION ? HPEN_FRAME : HPEN_WRONG_VERSION;
   }
 }

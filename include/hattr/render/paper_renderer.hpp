@@ -41,7 +41,8 @@ struct PaperParams {
   /// The paper's spring still pushes back there; the recording is what says it happened.
   double thickness_m = 0.003;
   /// A planar device (2 DOF, the open pen): the real table holds the pen up, so the normal
-  /// reaction is the pen's measured press (PenState::pressure_raw, newtons), not a spring; the
+  /// reaction is the pen's measured press (PenState::pressure_raw, newtons, while the device
+  /// reports the tip on the paper, z <= 0, and not lifted), not a spring; the
   /// rendered force is the in-plane part (friction, texture, and the relief's tilt of the normal),
   /// while the force on the paper keeps the normal. Set from the device's limits (session), not
   /// from a world file.
