@@ -1,7 +1,8 @@
 #pragma once
 /// Devices are opened by URI so apps and configurations can name them:
 ///   sim://pen?mass_kg=0.045&damping_N_s_per_m=1&quantum_m=2.3e-5&continuous_force_N=1.75
-/// Reserved for later: udp://host:port (remote partner), plugin:/path/lib.so (hardware).
+///   sim://planar (the open pen's plant), udp://HOST:PORT?key=FILE (a served pen),
+///   plugin:/path/lib.so or plugin:NAME (a driver plugin), serial://PORT (the open pen).
 
 #include <map>
 #include <memory>
@@ -13,7 +14,7 @@
 namespace hattr::device {
 
 struct DeviceUri {
-  std::string scheme;                        ///< "sim", "udp", "plugin"
+  std::string scheme;                        ///< "sim", "udp", "plugin", "serial"
   std::string target;                        ///< "pen", "host:port", "/path/lib.so"
   std::map<std::string, std::string> query;  ///< key=value parameters
 };
