@@ -32,6 +32,7 @@ std::string_view loopClockName(LoopClock clock) noexcept {
 
 ServoLoop::ServoLoop(device::Device& device, ServoConfig config)
     : device_(device),
+      pausable_clock_(device.pausableClock()),
       config_(std::move(config)),
       period_(periodFor(config_.rate_hz)),
       safety_(config_.safety, device.limits()),
@@ -136,7 +137,7 @@ TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
 
   // A consumer the loop depends on has stopped taking samples.
   // (Not on a pausable device clock: its loop time runs ahead of the wall, and the ring holds it.)
-  const bool consumer_stalled = consumer_time_s_ && !device_.pausableClock() &&
+  const bool consumer_stalled = consumer_time_s_ && !pausable_clock_ &&
                                 pen.t_s - consumer_time_s_->load(std::memory_order_acquire) > seconds(config_.stall_threshold);
   if (consumer_stalled) bump(counters_.consumer_stalls);
 
@@ -246,7 +247,7 @@ void ServoLoop::watchDeviceClock() {
   while (!stop_requested_.load(std::memory_order_acquire)) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
     const auto gap = monotonicNow().count() - last_device_tick_ns_.load(std::memory_order_acquire);
-    const bool now_stalled = gap > config_.stall_threshold.count() && !device_.pausableClock();
+    const bool now_stalled = gap > config_.stall_threshold.count() && !pausable_clock_;
     if (now_stalled && !stalled) bump(counters_.stalls);
     stalled = now_stalled;
   }

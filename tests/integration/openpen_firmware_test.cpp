@@ -128,6 +128,8 @@ TEST(OpenPenFirmware, ItsWatchdogStopsTheMotorsWhenTheHostStopsSending) {
   const double after_ms = (tripped->time_us - last_command_us) * 1e-3;
   EXPECT_GE(after_ms, 19.0);
   EXPECT_LE(after_ms, 22.0) << "the 20 ms watchdog (the command arrives within the period after its STATE)";
+  // Ten more silent milliseconds, so the plant's trace shows what the motors did after the trip.
+  for (int i = 0; i < 10; ++i) ASSERT_TRUE(port.nextState());
   port.close();
   ASSERT_EQ(emulator.process().wait(), 0);
 
@@ -136,6 +138,7 @@ TEST(OpenPenFirmware, ItsWatchdogStopsTheMotorsWhenTheHostStopsSending) {
   std::string line;
   std::getline(trace, line);
   double driven_max = 0.0, after_max = 0.0;
+  int rows_after = 0;
   const double trip_s = tripped->time_us * 1e-6;
   while (std::getline(trace, line)) {
     std::stringstream row(line);
@@ -143,9 +146,13 @@ TEST(OpenPenFirmware, ItsWatchdogStopsTheMotorsWhenTheHostStopsSending) {
     for (std::string cell; std::getline(row, cell, ',');) v.push_back(std::stod(cell));
     const double torque = std::max(std::abs(v[6]), std::abs(v[7]));
     if (v[0] > 0.03 && v[0] < trip_s - 0.03) driven_max = std::max(driven_max, torque);
-    if (v[0] > trip_s + 0.002) after_max = std::max(after_max, torque);
+    if (v[0] > trip_s + 0.002) {
+      after_max = std::max(after_max, torque);
+      ++rows_after;
+    }
   }
   EXPECT_GT(driven_max, 0.01);
+  EXPECT_GE(rows_after, 5) << "the trace covers the time after the trip";
   EXPECT_EQ(after_max, 0.0);
 }
 

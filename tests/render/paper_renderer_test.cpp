@@ -130,6 +130,24 @@ TEST(PaperRenderer, OnATableTheNormalIsThePressAndOnlyInPlaneForcesAreRendered) 
   EXPECT_NEAR(paper.detail().normal_N, 0.8, 1e-12);
 }
 
+TEST(PaperRenderer, OnATableAPenAtRestOnASlopeFeelsOnlyTheTiltOfTheNormal) {
+  // The tip lies on the relief (it cannot sink into it); at rest, friction pulls nowhere and the
+  // in-plane force is the normal's tilt (force shading), whatever height the device reports.
+  PaperParams params = plainPaper();
+  params.normal_from_pressure = true;
+  PaperRenderer paper(params, HeightField::fromFunction(41, 41, Vec3(-0.01, -0.01, 0.0), 0.0005,
+                                                        [](double x, double) { return 0.2 * (x + 0.01); }));
+  PenState pen = penAt(Vec3(0.005, 0.0, 0.0));
+  pen.has_pressure = true;
+  pen.pressure_raw = 1.0;
+  ContactForces out;
+  for (int i = 0; i < 3; ++i) paper.render(pen, 1e-3, out);
+  ASSERT_TRUE(out.in_contact);
+  const Vec3 n = paper.relief().surfaceAt(0.005, 0.0).normal_W;
+  EXPECT_GT(std::abs(n.x()), 0.1) << "the slope tilts the normal";
+  EXPECT_NEAR((out.f_on_pen_W.head<2>() - 1.0 * n.head<2>()).norm(), 0.0, 1e-9);
+}
+
 TEST(PaperRenderer, SlidingStopsWhenThePullDropsInsideTheDynamicCone) {
   PaperRenderer paper(plainPaper());
   ContactForces out;

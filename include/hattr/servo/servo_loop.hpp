@@ -139,6 +139,7 @@ class ServoLoop {
   void watchDeviceClock();
 
   device::Device& device_;
+  bool pausable_clock_;  // Device::pausableClock, asked once (not on every tick)
   ServoConfig config_;
   std::chrono::nanoseconds period_;
   ForceSafety safety_;
