@@ -14,6 +14,11 @@ constexpr double kLiftHeight_m = 0.003;
 }  // namespace
 
 Vec3 handForce(const HandImpedance& hand, const HandCommand& command, const Vec3& p_WT, const Vec3& v_WT) noexcept {
+  return handForce(hand, command, std::sin(command.altitude_rad), p_WT, v_WT);
+}
+
+Vec3 handForce(const HandImpedance& hand, const HandCommand& command, double sin_altitude, const Vec3& p_WT,
+               const Vec3& v_WT) noexcept {
   Vec3 force = hand.stiffness_N_per_m * (command.p_target_W - p_WT) +
                hand.damping_N_s_per_m * (command.v_target_W - v_WT);
   // In the paper plane: the grip's share of the impedance, and the feedforward push.
@@ -28,7 +33,7 @@ Vec3 handForce(const HandImpedance& hand, const HandCommand& command, const Vec3
     const double reach = std::clamp((hand.press_ease_end_m - depth_m) / (hand.press_ease_end_m - hand.press_ease_begin_m),
                                     0.0, 1.0);
     const double held_back_N = hand.stiffness_N_per_m * std::max(depth_m - hand.press_ease_end_m, 0.0);
-    force.z() = -std::max(command.press_N, 0.0) * reach * std::sin(command.altitude_rad) + held_back_N -
+    force.z() = -std::max(command.press_N, 0.0) * reach * sin_altitude + held_back_N -
                 hand.damping_N_s_per_m * v_WT.z();
   }
   // No hand pushes harder than a firm grip (a stale or far target does not make it 100 N).
@@ -79,7 +84,7 @@ HandCommand ProfileHandScript::command(double t_s) noexcept {
   cmd.altitude_rad = has_tilt_ ? std::clamp(a.tilt_altitude_rad, 0.1, 1.5707963267948966) : default_altitude_rad_;
   // The axial force that gives the recorded normal force at this tilt.
   const double normal_N = -((1.0 - w) * a.f_user_W.z() + w * b.f_user_W.z());
-  cmd.press_N = cmd.pen_down ? std::max(normal_N, 0.0) / std::sin(cmd.altitude_rad) : 0.0;
+  cmd.press_N = cmd.pen_down ? std::max(normal_N, 0.0) / altitude_sine_.of(cmd.altitude_rad) : 0.0;
   if (!cmd.pen_down) cmd.p_target_W.z() = std::max(cmd.p_target_W.z(), kLiftHeight_m);
   cmd.grip = playback_.grip;
   if (playback_.push_in_plane) {

@@ -42,7 +42,7 @@ void SimulatedDevice::advanceTo(double t_s) noexcept {
       press_N_ += tau > 0.0 ? (target - press_N_) * std::min(1.0, h / tau) : target - press_N_;
       HandCommand acting = last_hand_;
       acting.press_N = press_N_;
-      hand_force_W_ = handForce(params_.hand, acting, p_WT_, v_WT_);
+      hand_force_W_ = handForce(params_.hand, acting, altitude_sine_.of(acting.altitude_rad), p_WT_, v_WT_);
     } else {
       hand_force_W_.setZero();
     }

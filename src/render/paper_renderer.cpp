@@ -108,7 +108,7 @@ void PaperRenderer::render(const PenState& pen, double /*dt_s*/, ContactForces& 
   // θ from the device's tilt, else the configured writing angle: F_r = F·sin θ.
   const double theta = pen.has_tilt && pen.altitude_rad > 0.05 ? pen.altitude_rad : params_.writing_angle_rad;
   detail_.normal_N = normal;
-  detail_.axial_N = normal / std::sin(theta);
+  detail_.axial_N = normal / altitude_sine_.of(theta);
   detail_.mu_static = mu_s;
   detail_.mu_dynamic = mu_d;
 

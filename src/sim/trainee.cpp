@@ -8,6 +8,7 @@
 
 #include "hattr/core/error.hpp"
 #include "random_internal.hpp"
+#include "trainee_internal.hpp"
 
 namespace hattr::sim {
 namespace {
@@ -55,6 +56,46 @@ Resampled resample(const HapticProfile& profile, const std::vector<double>& t) {
 }
 
 }  // namespace
+
+namespace detail {
+
+// Where Eigen's product of phi by three columns is its blocked one, summing each entry in one
+// block: more than one row (one row is a vector product), rows + depth + 3 columns at least
+// EIGEN_GEMM_TO_COEFFBASED_THRESHOLD (20; smaller products go coefficient by coefficient), and
+// at most 128 basis functions (its depth blocks are 200 or more with a 16 kB L1 data cache, the
+// smallest it assumes).
+bool sumsInOneBlock(const Eigen::MatrixXd& phi) {
+  return phi.rows() >= 2 && phi.rows() + phi.cols() + 3 >= 20 && phi.cols() <= 128;
+}
+
+Eigen::MatrixXd combineBasis(const Eigen::MatrixXd& phi, const PlanWeights& weights,
+                             std::initializer_list<Eigen::Index> columns) {
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(phi.rows(), static_cast<Eigen::Index>(columns.size()));
+  if (!sumsInOneBlock(phi)) {
+    const Eigen::MatrixX3d product = phi * weights;
+    Eigen::Index j = 0;
+    for (const Eigen::Index c : columns) out.col(j++) = product.col(c);
+    return out;
+  }
+  // A block of rows at a time (the sums stay in L1), each basis function read once for all the
+  // columns: every sum still adds the functions in turn.
+  constexpr Eigen::Index kRows = 512;
+  for (Eigen::Index first = 0; first < phi.rows(); first += kRows) {
+    const Eigen::Index rows = std::min(kRows, phi.rows() - first);
+    for (Eigen::Index k = 0; k < phi.cols(); ++k) {
+      const double* const basis = phi.col(k).data() + first;
+      Eigen::Index j = 0;
+      for (const Eigen::Index c : columns) {
+        const double w = weights(k, c);
+        double* const sum = out.col(j++).data() + first;
+        for (Eigen::Index i = 0; i < rows; ++i) sum[i] += basis[i] * w;
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace detail
 
 double perceivedForce(double force_N, double weber_fraction, double standard_normal) noexcept {
   return force_N * (1.0 + weber_fraction * standard_normal);
@@ -134,32 +175,39 @@ double SimulatedTrainee::planUnitsPerMetre() const noexcept {
                                                        : 1.0;
 }
 
-SimulatedTrainee::Series SimulatedTrainee::series(const PlanWeights& weights) const {
-  const Eigen::MatrixX3d offsets = phi_ * weights;
-  const Eigen::MatrixX3d rates = phi_rate_ * weights;
+SimulatedTrainee::Series SimulatedTrainee::series(const PlanWeights& weights, SeriesUse use) const {
+  // Only the columns the use reads are combined, the offsets in one pass over the basis (the
+  // rate of the axial force is never read).
+  const bool played = use == SeriesUse::kPlayed;
+  const bool force_plan = hypothesis_ == LearningHypothesis::kForcePlan;
+  const Eigen::MatrixXd offsets = played ? detail::combineBasis(phi_, weights, {kPlanX, kPlanY, kPlanAxialForce})
+                                         : detail::combineBasis(phi_, weights, {kPlanAxialForce});
   Series s;
-  s.push_xy = Eigen::MatrixX2d::Zero(offsets.rows(), 2);
-  if (hypothesis_ == LearningHypothesis::kForcePlan) {
-    // A force plan: the hand aims at the template's path with its loose grip and pushes with
-    // the friction the plan expects at the template's normal force, along the template's
-    // motion, plus what it learned (in newtons). Pressing otherwise is not compensated.
+  s.v_xy = template_v_xy_;
+  if (!force_plan) s.v_xy += detail::combineBasis(phi_rate_, weights, {kPlanX, kPlanY});
+  if (played) {
     s.p_xy = template_xy_;
-    s.v_xy = template_v_xy_;
-    for (Eigen::Index i = 0; i < offsets.rows(); ++i) {
-      const double speed = template_v_xy_.row(i).norm();
-      if (pen_down_[static_cast<std::size_t>(i)] && speed > 1e-6) {
-        const double normal_N = template_axial_N_(i) * std::sin(altitude_rad_(i));
-        s.push_xy.row(i) = traits_.plan_friction * normal_N * template_v_xy_.row(i) / speed;
+    s.push_xy = Eigen::MatrixX2d::Zero(template_xy_.rows(), 2);
+    if (force_plan) {
+      // A force plan: the hand aims at the template's path with its loose grip and pushes with
+      // the friction the plan expects at the template's normal force, along the template's
+      // motion, plus what it learned (in newtons). Pressing otherwise is not compensated.
+      for (Eigen::Index i = 0; i < s.push_xy.rows(); ++i) {
+        const double speed = template_v_xy_.row(i).norm();
+        if (pen_down_[static_cast<std::size_t>(i)] && speed > 1e-6) {
+          const double normal_N = template_axial_N_(i) * std::sin(altitude_rad_(i));
+          s.push_xy.row(i) = traits_.plan_friction * normal_N * template_v_xy_.row(i) / speed;
+        }
       }
+      s.push_xy += offsets.leftCols<2>();
+    } else {
+      s.p_xy += offsets.leftCols<2>();
     }
-    s.push_xy += offsets.leftCols<2>();
-  } else {
-    s.p_xy = template_xy_ + offsets.leftCols<2>();
-    s.v_xy = template_v_xy_ + rates.leftCols<2>();
   }
+  const auto axial_offsets = offsets.col(offsets.cols() - 1);
   s.axial_N.resize(template_axial_N_.size());
   for (Eigen::Index i = 0; i < s.axial_N.size(); ++i) {
-    const double planned = traits_.force_scale * template_axial_N_(i) + traits_.force_offset_N + offsets(i, 2);
+    const double planned = traits_.force_scale * template_axial_N_(i) + traits_.force_offset_N + axial_offsets(i);
     s.axial_N(i) = pen_down_[static_cast<std::size_t>(i)] ? std::max(planned, 0.0) : 0.0;
   }
   return s;
@@ -197,7 +245,7 @@ HapticProfile SimulatedTrainee::plan() const { return profileOf(series(planWeigh
 
 std::unique_ptr<device::HandScript> SimulatedTrainee::handForTrial(std::uint64_t trial_seed) const {
   const PlanWeights weights = planWeights();
-  const Series planned = series(weights);
+  const Series planned = series(weights, SeriesUse::kNoiseScale);
   // Signal-dependent noise (Harris & Wolpert 1998): per basis window, SD proportional to the
   // command there — the distance the plan covers in the window, and the planned axial force.
   const Eigen::VectorXd speed = planned.v_xy.rowwise().norm();

@@ -8,6 +8,7 @@
 #include "hattr/core/hand_command.hpp"
 #include "hattr/core/haptic_profile.hpp"
 #include "hattr/core/pen_state.hpp"
+#include "hattr/core/sine_memo.hpp"
 
 namespace hattr::device {
 
@@ -45,6 +46,9 @@ struct HandImpedance {
 
 /// Force the hand exerts on the pen for a command and the pen's state [N, W].
 Vec3 handForce(const HandImpedance& hand, const HandCommand& command, const Vec3& p_WT, const Vec3& v_WT) noexcept;
+/// The same, given sin(command.altitude_rad) (a caller that remembers it: SineMemo).
+Vec3 handForce(const HandImpedance& hand, const HandCommand& command, double sin_altitude, const Vec3& p_WT,
+               const Vec3& v_WT) noexcept;
 
 /// A hand that holds still at a point, pressing with a constant force.
 class StillHand final : public HandScript {
@@ -97,6 +101,7 @@ class ProfileHandScript final : public HandScript {
   Vec3 offset_W_;
   ProfilePlayback playback_;
   std::size_t cursor_ = 0;
+  SineMemo altitude_sine_;
 };
 
 }  // namespace hattr::device

@@ -66,6 +66,7 @@ class SimulatedDevice final : public Device {
   Vec3 hand_force_W_ = Vec3::Zero();
   HandCommand last_hand_{};
   double press_N_ = 0.0;  // the hand's actual press, lagging its command
+  SineMemo altitude_sine_;  // sin of the hand's altitude, asked every sub-step
   double t_s_ = 0.0;
   double last_write_s_ = 0.0;
 };

@@ -13,6 +13,7 @@
 #include "hattr/core/world_renderer.hpp"
 #include "hattr/core/device_limits.hpp"
 #include "hattr/core/passivity.hpp"
+#include "hattr/core/sine_memo.hpp"
 #include "hattr/render/flat_paper.hpp"
 #include "hattr/render/gaussian_field.hpp"
 #include "hattr/render/height_field.hpp"
@@ -85,6 +86,7 @@ class PaperRenderer final : public WorldRenderer {
   std::shared_ptr<const CorrelatedGaussianField> texture_;  ///< sharedGaussianField: read only
   ContactDetail detail_;
   bool in_contact_ = false;
+  SineMemo altitude_sine_;  ///< sin θ: the altitude changes seldom
 };
 
 /// Checks every parameter; throws InputError naming the first problem.

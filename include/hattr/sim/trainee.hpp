@@ -138,7 +138,10 @@ class SimulatedTrainee {
   /// The share of its own (visual) error the trainee learns from after a trial that felt the
   /// guidance `f_guide` (rows where `valid`): guidance-dependent, less after a guided trial; else 1.
   [[nodiscard]] double ownLearningShare(const Eigen::MatrixX3d& f_guide, const std::vector<char>& valid) const;
-  [[nodiscard]] Series series(const PlanWeights& weights) const;
+  /// What a series is for: the hand plays it (all of it), or only the trial noise scales with
+  /// it (the planned velocity and axial force; the positions and pushes are left empty).
+  enum class SeriesUse { kPlayed, kNoiseScale };
+  [[nodiscard]] Series series(const PlanWeights& weights, SeriesUse use = SeriesUse::kPlayed) const;
   [[nodiscard]] HapticProfile profileOf(const Series& s, const std::string& source, double pace_factor = 1.0) const;
   [[nodiscard]] PlanWeights planWeights() const { return deviation_ + fast_ + slow_; }
   /// Least-squares weights of `values` (N × c) over the masked samples.
