@@ -36,9 +36,14 @@ Vec3 handForce(const HandImpedance& hand, const HandCommand& command, double sin
     force.z() = -std::max(command.press_N, 0.0) * reach * sin_altitude + held_back_N -
                 hand.damping_N_s_per_m * v_WT.z();
   }
-  // No hand pushes harder than a firm grip (a stale or far target does not make it 100 N).
-  const double magnitude = force.norm();
-  if (magnitude > hand.max_force_N) force *= hand.max_force_N / magnitude;
+  // No hand pushes harder than a firm grip (a stale or far target does not make it 100 N). The
+  // square root only near the grip's limit: well under it (by far more than rounding), the
+  // magnitude cannot exceed it, and the square root is most of a sub-step's wait.
+  const double squared = force.squaredNorm();
+  if (squared > 0.99 * hand.max_force_N * hand.max_force_N) {
+    const double magnitude = std::sqrt(squared);
+    if (magnitude > hand.max_force_N) force *= hand.max_force_N / magnitude;
+  }
   return force;
 }
 

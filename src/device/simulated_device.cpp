@@ -32,14 +32,18 @@ void SimulatedDevice::advanceTo(double t_s) noexcept {
   if (!(span > 0.0)) return;
   const auto steps = static_cast<int>(std::ceil(span / params_.max_substep_s));
   const double h = span / steps;
+  // The same in every sub-step: computed once here (the hand's virtual call in the loop keeps
+  // the compiler from hoisting them, and each is a division).
+  const double tau = params_.hand.press_time_constant_s;
+  const double press_share = tau > 0.0 ? std::min(1.0, h / tau) : 1.0;
+  const double stop_brake = 1.0 / (1.0 + h * params_.end_stop_damping_N_s_per_m / params_.mass_kg);
   for (int i = 0; i < steps; ++i) {
     const double t = t_s_ + h * (i + 1);
     if (hand_) {
       last_hand_ = hand_->command(t);
       // Finger force rises and falls with the muscle's time constant.
       const double target = last_hand_.pen_down ? last_hand_.press_N : 0.0;
-      const double tau = params_.hand.press_time_constant_s;
-      press_N_ += tau > 0.0 ? (target - press_N_) * std::min(1.0, h / tau) : target - press_N_;
+      press_N_ += tau > 0.0 ? (target - press_N_) * press_share : target - press_N_;
       HandCommand acting = last_hand_;
       acting.press_N = press_N_;
       hand_force_W_ = handForce(params_.hand, acting, altitude_sine_.of(acting.altitude_rad), p_WT_, v_WT_);
@@ -56,7 +60,6 @@ void SimulatedDevice::advanceTo(double t_s) noexcept {
     const Vec3 acceleration =
         (device_force + hand_force_W_ + stop_force - params_.damping_N_s_per_m * v_WT_) / params_.mass_kg;
     v_WT_ += h * acceleration;
-    const double stop_brake = 1.0 / (1.0 + h * params_.end_stop_damping_N_s_per_m / params_.mass_kg);
     for (int axis = 0; axis < 3; ++axis) {
       if (excess[axis] != 0.0) v_WT_[axis] *= stop_brake;
     }

@@ -209,6 +209,7 @@ int StudyRunner::runSubject(const SubjectRecord& subject, const RunOptions& opti
   }
   SubjectParticipants participants(*this, subject);
   SubjectTrials steps(db_.study(), subject, std::move(trials), references_);
+  if (db_.scratch()) steps.skipKinematics();
 
   // Resume: the participants relive the trials already done, in order.
   relivePassed(steps, participants);

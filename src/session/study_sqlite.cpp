@@ -209,6 +209,12 @@ StudyDatabase StudyDatabase::openSqlite(const std::filesystem::path& file, OpenM
                      file.string(), version, kStudySchemaVersion);
   if (mode != OpenMode::kReadOnly) {
     db.exec(options.scratch ? "PRAGMA synchronous = OFF" : "PRAGMA synchronous = FULL");
+    // A scratch study is one process's, removed once analyzed: it keeps the file's lock (no lock
+    // calls for each transaction) and its rollback journal in memory (no journal writes).
+    if (options.scratch) {
+      db.exec("PRAGMA locking_mode = EXCLUSIVE");
+      db.exec("PRAGMA journal_mode = MEMORY");
+    }
     db.exec("PRAGMA foreign_keys = ON");
   }
   database.options_ = options;

@@ -249,7 +249,7 @@ void SubjectTrials::measure(TrialResult& result) const {
   auto& extra = result.profile.metadata().extra;
   if (result.profile.empty()) return;
   // Every trial keeps its handwriting kinematics (docs/analysis.md), each as its shortest exact text.
-  if (!extra.contains(kKinematicsPrefix + std::string("duration_s"))) {
+  if (kinematics_ && !extra.contains(kKinematicsPrefix + std::string("duration_s"))) {
     const nlohmann::json k = analysis::toJson(analysis::trialKinematics(result.profile));
     for (const char* name : analysis::kinematicsNames()) {
       const nlohmann::json& v = k.at(name);

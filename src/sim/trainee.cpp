@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include <Eigen/Cholesky>
 #include <fmt/format.h>
@@ -68,30 +69,47 @@ bool sumsInOneBlock(const Eigen::MatrixXd& phi) {
   return phi.rows() >= 2 && phi.rows() + phi.cols() + 3 >= 20 && phi.cols() <= 128;
 }
 
+// Rows [first, first + rows) of combineBasis for kCols columns (`cols`): the sums of a few rows
+// stay in registers while the basis functions are added in turn (kRows at a time, then one by
+// one), each function read once for all the columns.
+template <int kCols>
+void combineRows(const Eigen::MatrixXd& phi, const PlanWeights& weights, const Eigen::Index* cols,
+                 Eigen::MatrixXd& out) {
+  constexpr Eigen::Index kRows = 8;
+  const auto block = [&](Eigen::Index first, auto rows_constant) {
+    constexpr Eigen::Index rows = decltype(rows_constant)::value;
+    double sum[kCols][rows] = {};
+    for (Eigen::Index k = 0; k < phi.cols(); ++k) {
+      const double* const basis = phi.col(k).data() + first;
+      for (int j = 0; j < kCols; ++j) {
+        const double w = weights(k, cols[j]);
+        for (Eigen::Index i = 0; i < rows; ++i) sum[j][i] += basis[i] * w;
+      }
+    }
+    for (int j = 0; j < kCols; ++j) {
+      for (Eigen::Index i = 0; i < rows; ++i) out(first + i, j) = sum[j][i];
+    }
+  };
+  Eigen::Index first = 0;
+  for (; first + kRows <= phi.rows(); first += kRows) block(first, std::integral_constant<Eigen::Index, kRows>{});
+  for (; first < phi.rows(); ++first) block(first, std::integral_constant<Eigen::Index, 1>{});
+}
+
 Eigen::MatrixXd combineBasis(const Eigen::MatrixXd& phi, const PlanWeights& weights,
                              std::initializer_list<Eigen::Index> columns) {
-  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(phi.rows(), static_cast<Eigen::Index>(columns.size()));
+  HATTR_DEMAND(columns.size() >= 1 && columns.size() <= 3, "combineBasis: expected 1 to 3 columns, got {}",
+               columns.size());
+  Eigen::MatrixXd out(phi.rows(), static_cast<Eigen::Index>(columns.size()));
   if (!sumsInOneBlock(phi)) {
     const Eigen::MatrixX3d product = phi * weights;
     Eigen::Index j = 0;
     for (const Eigen::Index c : columns) out.col(j++) = product.col(c);
     return out;
   }
-  // A block of rows at a time (the sums stay in L1), each basis function read once for all the
-  // columns: every sum still adds the functions in turn.
-  constexpr Eigen::Index kRows = 512;
-  for (Eigen::Index first = 0; first < phi.rows(); first += kRows) {
-    const Eigen::Index rows = std::min(kRows, phi.rows() - first);
-    for (Eigen::Index k = 0; k < phi.cols(); ++k) {
-      const double* const basis = phi.col(k).data() + first;
-      Eigen::Index j = 0;
-      for (const Eigen::Index c : columns) {
-        const double w = weights(k, c);
-        double* const sum = out.col(j++).data() + first;
-        for (Eigen::Index i = 0; i < rows; ++i) sum[i] += basis[i] * w;
-      }
-    }
-  }
+  const Eigen::Index* const cols = columns.begin();
+  if (columns.size() == 1) combineRows<1>(phi, weights, cols, out);
+  if (columns.size() == 2) combineRows<2>(phi, weights, cols, out);
+  if (columns.size() == 3) combineRows<3>(phi, weights, cols, out);
   return out;
 }
 

@@ -16,6 +16,7 @@
 #include "hattr/analysis/trial_score.hpp"
 #include "hattr/report/design_analysis.hpp"
 #include "hattr/session/study_runner.hpp"
+#include "hattr/session/subject_trials.hpp"
 #include "support/test_support.hpp"
 #include "support/thread_sanitizer.hpp"
 
@@ -614,7 +615,8 @@ TEST(OneScorer, TrialsPreparedOneByOneAndScoredInAnyBatchesGiveScoreAllsNumbers)
 
 // A scratch study (a power analysis's replicate) stores each trial's row but no samples; the run
 // hands every trial as stored to the caller, who scores it; the analysis takes those scores and
-// comes to the numbers of the same study stored in full.
+// comes to the numbers of the same study stored in full. Its trials leave out the handwriting
+// kinematics, which its analysis never reads.
 TEST(ScratchStudy, KeepsNoSamplesAndItsAnalysisFromScoresGivenIsTheFullStudysToTheBit) {
   CompletedStudy full;
   std::map<std::int64_t, HapticProfile> handed;
@@ -629,9 +631,12 @@ TEST(ScratchStudy, KeepsNoSamplesAndItsAnalysisFromScoresGivenIsTheFullStudysToT
   const auto scratch_db = session::StudyDatabase::open(scratch.dir / "s.sqlite", session::OpenMode::kReadOnly);
   const std::vector<session::TrialRecord> trials = scratch_db.trials();
   ASSERT_EQ(handed.size(), trials.size());
+  const std::string kinematics_key = session::kKinematicsPrefix + std::string("duration_s");
   for (const auto& t : trials) {
     EXPECT_EQ(t.status, session::TrialStatus::kCompleted);
     expectSameSamples(handed.at(t.id), full_db.trialProfile(t.id), fmt::format("trial {}", t.id));
+    EXPECT_FALSE(handed.at(t.id).metadata().extra.contains(kinematics_key)) << "trial " << t.id;
+    EXPECT_TRUE(full_db.trialProfile(t.id).metadata().extra.contains(kinematics_key)) << "trial " << t.id;
   }
   try {
     (void)scratch_db.trialProfile(trials.front().id);

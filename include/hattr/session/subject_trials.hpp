@@ -119,6 +119,9 @@ class SubjectTrials {
   /// metadata (kKinematicsPrefix + each of analysis::kinematicsNames(), "NA" where not a
   /// number), and a scheduled strategy's guided trial its tracking error (tracking_rms_m).
   void measure(TrialResult& result) const;
+  /// From now on measure() leaves out the handwriting kinematics: for a scratch study (a power
+  /// analysis's replicate), whose analysis reads none.
+  void skipKinematics() noexcept { kinematics_ = false; }
   /// The current trial failed (why): marked failed in the database; its next run is attempt 0.
   void fail(StudyDatabase& db, const std::string& reason);
 
@@ -141,6 +144,7 @@ class SubjectTrials {
   std::size_t next_ = 0;  // index of the current trial in trials_
   int completed_ = 0;
   int attempt_ = 0;
+  bool kinematics_ = true;  ///< measure() adds the kinematics (skipKinematics)
 };
 
 }  // namespace hattr::session
