@@ -83,10 +83,16 @@ std::string testedPhase(const session::StudyDefinition& study, const std::string
 /// score it (same options, z left out: no metric uses it). Called from the subjects' threads.
 class ScoredAsTheyEnd {
  public:
-  /// Every trial of a design (its analysis reads them all); the paper's recall trials. Scored
-  /// as `options` says, as the analysis would score them.
+  /// Every trial of a design (its analysis reads them all); the paper's analyzed recall trials,
+  /// and the others only when a disturbed one may be replaced by one of them (the "exclude"
+  /// policy's spares). Scored as `options` says, as the analysis would score them.
   ScoredAsTheyEnd(const session::StudyDatabase& db, bool every_trial, const report::AnalysisOptions& options)
       : every_trial_(every_trial) {
+    const session::Protocol& protocol = db.study().protocol;
+    if (protocol.disturbed != session::DisturbedPolicy::kExclude) {
+      const std::vector<int> analyzed = session::analyzedRecallTrials(protocol);
+      analyzed_recall_.insert(analyzed.begin(), analyzed.end());
+    }
     const analysis::ScoreOptions score{.normalization = options.normalization, .cost = options.cost,
                                        .band_fraction = options.band_fraction, .score_z = false};
     for (const auto& [skill, file] : db.study().experts) {
@@ -96,6 +102,7 @@ class ScoredAsTheyEnd {
 
   void add(const session::TrialRecord& trial, const HapticProfile& profile) {
     if (!every_trial_ && trial.plan.phase != session::kPhaseRecall) return;
+    if (!every_trial_ && !analyzed_recall_.empty() && !analyzed_recall_.contains(trial.plan.index)) return;
     Skill& skill = skills_.at(trial.plan.skill);
     analysis::PreparedTrial prepared = skill.scorer.prepare(profile);
     Batch full;
@@ -136,6 +143,7 @@ class ScoredAsTheyEnd {
   }
 
   bool every_trial_;
+  std::set<int> analyzed_recall_;  ///< empty: every recall trial (the "exclude" policy's spares)
   std::map<std::string, Skill> skills_;
   std::mutex mutex_;
   std::map<std::int64_t, analysis::TrialScore> scores_;

@@ -343,11 +343,22 @@ void SimulatedTrainee::learn(const HapticProfile& recorded, bool template_shown,
   }
 
   // (b) What the trainee felt: the guidance force, as an in-plane force and as the axial force
-  // that would give its normal part, perceived with Weber noise, read as a plan error.
+  // that would give its normal part, perceived with Weber noise, read as a plan error. A trial
+  // without guidance felt none: its weights would all be zero, which add nothing to the error
+  // (whose entries are never -0), so they are not computed.
+  if (!rec.f_guide.isZero(0.0)) error += feltError(rec.f_guide, rec.valid);
+
+  // The one learning rule.
+  fast_ = traits_.fast_retention * fast_ + traits_.fast_rate * error;
+  slow_ = traits_.slow_retention * slow_ + traits_.slow_rate * error;
+  ++trials_learned_;
+}
+
+PlanWeights SimulatedTrainee::feltError(const Eigen::MatrixX3d& f_guide, const std::vector<char>& valid) {
   Eigen::MatrixXd felt(static_cast<Eigen::Index>(t_s_.size()), 3);
-  felt.leftCols<2>() = rec.f_guide.leftCols<2>();
-  felt.col(2) = -rec.f_guide.col(2).cwiseQuotient(altitude_rad_.array().sin().matrix());
-  Eigen::MatrixXd felt_weights = project(felt, rec.valid);
+  felt.leftCols<2>() = f_guide.leftCols<2>();
+  felt.col(2) = -f_guide.col(2).cwiseQuotient(altitude_rad_.array().sin().matrix());
+  Eigen::MatrixXd felt_weights = project(felt, valid);
   detail::NormalSource normal(
       detail::streamSeed(detail::streamSeed(seed_, kPerceptionStream), static_cast<std::uint64_t>(trials_learned_)));
   for (Eigen::Index r = 0; r < felt_weights.rows(); ++r) {
@@ -357,19 +368,16 @@ void SimulatedTrainee::learn(const HapticProfile& recorded, bool template_shown,
   }
   // A position plan reads the in-plane force as where the hand should have been (f / K); a
   // force plan takes it as force it should have pushed with.
+  PlanWeights error(felt_weights.rows(), 3);
   if (hypothesis_ == LearningHypothesis::kForcePlan) {
-    error.col(kPlanX) += felt_weights.col(0);
-    error.col(kPlanY) += felt_weights.col(1);
+    error.col(kPlanX) = felt_weights.col(0);
+    error.col(kPlanY) = felt_weights.col(1);
   } else {
-    error.col(kPlanX) += felt_weights.col(0) / traits_.felt_force_stiffness_N_per_m;
-    error.col(kPlanY) += felt_weights.col(1) / traits_.felt_force_stiffness_N_per_m;
+    error.col(kPlanX) = felt_weights.col(0) / traits_.felt_force_stiffness_N_per_m;
+    error.col(kPlanY) = felt_weights.col(1) / traits_.felt_force_stiffness_N_per_m;
   }
-  error.col(kPlanAxialForce) += felt_weights.col(2);
-
-  // The one learning rule.
-  fast_ = traits_.fast_retention * fast_ + traits_.fast_rate * error;
-  slow_ = traits_.slow_retention * slow_ + traits_.slow_rate * error;
-  ++trials_learned_;
+  error.col(kPlanAxialForce) = felt_weights.col(2);
+  return error;
 }
 
 double SimulatedTrainee::ownLearningShare(const Eigen::MatrixX3d& f_guide, const std::vector<char>& valid) const {

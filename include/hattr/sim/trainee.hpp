@@ -138,6 +138,9 @@ class SimulatedTrainee {
   /// The share of its own (visual) error the trainee learns from after a trial that felt the
   /// guidance `f_guide` (rows where `valid`): guidance-dependent, less after a guided trial; else 1.
   [[nodiscard]] double ownLearningShare(const Eigen::MatrixX3d& f_guide, const std::vector<char>& valid) const;
+  /// learn()'s error from the guidance felt (`f_guide` on the template's grid, rows where `valid`),
+  /// in plan units, perceived with this trial's Weber noise.
+  [[nodiscard]] PlanWeights feltError(const Eigen::MatrixX3d& f_guide, const std::vector<char>& valid);
   /// What a series is for: the hand plays it (all of it), or only the trial noise scales with
   /// it (the planned velocity and axial force; the positions and pushes are left empty).
   enum class SeriesUse { kPlayed, kNoiseScale };
