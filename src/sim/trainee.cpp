@@ -145,6 +145,7 @@ SimulatedTrainee::SimulatedTrainee(const TraineeModel& model, const SubjectTrait
   template_z_.resize(n);
   template_axial_N_.resize(n);
   altitude_rad_.resize(n);
+  sin_altitude_.resize(n);
   azimuth_rad_.resize(n);
   pen_down_.resize(samples.size());
   std::vector<double> u(samples.size());
@@ -158,7 +159,8 @@ SimulatedTrainee::SimulatedTrainee(const TraineeModel& model, const SubjectTrait
     altitude_rad_(i) = has_tilt ? std::clamp(s.tilt_altitude_rad, 0.1, 1.5707963267948966) : kDefaultAltitude_rad;
     azimuth_rad_(i) = has_tilt ? s.tilt_azimuth_rad : 0.0;
     pen_down_[static_cast<std::size_t>(i)] = static_cast<char>(s.pen_down);
-    template_axial_N_(i) = s.pen_down ? std::max(-s.f_user_W.z(), 0.0) / std::sin(altitude_rad_(i)) : 0.0;
+    sin_altitude_(i) = std::sin(altitude_rad_(i));
+    template_axial_N_(i) = s.pen_down ? std::max(-s.f_user_W.z(), 0.0) / sin_altitude_(i) : 0.0;
   }
   visual_xy_ = template_xy_;
   visual_pen_down_ = pen_down_;
@@ -213,7 +215,7 @@ SimulatedTrainee::Series SimulatedTrainee::series(const PlanWeights& weights, Se
       for (Eigen::Index i = 0; i < s.push_xy.rows(); ++i) {
         const double speed = template_v_xy_.row(i).norm();
         if (pen_down_[static_cast<std::size_t>(i)] && speed > 1e-6) {
-          const double normal_N = template_axial_N_(i) * std::sin(altitude_rad_(i));
+          const double normal_N = template_axial_N_(i) * sin_altitude_(i);
           s.push_xy.row(i) = traits_.plan_friction * normal_N * template_v_xy_.row(i) / speed;
         }
       }
@@ -247,7 +249,7 @@ HapticProfile SimulatedTrainee::profileOf(const Series& s, const std::string& so
     sample.v_WT = Vec3(s.v_xy(r, 0) / pace_factor, s.v_xy(r, 1) / pace_factor, 0.0);
     sample.pen_down = pen_down_[i] != 0;
     sample.in_contact = sample.pen_down;
-    sample.f_user_W = Vec3(s.push_xy(r, 0), s.push_xy(r, 1), -s.axial_N(r) * std::sin(altitude_rad_(r)));
+    sample.f_user_W = Vec3(s.push_xy(r, 0), s.push_xy(r, 1), -s.axial_N(r) * sin_altitude_(r));
     sample.tilt_altitude_rad = altitude_rad_(r);
     sample.tilt_azimuth_rad = azimuth_rad_(r);
     profile.append(sample);

@@ -175,6 +175,7 @@ class SimulatedTrainee {
   Eigen::VectorXd template_axial_N_;
   std::vector<char> pen_down_;
   Eigen::VectorXd altitude_rad_;
+  Eigen::VectorXd sin_altitude_;  // std::sin of altitude_rad_, for every plan played
   Eigen::VectorXd azimuth_rad_;
 
   Eigen::MatrixXd phi_;        // N × K basis values
