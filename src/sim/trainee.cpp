@@ -63,8 +63,8 @@ namespace detail {
 // Where Eigen's product of phi by three columns is its blocked one, summing each entry in one
 // block: more than one row (one row is a vector product), rows + depth + 3 columns at least
 // EIGEN_GEMM_TO_COEFFBASED_THRESHOLD (20; smaller products go coefficient by coefficient), and
-// at most 128 basis functions (its depth blocks are 200 or more with a 16 kB L1 data cache, the
-// smallest it assumes).
+// at most 128 basis functions (its depth blocks hold more with a 32 kB L1 data cache, the least
+// of an x86-64 CPU and Eigen's default there, even with AVX-512's wider panels).
 bool sumsInOneBlock(const Eigen::MatrixXd& phi) {
   return phi.rows() >= 2 && phi.rows() + phi.cols() + 3 >= 20 && phi.cols() <= 128;
 }

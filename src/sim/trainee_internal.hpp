@@ -10,10 +10,11 @@
 namespace hattr::sim::detail {
 
 /// The basis at every sample combined by the `columns` of `weights` (each of 0, 1, 2), one
-/// result column each: (phi * weights).col(c) for each c, each entry summed over the basis functions in turn from zero. Those are the sums, in that order,
-/// of Eigen's product of a matrix by at most three columns whose depth fits one of its blocks,
-/// so the bits are the same (trainee_test compares the two); unlike the product, it does not
-/// copy phi (N × K) into a packed block first, which was most of a plan's cost. Where Eigen's
+/// result column each: (phi * weights).col(c) for each c, each entry summed over the basis
+/// functions in turn from zero. Those are the sums, in that order, of Eigen's product of a matrix
+/// by at most three columns whose depth fits one of its blocks, so the bits are the same
+/// (trainee_test compares the two, on this build's Eigen and CPU); unlike the product, it does
+/// not copy phi (N × K) into a packed block first, which was most of a plan's cost. Where Eigen's
 /// product takes another path (one row, a tiny product, more than 128 basis functions): that
 /// product itself.
 Eigen::MatrixXd combineBasis(const Eigen::MatrixXd& phi, const PlanWeights& weights,

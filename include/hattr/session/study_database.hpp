@@ -127,9 +127,7 @@ class StudyDatabase {
   ~StudyDatabase();
 
   [[nodiscard]] const StudyDefinition& study() const noexcept { return study_; }
-
   /// A scratch study (StoreOptions::scratch): its trials are scored as they end and removed.
-
   [[nodiscard]] bool scratch() const noexcept { return options_.scratch; }
   /// The study file, or the PostgreSQL address (for messages).
   [[nodiscard]] const std::filesystem::path& file() const noexcept { return file_; }
