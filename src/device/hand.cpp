@@ -14,11 +14,11 @@ constexpr double kLiftHeight_m = 0.003;
 }  // namespace
 
 Vec3 handForce(const HandImpedance& hand, const HandCommand& command, const Vec3& p_WT, const Vec3& v_WT) noexcept {
-  return handForce(hand, command, std::sin(command.altitude_rad), p_WT, v_WT);
+  return handForce(hand, command, command.press_N, std::sin(command.altitude_rad), p_WT, v_WT);
 }
 
-Vec3 handForce(const HandImpedance& hand, const HandCommand& command, double sin_altitude, const Vec3& p_WT,
-               const Vec3& v_WT) noexcept {
+Vec3 handForce(const HandImpedance& hand, const HandCommand& command, double press_N, double sin_altitude,
+               const Vec3& p_WT, const Vec3& v_WT) noexcept {
   Vec3 force = hand.stiffness_N_per_m * (command.p_target_W - p_WT) +
                hand.damping_N_s_per_m * (command.v_target_W - v_WT);
   // In the paper plane: the grip's share of the impedance, and the feedforward push.
@@ -33,7 +33,7 @@ Vec3 handForce(const HandImpedance& hand, const HandCommand& command, double sin
     const double reach = std::clamp((hand.press_ease_end_m - depth_m) / (hand.press_ease_end_m - hand.press_ease_begin_m),
                                     0.0, 1.0);
     const double held_back_N = hand.stiffness_N_per_m * std::max(depth_m - hand.press_ease_end_m, 0.0);
-    force.z() = -std::max(command.press_N, 0.0) * reach * sin_altitude + held_back_N -
+    force.z() = -std::max(press_N, 0.0) * reach * sin_altitude + held_back_N -
                 hand.damping_N_s_per_m * v_WT.z();
   }
   // No hand pushes harder than a firm grip (a stale or far target does not make it 100 N). The

@@ -40,13 +40,14 @@ void SimulatedDevice::advanceTo(double t_s) noexcept {
   for (int i = 0; i < steps; ++i) {
     const double t = t_s_ + h * (i + 1);
     if (hand_) {
-      last_hand_ = hand_->command(t);
+      // The command is read field by field where the hand wrote it; only the last sub-step's is
+      // kept (read() reports its pen-down and tilt).
+      const HandCommand command = hand_->command(t);
       // Finger force rises and falls with the muscle's time constant.
-      const double target = last_hand_.pen_down ? last_hand_.press_N : 0.0;
+      const double target = command.pen_down ? command.press_N : 0.0;
       press_N_ += tau > 0.0 ? (target - press_N_) * press_share : target - press_N_;
-      HandCommand acting = last_hand_;
-      acting.press_N = press_N_;
-      hand_force_W_ = handForce(params_.hand, acting, altitude_sine_.of(acting.altitude_rad), p_WT_, v_WT_);
+      hand_force_W_ = handForce(params_.hand, command, press_N_, altitude_sine_.of(command.altitude_rad), p_WT_, v_WT_);
+      if (i + 1 == steps) last_hand_ = command;
     } else {
       hand_force_W_.setZero();
     }

@@ -46,9 +46,11 @@ struct HandImpedance {
 
 /// Force the hand exerts on the pen for a command and the pen's state [N, W].
 Vec3 handForce(const HandImpedance& hand, const HandCommand& command, const Vec3& p_WT, const Vec3& v_WT) noexcept;
-/// The same, given sin(command.altitude_rad) (a caller that remembers it: SineMemo).
-Vec3 handForce(const HandImpedance& hand, const HandCommand& command, double sin_altitude, const Vec3& p_WT,
-               const Vec3& v_WT) noexcept;
+/// The same with the press the fingers give now (`press_N`, in place of command.press_N: a hand
+/// whose press lags its command) and sin(command.altitude_rad) (a caller that remembers it:
+/// SineMemo).
+Vec3 handForce(const HandImpedance& hand, const HandCommand& command, double press_N, double sin_altitude,
+               const Vec3& p_WT, const Vec3& v_WT) noexcept;
 
 /// A hand that holds still at a point, pressing with a constant force.
 class StillHand final : public HandScript {
