@@ -56,10 +56,6 @@ Resampled resample(const HapticProfile& profile, const std::vector<double>& t) {
   return out;
 }
 
-}  // namespace
-
-namespace detail {
-
 // Where Eigen's product of phi by three columns is its blocked one, summing each entry in one
 // block: more than one row (one row is a vector product), rows + depth + 3 columns at least
 // EIGEN_GEMM_TO_COEFFBASED_THRESHOLD (20; smaller products go coefficient by coefficient), and
@@ -94,6 +90,10 @@ void combineRows(const Eigen::MatrixXd& phi, const PlanWeights& weights, const E
   for (; first + kRows <= phi.rows(); first += kRows) block(first, std::integral_constant<Eigen::Index, kRows>{});
   for (; first < phi.rows(); ++first) block(first, std::integral_constant<Eigen::Index, 1>{});
 }
+
+}  // namespace
+
+namespace detail {
 
 Eigen::MatrixXd combineBasis(const Eigen::MatrixXd& phi, const PlanWeights& weights,
                              std::initializer_list<Eigen::Index> columns) {
