@@ -188,7 +188,7 @@ double diagonalKernel(const KernelProblem& p) {
 template <DtwCost kCost>
 HWY_INLINE Vd stripCell(Tag d, Vd a_i, Vd b_j, Vd up, Vd& diag, double* left) {
   const Vd old = hn::LoadU(d, left);
-  const Vd value = hn::Add(localCost<kCost>(a_i, b_j), hn::Min(hn::Min(up, diag), old));
+  const Vd value = hn::Add(localCost<kCost>(a_i, b_j), hn::Min(up, hn::Min(diag, old)));
   diag = old;
   hn::StoreU(value, d, left);
   return value;
@@ -297,35 +297,60 @@ struct ComputedColumns {
   std::size_t last = 0;
 };
 
+// Row i of a strip column, k rows below the strip's top: its four vectors of cells, inside the
+// band or (kInBand false) outside it. Each hands on up (the cell just computed) and diag (the
+// next row's D(i-1, j-1)); with kTrack, the column's smallest cells too. (Vectors are passed
+// one by one: sizeless vector types, as on SVE, cannot be members of a struct.)
+template <DtwCost kCost, bool kTrack, bool kInBand>
+HWY_INLINE void stripRow(Tag d, const BatchBlock& blk, std::size_t i, std::size_t k, Vd b0, Vd b1, Vd b2, Vd b3,
+                         Vd& up0, Vd& up1, Vd& up2, Vd& up3, Vd& diag0, Vd& diag1, Vd& diag2, Vd& diag3,
+                         Vd& column0, Vd& column1, Vd& column2, Vd& column3) {
+  const std::size_t lanes = hn::Lanes(d);
+  double* l = blk.left + k * blk.width;
+  if constexpr (kInBand) {
+    const double* a_i = blk.a_int + i * blk.width;
+    up0 = stripCell<kCost>(d, hn::LoadU(d, a_i), b0, up0, diag0, l);
+    up1 = stripCell<kCost>(d, hn::LoadU(d, a_i + lanes), b1, up1, diag1, l + lanes);
+    up2 = stripCell<kCost>(d, hn::LoadU(d, a_i + 2 * lanes), b2, up2, diag2, l + 2 * lanes);
+    up3 = stripCell<kCost>(d, hn::LoadU(d, a_i + 3 * lanes), b3, up3, diag3, l + 3 * lanes);
+  } else {
+    up0 = stripCellOutside(d, diag0, l);
+    up1 = stripCellOutside(d, diag1, l + lanes);
+    up2 = stripCellOutside(d, diag2, l + 2 * lanes);
+    up3 = stripCellOutside(d, diag3, l + 3 * lanes);
+  }
+  if constexpr (kTrack) {
+    column0 = hn::Min(column0, up0);
+    column1 = hn::Min(column1, up1);
+    column2 = hn::Min(column2, up2);
+    column3 = hn::Min(column3, up3);
+  }
+}
+
 // One column j of a strip, down its `rows` rows from i0: each cell from its up, diagonal and
 // left, or +inf outside the band; with kTrack also the column's smallest cells (to find where
-// the strip may stop).
+// the strip may stop). A full strip wholly inside the band (every strip without a band) runs
+// unrolled, without a test per row.
 template <DtwCost kCost, bool kTrack>
 HWY_INLINE void stripColumn(Tag d, const BatchBlock& blk, std::size_t i0, std::size_t rows, std::size_t j, Vd b0, Vd b1,
                             Vd b2, Vd b3, Vd& up0, Vd& up1, Vd& up2, Vd& up3, Vd& diag0, Vd& diag1, Vd& diag2,
                             Vd& diag3, Vd& column0, Vd& column1, Vd& column2, Vd& column3) {
-  const std::size_t lanes = hn::Lanes(d);
-  const std::size_t width = blk.width;
+  if (rows == kStripRows && j + blk.r >= i0 + kStripRows - 1 && j <= i0 + blk.r) {
+#pragma GCC unroll 16
+    for (std::size_t k = 0; k < kStripRows; ++k) {
+      stripRow<kCost, kTrack, true>(d, blk, i0 + k, k, b0, b1, b2, b3, up0, up1, up2, up3, diag0, diag1, diag2, diag3,
+                                    column0, column1, column2, column3);
+    }
+    return;
+  }
   for (std::size_t k = 0; k < rows; ++k) {
     const std::size_t i = i0 + k;
-    double* l = blk.left + k * width;
     if (j + blk.r >= i && j <= i + blk.r) {  // |i - j| <= r
-      const double* a_i = blk.a_int + i * width;
-      up0 = stripCell<kCost>(d, hn::LoadU(d, a_i), b0, up0, diag0, l);
-      up1 = stripCell<kCost>(d, hn::LoadU(d, a_i + lanes), b1, up1, diag1, l + lanes);
-      up2 = stripCell<kCost>(d, hn::LoadU(d, a_i + 2 * lanes), b2, up2, diag2, l + 2 * lanes);
-      up3 = stripCell<kCost>(d, hn::LoadU(d, a_i + 3 * lanes), b3, up3, diag3, l + 3 * lanes);
+      stripRow<kCost, kTrack, true>(d, blk, i, k, b0, b1, b2, b3, up0, up1, up2, up3, diag0, diag1, diag2, diag3,
+                                    column0, column1, column2, column3);
     } else {
-      up0 = stripCellOutside(d, diag0, l);
-      up1 = stripCellOutside(d, diag1, l + lanes);
-      up2 = stripCellOutside(d, diag2, l + 2 * lanes);
-      up3 = stripCellOutside(d, diag3, l + 3 * lanes);
-    }
-    if constexpr (kTrack) {
-      column0 = hn::Min(column0, up0);
-      column1 = hn::Min(column1, up1);
-      column2 = hn::Min(column2, up2);
-      column3 = hn::Min(column3, up3);
+      stripRow<kCost, kTrack, false>(d, blk, i, k, b0, b1, b2, b3, up0, up1, up2, up3, diag0, diag1, diag2, diag3,
+                                     column0, column1, column2, column3);
     }
   }
 }

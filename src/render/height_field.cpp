@@ -161,12 +161,14 @@ SurfacePoint HeightField::surfaceAt(double x_m, double y_m) const noexcept {
   const Cell c = locate(x_m, y_m);
   const auto at = [this](int i, int j) { return static_cast<std::size_t>(j * nx_ + i); };
   const std::size_t k00 = at(c.i, c.j), k11 = at(c.i + 1, c.j + 1);
-  // Barycentric weights in the triangle under the point; the third vertex depends on the side.
+  // Barycentric weights in the triangle under the point; the third vertex depends on the side
+  // (below the diagonal, u >= v: 1 - u, u - v, v; above it: 1 - v, v - u, u), written without
+  // a branch, which the pen crossing the diagonals would mispredict.
   const bool lower = c.u >= c.v;
-  const std::size_t k3 = lower ? at(c.i + 1, c.j) : at(c.i, c.j + 1);
-  const double w00 = lower ? 1.0 - c.u : 1.0 - c.v;
-  const double w3 = lower ? c.u - c.v : c.v - c.u;
-  const double w11 = lower ? c.v : c.u;
+  const std::size_t k3 = k00 + (lower ? std::size_t{1} : static_cast<std::size_t>(nx_));
+  const double w00 = 1.0 - std::max(c.u, c.v);
+  const double w3 = std::abs(c.u - c.v);
+  const double w11 = std::min(c.u, c.v);
   SurfacePoint out;
   out.height_m = w00 * heights_[k00] + w3 * heights_[k3] + w11 * heights_[k11];
   out.normal_W = (w00 * normals_[k00] + w3 * normals_[k3] + w11 * normals_[k11]).normalized();

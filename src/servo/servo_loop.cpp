@@ -100,11 +100,12 @@ void ServoLoop::publish(const PenState& pen, const ContactForces& contact, const
   sample.tilt_altitude_rad = pen.altitude_rad;
   if (!samples_.tryPush(TickSample{tick_number_, sample})) bump(counters_.dropped_samples);
   ++tick_number_;
-  latest_.write(sample);
+  if (latest_due_) latest_.write(sample);
 
   // The count is published after the tick's sample is in the ring (release): whoever reads the
-  // count (acquire) and ends a recording before that tick finds the sample in the ring.
-  counters_.ticks.fetch_add(1, std::memory_order_release);
+  // count (acquire) and ends a recording before that tick finds the sample in the ring. The
+  // ticking thread is its only writer: a plain store, not a locked add.
+  counters_.ticks.store(counters_.ticks.load(std::memory_order_relaxed) + 1, std::memory_order_release);
   // A fault is published after its tick is counted and its sample is in the ring: whoever
   // sees the fault (acquire) and ends the recording at the tick count keeps the faulting tick.
   counters_.faults.store(safety_.faultCount(), std::memory_order_release);
@@ -160,9 +161,11 @@ TickStatus ServoLoop::tick(std::chrono::nanoseconds now) noexcept {
 void ServoLoop::runSimulated(std::size_t ticks) noexcept {
   clock_.store(LoopClock::kSimulated, std::memory_order_release);
   for (std::size_t i = 0; i < ticks; ++i) {
+    latest_due_ = i + 1 == ticks;  // the newest sample for a display: the call's last
     (void)tick(sim_now_);
     sim_now_ += period_;
   }
+  latest_due_ = true;
 }
 
 void ServoLoop::start() {

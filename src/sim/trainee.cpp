@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <type_traits>
 
 #include <Eigen/Cholesky>
 #include <fmt/format.h>
@@ -65,32 +64,6 @@ bool sumsInOneBlock(const Eigen::MatrixXd& phi) {
   return phi.rows() >= 2 && phi.rows() + phi.cols() + 3 >= 20 && phi.cols() <= 128;
 }
 
-// Rows [first, first + rows) of combineBasis for kCols columns (`cols`): the sums of a few rows
-// stay in registers while the basis functions are added in turn (kRows at a time, then one by
-// one), each function read once for all the columns.
-template <int kCols>
-void combineRows(const Eigen::MatrixXd& phi, const PlanWeights& weights, const Eigen::Index* cols,
-                 Eigen::MatrixXd& out) {
-  constexpr Eigen::Index kRows = 8;
-  const auto block = [&](Eigen::Index first, auto rows_constant) {
-    constexpr Eigen::Index rows = decltype(rows_constant)::value;
-    double sum[kCols][rows] = {};
-    for (Eigen::Index k = 0; k < phi.cols(); ++k) {
-      const double* const basis = phi.col(k).data() + first;
-      for (int j = 0; j < kCols; ++j) {
-        const double w = weights(k, cols[j]);
-        for (Eigen::Index i = 0; i < rows; ++i) sum[j][i] += basis[i] * w;
-      }
-    }
-    for (int j = 0; j < kCols; ++j) {
-      for (Eigen::Index i = 0; i < rows; ++i) out(first + i, j) = sum[j][i];
-    }
-  };
-  Eigen::Index first = 0;
-  for (; first + kRows <= phi.rows(); first += kRows) block(first, std::integral_constant<Eigen::Index, kRows>{});
-  for (; first < phi.rows(); ++first) block(first, std::integral_constant<Eigen::Index, 1>{});
-}
-
 }  // namespace
 
 namespace detail {
@@ -106,10 +79,16 @@ Eigen::MatrixXd combineBasis(const Eigen::MatrixXd& phi, const PlanWeights& weig
     for (const Eigen::Index c : columns) out.col(j++) = product.col(c);
     return out;
   }
-  const Eigen::Index* const cols = columns.begin();
-  if (columns.size() == 1) combineRows<1>(phi, weights, cols, out);
-  if (columns.size() == 2) combineRows<2>(phi, weights, cols, out);
-  if (columns.size() == 3) combineRows<3>(phi, weights, cols, out);
+  // Every matrix here is stored by columns.
+  BasisCombination c{.phi = phi.data(), .rows = static_cast<std::size_t>(phi.rows()),
+                     .functions = static_cast<std::size_t>(phi.cols()), .columns = columns.size()};
+  Eigen::Index j = 0;
+  for (const Eigen::Index col : columns) {
+    c.weights[j] = weights.col(col).data();
+    c.out[j] = out.col(j).data();
+    ++j;
+  }
+  combineBasisColumns(c);
   return out;
 }
 

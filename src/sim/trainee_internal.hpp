@@ -1,6 +1,7 @@
 #pragma once
 // Private to the sim module (and its tests): the trainee's plan series, combined from its basis.
 
+#include <cstddef>
 #include <initializer_list>
 
 #include <Eigen/Core>
@@ -19,5 +20,17 @@ namespace hattr::sim::detail {
 /// product itself.
 Eigen::MatrixXd combineBasis(const Eigen::MatrixXd& phi, const PlanWeights& weights,
                              std::initializer_list<Eigen::Index> columns);
+
+/// combineBasis's sums (basis_combine.cpp, vectorized): out[j][r] = the sum over k in turn, from
+/// zero, of phi[k * rows + r] * weights[j][k], for j < columns (1 to 3).
+struct BasisCombination {
+  const double* phi = nullptr;  ///< rows x functions, by columns
+  std::size_t rows = 0;
+  std::size_t functions = 0;
+  std::size_t columns = 0;
+  const double* weights[3] = {};  ///< each `functions` long
+  double* out[3] = {};            ///< each `rows` long
+};
+void combineBasisColumns(const BasisCombination& combination);
 
 }  // namespace hattr::sim::detail

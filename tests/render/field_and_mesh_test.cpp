@@ -131,6 +131,31 @@ TEST(HeightField, MeshHasTwoTrianglesPerCellOverTheSameVertices) {
   for (const auto& v : mesh.vertices) EXPECT_NEAR(v.z(), wave(v.x(), v.y()), 1e-15);
 }
 
+// surfaceAt blends the three vertices of the triangle under the point: below a cell's diagonal
+// (u > v) the corner (i+1, j), above it (i, j+1), with barycentric weights; on the diagonal the
+// third vertex's weight is zero. Heights here are distinct, so a swapped vertex or weight shows.
+TEST(HeightField, SurfaceAtBlendsTheTriangleUnderThePointOnEitherSideOfTheDiagonal) {
+  const double spacing = 1e-3;
+  const auto heights = [](double x, double y) { return 1e-4 * (1.0 + 3.0 * x / 1e-3 + 7.0 * y / 1e-3 + 11.0 * x * y / 1e-6); };
+  const HeightField field = HeightField::fromFunction(3, 3, Vec3(0, 0, 0), spacing, heights);
+  const double h00 = heights(0, 0), h10 = heights(spacing, 0), h01 = heights(0, spacing);
+  const double h11 = heights(spacing, spacing);
+  struct Place {
+    double u, v;
+  };
+  for (const Place p : {Place{0.7, 0.2}, Place{0.2, 0.7}, Place{0.4, 0.4}, Place{0.9, 0.0}, Place{0.0, 0.9}}) {
+    const bool lower = p.u >= p.v;
+    const double w00 = lower ? 1.0 - p.u : 1.0 - p.v;
+    const double w3 = lower ? p.u - p.v : p.v - p.u;
+    const double w11 = lower ? p.v : p.u;
+    const double expected = w00 * h00 + w3 * (lower ? h10 : h01) + w11 * h11;
+    const SurfacePoint s = field.surfaceAt(p.u * spacing, p.v * spacing);
+    EXPECT_NEAR(s.height_m, expected, 1e-15) << "u " << p.u << " v " << p.v;
+    EXPECT_NEAR(s.height_m, field.heightAt(p.u * spacing, p.v * spacing), 1e-15) << "u " << p.u << " v " << p.v;
+    EXPECT_NEAR(s.normal_W.norm(), 1.0, 1e-12);
+  }
+}
+
 TEST(HeightField, ForceDraggedAcrossTheMeshHasNoJumpsAndTheProxyStaysOnTheSurface) {
   // Frictionless, so the only thing that could jump is the contact normal at facet edges
   // (stick–slip drops the force from μs·Fn to μd·Fn on purpose; tested above).

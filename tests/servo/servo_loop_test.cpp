@@ -102,6 +102,33 @@ TEST(ServoLoop, SimulatedRunsAreBitForBitRepeatable) {
   EXPECT_GT((a.back().p_WT - a.front().p_WT).norm(), 0.005);
 }
 
+// In simulated time the newest sample for a display is written once a call, on its last tick:
+// between calls it is the sample of the last tick run, and a read sees it once.
+TEST(ServoLoop, SimulatedRunsLeaveTheLastTicksSampleForTheDisplay) {
+  const auto expectSame = [](const Sample& a, const Sample& b) {  // field by field: Sample has padding
+    EXPECT_EQ(a.t_s, b.t_s);
+    EXPECT_EQ(a.p_WT, b.p_WT);
+    EXPECT_EQ(a.v_WT, b.v_WT);
+    EXPECT_EQ(a.f_user_W, b.f_user_W);
+    EXPECT_EQ(a.f_cmd_W, b.f_cmd_W);
+    EXPECT_EQ(a.in_contact, b.in_contact);
+  };
+  Rig rig;
+  rig.loop.runSimulated(100);
+  const std::vector<Sample> ring = rig.drain();
+  ASSERT_EQ(ring.size(), 100u);
+  EXPECT_EQ(rig.loop.counters().ticks.load(), 100u);
+  Sample latest;
+  ASSERT_TRUE(rig.loop.latest().read(latest));
+  expectSame(latest, ring.back());
+  EXPECT_NE(latest.t_s, ring[98].t_s);
+  EXPECT_FALSE(rig.loop.latest().read(latest));  // nothing newer
+  rig.loop.runSimulated(1);
+  ASSERT_TRUE(rig.loop.latest().read(latest));
+  expectSame(latest, rig.drain().back());
+  EXPECT_EQ(rig.loop.counters().ticks.load(), 101u);
+}
+
 TEST(ServoLoop, NanForceLatchesAFaultAndTheDeviceGetsZero) {
   Rig rig;
   rig.loop.runSimulated(500);

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <hwy/targets.h>
 
 #include "hattr/core/error.hpp"
 #include "hattr/guidance/reference.hpp"
@@ -430,37 +431,49 @@ TEST(SimulatedTraineeOnThePen, PositionGuidanceFeltWithTheTemplateHiddenPullsThe
 // on shapes a model can ask for up to the bound and past it, and on a single sample and tiny
 // products (where Eigen's product goes another way, and is used), with zeros, negative zeros
 // and values over many orders of magnitude. (Combining one row in turn gave other bits.)
-TEST(SimulatedTraineeSeries, CombiningTheBasisGivesEigensProductBitForBit) {
-  std::mt19937_64 rng(7);
-  std::normal_distribution<double> normal;
+// combineBasis is vectorized (Highway, dispatched at run time): every instruction set compiled
+// in that this CPU runs must give Eigen's bits, whole blocks of rows and the rows left over.
+TEST(SimulatedTraineeSeries, CombiningTheBasisGivesEigensProductBitForBitOnEveryInstructionSet) {
   int checked = 0;
-  for (const Eigen::Index rows : {1, 2, 3, 7, 64, 1001, 3555}) {
-    for (const Eigen::Index functions : {2, 3, 5, 20, 30, 40, 61, 128, 129, 200}) {
-      Eigen::MatrixXd phi(rows, functions);
-      PlanWeights weights(functions, 3);
-      for (Eigen::Index i = 0; i < rows; ++i) {
-        for (Eigen::Index k = 0; k < functions; ++k) phi(i, k) = (i + k) % 7 == 0 ? 0.0 : normal(rng) * std::exp(4.0 * normal(rng));
+  for (const std::int64_t target : hwy::SupportedAndGeneratedTargets()) {
+    hwy::SetSupportedTargetsForTest(target);
+    std::mt19937_64 rng(7);
+    std::normal_distribution<double> normal;
+    for (const Eigen::Index rows : {1, 2, 3, 7, 33, 64, 1001, 3555}) {
+      for (const Eigen::Index functions : {2, 3, 5, 20, 30, 40, 61, 128, 129, 200}) {
+        Eigen::MatrixXd phi(rows, functions);
+        PlanWeights weights(functions, 3);
+        for (Eigen::Index i = 0; i < rows; ++i) {
+          for (Eigen::Index k = 0; k < functions; ++k) {
+            phi(i, k) = (i + k) % 7 == 0 ? 0.0 : normal(rng) * std::exp(4.0 * normal(rng));
+          }
+        }
+        for (Eigen::Index k = 0; k < functions; ++k) {
+          for (Eigen::Index c = 0; c < 3; ++c) weights(k, c) = k % 5 == 0 ? -0.0 : normal(rng) * 1e-3;
+        }
+        const Eigen::MatrixX3d product = phi * weights;
+        const Eigen::MatrixXd all = detail::combineBasis(phi, weights, {0, 1, 2});
+        const Eigen::MatrixXd some = detail::combineBasis(phi, weights, {2, 0});
+        const Eigen::MatrixXd one = detail::combineBasis(phi, weights, {1});
+        ASSERT_EQ(all.rows(), rows);
+        ASSERT_EQ(all.cols(), 3);
+        ASSERT_EQ(some.cols(), 2);
+        ASSERT_EQ(one.cols(), 1);
+        const auto same = [&](const Eigen::MatrixXd& combined, Eigen::Index j, Eigen::Index c) {
+          EXPECT_EQ(std::memcmp(combined.col(j).data(), product.col(c).data(),
+                                sizeof(double) * static_cast<std::size_t>(rows)), 0)
+              << hwy::TargetName(target) << ": " << rows << " samples, " << functions << " functions, column " << c;
+          ++checked;
+        };
+        for (Eigen::Index c = 0; c < 3; ++c) same(all, c, c);
+        same(some, 0, 2);
+        same(some, 1, 0);
+        same(one, 0, 1);
       }
-      for (Eigen::Index k = 0; k < functions; ++k) {
-        for (Eigen::Index c = 0; c < 3; ++c) weights(k, c) = k % 5 == 0 ? -0.0 : normal(rng) * 1e-3;
-      }
-      const Eigen::MatrixX3d product = phi * weights;
-      const Eigen::MatrixXd all = detail::combineBasis(phi, weights, {0, 1, 2});
-      const Eigen::MatrixXd some = detail::combineBasis(phi, weights, {2, 0});
-      ASSERT_EQ(all.rows(), rows);
-      ASSERT_EQ(all.cols(), 3);
-      ASSERT_EQ(some.cols(), 2);
-      const auto same = [&](const Eigen::MatrixXd& combined, Eigen::Index j, Eigen::Index c) {
-        EXPECT_EQ(std::memcmp(combined.col(j).data(), product.col(c).data(), sizeof(double) * static_cast<std::size_t>(rows)), 0)
-            << rows << " samples, " << functions << " functions, column " << c;
-        ++checked;
-      };
-      for (Eigen::Index c = 0; c < 3; ++c) same(all, c, c);
-      same(some, 0, 2);
-      same(some, 1, 0);
     }
   }
-  EXPECT_EQ(checked, 7 * 10 * 5);
+  hwy::SetSupportedTargetsForTest(0);
+  EXPECT_EQ(checked, static_cast<int>(hwy::SupportedAndGeneratedTargets().size()) * 8 * 10 * 6);
 }
 
 }  // namespace

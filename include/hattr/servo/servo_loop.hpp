@@ -115,7 +115,9 @@ class ServoLoop {
 
   /// Every sample with its tick number, for one consumer (the recorder).
   [[nodiscard]] SpscRing<TickSample>& samples() noexcept { return samples_; }
-  /// The newest sample, for one display reader.
+  /// The newest sample, for one display reader. In simulated time (runSimulated) it is written
+  /// on the last tick of each call: the newest sample between calls, without a locked
+  /// exchange on every tick of a run that goes as fast as it can.
   [[nodiscard]] TripleBuffer<Sample>& latest() noexcept { return latest_; }
   [[nodiscard]] const LiveCounters& counters() const noexcept { return counters_; }
   /// |period − nominal| and tick compute time (on a real clock: none in simulated time). Read
@@ -157,6 +159,7 @@ class ServoLoop {
   std::chrono::nanoseconds last_now_{-1};
   std::uint64_t tick_number_ = 0;
   std::chrono::nanoseconds sim_now_{0};
+  bool latest_due_ = true;  // whether this tick writes latest_: always, but within runSimulated
   std::atomic<bool> running_{false};
   std::atomic<bool> stop_requested_{false};
   std::thread thread_;
