@@ -84,10 +84,12 @@ std::vector<TrialScore> TrialScorer::scoreAll(std::span<const HapticProfile* con
 
 PreparedTrial TrialScorer::prepare(const HapticProfile& trial) const {
   const Cropped c = crop(trial, "trial");
+  // preprocessTrial channel by channel, the trial's times scaled onto the expert's span once.
+  const std::vector<double> scaled_t_s = timeScale(c.t_s, expert_t_);
   PreparedTrial p;
   for (std::size_t k = 0; k < kScoredChannels.size(); ++k) {
     if (kScoredChannels[k] == Channel::kZ && !options_.score_z) continue;  // left empty: not scored
-    p.series[k] = preprocessTrial(c.t_s, c.series[k], expert_t_, options_.normalization);
+    p.series[k] = interpolateAt(scaled_t_s, normalize(c.series[k], options_.normalization), expert_t_);
   }
   return p;
 }
