@@ -11,7 +11,7 @@ BUILD := build/$(PRESET)
 # Warnings are errors in CI (CI=true), warnings elsewhere.
 export HATTR_WERROR := $(if $(filter true 1,$(CI)),ON,OFF)
 
-.PHONY: all deps build test demo sanitize asan tsan bench fuzz clean help
+.PHONY: all deps build test demo sanitize asan tsan bench fuzz package package-check clean help
 
 all: build
 
@@ -22,6 +22,8 @@ help:
 	@echo "               threads or processes under the thread sanitizer (make asan, make tsan)"
 	@echo "make bench     build and run the benchmarks"
 	@echo "make fuzz      build the libFuzzer targets and fuzz the profile, study and world readers for 60 s each"
+	@echo "make package   build the Debian packages into build/package/packages (docs/install.md)"
+	@echo "make package-check  the packages installed, run and purged on a fresh debootstrap root (as root)"
 
 deps:
 	@scripts/install-deps
@@ -62,6 +64,19 @@ fuzz: deps
 	build/fuzz/fuzz/fuzz_profile_csv -max_total_time=60 -max_len=4096 build/fuzz/corpus fuzz/seeds
 	build/fuzz/fuzz/fuzz_study_file -max_total_time=60 -max_len=4096 build/fuzz/corpus-study fuzz/seeds-study
 	build/fuzz/fuzz/fuzz_world_file -max_total_time=60 -max_len=4096 build/fuzz/corpus-world fuzz/seeds-world
+
+# The Debian packages (cmake/HattrPackaging.cmake): a release build for the prefix /usr, without
+# the tests (the compiler cache reuses the release build's objects), packed by CPack.
+package: deps
+	cmake --preset package >/dev/null
+	cmake --build --preset package -j $(JOBS)
+	rm -rf build/package/packages
+	cd build/package && cpack -G DEB
+
+# The packages on a clean Debian 12 root (scripts/check-debian-packages): installed with apt-get,
+# the demo, Python and the studio run from the installed files, then purged.
+package-check: package
+	scripts/check-debian-packages build/package/packages
 
 clean:
 	rm -rf build demo-out

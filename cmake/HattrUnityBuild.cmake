@@ -9,7 +9,7 @@
 # every clone, found through -I<root>, which ccache's CCACHE_BASEDIR makes relative.
 #
 # A file that cannot share a batch stays on its own: one with its own compile options or
-# definitions (the sample codec's -ffp-contract=off, sim/data_dir.cpp), one marked SKIP_UNITY_BUILD_INCLUSION
+# definitions (the sample codec's -ffp-contract=off, core/install_layout.cpp), one marked SKIP_UNITY_BUILD_INCLUSION
 # (Highway's per-target kernels include themselves), one that several targets compile (a batch
 # hides its file from every target of the folder), and every file of a target that Qt's moc
 # processes. HATTR_UNITY_BUILD=OFF compiles every file alone (to check each includes what it uses).

@@ -30,7 +30,7 @@ std::string kindsText() {
   std::string text = device::deviceUriHelp();
   const auto plugins = device::findPlugins();
   text += "\nplugins found (plugin:NAME, or plugin:/path/libX.so):\n";
-  if (plugins.empty()) text += "  none (search path: $HATTR_PLUGIN_PATH, then beside the hattr program)\n";
+  if (plugins.empty()) text += "  none (search path: $HATTR_PLUGIN_PATH, then the prefix's LIBDIR/hattr/plugins: `hattr paths`)\n";
   for (const auto& p : plugins) text += fmt::format("  {:<14} {}\n    {}\n", p.name, p.description, p.path);
   text += "\nCheck a device before a study: hattr devices check URI (docs/devices.md).\n";
   return text;

@@ -94,6 +94,7 @@ int main(int argc, char** argv) {
   registerLmmCommand(app);
   registerSimCommands(app);
   registerDemoCommand(app);
+  registerPathsCommand(app);
 
   if (const std::string unknown = unknownCommandMessage(app, argc, argv); !unknown.empty()) {
     std::cerr << "hattr: error: " << unknown << '\n';

@@ -25,6 +25,7 @@
 
 #include "avr_board.hpp"
 #include "hattr/core/error.hpp"
+#include "hattr/core/install_layout.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/openpen/protocol.h"
 #include "hattr/session/trial.hpp"
@@ -198,14 +199,26 @@ int run(const Options& options) {
   return 0;
 }
 
+/// The reference firmware in the share folder of the prefix this program is in.
+std::filesystem::path installedFirmware() {
+  const std::filesystem::path in_share = std::filesystem::path("firmware") / "openpen-atmega328p.elf";
+  if (const auto share = hattr::findShareDir(); share && std::filesystem::is_regular_file(*share / in_share)) {
+    return *share / in_share;
+  }
+  throw hattr::InputError(fmt::format(
+      "--firmware: not given, and no installed firmware: expected PREFIX/{}/{}, looked in {}; give the ELF with "
+      "--firmware", hattr::relativeShareDir().string(), in_share.string(), hattr::searchedShareDirs()));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"The open pen's firmware under simavr, with the simulated pantograph, hand and table, behind a "
                "pseudo-terminal: hattr opens it as serial://PTY (docs/hardware.md)"};
   Options options;
-  app.add_option("--firmware", options.firmware, "The firmware ELF (built for an ATmega328P at 16 MHz)")
-      ->required()
+  app.add_option("--firmware", options.firmware,
+                 "The firmware ELF (built for an ATmega328P at 16 MHz); default: the one hattr installs, "
+                 "PREFIX/share/hattr/firmware/openpen-atmega328p.elf")
       ->check(CLI::ExistingFile);
   app.add_option("--hand", options.hand, "A haptic profile (CSV) the simulated hand writes from the first STATE of a "
                                          "stream on (default: nobody holds the pen)")
@@ -243,6 +256,7 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;
   }
   try {
+    if (options.firmware.empty()) options.firmware = installedFirmware();
     return run(options);
   } catch (const hattr::InputError& e) {
     std::fprintf(stderr, "hattr-pen-emulator: %s\n", e.what());

@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/core/install_layout.hpp"
 #include "hattr/device/plugin_abi.h"
 
 namespace hattr::device {
@@ -250,14 +251,8 @@ std::vector<std::string> pluginSearchPath() {
       rest = colon == std::string_view::npos ? std::string_view{} : rest.substr(colon + 1);
     }
   }
-  std::error_code ec;
-  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    for (const char* relative : {"../../plugins", "../plugins", "../lib/hattr/plugins"}) {
-      const auto folder = std::filesystem::weakly_canonical(exe.parent_path() / relative, ec);
-      if (!ec && std::filesystem::is_directory(folder, ec)) folders.push_back(folder.string());
-    }
-  }
+  // Then the plugin folder of the prefix this program is in (installed, or the build folder).
+  if (const auto installed = findPluginDir()) folders.push_back(installed->string());
   return folders;
 }
 

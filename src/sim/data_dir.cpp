@@ -4,6 +4,7 @@
 #include <string>
 
 #include "hattr/core/error.hpp"
+#include "hattr/core/install_layout.hpp"
 
 namespace hattr::sim {
 
@@ -15,18 +16,11 @@ std::filesystem::path defaultDataDir() {
                        dir.string());
     return dir;
   }
-#ifdef HATTR_SOURCE_DATA_DIR
-  const std::filesystem::path built_in(HATTR_SOURCE_DATA_DIR);
-  HATTR_THROW_UNLESS(std::filesystem::is_directory(built_in),
-                     "data directory: HATTR_DATA_DIR is not set and the source tree's data folder \"{}\" does not "
-                     "exist; set HATTR_DATA_DIR to the folder holding glyphs/ and sim/",
-                     built_in.string());
-  return built_in;
-#else
-  throw InputError(
-      "data directory: HATTR_DATA_DIR is not set and this build has no source data folder; set HATTR_DATA_DIR to "
-      "the folder holding glyphs/ and sim/");
-#endif
+  if (auto share = findShareDir()) return *share;
+  throw InputError(fmt::format(
+      "data directory: HATTR_DATA_DIR is not set and no {} holding glyphs/ was found beside this program (looked in "
+      "{}); reinstall hattr, or set HATTR_DATA_DIR to the folder holding glyphs/ and sim/",
+      relativeShareDir().string(), searchedShareDirs()));
 }
 
 }  // namespace hattr::sim

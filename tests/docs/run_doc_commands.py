@@ -212,12 +212,17 @@ def make_scratch(source: Path, hattr: Path, build: Path, shared: Path | None) ->
     release = clone / "build" / "release"
     (release / "apps" / "hattr").mkdir(parents=True)
     shutil.copy2(hattr, release / "apps" / "hattr" / "hattr")
-    for sub, pattern in [("bench", "bench_*"), ("plugins", "*.so"), ("apps/pen-emulator", "hattr-pen-emulator"),
-                         ("firmware", "*.elf")]:
+    for sub, pattern in [("bench", "bench_*"), ("apps/pen-emulator", "hattr-pen-emulator")]:
         (release / sub).mkdir(parents=True, exist_ok=True)
         for program in sorted((build / sub).glob(pattern)) if (build / sub).is_dir() else []:
             if program.is_file():
                 shutil.copy2(program, release / sub / program.name)
+    # The build folder is a prefix (share/hattr: data and firmware; LIBDIR/hattr/plugins): the
+    # copied programs find them relative to themselves, as an installed hattr does.
+    if (build / "share").is_dir():
+        shutil.copytree(build / "share", release / "share")
+    for plugins in sorted(build.glob("lib*/**/hattr/plugins")):
+        shutil.copytree(plugins, release / plugins.relative_to(build))
     if (build / "python" / "hattr").is_dir():  # the Python package, for python blocks
         shutil.copytree(build / "python", release / "python")
     if shared is not None and shared.is_dir():

@@ -190,7 +190,7 @@ TEST(DataDir, TheEnvironmentVariableWinsAndMustNameADirectory) {
   }
   const ScopedEnv unset("HATTR_DATA_DIR", nullptr);
   EXPECT_TRUE(std::filesystem::is_regular_file(defaultDataDir() / "glyphs" / "na.json"))
-      << "without the variable, the source tree's data folder";
+      << "without the variable, the share/hattr folder the build stages beside this program";
 }
 
 }  // namespace

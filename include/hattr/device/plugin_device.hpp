@@ -27,8 +27,9 @@ struct PluginInfo {
 };
 
 /// Where plugins are looked for when a URI names one without a path (`plugin:sim` means
-/// libhattr_sim_plugin.so): the folders of $HATTR_PLUGIN_PATH (colon-separated), then beside
-/// the running program (the build tree's plugins/ and an install's lib/hattr/plugins).
+/// libhattr_sim_plugin.so): the folders of $HATTR_PLUGIN_PATH (colon-separated), then the plugin
+/// folder of the prefix this program is in, LIBDIR/hattr/plugins (an installed prefix's, or the
+/// build folder's: hattr/core/install_layout.hpp).
 std::vector<std::string> pluginSearchPath();
 /// The file a plugin URI's target names: a path as it is; a bare name through the search path.
 /// Throws InputError naming the folders searched when a bare name is not found.

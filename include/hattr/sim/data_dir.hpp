@@ -6,9 +6,10 @@
 
 namespace hattr::sim {
 
-/// The data directory: the environment variable HATTR_DATA_DIR if it is set and not empty,
-/// else the source tree's data/ folder as the build defines it (HATTR_SOURCE_DATA_DIR).
-/// Throws InputError if HATTR_DATA_DIR names no directory, or if neither is available.
+/// The data directory: the environment variable HATTR_DATA_DIR if it is set and not empty, else
+/// the share/hattr folder of the prefix this program is in (an installed prefix, or a build
+/// folder, which stages the same layout: hattr/core/install_layout.hpp). Throws InputError if
+/// HATTR_DATA_DIR names no directory, or if no prefix has one (saying where it looked).
 /// Not for the servo thread.
 std::filesystem::path defaultDataDir();
 
