@@ -11,7 +11,7 @@ BUILD := build/$(PRESET)
 # Warnings are errors in CI (CI=true), warnings elsewhere.
 export HATTR_WERROR := $(if $(filter true 1,$(CI)),ON,OFF)
 
-.PHONY: all deps build test demo sanitize asan tsan bench fuzz package package-check clean help
+.PHONY: all deps build test demo sanitize asan tsan bench fuzz package package-check nounity clean help
 
 all: build
 
@@ -23,6 +23,7 @@ help:
 	@echo "make bench     build and run the benchmarks"
 	@echo "make fuzz      build the libFuzzer targets and fuzz the profile, study and world readers for 60 s each"
 	@echo "make package   build the Debian packages into build/package/packages (docs/install.md)"
+	@echo "make nounity   build every C++ file alone, without unity batches (checks each includes what it uses)"
 	@echo "make package-check  the packages installed, run and purged on a fresh debootstrap root (as root)"
 
 deps:
@@ -64,6 +65,13 @@ fuzz: deps
 	build/fuzz/fuzz/fuzz_profile_csv -max_total_time=60 -max_len=4096 build/fuzz/corpus fuzz/seeds
 	build/fuzz/fuzz/fuzz_study_file -max_total_time=60 -max_len=4096 build/fuzz/corpus-study fuzz/seeds-study
 	build/fuzz/fuzz/fuzz_world_file -max_total_time=60 -max_len=4096 build/fuzz/corpus-world fuzz/seeds-world
+
+# Every C++ file of the library, the apps and the tests compiled alone (HATTR_UNITY_BUILD=OFF),
+# at -O0 without debug info: a file that leans on a batch-mate's include fails here. A build
+# check only (nothing runs); the compiler cache keeps it cheap after the first (docs/architecture.md).
+nounity: deps
+	cmake --preset nounity >/dev/null
+	cmake --build --preset nounity -j $(JOBS)
 
 # The Debian packages (cmake/HattrPackaging.cmake): a release build for the prefix /usr, without
 # the tests (the compiler cache reuses the release build's objects), packed by CPack.

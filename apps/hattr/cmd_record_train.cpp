@@ -181,8 +181,10 @@ void registerRecordTrainCommands(CLI::App& app) {
                     "partial-then-full (`hattr strategies`)")
       ->capture_default_str();
   train->add_option("--param", train_opt->params, "A parameter of the strategy, KEY=VALUE in the units `hattr "
-                    "strategies` gives, or a choice's name (repeatable), e.g. --param half_width_mm=1.5 --param base=alpha; a "
-                    "scheduled strategy (fading, ...) plays its first trial's law and gain");
+                    "strategies` gives, or a choice's name (repeatable), e.g. --param half_width_mm=1.5 --param base=alpha; "
+                    "STRATEGY.KEY=VALUE sets another strategy's, such as a scheduled strategy's law's gains "
+                    "(--param pcontrol.kp_N_per_mm=0.2); a scheduled strategy (fading, ...) plays its first trial's law "
+                    "and gain");
   train->add_option("--seed", train_opt->seed, "Seed of the strategy's random force (noise)")->capture_default_str();
   train->add_option("--reference", train_opt->reference, "The expert's haptic profile")->required();
   train->add_option("--indexing", train_opt->indexing, "time (the paper's) or progress (follows the trainee along the path)")

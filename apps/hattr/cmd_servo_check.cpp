@@ -8,6 +8,7 @@
 
 #include "cli_common.hpp"
 #include "hattr/core/error.hpp"
+#include "hattr/core/units.hpp"
 #include "hattr/ops/servo_check.hpp"
 
 namespace hattr::cli {
@@ -75,7 +76,7 @@ servo::Verdict runServoCheck(const ServoCheckOptions& opt) {
       .world = opt.world,
       .realtime = {.policy = servo::parseRealtimePolicy(opt.realtime),
                    .cpu = opt.cpu,
-                   .final_spin = std::chrono::nanoseconds(static_cast<std::int64_t>(opt.spin_us * 1e3))}};
+                   .final_spin = std::chrono::nanoseconds(units::secondsToNanoseconds(opt.spin_us * 1e-6))}};
   Progress progress("", 0, "s");
   int shown = 0;  // the run the progress line shows
   if (Progress::onTerminal()) {

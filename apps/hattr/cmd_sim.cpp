@@ -90,11 +90,14 @@ void runAa(const SimOptions& opt) {
   const sim::LearningHypothesis hypothesis = sim::parseHypothesis(opt.hypothesis, "--hypothesis");
   nlohmann::json seeds = nlohmann::json::array();
   int significant[2] = {0, 0};
-  std::string skill;  // the glyph's name, as the studies store it
+  // The studies' folders name the glyph and the hypothesis: runs of others into the same --out
+  // keep their own (aa-loop-position-plan-001).
+  std::string skill = sim::findGlyph(opt.glyph).name;
   Progress progress("A/A", opt.seeds, "studies");
   for (int s = 1; s <= opt.seeds; ++s) {
     progress.update(s - 1, fmt::format("A/A: study {} of {}", s, opt.seeds));
-    const auto r = sim::runInSilicoStudy({.out_dir = fmt::format("{}/aa-{:03}", opt.out_dir, s), .glyph = opt.glyph,
+    const auto r = sim::runInSilicoStudy({.out_dir = fmt::format("{}/aa-{}-{}-{:03}", opt.out_dir, skill, sim::hypothesisName(hypothesis), s),
+                                          .glyph = opt.glyph,
                                           .subjects = opt.subjects,
                                           .seed = static_cast<std::uint64_t>(s), .training_trials = opt.trials,
                                           .recall_trials = opt.trials, .guidance = false,
@@ -135,13 +138,14 @@ void runSweep(const SimOptions& opt) {
   HATTR_THROW_UNLESS(!values.empty(), "--values: expected at least one number");
   nlohmann::json rows = nlohmann::json::array();
   std::string baseline;
-  std::string skill;  // the glyph's name, as the studies store it
+  // The studies' folders name the glyph (sweep-loop-slow_rate-0.01).
+  std::string skill = sim::findGlyph(opt.glyph).name;
   Progress progress("sweep", static_cast<double>(values.size()), "studies");
   for (const double v : values) {
     progress.update(static_cast<double>(rows.size()), fmt::format("sweep: {} = {}", opt.parameter, v));
     sim::TraineeModel model = base;
     sim::setModelParameter(model, opt.parameter, v);
-    const auto r = sim::runInSilicoStudy({.out_dir = fmt::format("{}/sweep-{}-{}", opt.out_dir, opt.parameter, v),
+    const auto r = sim::runInSilicoStudy({.out_dir = fmt::format("{}/sweep-{}-{}-{}", opt.out_dir, skill, opt.parameter, v),
                                           .glyph = opt.glyph, .subjects = opt.subjects, .training_trials = opt.trials,
                                           .recall_trials = opt.trials, .model = model, .write_report = false,
                                           .progress = withinStudy(progress, static_cast<double>(rows.size()))});

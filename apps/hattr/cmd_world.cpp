@@ -17,9 +17,11 @@ render::WorldConfig worldConfigOrDefault(const std::string& file) {
 namespace {
 
 /// Clamps the paper to the passive bounds of the device `device_uri` at `rate_hz` (a sim://
-/// pen's declared limits, any other device's once opened); one line per change.
+/// pen's declared limits, any other device's once opened: its one open here); one line per change.
 std::vector<std::string> clampWorldToDevice(render::WorldConfig& world, const std::string& device_uri, double rate_hz) {
-  return render::clampToDevice(world.paper, device::declaredLimits(device_uri), rate_hz);
+  const std::optional<DeviceLimits> declared = device::limitsWithoutOpening(device_uri);
+  return render::clampToDevice(world.paper, declared ? *declared : device::openDevice(device_uri, nullptr)->limits(),
+                               rate_hz);
 }
 
 struct WorldCheckOptions {

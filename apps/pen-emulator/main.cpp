@@ -26,6 +26,7 @@
 #include "avr_board.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/core/install_layout.hpp"
+#include "hattr/core/units.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/openpen/protocol.h"
 #include "hattr/session/trial.hpp"
@@ -145,7 +146,7 @@ class Emulator {
 
   /// Real time: simulated time waits for the wall clock.
   void pace(std::chrono::steady_clock::time_point start) const {
-    const auto due = start + std::chrono::nanoseconds(static_cast<std::int64_t>(board_.now_s() * 1e9));
+    const auto due = start + std::chrono::nanoseconds(hattr::units::secondsToNanoseconds(board_.now_s()));
     if (due > std::chrono::steady_clock::now()) std::this_thread::sleep_until(due);
   }
 

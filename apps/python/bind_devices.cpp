@@ -12,6 +12,7 @@
 #include <pybind11/stl/filesystem.h>
 
 #include "bindings.hpp"
+#include "hattr/core/units.hpp"
 #include "hattr/ops/device_check.hpp"
 #include "hattr/ops/servo_check.hpp"
 
@@ -29,7 +30,7 @@ void bindDevices(py::module_& m) {
             .world = world.value_or(std::filesystem::path()),
             .realtime = {.policy = servo::parseRealtimePolicy(realtime),
                          .cpu = cpu,
-                         .final_spin = std::chrono::nanoseconds(static_cast<std::int64_t>(spin_us * 1e3))}};
+                         .final_spin = std::chrono::nanoseconds(units::secondsToNanoseconds(spin_us * 1e-6))}};
         nlohmann::json json;
         {
           py::gil_scoped_release unlocked;

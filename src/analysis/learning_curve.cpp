@@ -110,7 +110,7 @@ double CurveFit::at(double n) const { return asymptote.estimate + amplitude.esti
 
 LinearTrend linearTrend(const std::vector<double>& n, const std::vector<double>& y, double confidence) {
   LinearTrend out{kNaN, kNaN, kNaN, kNaN, n.size()};
-  if (n.size() != y.size() || n.size() < 3) return out;
+  if (n.size() != y.size() || n.size() < 2) return out;
   const auto m = static_cast<double>(n.size());
   double mn = 0.0, my = 0.0;
   for (std::size_t i = 0; i < n.size(); ++i) {
@@ -124,6 +124,7 @@ LinearTrend linearTrend(const std::vector<double>& n, const std::vector<double>&
   }
   if (!(sxx > 0.0)) return out;
   out.slope = sxy / sxx;
+  if (n.size() < 3) return out;  // a line through two points: no residual to judge it by
   double rss = 0.0;
   for (std::size_t i = 0; i < n.size(); ++i) {
     const double r = y[i] - my - out.slope * (n[i] - mn);

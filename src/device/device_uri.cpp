@@ -161,11 +161,11 @@ std::unique_ptr<Device> openDevice(std::string_view uri_text, HandScript* hand) 
   throw InputError(fmt::format("device URI \"{}\": unknown scheme \"{}\"; accepted: {}", uri_text, uri.scheme, kAccepted));
 }
 
-DeviceLimits declaredLimits(std::string_view uri) {
+std::optional<DeviceLimits> limitsWithoutOpening(std::string_view uri) {
   const DeviceUri parsed = parseDeviceUri(uri);
   if (parsed.scheme == "sim" && parsed.target == "pen") return simulatedPenParams(parsed).limits;
   if (parsed.scheme == "sim" && parsed.target == "planar") return planarPenLimits(simulatedPlanarParams(parsed).spec);
-  return openDevice(uri, nullptr)->limits();
+  return std::nullopt;
 }
 
 std::string deviceUriHelp() {

@@ -27,9 +27,9 @@ Vec3 handForce(const HandImpedance& hand, const HandCommand& command, double pre
     // Writing: the fingers steer the tip in the paper plane and press it into the paper
     // with the normal share F·sin θ of the axial force (the tangential share is carried
     // by the grip). The hand does not hold the height, but the fingers still damp it.
-    // The fingers reach only so far under the writing plane (the hand rests on the desk):
+    // The fingers reach only so far under the paper's surface (the hand rests on the paper):
     // deeper, the press eases off, and past the reach the fingers hold the pen back.
-    const double depth_m = -p_WT.z();
+    const double depth_m = command.surface_z_m - p_WT.z();
     const double reach = std::clamp((hand.press_ease_end_m - depth_m) / (hand.press_ease_end_m - hand.press_ease_begin_m),
                                     0.0, 1.0);
     const double held_back_N = hand.stiffness_N_per_m * std::max(depth_m - hand.press_ease_end_m, 0.0);

@@ -50,6 +50,7 @@ void MentorConfig::validate() const {
   check("deadband (Weber fraction)", deadband, 0.0, 1.0);
   check("deadband position [m]", deadband_position_m, 0.0, 0.01);
   check("heartbeat_s", heartbeat_s, 0.001, 1.0);
+  check("rate_hz", rate_hz, 1.0, 10'000.0);
   HATTR_THROW_UNLESS(heartbeat_s < hold_s, "mentoring: heartbeat_s: expected less than hold_s = {} s (or the link "
                      "drops between PEERs), got {}", hold_s, heartbeat_s);
   check("position Kp [N/m]", gains.position_kp_N_per_m, 0.0, 1e5);
@@ -161,11 +162,11 @@ wire::LinkSessionTiming mentorTiming(const MentorConfig& config) {
   return timing;
 }
 
-/// What the leader's WELCOME says: its timeouts (a station serves no device: rate 1 Hz is a
-/// placeholder the follower ignores).
+/// What the leader's WELCOME says: its servo rate and its timeouts (a station serves no device:
+/// the limits are WelcomePayload's defaults, not its pen's; docs/protocol.md).
 wire::WelcomePayload leaderOffer(const MentorConfig& config) {
   wire::WelcomePayload offer;
-  offer.rate_hz = 1.0;
+  offer.rate_hz = config.rate_hz;
   offer.session_timeout_ns = units::secondsToNanoseconds(config.session_timeout_s);
   offer.command_timeout_ns = units::secondsToNanoseconds(config.hold_s);
   return offer;

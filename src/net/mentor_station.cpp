@@ -59,14 +59,16 @@ device::HandCommand HeldHand::command(double t_s) noexcept {
 
 MentorStation::MentorStation(const StationConfig& config, wire::DatagramLink& link, device::HandScript* hand)
     : config_(config) {
+  // The device, opened once (a simulated pen starts above the hand); the world and the coupling's
+  // gains clamped to its limits; the coupling, the loop, the recorder.
   environment_ = std::make_unique<session::TrialEnvironment>(config_.device_uri, config_.world, config_.rate_hz);
+  device_ = hand ? session::openTrialDevice(config_.device_uri, *hand) : device::openDevice(config_.device_uri, nullptr);
+  environment_->bindLimits(device_->limits());
   clamps_ = environment_->worldClamps();
   MentorConfig mentor = config_.mentor;
+  mentor.rate_hz = config_.rate_hz;
   const auto gain_clamps = clampCouplingGains(mentor.gains, mentor.coupling, *environment_);
   clamps_.insert(clamps_.end(), gain_clamps.begin(), gain_clamps.end());
-
-  // The device (a simulated pen starts above the hand), the coupling, the loop, the recorder.
-  device_ = hand ? session::openTrialDevice(config_.device_uri, *hand) : device::openDevice(config_.device_uri, nullptr);
   coupling_ = std::make_unique<MentorCoupling>(mentor, link);
   environment_->paper().reset();
   loop_ = std::make_unique<servo::ServoLoop>(*device_, servo::ServoConfig{.rate_hz = config_.rate_hz});

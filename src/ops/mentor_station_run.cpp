@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "hattr/core/error.hpp"
+#include "hattr/core/units.hpp"
 #include "hattr/ops/json.hpp"
 #include "hattr/session/trial.hpp"
 #include "hattr/wire/keys.hpp"
@@ -152,7 +153,7 @@ void MentorStationRun::close() {
   closed_ = true;
   station_->loop().stop();
   station_->recorder().stopThread();
-  station_->coupling().close(static_cast<std::int64_t>(loopTime() * 1e9));
+  station_->coupling().close(units::secondsToNanoseconds(loopTime()));
 }
 
 }  // namespace hattr::ops

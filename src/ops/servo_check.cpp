@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "hattr/core/error.hpp"
+#include "hattr/core/units.hpp"
 #include "hattr/device/device_uri.hpp"
 #include "hattr/device/hand.hpp"
 #include "hattr/ops/json.hpp"
@@ -103,7 +104,7 @@ ServoCheckResult runServoCheck(const ServoCheckOptions& options) {
   // device's session, opened below, then waits for nothing before the loop runs.
   render::WorldConfig world = options.world.empty() ? render::WorldConfig{} : render::loadWorldConfig(options.world);
   auto paper = std::make_unique<render::PaperRenderer>(world.paper, render::buildRelief(world.relief));
-  const auto duration = std::chrono::nanoseconds(static_cast<std::int64_t>(options.seconds * 1e9));
+  const auto duration = std::chrono::nanoseconds(units::secondsToNanoseconds(options.seconds));
   result.floor = measureFloor(options, duration);
 
   // Then the full pipeline: a hand writing circles on the paper through the device, the paper

@@ -28,19 +28,21 @@ ScriptedTrialResult runScriptedTrial(ScriptedTrialRun run) {
   device::ProfileHandScript hand(run.hand);
   session::TrialEnvironment environment(run.device, std::move(run.world), run.options.rate_hz);
   const bool training = run.reference.has_value();
+  run.options.expert = training ? &*run.reference : nullptr;
+  session::TrialSetup setup = session::scriptedTrialSetup(hand, run.hand, run.options);
   if (training) {
-    // A reference or a hand script the device cannot render is refused before the trial
-    // (issue 38); a recording keeps any hand script: it records what happens, and marks it.
+    // A reference or a hand script the device cannot render is refused before the trial runs
+    // (issue 38), checked against the limits of the device the trial opened; a recording keeps
+    // any hand script: it records what happens, and marks it.
     const auto named = [](const std::string& what, const std::string& file) {
       return file.empty() ? what : fmt::format("{} {}", what, file);
     };
-    session::checkRenderable(*run.reference, environment.limits(), named(run.reference_what, run.options.reference_label));
-    session::checkRenderable(run.hand, environment.limits(), named(run.hand_what, run.options.hand_label));
-    run.options.expert = &*run.reference;
-  } else {
-    run.options.expert = nullptr;
+    setup.check_device = [&run, reference = named(run.reference_what, run.options.reference_label),
+                          script = named(run.hand_what, run.options.hand_label)](const DeviceLimits& limits) {
+      session::checkRenderable(*run.reference, limits, reference);
+      session::checkRenderable(run.hand, limits, script);
+    };
   }
-  const session::TrialSetup setup = session::scriptedTrialSetup(hand, run.hand, run.options);
   ScriptedTrialResult result;
   result.trial = session::runTrial(environment, setup, hand);
   result.disturbed = session::disturbanceOf(result.trial);

@@ -70,15 +70,16 @@ std::pair<SubjectMean, SubjectMean> shapeAndForce(const std::vector<DesignTrialS
 
 /// Every completed trial with its place, and why the analysis leaves it out ("" when it takes
 /// it); counts what is left out.
-std::vector<DesignTrialScore> completedTrials(const session::StudyDatabase& db, DesignAnalysis& out) {
+std::vector<DesignTrialScore> completedTrials(const session::StudyDatabase& db,
+                                             const std::vector<session::TrialRecord>& records, DesignAnalysis& out) {
   const session::StudyDefinition& study = db.study();
   const bool exclude = study.protocol.disturbed == session::DisturbedPolicy::kExclude;
   // A paper's design: its recall trials as the paper's analysis takes them (spares included).
   const bool paper = session::isPaperDesign(study);
-  const std::map<std::int64_t, int> paper_recall = paper ? paperRecallTrials(db) : std::map<std::int64_t, int>{};
+  const std::map<std::int64_t, int> paper_recall = paper ? paperRecallTrials(db, records) : std::map<std::int64_t, int>{};
   std::vector<DesignTrialScore> scores;
   std::map<std::tuple<std::string, std::string, std::string, std::string>, int> in_phase;
-  for (const session::TrialRecord& t : db.trials()) {
+  for (const session::TrialRecord& t : records) {
     ++out.trials_planned;
     if (t.status != session::TrialStatus::kCompleted) {
       ++out.trials_pending;
@@ -364,7 +365,10 @@ DesignAnalysis analyzeDesign(const session::StudyDatabase& db, const AnalysisOpt
   a.condition_kind = conditionKind(study);
   a.conditions = conditionsOf(study, a.condition_kind);
   a.disturbed_policy = std::string(session::disturbedPolicyName(study.protocol.disturbed));
-  std::vector<DesignTrialScore> completed = completedTrials(db, a);
+  // The trial records, read once: every count, selection and the choice of analysis below judge
+  // the same snapshot of a study that other stations may be adding to.
+  const std::vector<session::TrialRecord> records = db.trials();
+  std::vector<DesignTrialScore> completed = completedTrials(db, records, a);
   HATTR_THROW_UNLESS(!completed.empty(), "{}: no trial of the study is completed yet ({} planned); run the study first",
                      db.file().string(), a.trials_planned);
   scoreTrials(db, options, completed);
@@ -375,7 +379,7 @@ DesignAnalysis analyzeDesign(const session::StudyDatabase& db, const AnalysisOpt
   for (const DesignTrialScore& s : a.scores) subjects.insert(s.subject);
   a.subjects = static_cast<int>(subjects.size());
   a.paper_design = session::isPaperDesign(study);
-  a.reason = chooseAnalysis(db).reason;
+  a.reason = chooseAnalysis(db, records).reason;
   if (a.subjects == 1 && a.reason.rfind("one learner", 0) != 0) {  // the others' trials all excluded
     a.reason = "one learner (1 subject with analyzed trials): there are no between-subject statistics";
   }

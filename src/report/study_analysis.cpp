@@ -70,7 +70,8 @@ namespace {
 
 /// The analyzed recall trials (unscored), the flagged and the spares used, into `out`; returns
 /// what keeps the balanced design from being complete, each a sentence (none: complete).
-std::vector<std::string> selectRecallTrials(const session::StudyDatabase& db, StudyAnalysis& out) {
+std::vector<std::string> selectRecallTrials(const session::StudyDatabase& db,
+                                            const std::vector<session::TrialRecord>& records, StudyAnalysis& out) {
   const session::StudyDefinition& study = db.study();
   const std::set<int> analyzed(out.analyzed_recall_trials.begin(), out.analyzed_recall_trials.end());
   const bool exclude_disturbed = study.protocol.disturbed == session::DisturbedPolicy::kExclude;
@@ -81,7 +82,6 @@ std::vector<std::string> selectRecallTrials(const session::StudyDatabase& db, St
   // and its trial number, so the design stays balanced.
   std::map<std::pair<std::string, std::string>, std::vector<const session::TrialRecord*>> spares;
   std::map<std::pair<std::string, std::string>, std::vector<int>> excluded;
-  const std::vector<session::TrialRecord> records = db.trials();
   std::vector<std::string> missing;
   for (const session::TrialRecord& t : records) {
     if (t.plan.phase != session::kPhaseRecall) continue;
@@ -133,9 +133,11 @@ std::vector<std::string> selectRecallTrials(const session::StudyDatabase& db, St
 
 }  // namespace
 
-AnalysisChoice chooseAnalysis(const session::StudyDatabase& db) {
+AnalysisChoice chooseAnalysis(const session::StudyDatabase& db) { return chooseAnalysis(db, db.trials()); }
+
+AnalysisChoice chooseAnalysis(const session::StudyDatabase& db, const std::vector<session::TrialRecord>& records) {
   std::set<std::string> subjects;
-  for (const session::TrialRecord& t : db.trials()) {
+  for (const session::TrialRecord& t : records) {
     if (t.status == session::TrialStatus::kCompleted) subjects.insert(t.plan.subject);
   }
   if (subjects.size() < 2) {
@@ -150,7 +152,7 @@ AnalysisChoice chooseAnalysis(const session::StudyDatabase& db) {
   }
   StudyAnalysis probe;
   probe.analyzed_recall_trials = session::analyzedRecallTrials(db.study().protocol);
-  const std::vector<std::string> problems = selectRecallTrials(db, probe);
+  const std::vector<std::string> problems = selectRecallTrials(db, records, probe);
   if (!problems.empty()) {
     return {false, fmt::format("the paper's design is not complete ({}), and the balanced ANOVA needs every cell: a "
                                "linear mixed model analyzes the trials there are", problems.front())};
@@ -160,9 +162,14 @@ AnalysisChoice chooseAnalysis(const session::StudyDatabase& db) {
 }
 
 std::map<std::int64_t, int> paperRecallTrials(const session::StudyDatabase& db) {
+  return paperRecallTrials(db, db.trials());
+}
+
+std::map<std::int64_t, int> paperRecallTrials(const session::StudyDatabase& db,
+                                              const std::vector<session::TrialRecord>& records) {
   StudyAnalysis probe;
   probe.analyzed_recall_trials = session::analyzedRecallTrials(db.study().protocol);
-  (void)selectRecallTrials(db, probe);  // what is missing only makes the set smaller
+  (void)selectRecallTrials(db, records, probe);  // what is missing only makes the set smaller
   std::map<std::int64_t, int> out;
   for (const TrialCost& c : probe.costs) out[c.trial_id] = c.trial;
   return out;
@@ -181,7 +188,7 @@ StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptio
   for (const auto mode : study.modes) out.modes.emplace_back(guidance::modeName(mode));
   out.analyzed_recall_trials = session::analyzedRecallTrials(study.protocol);
   out.disturbed_policy = std::string(session::disturbedPolicyName(study.protocol.disturbed));
-  const std::vector<std::string> problems = selectRecallTrials(db, out);
+  const std::vector<std::string> problems = selectRecallTrials(db, db.trials(), out);
   if (!problems.empty()) {
     throw InputError(problems.front() + (problems.front().find("not completed") != std::string::npos ? "; run the study first" : ""));
   }

@@ -90,18 +90,13 @@ std::string metricUnit(const std::string& metric) {
 }  // namespace
 
 namespace {
-/// The least-squares slope of values[i] over i (0 for fewer than 2 values).
-double leastSquaresSlope(const std::vector<double>& values) {
-  const double n = static_cast<double>(values.size());
-  if (values.size() < 2) return 0.0;
-  double mean_x = (n - 1.0) / 2.0, mean_y = 0.0;
-  for (const double v : values) mean_y += v / n;
-  double sxy = 0.0, sxx = 0.0;
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    sxy += (static_cast<double>(i) - mean_x) * (values[i] - mean_y);
-    sxx += (static_cast<double>(i) - mean_x) * (static_cast<double>(i) - mean_x);
-  }
-  return sxy / sxx;
+
+/// The least-squares slope of values[i] over the trial numbers 1, 2, ... (0 for fewer than 2).
+double slopeOverTrials(const std::vector<double>& values) {
+  std::vector<double> n(values.size());
+  for (std::size_t i = 0; i < n.size(); ++i) n[i] = static_cast<double>(i + 1);
+  const double slope = analysis::linearTrend(n, values).slope;
+  return std::isfinite(slope) ? slope : 0.0;
 }
 
 /// The modes of a metric's per-mode tables in the study's order (those the study does not name,
@@ -147,7 +142,7 @@ std::vector<std::string> conclusions(const StudyAnalysis& a, double alpha) {
       const analysis::AnovaRow* trial = findRow(m->per_mode.at(mode_name), "trial");
       if (!trial || !(trial->p < alpha)) continue;
       const auto means = m->mean_by_trial.find(mode_name);
-      const double slope = means == m->mean_by_trial.end() ? 0.0 : leastSquaresSlope(means->second);
+      const double slope = means == m->mean_by_trial.end() ? 0.0 : slopeOverTrials(means->second);
       trained.push_back(fmt::format("{} ({}, {:+.3g} per trial: {})", mode_name, pIs(trial->p), slope,
                                     slope > 0.0 ? "costs rose over the recall trials, forgetting or fatigue, not learning"
                                                 : "costs fell over the recall trials"));

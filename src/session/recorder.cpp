@@ -137,6 +137,10 @@ void Recorder::reset() {
   t_origin_s_ = 0.0;
   missed_ = 0;
   rejected_ = 0;
+  // The next recording counts its gaps from its own first tick: the ticks between two
+  // recordings (a mentoring lead's sessions) were never part of either.
+  have_tick_ = false;
+  last_tick_ = 0;
 }
 
 }  // namespace hattr::session

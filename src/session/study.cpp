@@ -434,9 +434,10 @@ StudyDefinition parseStudyObject(const json& root, std::string_view source, cons
 }  // namespace
 
 bool checkExpertsRenderable(const StudyDefinition& study) {
-  const device::DeviceUri uri = device::parseDeviceUri(study.device);
-  if (uri.scheme != "sim") return false;
-  const DeviceLimits limits = device::declaredLimits(study.device);  // a simulated pen's: nothing is opened
+  // A simulated pen's limits are known without opening it; any other device's when a trial opens it.
+  const std::optional<DeviceLimits> declared = device::limitsWithoutOpening(study.device);
+  if (!declared) return false;
+  const DeviceLimits& limits = *declared;
   std::vector<std::string> refused;
   for (const auto& [skill, path] : study.experts) {
     const auto named = study.named_expert_profiles.find(skill);

@@ -446,6 +446,11 @@ void StudyDatabase::releaseSubject(const std::string& subject) {
   s.bind(1, subject).bind(2, station_).run();
 }
 
-double StudyDatabase::claimRetryInterval_s() const noexcept { return options_.lease_timeout_s / 4.0; }
+double StudyDatabase::claimRetryInterval_s() const noexcept {
+  // A quarter of the lease, so that a dead station's subject is taken over soon after it lapses,
+  // and at most a second, so that a subject given back or the study's end is noticed soon
+  // whatever the lease (each round is one claim query a waiting subject).
+  return std::min(options_.lease_timeout_s / 4.0, kMaxClaimRetry_s);
+}
 
 }  // namespace hattr::session

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <thread>
 
 #include <fmt/format.h>
@@ -73,8 +74,8 @@ WaitEnd waitForEnd(const servo::ServoLoop& loop, const device::Device& device, d
 
 }  // namespace
 
-SettlingHand::SettlingHand(device::HandScript& script, double settle_s, bool follow)
-    : script_(script), settle_s_(settle_s), follow_(follow) {
+SettlingHand::SettlingHand(device::HandScript& script, double settle_s, bool follow, const render::HeightField* relief)
+    : script_(script), settle_s_(settle_s), follow_(follow), relief_(relief != nullptr && !relief->flat() ? relief : nullptr) {
   script_.rewind();
   lifted_ = lifted(script_.command(0.0));
   lifted_.v_target_W.setZero();
@@ -82,8 +83,11 @@ SettlingHand::SettlingHand(device::HandScript& script, double settle_s, bool fol
 }
 
 device::HandCommand SettlingHand::command(double t_s) noexcept {
-  if (follow_) return t_s < settle_s_ ? lifted(script_.command(t_s)) : script_.command(t_s);
-  return t_s < settle_s_ ? lifted_ : script_.command(t_s - settle_s_);
+  device::HandCommand c = follow_ ? (t_s < settle_s_ ? lifted(script_.command(t_s)) : script_.command(t_s))
+                                  : (t_s < settle_s_ ? lifted_ : script_.command(t_s - settle_s_));
+  // Writing: the paper's surface under the target, where the fingers' reach is measured from.
+  if (relief_ != nullptr && c.pen_down) c.surface_z_m = relief_->heightAt(c.p_target_W.x(), c.p_target_W.y());
+  return c;
 }
 
 std::unique_ptr<device::Device> openTrialDevice(const std::string& uri_text, device::HandScript& hand) {
@@ -150,10 +154,41 @@ TrialEnvironment::TrialEnvironment(std::string device_uri, render::WorldConfig w
     : device_uri_(std::move(device_uri)), world_(std::move(world)), rate_hz_(rate_hz) {
   HATTR_THROW_UNLESS(std::isfinite(rate_hz) && rate_hz >= 1.0 && rate_hz <= 10'000.0,
                      "servo rate: expected 1 to 10000 Hz, got {}", rate_hz);
-  limits_ = device::declaredLimits(device_uri_);
-  world_clamps_ = render::clampToDevice(world_.paper, limits_, rate_hz_);
-  world_.paper.normal_from_pressure = limits_.degrees_of_freedom == 2;  // a planar pen on its table
-  paper_ = std::make_unique<render::PaperRenderer>(world_.paper, render::buildRelief(world_.relief));
+  relief_ = render::buildRelief(world_.relief);
+  if (const auto declared = device::limitsWithoutOpening(device_uri_)) bindLimits(*declared);
+}
+
+void TrialEnvironment::bindLimits(const DeviceLimits& limits) {
+  if (limitsBound()) {
+    HATTR_THROW_UNLESS(limits == limits_,
+                       "device {}: its limits changed since the last trial (continuous force {} N, now {} N; "
+                       "{} degrees of freedom, now {}): a trial's environment is for one device",
+                       device_uri_, limits_.continuous_force_N, limits.continuous_force_N, limits_.degrees_of_freedom,
+                       limits.degrees_of_freedom);
+    return;
+  }
+  render::WorldConfig world = world_;
+  std::vector<std::string> clamps = render::clampToDevice(world.paper, limits, rate_hz_);
+  world.paper.normal_from_pressure = limits.degrees_of_freedom == 2;  // a planar pen on its table
+  paper_ = std::make_unique<render::PaperRenderer>(world.paper, relief_);
+  world_ = std::move(world);
+  world_clamps_ = std::move(clamps);
+  limits_ = limits;
+}
+
+const DeviceLimits& TrialEnvironment::limits() const {
+  HATTR_DEMAND(limitsBound(), "device {}: its limits are read before a trial opened it", device_uri_);
+  return limits_;
+}
+
+render::PaperRenderer& TrialEnvironment::paper() {
+  HATTR_DEMAND(limitsBound(), "device {}: the paper is used before a trial opened the device", device_uri_);
+  return *paper_;
+}
+
+const std::vector<std::string>& TrialEnvironment::worldClamps() const {
+  HATTR_DEMAND(limitsBound(), "device {}: the world's clamps are read before a trial opened the device", device_uri_);
+  return world_clamps_;
 }
 
 guidance::WorldImpedance TrialEnvironment::impedance() const noexcept {
@@ -214,6 +249,28 @@ Clock parseClock(std::string_view name) {
   throw InputError(fmt::format("clock \"{}\": expected sim or real", name));
 }
 
+namespace {
+
+// KEY=VALUE: the strategy's own parameter; STRATEGY.KEY=VALUE another strategy's, as a study
+// file's strategy_parameters sets it (a scheduled strategy's law's gains: pcontrol.kp_N_per_mm).
+void setTrialParameters(guidance::GuidanceConfig& config, guidance::TrainingMode mode,
+                        const std::vector<guidance::StrategySetting>& settings) {
+  std::vector<guidance::StrategySetting> own;
+  std::map<guidance::TrainingMode, std::vector<guidance::StrategySetting>> others;
+  for (const auto& [key, value] : settings) {
+    const auto dot = key.find('.');
+    if (dot == std::string::npos) {
+      own.emplace_back(key, value);
+    } else {
+      others[guidance::parseMode(std::string_view(key).substr(0, dot))].emplace_back(key.substr(dot + 1), value);
+    }
+  }
+  guidance::setStrategyParameters(config, mode, own);
+  for (const auto& [other, its] : others) guidance::setStrategyParameters(config, other, its);
+}
+
+}  // namespace
+
 TrialSetup scriptedTrialSetup(const device::ProfileHandScript& hand, const HapticProfile& script,
                               const ScriptedTrialOptions& options) {
   HATTR_THROW_UNLESS(!guidance::isMentored(options.mode),
@@ -242,7 +299,7 @@ TrialSetup scriptedTrialSetup(const device::ProfileHandScript& hand, const Hapti
   setup.guidance.mode = options.mode;
   setup.guidance.playback.indexing = options.indexing;
   setup.guidance.playback.speed = options.speed;
-  guidance::setStrategyParameters(setup.guidance, options.mode, options.parameters);
+  setTrialParameters(setup.guidance, options.mode, options.parameters);
   setup.guidance.scheduled = guidance::scheduleTrial(setup.guidance, options.mode, {});  // a first trial
   setup.guidance.noise.seed = options.seed;
   setup.metadata.extra["reference"] = options.reference_label;

@@ -31,21 +31,25 @@ TrialRun::TrialRun(TrialEnvironment& environment, const TrialSetup& setup, devic
                    bool follow_during_settle)
     : environment_(&environment), bounds_(environment.physicalBounds()) {
   checkSetup(setup);
+  // The device, opened once for the trial, with the hand settling before the script starts (a
+  // mentored mode's settle long enough for the link); its limits are the environment's.
+  live_ = guidance::isMentored(setup.guidance.mode) ? setup.live_guidance : nullptr;
+  settle_s_ = live_ ? std::max(setup.settle_s, live_->minimumSettle_s()) : setup.settle_s;
+  settling_ = std::make_unique<SettlingHand>(hand, settle_s_, follow_during_settle, &environment.relief());
+  device_ = openTrialDevice(environment.deviceUri(), *settling_);
+  environment.bindLimits(device_->limits());
+  if (setup.check_device) setup.check_device(environment.limits());
+
   // Guidance, with its gains clamped to what the device renders passively with the paper; a
-  // mentored mode's comes live from the expert's pen, after a settle long enough for the link.
+  // mentored mode's comes live from the expert's pen.
   guidance::GuidanceConfig config = setup.guidance;
   clamps_ = clampTrialGains(config, environment);
   guidance_ = std::make_unique<guidance::TrainingGuidance>(setup.reference, config);
-  live_ = guidance::isMentored(config.mode) ? setup.live_guidance : nullptr;
-  settle_s_ = live_ ? std::max(setup.settle_s, live_->minimumSettle_s()) : setup.settle_s;
   GuidanceController& stage = live_ ? live_->beginTrial(config.mode, environment, settle_s_, setup.live_seed)
                                     : static_cast<GuidanceController&>(*guidance_);
   guidance_->startTrial(settle_s_);
 
-  // Device, paper and loop; the hand settles before the script starts. A device that cannot be
-  // simulated runs in real time whatever the setup asks.
-  settling_ = std::make_unique<SettlingHand>(hand, settle_s_, follow_during_settle);
-  device_ = openTrialDevice(environment.deviceUri(), *settling_);
+  // Paper and loop. A device that cannot be simulated runs in real time whatever the setup asks.
   clock_ = device_->clocking() == device::DeviceClocking::kSimulatable ? setup.clock : Clock::kRealTime;
   environment.paper().reset();
   // In simulated time the ring is drained every kSimulatedChunk ticks, so a small ring does (a

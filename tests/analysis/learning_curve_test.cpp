@@ -57,6 +57,23 @@ TEST(LearningCurve, FlatScoresPutTheRateOnItsBoundAndSaySo) {
   EXPECT_FALSE(fit.note.empty());
 }
 
+// The report's slope over the recall trials and the trend with its interval are one function.
+TEST(LinearTrend, TwoPointsGiveTheSlopeAndNoIntervalThreeGiveBoth) {
+  const LinearTrend two = linearTrend({1.0, 2.0}, {3.0, 5.0});
+  EXPECT_EQ(two.slope, 2.0);
+  EXPECT_EQ(two.points, 2u);
+  EXPECT_TRUE(std::isnan(two.std_error) && std::isnan(two.lower) && std::isnan(two.upper));
+  // y = 1, 3, 2 over n = 1, 2, 3: slope 0.5 (R: coef(lm(c(1, 3, 2) ~ c(1, 2, 3)))[2]), residuals
+  // -0.5, 1, -0.5: std error sqrt(1.5 / 1 / 2) = 0.866...
+  const LinearTrend three = linearTrend({1.0, 2.0, 3.0}, {1.0, 3.0, 2.0});
+  EXPECT_NEAR(three.slope, 0.5, 1e-15);
+  EXPECT_NEAR(three.std_error, std::sqrt(0.75), 1e-15);
+  EXPECT_LT(three.lower, three.slope);
+  EXPECT_GT(three.upper, three.slope);
+  EXPECT_TRUE(std::isnan(linearTrend({1.0}, {2.0}).slope));
+  EXPECT_TRUE(std::isnan(linearTrend({2.0, 2.0}, {1.0, 3.0}).slope)) << "n all equal";
+}
+
 TEST(LearningCurve, RefusesTooFewPointsAndBadValues) {
   EXPECT_THROW((void)fitLearningCurve({1, 2, 3}, {3, 2, 1}, CurveLaw::kPower), InputError);
   EXPECT_THROW((void)fitLearningCurve({0, 1, 2, 3}, {3, 2, 1, 1}, CurveLaw::kPower), InputError);

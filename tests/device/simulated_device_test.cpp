@@ -78,6 +78,8 @@ TEST(SimulatedDevice, TheHandPushesNoHarderThanAGripAndEasesOffUnderTheDesk) {
   EXPECT_LE(strongest_N, params.hand.max_force_N * (1.0 + 1e-12));
   EXPECT_NEAR(device.truePosition().z(), -params.hand.press_ease_end_m, 1e-4);
   EXPECT_GT(deepest, params.limits.workspace_min_m.z()) << "the fall never reached the mechanism's end stop";
+  // The massless hand's overshoot past its reach, as docs/realtime.md states it (24.8 mm).
+  EXPECT_NEAR(-deepest, 0.0248, 0.0005) << "docs/realtime.md's figure";
   std::cout << "[ info ] deepest " << deepest * 1e3 << " mm, strongest push " << strongest_N << " N\n";
 }
 

@@ -339,6 +339,33 @@ TEST(Cli, RecordThenTrainInEveryModeWritesProfilesWithGuidanceApart) {
   }
 }
 
+// A scheduled strategy's law has gains of its own: STRATEGY.KEY sets them, as a study file's
+// strategy_parameters does; the trial plays them (the metadata's after-clamp values).
+TEST(Cli, TrainSetsAScheduledStrategysLawGainsByTheLawsName) {
+  test::TempDir dir;
+  test::writeText(dir / "script.csv", handScript());
+  const auto path = [&](const char* name) { return (dir / name).string(); };
+  ASSERT_EQ(runHattr(dir, "record --hand " + path("script.csv") + " -o " + path("expert.csv")).exit_code, 0);
+  const RunResult r = runHattr(dir, "train --mode fading --param pcontrol.kp_N_per_mm=0.2 --param start_gain=0.5 "
+                                    "--reference " + path("expert.csv") + " --hand " + path("script.csv") + " -o " +
+                                    path("fading.csv") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto metadata = nlohmann::json::parse(r.out)["metadata"];
+  EXPECT_EQ(metadata["pcontrol.kp_N_per_mm"], "0.2");
+  EXPECT_EQ(metadata["pcontrol_kp_N_per_m"], "200");
+  EXPECT_EQ(metadata["fading.start_gain"], "0.5");
+  EXPECT_EQ(metadata["guidance_gain"], "0.5");
+  // A strategy or a law parameter that is not there is refused, naming it.
+  const RunResult unknown = runHattr(dir, "train --mode fading --param pcontrol.kp=1 --reference " + path("expert.csv") +
+                                              " --hand " + path("script.csv") + " -o " + path("x.csv"));
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_THAT(unknown.err, HasSubstr("kp_N_per_mm"));
+  const RunResult no_strategy = runHattr(dir, "train --mode fading --param beta.kp=1 --reference " + path("expert.csv") +
+                                                  " --hand " + path("script.csv") + " -o " + path("y.csv"));
+  EXPECT_EQ(no_strategy.exit_code, 2);
+  EXPECT_THAT(no_strategy.err, HasSubstr("\"beta\""));
+}
+
 TEST(Cli, TrainRefusesBadModesAndMissingFilesWithExitTwo) {
   test::TempDir dir;
   test::writeText(dir / "script.csv", handScript());

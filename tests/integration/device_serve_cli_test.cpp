@@ -22,6 +22,7 @@ namespace hattr {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 using test::RunResult;
 using test::runHattr;
@@ -32,8 +33,8 @@ class ServeProcess : public test::BackgroundProcess {
   ServeProcess(const test::TempDir& dir, const std::string& key, const std::vector<std::string>& extra = {})
       : BackgroundProcess(arguments(key, extra), dir / "serve.err") {}
   /// Waits (up to `timeout`) until the server says on stderr that the client's `n`-th session
-  /// opened (`hattr record` and `train` first open the device once to read its limits: session 1;
-  /// servo-check opens it once).
+  /// opened (`hattr record`, `train` and servo-check open the device once, and read its limits
+  /// from that session).
   bool waitForSession(const test::TempDir& dir, int n, std::chrono::milliseconds timeout) const {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     const std::string line = "session " + std::to_string(n) + " opened";
@@ -153,6 +154,10 @@ TEST(DeviceServeCli, RecordOverUdpWritesTheProfileTheServersPenDrew) {
   EXPECT_GT(json["samples"].get<int>(), 10);  // how many depends on this host's scheduling
   server.signal(SIGTERM);
   EXPECT_EQ(server.wait(), 0);
+  // One trial, one session: its limits came from the trial's own session (issue 63).
+  const std::string log = test::readText(dir / "serve.err");
+  EXPECT_THAT(log, HasSubstr("session 1 opened"));
+  EXPECT_THAT(log, Not(HasSubstr("session 2 opened"))) << log;
 }
 
 TEST(DeviceServeCli, KillingTheServerMidTrialFailsTheTrialWithTheReasonAndKeepsWhatWasRecorded) {
@@ -165,7 +170,7 @@ TEST(DeviceServeCli, KillingTheServerMidTrialFailsTheTrialWithTheReasonAndKeepsW
   const std::string uri = "udp://" + server.address() + "?key=" + key;
   // The trial: 0.3 s settling, then 6 s; the server dies 1.3 s after the client's session opened.
   std::thread killer([&] {
-    if (server.waitForSession(dir, 2, std::chrono::seconds(20))) std::this_thread::sleep_for(std::chrono::milliseconds(1300));
+    if (server.waitForSession(dir, 1, std::chrono::seconds(20))) std::this_thread::sleep_for(std::chrono::milliseconds(1300));
     server.signal(SIGKILL);
   });
   const RunResult r = runHattr(dir, "record --clock real --hand " + (dir / "hand.csv").string() + " -o " +

@@ -164,13 +164,17 @@ TEST(Newcomer, SimAaAndSweepShowProgressOnATerminalAndNothingInAPipe) {
   ASSERT_EQ(aa.exit_code, 0) << aa.out;
   EXPECT_THAT(aa.out, HasSubstr("A/A: study 2 of 2 ["));
   EXPECT_THAT(aa.out, HasSubstr("A/A check (2 seeds, 2 subjects, 2+2 trials per mode, glyph loop,"));
-  EXPECT_THAT(test::readText(dir / "sim" / "aa-002" / "study.json"), HasSubstr("\"skill\": \"loop\""));
+  EXPECT_THAT(test::readText(dir / "sim" / "aa-loop-position-plan-002" / "study.json"), HasSubstr("\"skill\": \"loop\""));
+  // Another glyph into the same folder keeps the first run's studies (the folders name the glyph).
+  ASSERT_EQ(runOnTerminal(dir, "sim aa --seeds 1 --subjects 2 --trials 2 --glyph a --out " + out).exit_code, 0);
+  EXPECT_THAT(test::readText(dir / "sim" / "aa-small-a-position-plan-001" / "study.json"), HasSubstr("\"skill\": \"small-a\""));
+  EXPECT_THAT(test::readText(dir / "sim" / "aa-loop-position-plan-001" / "study.json"), HasSubstr("\"skill\": \"loop\""));
 
   const RunResult sweep =
       runOnTerminal(dir, "sim sweep --param slow_rate --values 0.01 --subjects 2 --trials 2 --glyph loop --out " + out);
   ASSERT_EQ(sweep.exit_code, 0) << sweep.out;
   EXPECT_THAT(sweep.out, HasSubstr("sweep: slow_rate = 0.01 ["));
-  EXPECT_THAT(test::readText(dir / "sim" / "sweep-slow_rate-0.01" / "study.json"), HasSubstr("\"skill\": \"loop\""));
+  EXPECT_THAT(test::readText(dir / "sim" / "sweep-loop-slow_rate-0.01" / "study.json"), HasSubstr("\"skill\": \"loop\""));
 
   const RunResult piped = runPiped(dir, "sim aa --seeds 1 --subjects 2 --trials 2 --glyph loop --out " + out + "-piped");
   ASSERT_EQ(piped.exit_code, 0) << piped.err;

@@ -10,6 +10,7 @@
 #include "hattr/analysis/dtw.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/net/mentor_station.hpp"
+#include "hattr/wire/link_session.hpp"
 #include "net/writing_script.hpp"
 #include "support/no_allocation.hpp"
 #include "support/thread_sanitizer.hpp"
@@ -197,6 +198,25 @@ TEST(Mentoring, AGoodbyeEndsTheSessionWithoutALinkFaultASilentLinkCountsOne) {
     EXPECT_EQ(leader.stats().goodbyes_received, goodbye ? 1u : 0u);
     EXPECT_EQ(leader.stats().sessions, 1u);
   }
+}
+
+TEST(Mentoring, TheLeadersWelcomeTellsItsServoRate) {
+  EmulatedLinkPair link(LinkConditions{}, LinkConditions{});
+  const wire::AuthKey key = wire::randomKey();
+  MentorCoupling leader(MentorConfig{.role = MentorRole::kLeader, .key = key, .rate_hz = 2000.0}, link.end(0));
+  // The follower's end of the wire, as a udp:// client or `mentor follow` says HELLO.
+  wire::InitiatorLinkSession follower(key, wire::PacketType::kPeer, link.end(1), EmulatedLinkPair::addressOf(0),
+                                      wire::LinkSessionTiming{});
+  const ContactForces contact;
+  follower.connect(0);
+  for (int tick = 0; tick < 200 && follower.state() != wire::InitiatorLinkSession::State::kLive; ++tick) {
+    (void)leader.compute(PenState{.t_s = tick * 5e-4}, contact, 5e-4);
+    follower.pump(static_cast<std::int64_t>(tick) * 500'000);
+  }
+  ASSERT_EQ(follower.state(), wire::InitiatorLinkSession::State::kLive);
+  EXPECT_EQ(follower.welcome().rate_hz, 2000.0);
+  EXPECT_THROW((void)MentorCoupling(MentorConfig{.role = MentorRole::kLeader, .key = key, .rate_hz = 0.5}, link.end(0)),
+               InputError);
 }
 
 // Both stations' ticks (the wire session's handshake and checks, the coupling, the PEERs) never

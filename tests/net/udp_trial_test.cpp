@@ -144,6 +144,8 @@ TEST(UdpTrial, AStudyRunsOverTheNetworkDevice) {
     EXPECT_EQ(p.metadata().device, served.uri());
     EXPECT_GT(p.duration_s(), 0.2);  // 0.25 s (the sample count depends on the ticks a late loop skips)
   }
+  // Each trial opened the device once, and nothing opened it only to read its limits (issue 63).
+  EXPECT_EQ(served.server->stats().sessions, 2u);
 }
 
 }  // namespace

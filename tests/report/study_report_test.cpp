@@ -371,6 +371,27 @@ TEST(StudyAnalysis, AnIncompletePapersStudyIsAnalyzedByMixedModelsAndSaysWhy) {
   EXPECT_EQ(designAnalysisToJson(a)["trials_left_out"].size(), 6u);
 }
 
+// The design's analysis reads the trial records once: a trial another station completes while it
+// scores does not make its choice of analysis disagree with its counts.
+TEST(StudyAnalysis, TheDesignsAnalysisJudgesOneSnapshotOfTheTrials) {
+  test::TempDir dir;
+  runSmallPapersStudy(dir, 3, 3 * 2 * 5 - 1);  // the last recall trial is not run
+  const auto db = session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kReadOnly);
+  bool ran = false;
+  AnalysisOptions options;
+  options.progress = [&](int, int) {
+    if (ran) return;
+    ran = true;  // another station completes the last trial now
+    session::StudyDatabase station = session::StudyDatabase::open(dir / "s.sqlite", session::OpenMode::kRunner);
+    EXPECT_EQ(session::StudyRunner(station, session::makeScriptParticipant).run({}), 1);
+  };
+  const DesignAnalysis a = analyzeDesign(db, options);
+  ASSERT_TRUE(ran);
+  EXPECT_EQ(a.trials_pending, 1);
+  EXPECT_THAT(a.reason, HasSubstr("not complete")) << "the choice was made from a later read than the counts";
+  EXPECT_TRUE(chooseAnalysis(db).balanced) << "read again, the study is complete";
+}
+
 // A complete paper's study keeps the balanced ANOVA, and its long table has every trial with
 // its kinematics, the recall trials (scored by the balanced analysis) included.
 TEST(StudyAnalysis, ACompletePapersStudysLongTableHasEveryTrialsKinematics) {

@@ -297,6 +297,50 @@ TEST(ServoLoop, MailboxForwardsGuidanceParameters) {
   EXPECT_EQ(rig.guidance.force.x(), 0.25);
 }
 
+/// Adds each parameter-0 value it is given, counting the calls.
+class SummingGuidance final : public GuidanceController {
+ public:
+  double sum = 0.0;
+  std::uint64_t calls = 0;
+  Vec3 compute(const PenState&, const ContactForces&, double) noexcept override { return Vec3::Zero(); }
+  bool setParameter(int parameter, double value) noexcept override {
+    if (parameter != 0) return false;
+    sum += value;
+    ++calls;
+    return true;
+  }
+};
+
+// Two threads post at once (a GUI and a watchdog, say): every command arrives exactly once. The
+// mailbox's ring has one producer; post() turns a second one away while the first pushes (it
+// retries), where two unguarded producers would race on the ring's head and lose or repeat
+// commands.
+TEST(ServoLoop, TheMailboxTakesCommandsFromTwoThreadsLosingNoneRepeatingNone) {
+  Rig rig;
+  SummingGuidance summing;
+  rig.loop.setGuidance(&summing);
+  constexpr int kEach = 100'000;
+  std::atomic<int> finished{0};
+  const auto poster = [&](double value) {
+    for (int i = 0; i < kEach; ++i) {
+      while (!rig.loop.post({ServoCommand::Type::kSetGuidanceParameter, 0, value})) {
+      }
+    }
+    finished.fetch_add(1);
+  };
+  std::thread a(poster, 1.0);
+  std::thread b(poster, 1000.0);
+  while (finished.load() < 2) {
+    rig.loop.runSimulated(1);
+    (void)rig.drain();
+  }
+  a.join();
+  b.join();
+  rig.loop.runSimulated(16);  // what the last posts left in the mailbox (64 at most, 8 a tick)
+  EXPECT_EQ(summing.calls, 2u * kEach);
+  EXPECT_EQ(summing.sum, kEach * 1.0 + kEach * 1000.0);
+}
+
 TEST(ServoLoop, RejectsRatesOutsideOneToTenKilohertz) {
   device::SimulatedDevice device(device::SimulatedPenParams{}, nullptr);
   EXPECT_THROW(ServoLoop(device, ServoConfig{.rate_hz = 20'000.0}), InputError);

@@ -8,6 +8,7 @@
 #include "hattr/core/error.hpp"
 #include "hattr/device/simulated_device.hpp"
 #include "hattr/render/flat_paper.hpp"
+#include "hattr/render/world_config.hpp"
 #include "hattr/servo/servo_loop.hpp"
 #include "hattr/session/recorder.hpp"
 #include "hattr/session/trial.hpp"
@@ -282,6 +283,61 @@ TEST(Recorder, CountsSamplesTheRingLost) {
   recorder.drain();
   EXPECT_EQ(recorder.missed(), 5u);
   EXPECT_EQ(recorder.takeProfile().size(), 6u);
+}
+
+// An environment opens nothing: a simulated pen's limits come from its URI; any other device's
+// are bound by its first trial's open (TrialRun), and a device that answers with other limits
+// later is refused, the environment unchanged (issue 63).
+TEST(TrialEnvironment, OpensNothingAndBindsAnotherDevicesLimitsOnce) {
+  const TrialEnvironment simulated("sim://pen?continuous_force_N=1.2", render::WorldConfig{});
+  ASSERT_TRUE(simulated.limitsBound());
+  EXPECT_EQ(simulated.limits().continuous_force_N, 1.2);
+
+  TrialEnvironment plugin("plugin:/no/such/hattr-plugin.so", render::WorldConfig{});  // not loaded: not opened
+  EXPECT_FALSE(plugin.limitsBound());
+  EXPECT_THROW((void)plugin.limits(), InvariantError);
+  EXPECT_THROW((void)plugin.paper(), InvariantError);
+  DeviceLimits limits;
+  limits.continuous_force_N = 1.4;
+  plugin.bindLimits(limits);
+  ASSERT_TRUE(plugin.limitsBound());
+  EXPECT_EQ(plugin.limits().continuous_force_N, 1.4);
+  EXPECT_NO_THROW((void)plugin.worldClamps());
+  EXPECT_NO_THROW(plugin.bindLimits(limits)) << "the same device again";
+  DeviceLimits other = limits;
+  other.continuous_force_N = 0.9;
+  try {
+    plugin.bindLimits(other);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("its limits changed since the last trial (continuous force 1.4 N, now 0.9 N"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(plugin.limits().continuous_force_N, 1.4);
+}
+
+TEST(Recorder, AResetRecordingCountsNoTicksFromBeforeItAsMissed) {
+  SpscRing<TickSample> ring(8);
+  Recorder recorder(ring, RecorderConfig{.nominal_period_s = 1e-3}, ProfileMetadata{});
+  const auto push = [&](std::initializer_list<int> ticks) {
+    for (int i : ticks) {
+      Sample s;
+      s.t_s = i * 1e-3;
+      ASSERT_TRUE(ring.tryPush(TickSample{static_cast<std::uint64_t>(i), s}));
+    }
+  };
+  recorder.start();
+  push({0, 1, 2});
+  recorder.drain();
+  (void)recorder.takeProfile();
+  // The loop ran on between two sessions (a mentoring lead's): ticks 3 to 9 were nobody's.
+  recorder.reset();
+  recorder.start();
+  push({10, 11, 12});
+  recorder.drain();
+  EXPECT_EQ(recorder.missed(), 0u);
+  EXPECT_EQ(recorder.takeProfile().size(), 3u);
 }
 
 TEST(Recorder, PenDownTriggerRecordsFromTouchDownToALongLift) {

@@ -133,6 +133,21 @@ TEST(StudyDefinition, LatinSquareCounterbalancesOrderAndCarryOver) {
   for (const auto& [pair, n] : follows) EXPECT_EQ(n, 2);
 }
 
+// A station waiting for subjects other stations hold asks again every quarter of the lease, but
+// at least once a second: a subject given back (or the study's end) is seen within a second
+// under a long lease too, not 15 minutes later under a lease of an hour.
+TEST(StudyDatabase, AWaitingStationAsksAgainEveryQuarterLeaseAtLeastOnceASecond) {
+  StudyFolder folder;
+  { (void)StudyDatabase::create(folder.dir / "s.sqlite", loadStudy(folder.dir / "study.json")); }
+  const auto interval = [&](double lease_s) {
+    return StudyDatabase::open(folder.dir / "s.sqlite", OpenMode::kReadOnly, {.lease_timeout_s = lease_s})
+        .claimRetryInterval_s();
+  };
+  EXPECT_EQ(interval(2.0), 0.5);
+  EXPECT_EQ(interval(30.0), 1.0);
+  EXPECT_EQ(interval(3600.0), 1.0);
+}
+
 TEST(StudyDatabase, RefusesFilesThatAreNotStudiesOrAreNewer) {
   test::TempDir dir;
   test::writeText(dir / "text.sqlite", "just some text, long enough to not be an empty database file.............");

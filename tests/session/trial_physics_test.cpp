@@ -11,6 +11,7 @@
 #include "hattr/render/world_config.hpp"
 #include "hattr/session/trial.hpp"
 #include "hattr/session/trial_physics.hpp"
+#include "support/test_support.hpp"
 #include "support/thread_sanitizer.hpp"
 
 namespace hattr::session {
@@ -123,6 +124,32 @@ TrialResult runPressing(double press_N) {
   device::ProfileHandScript hand(pressingScript(press_N));
   TrialSetup setup{.duration_s = 1.2};
   return runTrial(env, setup, hand);
+}
+
+// The hand rests on the paper: its fingers' reach is measured from the relief under the pen, not
+// from the writing plane. Paper lying 8 mm under the plane is pressed as hard as flat paper (the
+// fingers' press eases off only from 4 mm under the surface; from the plane it would be halved).
+TEST(TrialPhysics, TheHandPressesPaperLyingUnderTheWritingPlaneAsHardAsFlatPaper) {
+  const test::TempDir dir;
+  test::writeText(dir / "low.pgm", "P2\n2 2\n255\n255 255\n255 255\n");
+  const auto mean_press = [](const char* world_json, const std::filesystem::path& base) {
+    TrialEnvironment env("sim://pen", render::parseWorldConfig(world_json, "w.json", base), 1000.0);
+    device::ProfileHandScript hand(pressingScript(1.2));
+    const TrialResult r = runTrial(env, TrialSetup{.duration_s = 1.2}, hand);
+    double sum = 0.0;
+    int n = 0;
+    for (const Sample& s : r.profile.samples()) {
+      if (s.t_s < 0.3 || !s.pen_down) continue;  // once the press has settled
+      sum += -s.f_user_W.z();
+      ++n;
+    }
+    return n > 0 ? sum / n : 0.0;
+  };
+  const double flat = mean_press(R"({"relief": {"kind": "flat"}})", dir.path());
+  const double low = mean_press(
+      R"({"relief": {"kind": "pgm", "file": "low.pgm", "size_m": 0.3, "height_scale_m": -0.008}})", dir.path());
+  EXPECT_NEAR(flat, 1.2, 0.05) << "the script presses 1.2 N into the paper";
+  EXPECT_NEAR(low, flat, 0.03 * flat) << "flat " << flat << " N, 8 mm under the plane " << low << " N";
 }
 
 // Through the whole pipeline: a hand pressing 1.2 N writes a clean trial; one pressing 20 N

@@ -109,14 +109,6 @@ bool samePen(const PenState& a, const PenState& b) {
          a.altitude_rad == b.altitude_rad;
 }
 
-bool sameLimits(const DeviceLimits& a, const DeviceLimits& b) {
-  return a.degrees_of_freedom == b.degrees_of_freedom && a.workspace_min_m == b.workspace_min_m &&
-         a.workspace_max_m == b.workspace_max_m && a.peak_force_N == b.peak_force_N &&
-         a.continuous_force_N == b.continuous_force_N && a.max_stiffness_N_per_m == b.max_stiffness_N_per_m &&
-         a.max_damping_N_s_per_m == b.max_damping_N_s_per_m && a.nominal_rate_hz == b.nominal_rate_hz &&
-         a.mass_kg == b.mass_kg && a.damping_N_s_per_m == b.damping_N_s_per_m;
-}
-
 bool samePayload(const Payload& a, const Payload& b) {
   if (a.index() != b.index()) return false;
   if (const auto* x = std::get_if<HelloPayload>(&a)) {
@@ -140,7 +132,7 @@ bool samePayload(const Payload& a, const Payload& b) {
            x->session_timeout_ns == y.session_timeout_ns && x->command_timeout_ns == y.command_timeout_ns &&
            x->capabilities.force_sensor == y.capabilities.force_sensor &&
            x->capabilities.pressure == y.capabilities.pressure && x->capabilities.tilt == y.capabilities.tilt &&
-           sameLimits(x->limits, y.limits);
+           x->limits == y.limits;
   }
   if (const auto* x = std::get_if<StatePayload>(&a)) {
     const auto& y = std::get<StatePayload>(b);

@@ -28,6 +28,7 @@ session::TrialSetup trialSetupOf(const RunSpec& spec, session::Clock clock) {
   setup.trigger = spec.record == RecordMode::kPenDown ? session::RecordTrigger::kPenDown : session::RecordTrigger::kCommand;
   setup.live_guidance = spec.live_guidance;
   setup.live_seed = spec.live_seed;
+  setup.check_device = spec.check_device;
   return setup;
 }
 
@@ -45,6 +46,7 @@ RunSpec trialRunSpec(const session::TrialSetup& setup, bool follow_during_settle
   spec.follow_during_settle = follow_during_settle;
   spec.live_guidance = setup.live_guidance;
   spec.live_seed = setup.live_seed;
+  spec.check_device = setup.check_device;
   return spec;
 }
 

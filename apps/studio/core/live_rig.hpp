@@ -15,6 +15,7 @@
 #include <atomic>
 #include <cstdint>
 #include <limits>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -70,6 +71,8 @@ struct RunSpec {
   /// outlive the run; null for every other mode.
   session::LiveGuidance* live_guidance = nullptr;
   std::uint64_t live_seed = 1;  ///< passed to LiveGuidance::beginTrial
+  /// session::TrialSetup::check_device: refuses the run once the device is open, before its loop.
+  std::function<void(const DeviceLimits&)> check_device;
 };
 
 /// The rig's state, readable from the GUI thread while a run goes on.

@@ -61,19 +61,25 @@ MainWindow::MainWindow(std::unique_ptr<QSettings> settings, QWidget* parent)
       world_file_.clear();  // a world file that went bad: fall back to the defaults silently
     }
   }
-  // The device remembered, else sim://pen (one that no longer validates falls back quietly).
-  std::string device_uri = settings_->value("device/uri", QString::fromLatin1(kDefaultDeviceUri)).toString().toStdString();
+  // The device remembered, else sim://pen: one whose URI no longer parses, or that does not open
+  // for the first free run, falls back quietly (nothing is opened just to ask it).
+  const std::string device_uri =
+      settings_->value("device/uri", QString::fromLatin1(kDefaultDeviceUri)).toString().toStdString();
   try {
-    (void)validateStudioDevice(device_uri);
+    default_environment_ = std::make_unique<session::TrialEnvironment>(device_uri, world, 1000.0);
   } catch (const std::exception&) {
-    device_uri = kDefaultDeviceUri;
+    default_environment_ = std::make_unique<session::TrialEnvironment>(kDefaultDeviceUri, world, 1000.0);
   }
-  default_environment_ = std::make_unique<session::TrialEnvironment>(device_uri, world, 1000.0);
 
   buildUi();
   buildActions();
   loadSettings();
-  useEnvironment(*default_environment_);
+  QString failed = useEnvironment(*default_environment_);
+  if (!failed.isEmpty() && default_environment_->deviceUri() != kDefaultDeviceUri) {
+    default_environment_ = std::make_unique<session::TrialEnvironment>(kDefaultDeviceUri, world, 1000.0);
+    failed = useEnvironment(*default_environment_);
+  }
+  if (!failed.isEmpty()) showError(tr("The servo loop could not start"), failed);
 
   frame_timer_ = new QTimer(this);
   frame_timer_->setTimerType(Qt::PreciseTimer);

@@ -100,7 +100,7 @@ class MainWindow final : public QMainWindow {
   /// Plays back (or pauses) the profile on show: a take, the last trial or a reviewed trial.
   void togglePlayback();
   void clearTrail();
-  /// The device for the live rig, by URI (validateStudioDevice: sim://, plugin:, udp://); applied to the
+  /// The device for the live rig, by URI (sim://, plugin:, udp://, serial://); applied to the
   /// rig at once when nothing runs (a study keeps its own device). Remembered in settings.
   bool setDevice(const QString& uri);
   [[nodiscard]] QString deviceUri() const;
@@ -178,8 +178,15 @@ class MainWindow final : public QMainWindow {
   void saveSettings();
 
   // The loop and the display (main_window.cpp).
+  /// The rig's free run on the current environment (its one open of the device); errors shown.
   void startFreeRun();
-  void useEnvironment(session::TrialEnvironment& environment);
+  /// The same, returning why it could not start ("" when it runs) instead of showing it.
+  QString tryFreeRun();
+  /// Makes `environment` the rig's and starts its free run (which opens the device; the paper
+  /// view then takes its limits). Returns why the free run could not start, "" when it runs.
+  QString useEnvironment(session::TrialEnvironment& environment);
+  /// useEnvironment, with any failure shown.
+  void startFreeRunOn(session::TrialEnvironment& environment);
   void onFrame();
   void onStatus();
   void consumeLive(const Sample& sample);

@@ -60,7 +60,7 @@ bool MainWindow::loadWorld(const QString& file) {
     if (in_use) (void)rig_.finish();
     default_environment_ = std::move(environment);
     world_file_ = file;
-    if (in_use) useEnvironment(*default_environment_);
+    if (in_use) startFreeRunOn(*default_environment_);
     return true;
   } catch (const std::exception& e) {
     showError(tr("The world configuration could not be loaded"), what(e));
@@ -74,15 +74,25 @@ bool MainWindow::setDevice(const QString& uri) {
     return false;
   }
   try {
-    (void)validateStudioDevice(uri.toStdString());
+    // Nothing is opened to be asked: the free run opens the device (once), and its limits are
+    // the environment's. A study keeps its own device; the new one is opened when it is closed.
     auto environment = std::make_unique<session::TrialEnvironment>(uri.toStdString(), default_environment_->world(),
                                                                    default_environment_->rate_hz());
-    // A study keeps its own device; the new one is used when it is closed.
-    const bool in_use = study() == nullptr;
-    if (in_use) (void)rig_.finish();
+    if (study() != nullptr) {
+      default_environment_ = std::move(environment);
+      settings_->setValue("device/uri", uri);
+      return true;
+    }
+    (void)rig_.finish();
+    std::unique_ptr<session::TrialEnvironment> previous = std::move(default_environment_);
     default_environment_ = std::move(environment);
+    if (const QString failed = useEnvironment(*default_environment_); !failed.isEmpty()) {
+      default_environment_ = std::move(previous);  // the device that worked, running again
+      (void)useEnvironment(*default_environment_);
+      showError(tr("The device cannot be used"), failed);
+      return false;
+    }
     settings_->setValue("device/uri", uri);
-    if (in_use) useEnvironment(*default_environment_);
     return true;
   } catch (const std::exception& e) {
     showError(tr("The device cannot be used"), what(e));
@@ -114,9 +124,11 @@ void MainWindow::beginLiveTrial(session::TrialEnvironment& environment, const se
                                 Activity kind, const HapticProfile& expert, bool reference_on_paper,
                                 bool expert_on_plot, const QString& title, QLabel* scores) {
   // A reference the device cannot render (too strong, outside its workspace) is refused with
-  // the numbers and the remedy, as `hattr train` refuses it (issue 38).
-  session::checkRenderable(expert, environment.limits(), "the reference");
-  startRun(environment, trialRunSpec(setup, true), kind);
+  // the numbers and the remedy, as `hattr train` refuses it (issue 38), against the limits of
+  // the device the trial opens.
+  session::TrialSetup checked = setup;
+  checked.check_device = [&expert](const DeviceLimits& limits) { session::checkRenderable(expert, limits, "the reference"); };
+  startRun(environment, trialRunSpec(checked, true), kind);
   trial_expert_ = &expert;
   // The paper: the reference (or not), nothing else; the plot: the trial's window.
   showReference(trial_expert_);

@@ -15,6 +15,7 @@
 #include <cmath>
 
 #include "core/device_choice.hpp"
+#include "hattr/device/device_uri.hpp"
 #include "hattr/guidance/strategy_catalog.hpp"
 #include "ui/mentor_tab.hpp"
 #include "ui/paper_view.hpp"
@@ -77,7 +78,7 @@ void MainWindow::askDevice() {
   const QString uri = QInputDialog::getText(
       this, tr("Device"),
       tr("The device, by URI. The mouse or tablet holds a simulated pen (sim://pen, plugin:sim, or one served "
-         "over udp://); a hardware pen (plugin:, udp://) is held by the person.\n\n%1")
+         "over udp://); a hardware pen (plugin:, udp://, the open pen on serial://) is held by the person.\n\n%1")
           .arg(qs(device::deviceUriHelp())),
       QLineEdit::Normal, deviceUri(), &ok);
   if (ok && !uri.trimmed().isEmpty()) (void)setDevice(uri.trimmed());
@@ -89,7 +90,10 @@ void MainWindow::askDevice() {
 void MainWindow::refreshWorldLabel() {
   if (environment_ == nullptr) return;
   QString clamps;
-  for (const auto& line : environment_->worldClamps()) clamps += QStringLiteral("<br>· ") + qs(line).toHtmlEscaped();
+  const std::vector<std::string> none;
+  for (const auto& line : environment_->limitsBound() ? environment_->worldClamps() : none) {
+    clamps += QStringLiteral("<br>· ") + qs(line).toHtmlEscaped();
+  }
   if (!engineer_view_) clamps.clear();  // the passivity bounds' detail is the engineer's
   world_label_->setText(tr("Device <tt>%1</tt> at %2 Hz; world: %3%4")
                             .arg(qs(environment_->deviceUri()).toHtmlEscaped())
@@ -98,27 +102,43 @@ void MainWindow::refreshWorldLabel() {
                             .arg(clamps.isEmpty() ? QString() : tr("<br>Clamped to the device:%1").arg(clamps)));
 }
 
-void MainWindow::useEnvironment(session::TrialEnvironment& environment) {
+QString MainWindow::useEnvironment(session::TrialEnvironment& environment) {
   environment_ = &environment;
-  const DeviceLimits& limits = environment.limits();
-  paper_->setPaper(environment.paper().relief(), limits.workspace_min_m.x(), limits.workspace_min_m.y(),
-                   limits.workspace_max_m.x(), limits.workspace_max_m.y());
-  scene_->setPaper(environment.paper().relief(), limits.workspace_min_m.x(), limits.workspace_min_m.y(),
-                   limits.workspace_max_m.x(), limits.workspace_max_m.y());
-  paper_->setForceLimit(limits.continuous_force_N);
+  // The free run opens the device (once): a device other than a simulated pen says its limits then.
+  const QString failed = tryFreeRun();
+  if (environment.limitsBound()) {
+    const DeviceLimits& limits = environment.limits();
+    paper_->setPaper(environment.paper().relief(), limits.workspace_min_m.x(), limits.workspace_min_m.y(),
+                     limits.workspace_max_m.x(), limits.workspace_max_m.y());
+    scene_->setPaper(environment.paper().relief(), limits.workspace_min_m.x(), limits.workspace_min_m.y(),
+                     limits.workspace_max_m.x(), limits.workspace_max_m.y());
+    paper_->setForceLimit(limits.continuous_force_N);
+  }
   refreshWorldLabel();
-  startFreeRun();
+  return failed;
 }
 
-void MainWindow::startFreeRun() {
+void MainWindow::startFreeRunOn(session::TrialEnvironment& environment) {
+  if (const QString failed = useEnvironment(environment); !failed.isEmpty()) {
+    showError(tr("The servo loop could not start"), failed);
+  }
+}
+
+QString MainWindow::tryFreeRun() {
   RunSpec spec;
   spec.metadata.subject = "studio";
+  QString failed;
   try {
     rig_.start(*environment_, spec, hand_, session::Clock::kRealTime);
   } catch (const std::exception& e) {
-    showError(tr("The servo loop could not start"), QString::fromUtf8(e.what()));
+    failed = QString::fromUtf8(e.what());
   }
   if (activity_ != Activity::kPlayback) activity_ = Activity::kFree;
+  return failed;
+}
+
+void MainWindow::startFreeRun() {
+  if (const QString failed = tryFreeRun(); !failed.isEmpty()) showError(tr("The servo loop could not start"), failed);
 }
 
 void MainWindow::startRun(session::TrialEnvironment& environment, const RunSpec& spec, Activity kind) {

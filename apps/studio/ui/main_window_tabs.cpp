@@ -161,7 +161,7 @@ void MainWindow::buildStudyTab() {
       showReference(train_tab_->reference());
       paper_->setReferenceShown(train_tab_->referenceShown());
     }
-    useEnvironment(environment != nullptr ? *environment : *default_environment_);
+    startFreeRunOn(environment != nullptr ? *environment : *default_environment_);
   };
   host.show_reference = [this](const HapticProfile* expert, bool shown) {
     showReference(expert);

@@ -3,6 +3,7 @@
 #include <QApplication>
 #include <QComboBox>
 #include <QDir>
+#include <QEventLoop>
 #include <QFileInfo>
 #include <QHBoxLayout>
 #include <QHeaderView>
@@ -14,6 +15,9 @@
 #include <QTreeWidgetItemIterator>
 #include <QUrl>
 #include <QVBoxLayout>
+
+#include <string>
+#include <thread>
 
 #include "core/study_report_export.hpp"
 #include "hattr/guidance/strategy_catalog.hpp"
@@ -97,12 +101,16 @@ double ReviewTab::speed() const { return w_.speed->currentData().toDouble(); }
 
 void ReviewTab::refresh(bool playback_loaded) {
   w_.play->setEnabled(trial_.has_value() || playback_loaded);
-  w_.report->setEnabled(db_ != nullptr);
+  w_.report->setEnabled(db_ != nullptr && !reporting_);
 }
 
 // ---- Actions -------------------------------------------------------------------------------
 
 bool ReviewTab::open(const QString& file) {
+  if (reporting_) {
+    host_.error(tr("The study could not be opened for review"), tr("a report is being written; wait for it"));
+    return false;
+  }
   std::unique_ptr<session::StudyDatabase> db;
   try {
     db = std::make_unique<session::StudyDatabase>(
@@ -217,12 +225,33 @@ bool ReviewTab::openReport() {
     host_.error(tr("No study open for review"), tr("open a study for review first (Ctrl+Shift+D)"));
     return false;
   }
+  if (reporting_) return false;
+  // The report is written off this thread (seconds for a large study), by its own read-only
+  // connection; this thread's events go on meanwhile, and the tab's actions wait for it.
+  reporting_ = true;
+  w_.report->setEnabled(false);
   ReviewReport written;
-  try {
+  std::string failure;
+  const std::filesystem::path file_path(file_.toStdString());
+  QEventLoop until_written;
+  std::thread worker([&] {
+    try {
+      const auto db = session::StudyDatabase::open(file_path, session::OpenMode::kReadOnly);
+      written = writeReviewReport(db, file_path);
+    } catch (const std::exception& e) {
+      failure = e.what();
+    }
+    QMetaObject::invokeMethod(&until_written, &QEventLoop::quit, Qt::QueuedConnection);
+  });
+  {
     const WaitCursor wait;
-    written = writeReviewReport(*db_, std::filesystem::path(file_.toStdString()));
-  } catch (const std::exception& e) {
-    host_.error(tr("The report could not be made"), what(e));
+    until_written.exec();
+  }
+  worker.join();
+  reporting_ = false;
+  w_.report->setEnabled(db_ != nullptr);
+  if (!failure.empty()) {
+    host_.error(tr("The report could not be made"), QString::fromStdString(failure));
     return false;
   }
   useCosts(written.costs, tr("Shape and force: the recall trials' costs in the report just written."));

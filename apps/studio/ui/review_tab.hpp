@@ -65,8 +65,13 @@ class ReviewTab final : public QWidget {
   /// Shows the completed trial with this database id over the expert.
   bool showTrial(qint64 trial_id);
   /// Analyzes the study, writes its report next to the database (<stem>-report/), opens
-  /// report.html, and shows the analysis's costs in the tree.
+  /// report.html, and shows the analysis's costs in the tree. The analysis and the files are made
+  /// on a worker thread with its own read-only connection, while this thread's events go on (the
+  /// window repaints, the live pen moves, a timer fires); the call returns when the report is
+  /// written. Refused while a report is being written.
   bool openReport();
+  /// A report is being written (openReport has not returned).
+  [[nodiscard]] bool reporting() const { return reporting_; }
 
   /// The tree names strategies plainly ("Guided path") or technically ("PCONTROL").
   void setEngineerView(bool on);
@@ -106,6 +111,7 @@ class ReviewTab final : public QWidget {
   std::optional<HapticProfile> expert_;
   std::map<std::int64_t, report::TrialCost> costs_;
   bool engineer_view_ = false;
+  bool reporting_ = false;
 };
 
 }  // namespace hattr::studio

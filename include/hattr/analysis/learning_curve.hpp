@@ -64,7 +64,8 @@ struct LinearTrend {
   std::size_t points = 0;
 };
 
-/// The trend of y over n. Needs 3 points or more and n not all equal; else NaN throughout.
+/// The least-squares trend of y over n. The slope needs 2 points or more and n not all equal;
+/// its standard error and interval need 3 or more (NaN otherwise); NaN throughout else.
 [[nodiscard]] LinearTrend linearTrend(const std::vector<double>& n, const std::vector<double>& y,
                                       double confidence = 0.95);
 

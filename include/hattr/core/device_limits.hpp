@@ -19,6 +19,8 @@ struct DeviceLimits {
   double nominal_rate_hz = 1000.0;                      ///< the servo rate it is specified for
   double mass_kg = 0.045;                               ///< apparent mass at the tip (for passivity bounds)
   double damping_N_s_per_m = 1.0;                       ///< physical damping (for passivity bounds)
+  /// Every field equal, to the bit.
+  friend bool operator==(const DeviceLimits&, const DeviceLimits&) = default;
 };
 
 /// What a device measures besides position and velocity.

@@ -19,6 +19,10 @@ struct HandCommand {
   double grip = 1.0;
   /// A feedforward force the hand adds in the paper plane [N, W] (z ignored).
   Vec3 push_W = Vec3::Zero();
+  /// The height of the writing surface under the target [m, W]: the fingers' reach under it is
+  /// measured from here (the hand rests on the paper, whatever its relief). A trial fills it from
+  /// its paper's relief (session::SettlingHand); 0 is the writing plane.
+  double surface_z_m = 0.0;
 };
 
 }  // namespace hattr

@@ -6,6 +6,7 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -30,9 +31,12 @@ SimulatedPenParams simulatedPenParams(const DeviceUri& uri);
 /// InputError for an unknown or malformed URI, listing what is accepted.
 std::unique_ptr<Device> openDevice(std::string_view uri, HandScript* hand);
 
-/// The limits a device declares: a sim:// pen's from its URI, any other device's by opening it
-/// (a plugin loads its SDK, a udp:// device asks its server). Throws as openDevice does.
-DeviceLimits declaredLimits(std::string_view uri);
+/// The limits a device declares without being opened: a simulated pen's (sim://pen, sim://planar)
+/// from its URI. nullopt for every other device, whose limits are known once it is open (a plugin
+/// loads its SDK, a udp:// device asks its server, the open pen says its linkage): a trial reads
+/// them from the device it opens (session::TrialEnvironment::bindLimits). Throws InputError for a
+/// malformed URI or sim:// key.
+std::optional<DeviceLimits> limitsWithoutOpening(std::string_view uri);
 
 /// Help text listing the accepted URIs and sim:// keys.
 std::string deviceUriHelp();

@@ -36,10 +36,11 @@ struct HandImpedance {
   /// The most the hand pushes the pen with, in any direction [N]: a firm grip, well under an
   /// adult's tip-pinch strength (about 50 N). A script asking for more gets this much.
   double max_force_N = 20.0;
-  /// The writer's hand rests on the desk, so the fingers reach only so far under the writing
-  /// plane (z = 0): the press eases off linearly from `press_ease_begin_m` under it to nothing at
-  /// `press_ease_end_m`, and deeper the fingers hold the pen back with the hand's stiffness. A pen
-  /// that gives way under the fingers is not chased through the desk.
+  /// The writer's hand rests on the paper, so the fingers reach only so far under its surface
+  /// (HandCommand::surface_z_m; z = 0 on flat paper): the press eases off linearly from
+  /// `press_ease_begin_m` under it to nothing at `press_ease_end_m`, and deeper the fingers hold
+  /// the pen back with the hand's stiffness. A pen that gives way under the fingers is not chased
+  /// through the desk.
   double press_ease_begin_m = 0.004;
   double press_ease_end_m = 0.012;
 };

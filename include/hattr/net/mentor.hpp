@@ -109,6 +109,7 @@ struct MentorConfig {
   double deadband = 0.0;
   double deadband_position_m = 0.0002;     ///< [m]; hand position discrimination is ~1 mm or coarser
   double heartbeat_s = 0.003;              ///< at most this long between PEERs (< hold_s; hold_s / 3 survives two lost in a row)
+  double rate_hz = 1000.0;                 ///< the station's servo rate, told in the leader's WELCOME [Hz]
   /// Throws InputError naming the field for a value out of range.
   void validate() const;
 };

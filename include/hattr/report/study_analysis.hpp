@@ -106,6 +106,10 @@ struct AnalysisChoice {
 /// The paper's balanced ANOVA where the design is the paper's and complete with two subjects
 /// or more; the design's analysis (a mixed model per phase, or one learner's progress) otherwise.
 [[nodiscard]] AnalysisChoice chooseAnalysis(const session::StudyDatabase& db);
+/// The same from the study's trial records as read once (db.trials()): an analysis that reads
+/// them once judges one snapshot of a study that stations may be adding to.
+[[nodiscard]] AnalysisChoice chooseAnalysis(const session::StudyDatabase& db,
+                                            const std::vector<session::TrialRecord>& records);
 
 /// The recall trials of a paper's study the paper's analysis takes, as far as they are
 /// completed: trial id -> the recall trial number it is analyzed as. The protocol's analyzed
@@ -113,6 +117,9 @@ struct AnalysisChoice {
 /// outside the analyzed set, same subject and mode) takes its number where there is one. The
 /// design's analysis of an incomplete paper's study analyzes these and no other recall trial.
 std::map<std::int64_t, int> paperRecallTrials(const session::StudyDatabase& db);
+/// The same from the study's trial records as read once (db.trials()).
+std::map<std::int64_t, int> paperRecallTrials(const session::StudyDatabase& db,
+                                              const std::vector<session::TrialRecord>& records);
 
 /// Analyzes every completed recall trial. Throws InputError when the study is not complete
 /// enough for the balanced design (naming the missing trials).

@@ -110,8 +110,15 @@ class ServoLoop {
   [[nodiscard]] bool running() const noexcept { return running_.load(std::memory_order_acquire); }
   [[nodiscard]] const RealtimeReport& realtimeReport() const noexcept { return realtime_report_; }
 
-  /// Posts a command; false if the mailbox is full. From one controlling thread.
-  bool post(const ServoCommand& command) noexcept { return commands_.tryPush(command); }
+  /// Posts a command; false if the mailbox is full, or if another thread is posting at this very
+  /// moment (the mailbox is a single-producer ring: a second producer is turned away, never let
+  /// race; it retries as it would on a full mailbox). Any thread; never blocks or allocates.
+  bool post(const ServoCommand& command) noexcept {
+    if (posting_.test_and_set(std::memory_order_acquire)) return false;
+    const bool pushed = commands_.tryPush(command);
+    posting_.clear(std::memory_order_release);
+    return pushed;
+  }
 
   /// Every sample with its tick number, for one consumer (the recorder).
   [[nodiscard]] SpscRing<TickSample>& samples() noexcept { return samples_; }
@@ -151,6 +158,7 @@ class ServoLoop {
 
   SpscRing<TickSample> samples_;
   SpscRing<ServoCommand> commands_;
+  std::atomic_flag posting_ = ATOMIC_FLAG_INIT;  ///< held by the thread posting into commands_ (post)
   TripleBuffer<Sample> latest_;
   LiveCounters counters_;
   DurationHistogram period_error_;

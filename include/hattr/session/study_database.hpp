@@ -151,8 +151,10 @@ class StudyDatabase {
   SubjectClaim claimSubject(const std::string& subject);
   /// Gives the subject back (PostgreSQL: drops the lease); quiet when not held.
   void releaseSubject(const std::string& subject);
-  /// How long a station waits before asking again for subjects other stations hold.
+  /// How long a station waits before asking again for subjects other stations hold: a quarter
+  /// of the lease timeout, at most kMaxClaimRetry_s [s].
   [[nodiscard]] double claimRetryInterval_s() const noexcept;
+  static constexpr double kMaxClaimRetry_s = 1.0;
 
   /// Starts a session (a run of the protocol by this process); returns its id.
   /// Writing a trial (markRunning to failTrial) on PostgreSQL needs this station's lease on

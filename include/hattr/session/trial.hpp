@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <map>
+#include <functional>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -34,16 +35,29 @@ Clock parseClock(std::string_view name);
 /// relief and texture take a moment), the rate. Clamps are applied on construction.
 class TrialEnvironment {
  public:
-  /// Throws InputError for a bad URI, world or rate.
+  /// Throws InputError for a bad URI, world or rate. Opens nothing: a simulated pen's limits are
+  /// known from its URI and bound here; any other device's are bound when its first trial opens
+  /// it (TrialRun calls bindLimits), so a device is opened once per trial, never to be asked.
   TrialEnvironment(std::string device_uri, render::WorldConfig world, double rate_hz = 1000.0);
 
+  /// The device's limits: the world clamped to what it renders passively, the paper built for it.
+  /// The first call binds them; later calls with the same limits do nothing, and other limits
+  /// (another device behind the same URI) throw InputError, the environment unchanged.
+  void bindLimits(const DeviceLimits& limits);
+  /// Whether the device's limits are known (a simulated pen's always; another device's once a
+  /// trial has opened it). limits(), paper() and worldClamps() need them (InvariantError before).
+  [[nodiscard]] bool limitsBound() const noexcept { return paper_ != nullptr; }
+
   [[nodiscard]] const std::string& deviceUri() const noexcept { return device_uri_; }
-  [[nodiscard]] const DeviceLimits& limits() const noexcept { return limits_; }
+  [[nodiscard]] const DeviceLimits& limits() const;
   [[nodiscard]] double rate_hz() const noexcept { return rate_hz_; }
+  /// The world configuration: as given until the limits are bound, then clamped to them.
   [[nodiscard]] const render::WorldConfig& world() const noexcept { return world_; }
-  [[nodiscard]] render::PaperRenderer& paper() noexcept { return *paper_; }
+  [[nodiscard]] render::PaperRenderer& paper();
+  /// The paper's relief, known before the limits (the clamps change the paper's contact, not it).
+  [[nodiscard]] const render::HeightField& relief() const noexcept { return relief_; }
   /// What the passivity bounds changed in the world configuration.
-  [[nodiscard]] const std::vector<std::string>& worldClamps() const noexcept { return world_clamps_; }
+  [[nodiscard]] const std::vector<std::string>& worldClamps() const;
   /// The world's impedance on the guidance's axes (for clampGains).
   [[nodiscard]] guidance::WorldImpedance impedance() const noexcept;
   /// What a trial's recording is judged against (TrialResult::physics): the paper's thickness.
@@ -57,6 +71,7 @@ class TrialEnvironment {
   double rate_hz_;
   DeviceLimits limits_;
   std::vector<std::string> world_clamps_;
+  render::HeightField relief_;  ///< built at construction; the paper gets a copy once the limits are bound
   std::unique_ptr<render::PaperRenderer> paper_;
 };
 
@@ -133,6 +148,10 @@ struct TrialSetup {
   /// A mentored mode's guidance (required for one, unused otherwise); must outlive the trial.
   LiveGuidance* live_guidance = nullptr;
   std::uint64_t live_seed = 1;   ///< passed to LiveGuidance::beginTrial
+  /// Once the trial's device is open and its limits bound, before the guidance and the loop are
+  /// built: refuses a trial the device cannot render by throwing InputError (a reference too strong
+  /// or outside its workspace: checkRenderable). Null: no check.
+  std::function<void(const DeviceLimits&)> check_device;
 };
 
 struct TrialResult {
@@ -170,7 +189,10 @@ struct TrialResult {
 /// `settle_s` the script (on the trial's clock, or unchanged when following).
 class SettlingHand final : public device::HandScript {
  public:
-  SettlingHand(device::HandScript& script, double settle_s, bool follow = false);
+  /// `relief`: the paper under the hand (null: flat); each command's surface_z_m is its height
+  /// under the target, where the fingers' reach is measured from. Must outlive the hand.
+  SettlingHand(device::HandScript& script, double settle_s, bool follow = false,
+               const render::HeightField* relief = nullptr);
   device::HandCommand command(double t_s) noexcept override;
   void rewind() noexcept override { script_.rewind(); }
 
@@ -179,6 +201,7 @@ class SettlingHand final : public device::HandScript {
   double settle_s_;
   bool follow_;
   device::HandCommand lifted_;
+  const render::HeightField* relief_;
 };
 
 /// The device a trial uses: the URI's device; a simulated pen starts 3 mm above where the
@@ -229,7 +252,8 @@ struct ScriptedTrialOptions {
   double speed = 1.0;            ///< reference playback speed (time indexing)
   int trial = 0;                 ///< trial number recorded when training
   /// The mode's parameters by name, in the catalog's units or a choice's name
-  /// (guidance::setStrategyParameters). A scheduled mode plays its first trial's law and gain.
+  /// (guidance::setStrategyParameters); "STRATEGY.NAME" names another strategy's (a scheduled
+  /// mode's law's gains: "pcontrol.kp_N_per_mm"). A scheduled mode plays its first trial's law and gain.
   std::vector<guidance::StrategySetting> parameters;
   std::uint64_t seed = 1;        ///< NOISE's seed
 };
