@@ -48,10 +48,17 @@ nlohmann::json limitsJson(const DeviceLimits& l) {
 
 // The gentle force: ramped in by the safety path, held 1 s (up to 5 s while stalls of the host
 // keep restarting the ramp, until a latched fault), then off. Fills the force test's figures.
+// Posts until the mailbox takes the command (it turns one away only while full, or while another
+// thread posts), for a second at most: a loop that stopped draining it is past helping.
+void postUntilTaken(servo::ServoLoop& loop, const servo::ServoCommand& command) {
+  const auto give_up = Clock::now() + std::chrono::seconds(1);
+  while (!loop.post(command) && Clock::now() < give_up) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+}
+
 void applyTestForce(servo::ServoLoop& loop, double force_N, const Vec3& direction, DeviceCheckResult& r) {
   Sample before;
   (void)loop.latest().read(before);
-  (void)loop.post({servo::ServoCommand::Type::kSetGuidanceParameter, 0, force_N});
+  postUntilTaken(loop, {servo::ServoCommand::Type::kSetGuidanceParameter, 0, force_N});
   Sample during;
   const auto reached = [&] { return std::abs(during.f_cmd_W.dot(direction) - force_N) < 0.02 * force_N; };
   const auto faulted = [&] { return loop.counters().faults.load() > 0; };
@@ -63,7 +70,7 @@ void applyTestForce(servo::ServoLoop& loop, double force_N, const Vec3& directio
     Sample now;
     if (loop.latest().read(now) && now.f_cmd_W.dot(direction) >= during.f_cmd_W.dot(direction)) during = now;
   }
-  (void)loop.post({servo::ServoCommand::Type::kSetGuidanceParameter, 0, 0.0});
+  postUntilTaken(loop, {servo::ServoCommand::Type::kSetGuidanceParameter, 0, 0.0});
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   r.commanded_N = during.f_cmd_W.dot(direction);
   r.pen_rise_m = (during.p_WT - before.p_WT).dot(direction);

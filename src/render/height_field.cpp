@@ -148,6 +148,12 @@ HeightField::Cell HeightField::locate(double x_m, double y_m) const noexcept {
   return {i, j, gx - i, gy - j};
 }
 
+double HeightField::maxAbsHeight_m() const noexcept {
+  double largest = 0.0;
+  for (const double height : heights_) largest = std::max(largest, std::abs(height));
+  return largest;
+}
+
 double HeightField::heightAt(double x_m, double y_m) const noexcept {
   if (flat()) return 0.0;
   const Cell c = locate(x_m, y_m);

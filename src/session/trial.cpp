@@ -155,16 +155,44 @@ TrialEnvironment::TrialEnvironment(std::string device_uri, render::WorldConfig w
   HATTR_THROW_UNLESS(std::isfinite(rate_hz) && rate_hz >= 1.0 && rate_hz <= 10'000.0,
                      "servo rate: expected 1 to 10000 Hz, got {}", rate_hz);
   relief_ = render::buildRelief(world_.relief);
+  hand_relief_ = relief_.maxAbsHeight_m() > kHandFlatRelief_m;
   if (const auto declared = device::limitsWithoutOpening(device_uri_)) bindLimits(*declared);
 }
+
+namespace {
+
+// What differs between a device's limits and the ones it had ("continuous force 1.4 N, now 0.9 N").
+std::string limitsChange(const DeviceLimits& was, const DeviceLimits& now) {
+  std::vector<std::string> parts;
+  const auto number = [&](const char* what, double a, double b, const char* unit) {
+    if (a != b) parts.push_back(fmt::format("{} {} {}, now {} {}", what, a, unit, b, unit));
+  };
+  const auto vector = [&](const char* what, const Vec3& a, const Vec3& b) {
+    if (a != b) parts.push_back(fmt::format("{} ({}, {}, {}) m, now ({}, {}, {}) m", what, a.x(), a.y(), a.z(), b.x(), b.y(), b.z()));
+  };
+  if (was.degrees_of_freedom != now.degrees_of_freedom) {
+    parts.push_back(fmt::format("{} degrees of freedom, now {}", was.degrees_of_freedom, now.degrees_of_freedom));
+  }
+  vector("workspace min", was.workspace_min_m, now.workspace_min_m);
+  vector("workspace max", was.workspace_max_m, now.workspace_max_m);
+  number("peak force", was.peak_force_N, now.peak_force_N, "N");
+  number("continuous force", was.continuous_force_N, now.continuous_force_N, "N");
+  number("max stiffness", was.max_stiffness_N_per_m, now.max_stiffness_N_per_m, "N/m");
+  number("max damping", was.max_damping_N_s_per_m, now.max_damping_N_s_per_m, "N·s/m");
+  number("nominal rate", was.nominal_rate_hz, now.nominal_rate_hz, "Hz");
+  number("mass", was.mass_kg, now.mass_kg, "kg");
+  number("damping", was.damping_N_s_per_m, now.damping_N_s_per_m, "N·s/m");
+  return fmt::format("{}", fmt::join(parts, "; "));
+}
+
+}  // namespace
 
 void TrialEnvironment::bindLimits(const DeviceLimits& limits) {
   if (limitsBound()) {
     HATTR_THROW_UNLESS(limits == limits_,
-                       "device {}: its limits changed since the last trial (continuous force {} N, now {} N; "
-                       "{} degrees of freedom, now {}): a trial's environment is for one device",
-                       device_uri_, limits_.continuous_force_N, limits.continuous_force_N, limits_.degrees_of_freedom,
-                       limits.degrees_of_freedom);
+                       "device {}: its limits changed since the last trial ({}): a trial's environment is for one "
+                       "device as it was; choose the device again (a new environment) to use it as it is now",
+                       device_uri_, limitsChange(limits_, limits));
     return;
   }
   render::WorldConfig world = world_;
@@ -251,19 +279,36 @@ Clock parseClock(std::string_view name) {
 
 namespace {
 
-// KEY=VALUE: the strategy's own parameter; STRATEGY.KEY=VALUE another strategy's, as a study
-// file's strategy_parameters sets it (a scheduled strategy's law's gains: pcontrol.kp_N_per_mm).
+// The strategy a "STRATEGY.KEY" setting names; InputError naming the setting otherwise.
+guidance::TrainingMode strategyOfSetting(const guidance::StrategySetting& setting, std::string_view strategy) {
+  try {
+    return guidance::parseMode(strategy);
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("parameter \"{}={}\": the strategy before the dot: {}", setting.first,
+                                 setting.second, e.what()));
+  }
+}
+
+// KEY=VALUE (or MODE.KEY=VALUE): the strategy's own parameter; STRATEGY.KEY=VALUE, for a scheduled
+// strategy, a law's it may play, as a study file's strategy_parameters sets it (pcontrol.kp_N_per_mm).
 void setTrialParameters(guidance::GuidanceConfig& config, guidance::TrainingMode mode,
                         const std::vector<guidance::StrategySetting>& settings) {
   std::vector<guidance::StrategySetting> own;
   std::map<guidance::TrainingMode, std::vector<guidance::StrategySetting>> others;
-  for (const auto& [key, value] : settings) {
+  for (const auto& setting : settings) {
+    const auto& [key, value] = setting;
     const auto dot = key.find('.');
-    if (dot == std::string::npos) {
-      own.emplace_back(key, value);
-    } else {
-      others[guidance::parseMode(std::string_view(key).substr(0, dot))].emplace_back(key.substr(dot + 1), value);
+    const guidance::TrainingMode named = dot == std::string::npos ? mode : strategyOfSetting(setting, key.substr(0, dot));
+    const std::string name = dot == std::string::npos ? key : key.substr(dot + 1);
+    if (named == mode) {
+      own.emplace_back(name, value);
+      continue;
     }
+    HATTR_THROW_UNLESS(guidance::isScheduled(mode) && !guidance::isScheduled(named) && !guidance::isMentored(named),
+                       "parameter \"{}={}\": {} plays no other strategy's law; expected its own parameters "
+                       "(KEY=VALUE, `hattr strategies`), got {}'s",
+                       key, value, guidance::strategyName(mode), guidance::strategyName(named));
+    others[named].emplace_back(name, value);
   }
   guidance::setStrategyParameters(config, mode, own);
   for (const auto& [other, its] : others) guidance::setStrategyParameters(config, other, its);

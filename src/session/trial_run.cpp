@@ -31,14 +31,16 @@ TrialRun::TrialRun(TrialEnvironment& environment, const TrialSetup& setup, devic
                    bool follow_during_settle)
     : environment_(&environment), bounds_(environment.physicalBounds()) {
   checkSetup(setup);
-  // The device, opened once for the trial, with the hand settling before the script starts (a
-  // mentored mode's settle long enough for the link); its limits are the environment's.
+  // The hand settles before the script starts (a mentored mode's settle long enough for the link).
   live_ = guidance::isMentored(setup.guidance.mode) ? setup.live_guidance : nullptr;
   settle_s_ = live_ ? std::max(setup.settle_s, live_->minimumSettle_s()) : setup.settle_s;
-  settling_ = std::make_unique<SettlingHand>(hand, settle_s_, follow_during_settle, &environment.relief());
-  device_ = openTrialDevice(environment.deviceUri(), *settling_);
-  environment.bindLimits(device_->limits());
-  if (setup.check_device) setup.check_device(environment.limits());
+  settling_ = std::make_unique<SettlingHand>(hand, settle_s_, follow_during_settle, environment.handRelief());
+  // The device is opened once for the trial, as late as it can be: right before the loop when its
+  // limits are known (a simulated pen's, or a later trial's of the same environment), else first,
+  // for the guidance's gains are clamped to them (a served pen then waits while the guidance is
+  // built: milliseconds, longer for a simulated mentor's station).
+  const bool open_first = !environment.limitsBound();
+  if (open_first) openDevice(environment, setup);
 
   // Guidance, with its gains clamped to what the device renders passively with the paper; a
   // mentored mode's comes live from the expert's pen.
@@ -48,6 +50,7 @@ TrialRun::TrialRun(TrialEnvironment& environment, const TrialSetup& setup, devic
   GuidanceController& stage = live_ ? live_->beginTrial(config.mode, environment, settle_s_, setup.live_seed)
                                     : static_cast<GuidanceController&>(*guidance_);
   guidance_->startTrial(settle_s_);
+  if (!open_first) openDevice(environment, setup);
 
   // Paper and loop. A device that cannot be simulated runs in real time whatever the setup asks.
   clock_ = device_->clocking() == device::DeviceClocking::kSimulatable ? setup.clock : Clock::kRealTime;
@@ -71,6 +74,12 @@ TrialRun::TrialRun(TrialEnvironment& environment, const TrialSetup& setup, devic
 }
 
 TrialRun::~TrialRun() = default;
+
+void TrialRun::openDevice(TrialEnvironment& environment, const TrialSetup& setup) {
+  device_ = openTrialDevice(environment.deviceUri(), *settling_);
+  environment.bindLimits(device_->limits());
+  if (setup.check_device) setup.check_device(environment.limits());
+}
 
 std::string TrialRun::mentorUnavailable() const { return live_ ? live_->unavailable() : std::string(); }
 

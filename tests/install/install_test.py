@@ -21,6 +21,7 @@ import time
 from pathlib import Path
 
 HIDDEN_MARK = "HATTR_INSTALL_TEST_HIDDEN"
+SKIPPED = 77  # ctest's SKIP_RETURN_CODE for this test
 
 
 def fail(message: str) -> None:
@@ -29,11 +30,29 @@ def fail(message: str) -> None:
 
 
 def run(cmd: list[str], *, env: dict[str, str], cwd: Path, timeout: float = 300, ok=(0,)) -> subprocess.CompletedProcess:
+    """Runs `cmd` in a session of its own, so that a time-out stops everything it started (xvfb-run's
+    X server and program too)."""
     print("install_test: $ " + " ".join(str(c) for c in cmd), flush=True)
-    done = subprocess.run([str(c) for c in cmd], env=env, cwd=cwd, capture_output=True, text=True, timeout=timeout)
+    process = subprocess.Popen([str(c) for c in cmd], env=env, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True, start_new_session=True)
+    try:
+        stdout, stderr = process.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(process.pid, signal.SIGKILL)
+        process.communicate()
+        fail(f"{cmd[0]} did not finish within {timeout} s")
+    done = subprocess.CompletedProcess(process.args, process.returncode, stdout, stderr)
     if done.returncode not in ok:
         fail(f"{cmd[0]} exited {done.returncode}\nstdout:\n{done.stdout[-4000:]}\nstderr:\n{done.stderr[-4000:]}")
     return done
+
+
+def parsed_json(done: subprocess.CompletedProcess, what: str) -> dict:
+    try:
+        return json.loads(done.stdout)
+    except json.JSONDecodeError:
+        fail(f"{what}: expected JSON, got:\n{done.stdout[-2000:]}\nstderr:\n{done.stderr[-2000:]}")
+        raise
 
 
 def install(build: Path, prefix: Path) -> None:
@@ -49,17 +68,23 @@ def hide_trees_and_rerun(args: argparse.Namespace, work: Path) -> int:
     hidden = [args.source_dir.resolve()]
     if not args.build_dir.resolve().is_relative_to(hidden[0]):
         hidden.append(args.build_dir.resolve())
-    mounts = " && ".join(f"mount -t tmpfs hattr-hidden '{folder}'" for folder in hidden)
+    # The folders to hide come after the command, as arguments: no quoting of paths in the script.
+    mounts = 'for folder in "$@"; do case $folder in --) shift; break;; esac; ' \
+             'mount -t tmpfs hattr-hidden "$folder" || exit 1; shift; done; exec "$@"'
     unshare = ["unshare", "--mount", "--propagation", "private"]
     if os.geteuid() != 0:
         unshare.insert(1, "--map-root-user")
+    if shutil.which("unshare") is None:
+        fail("unshare is missing (Debian's util-linux): the trees cannot be hidden")
+    if subprocess.run(unshare + ["true"], capture_output=True).returncode != 0:
+        print("install_test: SKIPPED: no private mount namespace can be made here (not root, and unprivileged "
+              "user namespaces are off: sysctl kernel.unprivileged_userns_clone): the trees cannot be hidden")
+        return SKIPPED
     env = dict(os.environ, **{HIDDEN_MARK: "1"})
     script = work / "install_test.py"  # this script, readable once its tree is hidden
     shutil.copy2(__file__, script)
-    cmd = unshare + ["sh", "-c", f'{mounts} && exec "$@"', "sh", sys.executable, str(script),
+    cmd = unshare + ["sh", "-c", mounts, "sh", *[str(f) for f in hidden], "--", sys.executable, str(script),
                      "--build-dir", str(args.build_dir), "--source-dir", str(args.source_dir), "--work", str(work)]
-    if shutil.which("unshare") is None:
-        fail("unshare is missing (Debian's util-linux): the trees cannot be hidden")
     return subprocess.run(cmd, env=env).returncode
 
 
@@ -82,7 +107,7 @@ def python_site(prefix: Path) -> Path:
 
 
 def check_paths(prefix: Path, env: dict[str, str], cwd: Path) -> None:
-    paths = json.loads(run(["hattr", "paths", "--json"], env=env, cwd=cwd).stdout)
+    paths = parsed_json(run(["hattr", "paths", "--json"], env=env, cwd=cwd), "hattr paths --json")
     share = prefix / "share" / "hattr"
     if Path(paths["share_dir"]) != share or Path(paths["data_dir"]) != share or paths["data_dir_from"] != "prefix":
         fail(f"hattr paths: expected the data in {share}, got {paths}")
@@ -94,7 +119,7 @@ def check_paths(prefix: Path, env: dict[str, str], cwd: Path) -> None:
 
 def check_cli(env: dict[str, str], cwd: Path) -> None:
     run(["hattr", "sim", "expert", "--glyph", "a", "-o", "a.csv"], env=env, cwd=cwd)
-    info = json.loads(run(["hattr", "profile", "info", "a.csv", "--json"], env=env, cwd=cwd).stdout)
+    info = parsed_json(run(["hattr", "profile", "info", "a.csv", "--json"], env=env, cwd=cwd), "hattr profile info")
     if int(info.get("samples", 0)) < 100:
         fail(f"hattr sim expert --glyph a: expected a profile of the letter, got {info}")
     listed = run(["hattr", "devices"], env=env, cwd=cwd).stdout
@@ -112,7 +137,7 @@ def check_python(prefix: Path, env: dict[str, str], cwd: Path) -> None:
     code = ("import hattr, json, sys; "
             "r = hattr.simulate_study('py-study', subjects=2, training_trials=1, recall_trials=2, glyph='a', "
             "write_report=False); print(json.dumps({'file': hattr.__file__, 'trials': r['trials']}))")
-    out = json.loads(run(["/usr/bin/python3", "-c", code], env=dict(env, PYTHONPATH=str(site)), cwd=cwd).stdout)
+    out = parsed_json(run(["/usr/bin/python3", "-c", code], env=dict(env, PYTHONPATH=str(site)), cwd=cwd), "import hattr")
     if not Path(out["file"]).is_relative_to(prefix) or out["trials"] <= 0:
         fail(f"import hattr: expected the prefix's module running a study, got {out}")
 
@@ -136,26 +161,29 @@ def check_emulator(prefix: Path, env: dict[str, str], cwd: Path) -> None:
         print("install_test: no hattr-pen-emulator in this build (simavr missing): skipped")
         return
     link = cwd / "pen.tty"
+    log = (cwd / "emulator.out").open("w"), (cwd / "emulator.err").open("w")  # files: nothing fills a pipe
     emulator = subprocess.Popen(["hattr-pen-emulator", "--hangups", "1", "--link", str(link)], env=env, cwd=cwd,
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                                stdout=log[0], stderr=log[1], text=True)
     try:
         for _ in range(200):
             if link.exists() or emulator.poll() is not None:
                 break
             time.sleep(0.05)
         if not link.exists():
-            fail(f"hattr-pen-emulator without --firmware: no pseudo-terminal; stderr:\n{emulator.communicate()[1]}")
+            fail(f"hattr-pen-emulator without --firmware: no pseudo-terminal; stderr:\n{(cwd / 'emulator.err').read_text()}")
         check = run(["hattr", "devices", "check", f"serial://{link}?lockstep=1", "--no-confirm", "--seconds", "1", "--json"],
                     env=env, cwd=cwd, ok=(0, 1))
-        if json.loads(check.stdout).get("limits") is None:
+        if parsed_json(check, "hattr devices check").get("limits") is None:
             fail(f"hattr devices check on the emulated pen: expected its limits, got {check.stdout[:2000]}")
         code = emulator.wait(timeout=60)
         if code != 0:
-            fail(f"hattr-pen-emulator --hangups 1 exited {code}: {emulator.stderr.read()[-2000:]}")
+            fail(f"hattr-pen-emulator --hangups 1 exited {code}: {(cwd / 'emulator.err').read_text()[-2000:]}")
     finally:
         if emulator.poll() is None:
             emulator.send_signal(signal.SIGTERM)
             emulator.wait(timeout=10)
+        for f in log:
+            f.close()
 
 
 CONSUMER_CMAKE = """cmake_minimum_required(VERSION 3.25)

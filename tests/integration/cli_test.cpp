@@ -363,7 +363,20 @@ TEST(Cli, TrainSetsAScheduledStrategysLawGainsByTheLawsName) {
   const RunResult no_strategy = runHattr(dir, "train --mode fading --param beta.kp=1 --reference " + path("expert.csv") +
                                                   " --hand " + path("script.csv") + " -o " + path("y.csv"));
   EXPECT_EQ(no_strategy.exit_code, 2);
+  EXPECT_THAT(no_strategy.err, HasSubstr("parameter \"beta.kp=1\": the strategy before the dot"));
   EXPECT_THAT(no_strategy.err, HasSubstr("\"beta\""));
+  // The mode's own prefix is its own parameter (given twice is refused); a strategy that plays no
+  // other's law takes no other's parameters.
+  const RunResult twice = runHattr(dir, "train --mode fading --param start_gain=0.5 --param fading.start_gain=0.6 "
+                                        "--reference " + path("expert.csv") + " --hand " + path("script.csv") + " -o " +
+                                        path("z.csv"));
+  EXPECT_EQ(twice.exit_code, 2);
+  EXPECT_THAT(twice.err, HasSubstr("start_gain: given twice"));
+  const RunResult not_scheduled = runHattr(dir, "train --mode channel --param pcontrol.kp_N_per_mm=0.2 --reference " +
+                                                    path("expert.csv") + " --hand " + path("script.csv") + " -o " +
+                                                    path("w.csv"));
+  EXPECT_EQ(not_scheduled.exit_code, 2);
+  EXPECT_THAT(not_scheduled.err, HasSubstr("channel plays no other strategy's law"));
 }
 
 TEST(Cli, TrainRefusesBadModesAndMissingFilesWithExitTwo) {

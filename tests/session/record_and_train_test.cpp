@@ -292,6 +292,7 @@ TEST(TrialEnvironment, OpensNothingAndBindsAnotherDevicesLimitsOnce) {
   const TrialEnvironment simulated("sim://pen?continuous_force_N=1.2", render::WorldConfig{});
   ASSERT_TRUE(simulated.limitsBound());
   EXPECT_EQ(simulated.limits().continuous_force_N, 1.2);
+  EXPECT_EQ(simulated.handRelief(), nullptr) << "the default paper's grain is flat for the hand's reach";
 
   TrialEnvironment plugin("plugin:/no/such/hattr-plugin.so", render::WorldConfig{});  // not loaded: not opened
   EXPECT_FALSE(plugin.limitsBound());

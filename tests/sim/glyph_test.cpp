@@ -1,5 +1,6 @@
 // Glyph files: the shipped skills load; bad files are rejected with the file, stroke and
-// point named; the data directory is found through HATTR_DATA_DIR or the source tree.
+// point named; the data directory is found through HATTR_DATA_DIR or the prefix the program is in
+// (the build folder's staged share/hattr here).
 
 #include <cmath>
 #include <cstdlib>

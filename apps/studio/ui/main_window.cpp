@@ -33,6 +33,7 @@
 #include "ui/pen_scene_view.hpp"
 #include "ui/profile_plot.hpp"
 #include "ui/record_tab.hpp"
+#include "ui/review_tab.hpp"
 #include "ui/train_tab.hpp"
 #include "ui/ui_text.hpp"
 
@@ -332,6 +333,11 @@ void MainWindow::saveSettings() {
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {
+  if (review_->reporting()) {  // its worker writes into the study's report folder
+    showError(tr("The studio cannot close now"), tr("a report is being written; close it when the report is done"));
+    event->ignore();
+    return;
+  }
   if (!record_tab_->mayClose()) {
     event->ignore();
     return;

@@ -16,7 +16,9 @@
 #include <QUrl>
 #include <QVBoxLayout>
 
+#include <atomic>
 #include <string>
+#include <system_error>
 #include <thread>
 
 #include "core/study_report_export.hpp"
@@ -232,24 +234,35 @@ bool ReviewTab::openReport() {
   w_.report->setEnabled(false);
   ReviewReport written;
   std::string failure;
+  std::atomic<bool> done{false};
   const std::filesystem::path file_path(file_.toStdString());
   QEventLoop until_written;
-  std::thread worker([&] {
+  const auto write = [&] {
     try {
       const auto db = session::StudyDatabase::open(file_path, session::OpenMode::kReadOnly);
       written = writeReviewReport(db, file_path);
     } catch (const std::exception& e) {
       failure = e.what();
     }
+    done.store(true, std::memory_order_release);
     QMetaObject::invokeMethod(&until_written, &QEventLoop::quit, Qt::QueuedConnection);
-  });
-  {
-    const WaitCursor wait;
-    until_written.exec();
+  };
+  bool quitting = false;
+  try {
+    std::thread worker(write);
+    {
+      const WaitCursor wait;
+      until_written.exec();
+    }
+    // The application quitting ends every event loop, ours before the report was done.
+    quitting = !done.load(std::memory_order_acquire);
+    worker.join();
+  } catch (const std::system_error& e) {  // no thread to be had: nothing was written
+    failure = e.what();
   }
-  worker.join();
   reporting_ = false;
   w_.report->setEnabled(db_ != nullptr);
+  if (quitting) return false;  // the report is written; nobody is there to see it now
   if (!failure.empty()) {
     host_.error(tr("The report could not be made"), QString::fromStdString(failure));
     return false;

@@ -60,6 +60,8 @@ class HeightField {
   [[nodiscard]] int ny() const noexcept { return ny_; }
   [[nodiscard]] double spacing_m() const noexcept { return spacing_m_; }
   [[nodiscard]] const Vec3& origin_W() const noexcept { return origin_W_; }
+  /// The largest |height| of the grid's vertices [m] (0 when flat). O(vertices).
+  [[nodiscard]] double maxAbsHeight_m() const noexcept;
 
  private:
   struct Cell;

@@ -67,6 +67,10 @@ class TrialRun {
   TrialResult finish(Recorder& recorder, std::string failure, bool stopped);
 
  private:
+  /// Opens the trial's device (with the settling hand), binds its limits to the environment and
+  /// runs the setup's check of them.
+  void openDevice(TrialEnvironment& environment, const TrialSetup& setup);
+
   std::vector<std::string> clamps_;
   std::unique_ptr<guidance::TrainingGuidance> guidance_;
   LiveGuidance* live_ = nullptr;
