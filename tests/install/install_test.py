@@ -85,7 +85,8 @@ def hide_trees_and_rerun(args: argparse.Namespace, work: Path) -> int:
     shutil.copy2(__file__, script)
     cmd = unshare + ["sh", "-c", mounts, "sh", *[str(f) for f in hidden], "--", sys.executable, str(script),
                      "--build-dir", str(args.build_dir), "--source-dir", str(args.source_dir), "--work", str(work)]
-    return subprocess.run(cmd, env=env).returncode
+    # From the work folder: a working folder inside a hidden tree would still read it through ".".
+    return subprocess.run(cmd, env=env, cwd=work).returncode
 
 
 def clean_env(prefix: Path, home: Path) -> dict[str, str]:
@@ -222,8 +223,8 @@ def check_find_package(prefix: Path, env: dict[str, str], cwd: Path) -> None:
 
 def main() -> int:
     parser = argparse.ArgumentParser()
-    parser.add_argument("--build-dir", type=Path, required=True)
-    parser.add_argument("--source-dir", type=Path, required=True)
+    parser.add_argument("--build-dir", type=lambda p: Path(p).resolve(), required=True)
+    parser.add_argument("--source-dir", type=lambda p: Path(p).resolve(), required=True)
     parser.add_argument("--work", type=Path, help="(internal) the folder made before the trees were hidden")
     parser.add_argument("--keep", action="store_true", help="Keep the scratch folder")
     args = parser.parse_args()

@@ -22,7 +22,6 @@ namespace hattr {
 namespace {
 
 using ::testing::HasSubstr;
-using ::testing::Not;
 
 using test::RunResult;
 using test::runHattr;
@@ -153,11 +152,13 @@ TEST(DeviceServeCli, RecordOverUdpWritesTheProfileTheServersPenDrew) {
   const auto json = nlohmann::json::parse(r.out);
   EXPECT_GT(json["samples"].get<int>(), 10);  // how many depends on this host's scheduling
   server.signal(SIGTERM);
+  const std::string summary = server.readRest();
   EXPECT_EQ(server.wait(), 0);
-  // One trial, one session: its limits came from the trial's own session (issue 63).
-  const std::string log = test::readText(dir / "serve.err");
-  EXPECT_THAT(log, HasSubstr("session 1 opened"));
-  EXPECT_THAT(log, Not(HasSubstr("session 2 opened"))) << log;
+  // One trial, one open: one session ended by the client's goodbye, its limits read from it
+  // (issue 63). A host slow enough to leave the session silent for its timeout (ThreadSanitizer's)
+  // makes the client say hello again: another session, ended by silence, not by a goodbye.
+  const auto served = nlohmann::json::parse(summary.substr(summary.find('{')));
+  EXPECT_EQ(served["byes"].get<int>(), 1) << summary << test::readText(dir / "serve.err");
 }
 
 TEST(DeviceServeCli, KillingTheServerMidTrialFailsTheTrialWithTheReasonAndKeepsWhatWasRecorded) {
