@@ -75,7 +75,7 @@ WaitEnd waitForEnd(const servo::ServoLoop& loop, const device::Device& device, d
 }  // namespace
 
 SettlingHand::SettlingHand(device::HandScript& script, double settle_s, bool follow, const render::HeightField* relief)
-    : script_(script), settle_s_(settle_s), follow_(follow), relief_(relief != nullptr && !relief->flat() ? relief : nullptr) {
+    : script_(script), settle_s_(settle_s), follow_(follow), relief_(relief) {
   script_.rewind();
   lifted_ = lifted(script_.command(0.0));
   lifted_.v_target_W.setZero();
