@@ -137,18 +137,24 @@ TEST(UdpTrial, AStudyRunsOverTheNetworkDevice) {
   db = session::StudyDatabase::open(served.dir / "s.sqlite", session::OpenMode::kRunner);
   session::StudyRunner runner(db, &session::makeScriptParticipant);
   EXPECT_EQ(runner.run({}), 2);
+  int attempts = 0;
   for (const auto& trial : db.trials()) {
     EXPECT_EQ(trial.status, session::TrialStatus::kCompleted);
+    attempts += trial.attempts;
     const HapticProfile p = db.trialProfile(trial.id);
     EXPECT_EQ(p.metadata().extra.at("clock"), "real-time");
     EXPECT_EQ(p.metadata().device, served.uri());
     EXPECT_GT(p.duration_s(), 0.2);  // 0.25 s (the sample count depends on the ticks a late loop skips)
   }
-  // Each trial opened the device once, and nothing opened it only to read its limits (issue 63):
-  // two sessions ended by the client's goodbye. (A host slow enough to leave a session silent for
-  // its timeout, ThreadSanitizer's, makes the client say hello again: more sessions, no more byes.)
+  // Each attempt of a trial opened the device once, and nothing opened it only to read its limits
+  // (issue 63): one session an attempt, ended by the client's goodbye. Two trials are two attempts
+  // unless the host disturbed one (ThreadSanitizer's, in the CI run of 4daf169): the study runs it again, with
+  // its own open. (A session left silent for its timeout makes the client say hello again: more
+  // sessions, no more goodbyes.)
+  EXPECT_GE(attempts, 2);
   const DeviceServerStats stats = served.server->stats();
-  EXPECT_EQ(stats.byes, 2u) << stats.sessions << " sessions, " << stats.session_timeouts << " ended by silence";
+  EXPECT_EQ(stats.byes, static_cast<std::uint64_t>(attempts))
+      << attempts << " attempts, " << stats.sessions << " sessions, " << stats.session_timeouts << " ended by silence";
 }
 
 }  // namespace
