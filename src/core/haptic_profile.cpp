@@ -122,7 +122,7 @@ Vec3 centreOnPaper(std::vector<Sample>& samples) {
 
 namespace hattr {
 
-void fillVelocityByFiniteDifferences(std::vector<Sample>& samples) {
+void fillVelocityByFiniteDifferences(std::span<Sample> samples) {
   const std::size_t n = samples.size();
   if (n < 2) {
     for (auto& s : samples) s.v_WT.setZero();

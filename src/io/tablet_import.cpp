@@ -26,6 +26,7 @@ struct RawPoint {
   double pressure = 0;
   double azimuth = 0, altitude = 0;
   bool button_down = false;
+  bool lift_after = false;  ///< the pen left the paper after this point (the format says so)
 };
 
 /// Makes time stamps strictly increasing without dropping a point: a run of stamps that
@@ -47,6 +48,49 @@ std::size_t retimeNonIncreasing(std::vector<RawPoint>& points, double unit) {
   return changed;
 }
 
+/// The nominal rate [Hz]: one over the median time step of the re-timed stamps (0 for one point).
+double medianRate_hz(const std::vector<Sample>& samples) {
+  std::vector<double> steps;
+  for (std::size_t i = 1; i < samples.size(); ++i) steps.push_back(samples[i].t_s - samples[i - 1].t_s);
+  if (steps.empty()) return 0.0;
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+  return std::round(1.0 / steps[steps.size() / 2]);
+}
+
+/// A tablet that reports nothing while the pen is in the air leaves each lift as a gap between
+/// two pen-down points. Each lift the format marks between two pen-down points gets one pen-up
+/// sample: where the pen left the paper (its path in the air is not recorded), one sample
+/// period later (or half-way to the next point, if sooner), with no force, no pressure and the
+/// tilt it left with. Velocities are differenced within each stroke, never across a lift (the
+/// marks are still). How many were inserted is in metadata `inserted_lift_samples`.
+std::vector<Sample> withLiftsMarked(std::vector<Sample> samples, const std::vector<bool>& lift_after, double rate_hz,
+                                    ProfileMetadata& meta) {
+  std::vector<Sample> out;
+  out.reserve(samples.size() + static_cast<std::size_t>(std::count(lift_after.begin(), lift_after.end(), true)));
+  std::size_t stroke_begin = 0;
+  std::size_t inserted = 0;
+  const double period_s = rate_hz > 0.0 ? 1.0 / rate_hz : 0.0;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    out.push_back(samples[i]);
+    const bool marks = lift_after[i] && i + 1 < samples.size() && samples[i].pen_down && samples[i + 1].pen_down;
+    if (!marks) continue;
+    fillVelocityByFiniteDifferences(std::span(out).subspan(stroke_begin));
+    Sample up = samples[i];
+    up.t_s = samples[i].t_s + std::min(period_s, 0.5 * (samples[i + 1].t_s - samples[i].t_s));
+    up.v_WT.setZero();
+    up.f_user_W.setZero();
+    up.pen_down = false;
+    up.in_contact = false;
+    up.pressure_raw = 0.0;
+    out.push_back(up);
+    stroke_begin = out.size();
+    ++inserted;
+  }
+  fillVelocityByFiniteDifferences(std::span(out).subspan(stroke_begin));
+  meta.extra["inserted_lift_samples"] = fmt::format("{}", inserted);
+  return out;
+}
+
 /// Calibrated SI profile from raw points.
 HapticProfile toProfile(std::vector<RawPoint> points, const TabletCalibration& cal, bool has_tilt,
                         std::string source, std::string_view format_name) {
@@ -59,12 +103,12 @@ HapticProfile toProfile(std::vector<RawPoint> points, const TabletCalibration& c
   const std::size_t retimed = retimeNonIncreasing(points, 1.0);
   meta.extra["retimed_samples"] = fmt::format("{}", retimed);
 
-  std::vector<Sample> samples(points.size());
+  std::vector<Sample> samples;
+  samples.reserve(points.size());
   const double t0 = points.front().t;
   const double y_sign = cal.y_axis_toward_writer ? -1.0 : 1.0;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const RawPoint& p = points[i];
-    Sample& s = samples[i];
+  for (const RawPoint& p : points) {
+    Sample& s = samples.emplace_back();
     s.t_s = (p.t - t0) * cal.time_s_per_unit;
     s.p_WT = Vec3(p.x * cal.metres_per_unit_x, y_sign * p.y * cal.metres_per_unit_y, 0.0);
     s.pen_down = p.button_down || p.pressure > cal.pen_down_pressure_raw;
@@ -78,18 +122,14 @@ HapticProfile toProfile(std::vector<RawPoint> points, const TabletCalibration& c
     s.f_user_W = has_tilt ? axialForceOnPaper(axial, azimuth, altitude)
                           : Vec3(0.0, 0.0, -axial * std::sin(altitude));
   }
-  fillVelocityByFiniteDifferences(samples);
+  const double rate_hz = medianRate_hz(samples);
+  meta.nominal_rate_hz = rate_hz;
+  std::vector<bool> lift_after(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) lift_after[i] = points[i].lift_after;
+  samples = withLiftsMarked(std::move(samples), lift_after, rate_hz, meta);
   if (cal.centre_on_paper) {
     const Vec3 shift = centreOnPaper(samples);
     meta.extra["placed_shift_m"] = fmt::format("{} {}", shift.x(), shift.y());
-  }
-
-  // Nominal rate: the median time step of the re-timed stamps.
-  std::vector<double> steps;
-  for (std::size_t i = 1; i < samples.size(); ++i) steps.push_back(samples[i].t_s - samples[i - 1].t_s);
-  if (!steps.empty()) {
-    std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
-    meta.nominal_rate_hz = std::round(1.0 / steps[steps.size() / 2]);
   }
 
   HapticProfile profile(std::move(meta), RawChannels{.pressure = true, .tilt = has_tilt});
@@ -198,6 +238,25 @@ Vec3 axialForceOnPaper(double axial_N, double azimuth_rad, double altitude_rad) 
 
 // ---- SVC2004 --------------------------------------------------------------------------
 
+namespace {
+
+/// SVC2004's tablet reports nothing in the air, and the first point after the pen lands has
+/// button 0: a lift precedes a point whose button is 0 and which follows the one before it by
+/// more than 1.5 median time steps (a point the tablet dropped leaves such a gap too, but with
+/// the button still 1). Read on the raw stamps, before any re-timing.
+void markSvc2004Lifts(std::vector<RawPoint>& points, const std::vector<long long>& buttons) {
+  std::vector<double> steps;
+  for (std::size_t i = 1; i < points.size(); ++i) steps.push_back(points[i].t - points[i - 1].t);
+  if (steps.empty()) return;
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+  const double step = steps[steps.size() / 2];
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    if (buttons[i] == 0 && points[i].t - points[i - 1].t > 1.5 * step) points[i - 1].lift_after = true;
+  }
+}
+
+}  // namespace
+
 HapticProfile importSvc2004(std::istream& in, std::string_view source_name, const TabletCalibration& cal) {
   LineReader reader(in, std::string(source_name));
   std::string line;
@@ -209,6 +268,7 @@ HapticProfile importSvc2004(std::istream& in, std::string_view source_name, cons
 
   constexpr std::string_view kFields[] = {"X", "Y", "T", "button", "azimuth", "altitude", "pressure"};
   std::vector<RawPoint> points;
+  std::vector<long long> raw_buttons;
   points.reserve(static_cast<std::size_t>(*count));
   while (reader.next(line)) {
     if (detail::trim(line).empty()) continue;
@@ -220,9 +280,11 @@ HapticProfile importSvc2004(std::istream& in, std::string_view source_name, cons
     for (std::size_t i = 0; i < 7; ++i) v[i] = requireNumber(fields[i], kFields[i], reader);
     points.push_back({.x = v[0], .y = v[1], .t = v[2], .pressure = v[6], .azimuth = v[4],
                       .altitude = v[5], .button_down = (static_cast<long long>(v[3]) & 1) != 0});
+    raw_buttons.push_back(static_cast<long long>(v[3]));
   }
   HATTR_THROW_UNLESS(points.size() == static_cast<std::size_t>(*count),
                      "{}: line 1 announces {} points, the file has {}", source_name, *count, points.size());
+  markSvc2004Lifts(points, raw_buttons);
   return toProfile(std::move(points), cal, true,
                    fmt::format("import:svc2004 {}", std::filesystem::path(source_name).filename().string()),
                    "svc2004");
@@ -277,7 +339,7 @@ HapticProfile importSusig(std::istream& in, std::string_view source_name, const 
     HATTR_THROW_UNLESS(v[4] == 0.0 || v[4] == 1.0, "{}: field EndPts: expected 0 or 1, got {}", reader.where(),
                        quotedField(fields[4]));
     strokes += v[4] == 1.0 ? 1 : 0;
-    points.push_back({.x = v[0], .y = v[1], .t = v[2], .pressure = v[3]});
+    points.push_back({.x = v[0], .y = v[1], .t = v[2], .pressure = v[3], .lift_after = v[4] == 1.0});
   }
   HATTR_THROW_UNLESS(data_size.has_value() && !header.empty(),
                      "{}: expected a \"DataSize: N\" line and the header \"X, Y, TStamp, Pres., EndPts\"",

@@ -459,6 +459,21 @@ void writeTwoOccasionsFigure(const session::StudyDatabase& db, const StudyAnalys
   }
 }
 
+/// The pen-down path in mm, broken (a NaN point) where the pen lifts.
+std::vector<std::pair<double, double>> penDownPath_mm(const HapticProfile& profile) {
+  std::vector<std::pair<double, double>> points;
+  bool was_down = false;
+  for (const Sample& s : profile.samples()) {
+    if (s.pen_down) {
+      points.emplace_back(units::metresToMillimetres(s.p_WT.x()), units::metresToMillimetres(s.p_WT.y()));
+    } else if (was_down) {
+      points.emplace_back(std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN());
+    }
+    was_down = s.pen_down;
+  }
+  return points;
+}
+
 /// Per mode of the study: every subject's last recall trajectory (pen down) over the expert's.
 void writeTrajectoryFigures(const session::StudyDatabase& db, const HapticProfile& expert,
                             const std::map<std::string, const TrialCost*>& last_recall, Document& doc,
@@ -467,18 +482,11 @@ void writeTrajectoryFigures(const session::StudyDatabase& db, const HapticProfil
     const std::string name(guidance::modeName(mode));
     SvgPlot plot(fmt::format("Recall trajectories after {} training", name), "x [mm]", "y [mm]", 560, 420);
     plot.equalAspect();
-    Series e{"expert", "#000000", {}, 2.5};
-    for (const Sample& s : expert.samples()) {
-      if (s.pen_down) e.points.emplace_back(units::metresToMillimetres(s.p_WT.x()), units::metresToMillimetres(s.p_WT.y()));
-    }
+    Series e{"expert", "#000000", penDownPath_mm(expert), 2.5};
     for (const auto& [key, cost] : last_recall) {
       if (cost->mode != name) continue;
       const HapticProfile trial = db.trialProfile(cost->trial_id);
-      Series s{name + " subjects", modeColour(name), {}, 1.0};
-      for (const Sample& x : trial.samples()) {
-        if (x.pen_down) s.points.emplace_back(units::metresToMillimetres(x.p_WT.x()), units::metresToMillimetres(x.p_WT.y()));
-      }
-      plot.add(s);
+      plot.add(Series{name + " subjects", modeColour(name), penDownPath_mm(trial), 1.0});
     }
     plot.add(e);
     doc.figure(fmt::format("trajectories_{}", name), plot.svg(),

@@ -189,12 +189,23 @@ std::string SvgPlot::seriesSvg(const Area& area) const {
                                 kClipIdPlaceholder, left - kMarkerRoom, top - kMarkerRoom, pw + 2 * kMarkerRoom,
                                 ph + 2 * kMarkerRoom, kClipIdPlaceholder);
   for (const auto& s : series_) {
+    // One polyline per run of finite points: a non-finite point breaks the line (a pen lift).
     std::string points;
+    const auto flush = [&] {
+      if (!points.empty()) {
+        out += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"{}\"{} points=\"{}\"/>\n", s.colour,
+                           s.width, s.dashed ? " stroke-dasharray=\"5,3\"" : "", points);
+      }
+      points.clear();
+    };
     for (const auto& [x, y] : s.points) {
-      if (std::isfinite(x) && std::isfinite(y)) points += fmt::format("{:.1f},{:.1f} ", X(x), Y(y));
+      if (std::isfinite(x) && std::isfinite(y)) {
+        points += fmt::format("{:.1f},{:.1f} ", X(x), Y(y));
+      } else {
+        flush();
+      }
     }
-    out += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"{}\"{} points=\"{}\"/>\n", s.colour, s.width,
-                       s.dashed ? " stroke-dasharray=\"5,3\"" : "", points);
+    flush();
     for (std::size_t i = 0; i < s.errors.size() && i < s.points.size(); ++i) {
       const auto [x, y] = s.points[i];
       if (std::isfinite(x) && std::isfinite(y) && std::isfinite(s.errors[i])) {

@@ -132,8 +132,9 @@ TEST(Cli, ImportSvc2004ThenInfoGivesDurationAndPointCount) {
   const RunResult info = runHattr(dir, "profile info --json " + out);
   ASSERT_EQ(info.exit_code, 0) << info.err;
   const auto json = nlohmann::json::parse(info.out);
-  // U1S1.TXT: 84 points from T = 31275775 ms to 31276987 ms (read off the file).
-  EXPECT_EQ(json["samples"].get<int>(), 84);
+  // U1S1.TXT: 84 points from T = 31275775 ms to 31276987 ms, and 5 lifts (points with button 0
+  // after a gap), each marked by one pen-up sample (read off the file).
+  EXPECT_EQ(json["samples"].get<int>(), 84 + 5);
   EXPECT_NEAR(json["duration_s"].get<double>(), 1.212, 1e-9);
   EXPECT_EQ(json["metadata"]["source"], "import:svc2004 U1S1.TXT");
 }

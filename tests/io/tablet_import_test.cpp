@@ -7,6 +7,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "hattr/analysis/kinematics.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/core/units.hpp"
 
@@ -84,6 +85,41 @@ TEST(Svc2004Import, PenDownFollowsPressureOrButtonAndPenUpPointsAreKept) {
   EXPECT_EQ(p[2].f_user_W, Vec3::Zero());
 }
 
+TEST(Svc2004Import, ALiftIsAGapBeforeAButtonZeroPointAndBecomesOnePenUpSample) {
+  // Two strokes: the second starts 100 ms after the first ends, with button 0 and pressure; a
+  // dropped point inside it (20 ms, button 1) is no lift.
+  const HapticProfile p = svc("6\n0 0 0 0 900 900 10\n100 0 10 1 900 900 20\n200 0 20 1 900 900 30\n"
+                              "900 500 120 0 900 900 40\n1000 500 130 1 900 900 50\n1200 500 150 1 900 900 60\n");
+  ASSERT_EQ(p.size(), 7u);
+  EXPECT_EQ(p.metadata().extra.at("inserted_lift_samples"), "1");
+  EXPECT_EQ(p.metadata().nominal_rate_hz, 100.0);  // from the file's own steps, not the mark's
+  const Sample& up = p[3];
+  EXPECT_FALSE(up.pen_down);
+  EXPECT_FALSE(up.in_contact);
+  EXPECT_DOUBLE_EQ(up.t_s, 0.030);
+  EXPECT_EQ(up.p_WT, p[2].p_WT);
+  EXPECT_EQ(up.f_user_W, Vec3::Zero());
+  EXPECT_EQ(up.v_WT, Vec3::Zero());
+  EXPECT_EQ(up.pressure_raw, 0.0);
+  EXPECT_TRUE(p[4].pen_down);
+  // Velocities are differenced within each stroke: the first stroke's end one-sided (1 mm in
+  // 10 ms), the second's start too, never across the lift.
+  EXPECT_NEAR(p[2].v_WT.x(), 0.1, 1e-12);
+  EXPECT_NEAR(p[4].v_WT.x(), 0.1, 1e-12);
+  const analysis::TrialKinematics k = analysis::trialKinematics(p);
+  EXPECT_EQ(k.strokes, 2u);
+  EXPECT_EQ(k.pen_lifts, 1u);
+  EXPECT_NEAR(k.in_air_time_s, 0.100, 1e-12);
+  EXPECT_NEAR(k.writing_time_s, 0.050, 1e-12);
+}
+
+TEST(Svc2004Import, APointAlreadyUpNeedsNoMark) {
+  // The tablet reported the pen in the air (button 0, no pressure): the stroke ends there.
+  const HapticProfile p = svc("3\n0 0 0 1 900 900 10\n0 0 50 0 900 900 0\n0 0 100 0 900 900 10\n");
+  EXPECT_EQ(p.size(), 3u);
+  EXPECT_EQ(p.metadata().extra.at("inserted_lift_samples"), "0");
+}
+
 TEST(Svc2004Import, TiltSplitsTheAxialForceAsThePaperSays) {
   // Altitude 30°, azimuth 90° (barrel toward +x): normal part F·sin θ, tangential F·cos θ toward −x.
   const HapticProfile p = svc("1\n0 0 0 1 900 300 1023\n");
@@ -123,10 +159,16 @@ TEST(SusigImport, ReadsHeaderDataSizeAndStrokeEnds) {
   const HapticProfile p = susig(
       "X, Y, TStamp, Pres., EndPts\nDataSize: 4\n"
       "100, 200, 0, 128, 0\n110, 205, 10, 255, 1\n300, 200, 50, 64, 0\n310, 210, 60, 0, 1\n");
-  ASSERT_EQ(p.size(), 4u);
-  EXPECT_DOUBLE_EQ(p[2].t_s, 0.050);
+  // The first stroke's end is followed by a lift the tablet did not report: one pen-up sample,
+  // one period (10 ms, the median step) after it, where the pen left.
+  ASSERT_EQ(p.size(), 5u);
+  EXPECT_FALSE(p[2].pen_down);
+  EXPECT_DOUBLE_EQ(p[2].t_s, 0.020);
+  EXPECT_EQ(p[2].p_WT, p[1].p_WT);
+  EXPECT_EQ(p.metadata().extra.at("inserted_lift_samples"), "1");
+  EXPECT_DOUBLE_EQ(p[3].t_s, 0.050);
   EXPECT_NEAR(p[1].f_user_W.z(), -susigCalibration().pressure_max_N, 1e-12);
-  EXPECT_FALSE(p[3].pen_down);
+  EXPECT_FALSE(p[4].pen_down);
   EXPECT_FALSE(p.hasChannel(Channel::kAzimuth));
   EXPECT_TRUE(p.hasChannel(Channel::kPressure));
   EXPECT_EQ(p.metadata().extra.at("strokes"), "2");

@@ -3,6 +3,7 @@
 /// as an ordered series of servo-rate samples plus metadata. SI units inside.
 
 #include <map>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -95,7 +96,7 @@ namespace hattr {
 /// Sets every sample's velocity from its positions by finite differences (central
 /// inside, one-sided at the ends; exact for non-uniform time steps on a parabola).
 /// For sources that record only positions (tablets, hand-written files).
-void fillVelocityByFiniteDifferences(std::vector<Sample>& samples);
+void fillVelocityByFiniteDifferences(std::span<Sample> samples);
 
 /// Places writing on the paper: moves the centre of the pen-down points' box in the paper
 /// plane (of all points when none is down) to W's origin, the paper's centre. Returns the

@@ -2,7 +2,9 @@
 /// Importers for real pen-tablet recordings people already have: SVC2004 and SUSIG.
 /// Tablet units, raw pressure and tilt convert to SI through a TabletCalibration, whose
 /// defaults and sources are in docs/file-formats.md and which a JSON file can override.
-/// Pen-up points are kept and flagged (pen_down = false), never dropped.
+/// Pen-up points are kept and flagged (pen_down = false), never dropped. A lift the tablet did
+/// not report (no points in the air) but the format marks is one inserted pen-up sample, so
+/// strokes are what the writer wrote (metadata `inserted_lift_samples`; docs/file-formats.md).
 /// Errors throw hattr::InputError naming file, line and field. Not for the servo thread.
 
 #include <filesystem>
@@ -55,14 +57,16 @@ double pressureToNewtons(double raw, const TabletCalibration& calibration);
 Vec3 axialForceOnPaper(double axial_N, double azimuth_rad, double altitude_rad);
 
 /// Imports an SVC2004 .TXT file: "N", then N lines "X Y T button azimuth altitude pressure".
-/// The pen is down when pressure exceeds the threshold or button bit 0 is set. Time stamps
+/// The pen is down when pressure exceeds the threshold or button bit 0 is set. The tablet
+/// reports nothing in the air: a lift precedes a point with button 0 that comes more than 1.5
+/// median time steps after the one before (a dropped point keeps button 1). Time stamps
 /// that do not increase (the tablet's clock jitters) are re-timed evenly between their
 /// neighbours; how many is recorded in the metadata key `retimed_samples`.
 HapticProfile importSvc2004(const std::filesystem::path& file, const TabletCalibration& calibration);
 HapticProfile importSvc2004(std::istream& in, std::string_view source_name,
                             const TabletCalibration& calibration);
 
-/// Imports a SUSIG file (format in docs/file-formats.md).
+/// Imports a SUSIG file (format in docs/file-formats.md); EndPts = 1 ends a stroke.
 HapticProfile importSusig(const std::filesystem::path& file, const TabletCalibration& calibration);
 HapticProfile importSusig(std::istream& in, std::string_view source_name,
                           const TabletCalibration& calibration);
