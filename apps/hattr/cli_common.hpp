@@ -40,6 +40,7 @@ void registerProfileCommands(CLI::App& app);
 void registerImportCommands(CLI::App& app);
 void registerDemoCommand(CLI::App& app);
 void registerPathsCommand(CLI::App& app);
+void registerLibraryCommands(CLI::App& app);
 void registerServoCheckCommand(CLI::App& app);
 void registerWorldCommands(CLI::App& app);
 void registerRecordTrainCommands(CLI::App& app);

@@ -95,6 +95,7 @@ int main(int argc, char** argv) {
   registerSimCommands(app);
   registerDemoCommand(app);
   registerPathsCommand(app);
+  registerLibraryCommands(app);
 
   if (const std::string unknown = unknownCommandMessage(app, argc, argv); !unknown.empty()) {
     std::cerr << "hattr: error: " << unknown << '\n';

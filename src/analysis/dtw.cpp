@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <deque>
 #include <exception>
 #include <limits>
 #include <mutex>
@@ -420,6 +421,48 @@ Eigen::MatrixXd dtwCostMatrix(std::span<const std::vector<double>> series,
     }
   });
   return costs;
+}
+
+// The envelope by a monotone deque of indices per side (Lemire 2009): O(n) whatever the radius.
+DtwEnvelope dtwEnvelope(std::span<const double> series, std::size_t radius) {
+  HATTR_THROW_UNLESS(!series.empty(), "DTW envelope: the series is empty; expected at least one value");
+  for (std::size_t i = 0; i < series.size(); ++i) {
+    HATTR_THROW_UNLESS(std::isfinite(series[i]), "DTW envelope: value {} is {}; expected a finite number", i, series[i]);
+  }
+  const std::size_t n = series.size();
+  const std::size_t r = std::min(radius, n);
+  DtwEnvelope e{std::vector<double>(n), std::vector<double>(n)};
+  std::deque<std::size_t> lows;
+  std::deque<std::size_t> highs;
+  std::size_t next = 0;  // the next index to enter the window
+  for (std::size_t i = 0; i < n; ++i) {
+    // The window [i - r, i + r]: enter up to i + r, leave below i - r.
+    for (; next < n && next <= i + r; ++next) {
+      while (!lows.empty() && series[lows.back()] >= series[next]) lows.pop_back();
+      lows.push_back(next);
+      while (!highs.empty() && series[highs.back()] <= series[next]) highs.pop_back();
+      highs.push_back(next);
+    }
+    while (lows.front() + r < i) lows.pop_front();
+    while (highs.front() + r < i) highs.pop_front();
+    e.lower[i] = series[lows.front()];
+    e.upper[i] = series[highs.front()];
+  }
+  return e;
+}
+
+double lbKeogh(std::span<const double> candidate, const DtwEnvelope& envelope, DtwCost cost, double abandon_above) {
+  HATTR_THROW_UNLESS(candidate.size() == envelope.lower.size() && candidate.size() == envelope.upper.size(),
+                     "LB_Keogh: the candidate has {} values and the envelope {}; expected the same length",
+                     candidate.size(), envelope.lower.size());
+  double sum = 0.0;
+  for (std::size_t i = 0; i < candidate.size(); ++i) {
+    const double c = candidate[i];
+    const double gap = c > envelope.upper[i] ? c - envelope.upper[i] : (c < envelope.lower[i] ? envelope.lower[i] - c : 0.0);
+    sum += cost == DtwCost::kAbsolute ? gap : gap * gap;
+    if (sum > abandon_above) return sum;
+  }
+  return sum;
 }
 
 std::size_t dtwBatchWidth() { return detail::batchWidth(); }

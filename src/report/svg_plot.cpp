@@ -103,6 +103,7 @@ SvgPlot::Area SvgPlot::layout() const {
   }
   if (!std::isfinite(x0)) x0 = 0, x1 = 1, y0 = 0, y1 = 1;
   if (y_range_) std::tie(y0, y1) = *y_range_;
+  if (x_range_) std::tie(x0, x1) = *x_range_;
   if (x1 - x0 < 1e-12) x0 -= 0.5, x1 += 0.5;
   if (y1 - y0 < 1e-12) y0 -= 0.5, y1 += 0.5;
   const double pad = 0.05 * (y1 - y0);
@@ -135,16 +136,27 @@ std::string SvgPlot::axesSvg(const Area& area) const {
   const auto X = [&area](double x) { return area.xPixel(x); };
   const auto Y = [&area](double y) { return area.yPixel(y); };
   std::string out;
-  for (const double t : ticks(area.y0, area.y1)) {
+  // Evenly spaced numbers, or the labelled ticks given (those within the range).
+  const auto tickList = [](const Ticks& given, const std::vector<double>& even, double lo, double hi) {
+    Ticks shown;
+    if (given.empty()) {
+      for (const double t : even) shown.emplace_back(t, number(t));
+    }
+    for (const auto& t : given) {
+      if (t.first >= lo && t.first <= hi) shown.push_back(t);
+    }
+    return shown;
+  };
+  for (const auto& [t, label] : tickList(y_ticks_, ticks(area.y0, area.y1), area.y0, area.y1)) {
     out += fmt::format("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#e4e4e4\"/>"
                        "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"end\">{}</text>\n",
-                       left, Y(t), left + pw, Y(t), left - 6, Y(t) + 4, number(t));
+                       left, Y(t), left + pw, Y(t), left - 6, Y(t) + 4, escape(label));
   }
   if (bars_.empty()) {
-    for (const double t : ticks(area.x0, area.x1, integer_x_)) {
+    for (const auto& [t, label] : tickList(x_ticks_, ticks(area.x0, area.x1, integer_x_), area.x0, area.x1)) {
       out += fmt::format("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#e4e4e4\"/>"
                          "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n",
-                         X(t), top, X(t), top + ph, X(t), top + ph + 16, number(t));
+                         X(t), top, X(t), top + ph, X(t), top + ph + 16, escape(label));
     }
   }
   out += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#555\"/>\n", left, top, pw, ph);

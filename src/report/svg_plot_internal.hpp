@@ -38,6 +38,15 @@ class SvgPlot {
   void integerX() { integer_x_ = true; }
   /// A fixed y range (a probability from 0 to 1) instead of the data's.
   void yRange(double lo, double hi) { y_range_ = {lo, hi}; }
+  /// A fixed x range instead of the data's.
+  void xRange(double lo, double hi) { x_range_ = {lo, hi}; }
+  /// Ticks at these values with these labels instead of evenly spaced numbers (a DET curve's
+  /// probabilities on a normal-deviate axis).
+  using Ticks = std::vector<std::pair<double, std::string>>;
+  void labelledTicks(Ticks x, Ticks y) {
+    x_ticks_ = std::move(x);
+    y_ticks_ = std::move(y);
+  }
   /// Bars instead of lines (categories along x).
   void bars(std::vector<Bar> bars) { bars_ = std::move(bars); }
   [[nodiscard]] std::string svg() const;
@@ -57,6 +66,8 @@ class SvgPlot {
   bool equal_aspect_ = false;
   bool integer_x_ = false;
   std::optional<std::pair<double, double>> y_range_;
+  std::optional<std::pair<double, double>> x_range_;
+  Ticks x_ticks_, y_ticks_;
   std::vector<Series> series_;
   std::vector<Bar> bars_;
 };

@@ -271,19 +271,12 @@ HapticProfile StudyDatabase::trialProfile(std::int64_t trial_id) const {
   // What was stored is checked as it is read back: a damaged trial is named, never half-read.
   try {
     const RawChannels raw{s.integer(0) != 0, s.integer(1) != 0};
-    const json meta = json::parse(s.text(4));
-    ProfileMetadata metadata{meta.at("subject"), meta.at("skill"), meta.at("device"), meta.at("source"),
-                             meta.at("created_utc"), meta.at("rate_hz").get<double>(),
-                             meta.at("extra").get<std::map<std::string, std::string>>()};
-    HapticProfile profile(std::move(metadata), raw);
+    HapticProfile profile(parseProfileMetadataJson(s.text(4), "metadata"), raw);
     const auto samples =
         decodeTrialSamples(s.blob(3), s.text(7), raw, static_cast<std::size_t>(std::max<std::int64_t>(s.integer(2), 0)));
     profile.reserve(samples.size());
     for (const Sample& sample : samples) profile.append(sample);
     return profile;
-  } catch (const json::exception& e) {
-    throw InputError(fmt::format("{}: trial {} (subject {}, sequence {}) is damaged: metadata: {}", file_.string(),
-                                 trial_id, textExcerpt(s.text(5)), s.integer(6), jsonLibraryMessage(e)));
   } catch (const std::exception& e) {
     throw InputError(fmt::format("{}: trial {} (subject {}, sequence {}) is damaged: {}", file_.string(), trial_id,
                                  textExcerpt(s.text(5)), s.integer(6), e.what()));
@@ -349,16 +342,6 @@ void StudyDatabase::refuseUnwritable(std::int64_t changed, std::int64_t trial_id
                           file_.string(), trial_id, what));
 }
 
-namespace {
-
-json metadataJson(const ProfileMetadata& m) {
-  return {{"subject", m.subject}, {"skill", m.skill},   {"device", m.device},
-          {"source", m.source},   {"created_utc", m.created_utc}, {"rate_hz", m.nominal_rate_hz},
-          {"extra", m.extra}};
-}
-
-}  // namespace
-
 void StudyDatabase::completeTrial(std::int64_t trial_id, const HapticProfile& profile, const std::string& outcome,
                                   const std::string& disturbed) {
   const std::string data = options_.scratch ? std::string() : encodeTrialSamples(profile, study_.resolution);
@@ -366,7 +349,7 @@ void StudyDatabase::completeTrial(std::int64_t trial_id, const HapticProfile& pr
   holdLease(trial_id);
   Statement trial(*db_, "UPDATE trials SET status = 'completed', ended_utc = ?, outcome = ?, metadata = ?, disturbed = ? "
                         "WHERE id = ? AND status != 'completed'");
-  trial.bind(1, utcNowIso8601()).bind(2, outcome).bind(3, metadataJson(profile.metadata()).dump());
+  trial.bind(1, utcNowIso8601()).bind(2, outcome).bind(3, profileMetadataJson(profile.metadata()));
   if (disturbed.empty()) {
     trial.bindNull(4);
   } else {
@@ -396,7 +379,7 @@ void StudyDatabase::keepDisturbedAttempt(std::int64_t trial_id, const HapticProf
   Statement s(*db_,
               "INSERT INTO disturbed_attempts (trial, reason, ended_utc, metadata, raw_pressure, raw_tilt, sample_count, "
               "data, encoding) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)");
-  s.bind(1, trial_id).bind(2, reason).bind(3, utcNowIso8601()).bind(4, metadataJson(profile.metadata()).dump())
+  s.bind(1, trial_id).bind(2, reason).bind(3, utcNowIso8601()).bind(4, profileMetadataJson(profile.metadata()))
       .bind(5, profile.rawChannels().pressure ? 1 : 0).bind(6, profile.rawChannels().tilt ? 1 : 0)
       .bind(7, static_cast<std::int64_t>(profile.size())).bindBlob(8, encodeTrialSamples(profile, study_.resolution))
       .bind(9, std::string(kCompactSamples)).run();
@@ -451,6 +434,23 @@ double StudyDatabase::claimRetryInterval_s() const noexcept {
   // and at most a second, so that a subject given back or the study's end is noticed soon
   // whatever the lease (each round is one claim query a waiting subject).
   return std::min(options_.lease_timeout_s / 4.0, kMaxClaimRetry_s);
+}
+
+std::string profileMetadataJson(const ProfileMetadata& m) {
+  const json j{{"subject", m.subject}, {"skill", m.skill},   {"device", m.device},
+               {"source", m.source},   {"created_utc", m.created_utc}, {"rate_hz", m.nominal_rate_hz},
+               {"extra", m.extra}};
+  return j.dump();
+}
+
+ProfileMetadata parseProfileMetadataJson(std::string_view text, std::string_view where) {
+  try {
+    const json meta = json::parse(text);
+    return {meta.at("subject"), meta.at("skill"), meta.at("device"), meta.at("source"), meta.at("created_utc"),
+            meta.at("rate_hz").get<double>(), meta.at("extra").get<std::map<std::string, std::string>>()};
+  } catch (const json::exception& e) {
+    throw InputError(fmt::format("{}: {}", where, jsonLibraryMessage(e)));
+  }
 }
 
 }  // namespace hattr::session

@@ -138,6 +138,27 @@ using Channels = std::span<const std::vector<double>>;
 [[nodiscard]] Eigen::MatrixXd dtwCostMatrix(std::span<const std::vector<double>> series,
                                             const DtwOptions& options = {}, unsigned threads = 2);
 
+/// The envelope of a series for LB_Keogh: lower[i] and upper[i] are the least and greatest
+/// value of series[j] for |i - j| <= radius.
+struct DtwEnvelope {
+  std::vector<double> lower;
+  std::vector<double> upper;
+};
+
+/// The envelope of `series` within `radius` samples (kNoBand: the whole series). Throws
+/// InputError on an empty series or a non-finite value.
+[[nodiscard]] DtwEnvelope dtwEnvelope(std::span<const double> series, std::size_t radius);
+
+/// LB_Keogh (Keogh and Ratanamahatana 2005): a lower bound of the banded DTW cost between a
+/// series q and `candidate` of the same length, from q's envelope within the band's radius:
+/// the sum over i of cost(candidate[i], the nearest point of [lower[i], upper[i]]). For any
+/// candidate, lbKeogh(candidate, dtwEnvelope(q, r), cost) <= dtwDistance(candidate, q) with the
+/// band of radius r and the same cost, so a search may skip a candidate whose bound exceeds its
+/// best so far without changing its answer. Stops summing once the sum exceeds `abandon_above`
+/// (and returns the partial sum, already above it). Throws InputError when the lengths differ.
+[[nodiscard]] double lbKeogh(std::span<const double> candidate, const DtwEnvelope& envelope, DtwCost cost,
+                             double abandon_above = std::numeric_limits<double>::infinity());
+
 /// Pairs the batch kernel computes together on this machine (one SIMD block): a batch of
 /// equal-length pairs whose count is a multiple of it leaves no lane idle.
 [[nodiscard]] std::size_t dtwBatchWidth();

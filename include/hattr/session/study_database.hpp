@@ -235,5 +235,10 @@ std::string encodeTrialSamples(const HapticProfile& profile, const io::ChannelRe
 /// A stored block back into samples, from either encoding; throws InputError for a damaged one.
 std::vector<Sample> decodeTrialSamples(std::string_view bytes, std::string_view encoding, const RawChannels& raw,
                                        std::size_t count);
+/// A profile's metadata as the stores keep it: a JSON object (subject, skill, device, source,
+/// created_utc, rate_hz, extra), keys sorted.
+std::string profileMetadataJson(const ProfileMetadata& metadata);
+/// profileMetadataJson's text back; throws InputError naming `where` for text that is not one.
+ProfileMetadata parseProfileMetadataJson(std::string_view text, std::string_view where);
 
 }  // namespace hattr::session

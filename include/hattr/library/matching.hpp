@@ -1,0 +1,150 @@
+#pragma once
+/// Comparing haptic profiles for identity: feature series, distances, verification against a
+/// person's enrolled profiles, and exact nearest-person search.
+///
+/// Features (docs/library.md). A profile's pen-down samples, in order, on *writing time* (the
+/// time in the air between strokes left out: one median step across each lift), resampled
+/// linearly at `length` evenly spaced steps (the paper's time scaling, onto a common grid rather
+/// than one expert's steps, so every profile of a library is comparable with every other), and
+/// each channel normalized as the paper does ((x − mean) / range by default). Channels by
+/// feature: shape x, y; force |f| (the pen's force on the paper, proportional to a tablet's
+/// pressure); angles azimuth, altitude; velocity vx, vy.
+///
+/// Distance: the paper's per-axis DTW with the absolute cost, each channel on its own path,
+/// summed over the feature set's channels, within a Sakoe–Chiba band, divided by `length`; plus,
+/// with timing, timing_weight·|ln(T_a / T_b)| of the two writing times.
+///
+/// Offline code: any thread but the servo thread. Bad input (a profile without the channels a
+/// feature set needs, too few pen-down samples) throws hattr::InputError naming the profile.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "hattr/analysis/preprocess.hpp"
+#include "hattr/core/haptic_profile.hpp"
+
+namespace hattr::library {
+
+/// The feature channels, in the order FeatureSeries keeps them.
+enum class FeatureChannel : std::uint8_t { kX, kY, kForce, kAzimuth, kAltitude, kVx, kVy };
+inline constexpr std::size_t kFeatureChannels = 7;
+
+/// A set of features, as bits: shape (x, y), force, angles, velocity, timing (the writing time,
+/// which resampling to a common length takes out of the others).
+struct FeatureSet {
+  static constexpr unsigned kShape = 1, kForce = 2, kAngles = 4, kVelocity = 8, kTiming = 16;
+  unsigned bits = kShape;
+  friend bool operator==(FeatureSet, FeatureSet) = default;
+  /// The channels of the set, in FeatureChannel order (timing has none: it is one number).
+  [[nodiscard]] std::vector<FeatureChannel> channels() const;
+  [[nodiscard]] bool timing() const { return (bits & kTiming) != 0; }
+  /// "shape", "force", "shape+force", ..., "all" for the five.
+  [[nodiscard]] std::string name() const;
+};
+/// Parses "shape", "force", "angles", "velocity", "timing", joined with '+', or "all"; InputError
+/// otherwise.
+FeatureSet parseFeatureSet(std::string_view text);
+/// The sets an evaluation reports: each alone, shape+force, and all four.
+std::vector<FeatureSet> reportedFeatureSets();
+
+struct FeatureOptions {
+  std::size_t length = 128;       ///< steps every profile is resampled at (>= 8)
+  double band_fraction = 0.1;     ///< the DTW band as a fraction of `length` (also the LB radius)
+  analysis::Normalization normalization = analysis::Normalization::kPaper;
+  /// The timing feature's weight: its distance is weight·|ln(T_a / T_b)| for writing times T.
+  double timing_weight = 0.05;
+};
+/// Throws InputError naming the option for a length below 8, a band outside (0, 1] or a timing
+/// weight that is negative or not finite.
+void checkFeatureOptions(const FeatureOptions& options);
+
+/// A profile's feature series: one vector of `length` values per channel it has (empty for a
+/// channel it lacks: no tilt, no angles).
+struct FeatureSeries {
+  std::array<std::vector<double>, kFeatureChannels> channels;
+  double writing_time_s = 0.0;  ///< the pen-down time (lifts left out) [s]
+  [[nodiscard]] bool has(FeatureChannel c) const { return !channels[static_cast<std::size_t>(c)].empty(); }
+  [[nodiscard]] const std::vector<double>& operator[](FeatureChannel c) const {
+    return channels[static_cast<std::size_t>(c)];
+  }
+};
+
+/// The features of a profile (every channel it has). `where` names it in errors.
+FeatureSeries extractFeatures(const HapticProfile& profile, const FeatureOptions& options, std::string_view where);
+/// Throws InputError naming `where` and the missing channel if `series` lacks one of `set`'s.
+void requireChannels(const FeatureSeries& series, FeatureSet set, std::string_view where);
+
+/// The timing part of a distance (0 unless the set has timing).
+double timingDistance(const FeatureSeries& a, const FeatureSeries& b, FeatureSet set, const FeatureOptions& options);
+/// The distance between two profiles' features over a set (see above). Returns +infinity as
+/// soon as it is sure to exceed `abandon_above`.
+double featureDistance(const FeatureSeries& a, const FeatureSeries& b, FeatureSet set, const FeatureOptions& options,
+                       double abandon_above = std::numeric_limits<double>::infinity());
+
+// ---- Verification -------------------------------------------------------------------------
+
+/// How a query's distances to a person's references become one score.
+enum class ScoreRule { kMean, kMin };
+std::string_view scoreRuleName(ScoreRule rule);  ///< "mean", "min"
+ScoreRule parseScoreRule(std::string_view name);
+
+/// A person's enrolment for a skill: their reference profiles' features, and their own spread
+/// (the mean distance between two of their references), which normalises their scores, as the
+/// signature literature does: a writer who varies much is allowed more.
+struct Enrolment {
+  std::string person;
+  std::vector<FeatureSeries> references;
+  double spread = 0.0;
+};
+/// Enrols references: at least 2 (a spread needs two), not all the same. Throws InputError
+/// naming the person otherwise.
+Enrolment enrol(std::string person, std::vector<FeatureSeries> references, FeatureSet set, const FeatureOptions& options);
+
+/// The normalised score of a query against an enrolment: rule(distances to the references) /
+/// spread. Lower is more like the person. From the distances, for callers that cache them.
+double verificationScore(std::span<const double> distances_to_references, double spread, ScoreRule rule);
+double verificationScore(const FeatureSeries& query, const Enrolment& enrolment, FeatureSet set,
+                         const FeatureOptions& options, ScoreRule rule);
+
+// ---- Identification -----------------------------------------------------------------------
+
+/// One profile a search may return.
+struct Candidate {
+  std::string person;
+  std::string key;
+  FeatureSeries features;
+};
+
+/// A person in a ranking: their nearest profile and its distance.
+struct RankedPerson {
+  std::string person;
+  std::string key;
+  double distance = 0.0;
+  friend bool operator==(const RankedPerson&, const RankedPerson&) = default;
+};
+
+/// What a search did: how many full DTWs it ran against how many candidates.
+struct SearchStats {
+  std::size_t candidates = 0;
+  std::size_t lower_bounds = 0;  ///< LB_Keogh computed
+  std::size_t dtw_full = 0;      ///< distances computed to the end
+  std::size_t dtw_abandoned = 0; ///< distances stopped early
+};
+
+/// The `top` persons nearest to the query (by their nearest candidate; ties by person then
+/// key), exactly: candidates in ascending LB_Keogh order, each distance abandoned once it
+/// cannot enter the answer, and the search stops once the next bound exceeds the `top`-th
+/// person's distance. The same answer as identifyBruteForce.
+std::vector<RankedPerson> identify(const FeatureSeries& query, std::span<const Candidate> candidates, FeatureSet set,
+                                   const FeatureOptions& options, std::size_t top, SearchStats* stats = nullptr);
+/// Every distance computed in full, then ranked: the baseline of tests and benchmarks.
+std::vector<RankedPerson> identifyBruteForce(const FeatureSeries& query, std::span<const Candidate> candidates,
+                                             FeatureSet set, const FeatureOptions& options, std::size_t top);
+
+}  // namespace hattr::library

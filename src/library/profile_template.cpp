@@ -1,0 +1,217 @@
+// DTW barycenter averaging of a person's recordings into a template, and library: references.
+
+#include "hattr/library/profile_template.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "hattr/analysis/dtw.hpp"
+#include "hattr/core/error.hpp"
+#include "hattr/library/profile_library.hpp"
+
+namespace hattr::library {
+
+namespace {
+
+/// The sample between a and b at weight w (0: a, 1: b): every stored field linear, flags nearest.
+Sample mix(const Sample& a, const Sample& b, double w) {
+  Sample s = w < 0.5 ? a : b;
+  s.t_s = (1 - w) * a.t_s + w * b.t_s;
+  s.p_WT = (1 - w) * a.p_WT + w * b.p_WT;
+  s.v_WT = (1 - w) * a.v_WT + w * b.v_WT;
+  s.f_user_W = (1 - w) * a.f_user_W + w * b.f_user_W;
+  s.f_cmd_W = (1 - w) * a.f_cmd_W + w * b.f_cmd_W;
+  s.f_guide_W = (1 - w) * a.f_guide_W + w * b.f_guide_W;
+  s.pressure_raw = (1 - w) * a.pressure_raw + w * b.pressure_raw;
+  s.tilt_azimuth_rad = (1 - w) * a.tilt_azimuth_rad + w * b.tilt_azimuth_rad;
+  s.tilt_altitude_rad = (1 - w) * a.tilt_altitude_rad + w * b.tilt_altitude_rad;
+  return s;
+}
+
+/// `n` samples evenly in time over the profile's span.
+std::vector<Sample> resampleEvenly(const HapticProfile& profile, std::size_t n) {
+  const auto& s = profile.samples();
+  const double t0 = s.front().t_s;
+  const double span = s.back().t_s - t0;
+  std::vector<Sample> out(n);
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = t0 + span * static_cast<double>(i) / static_cast<double>(n - 1);
+    while (k + 2 < s.size() && s[k + 1].t_s <= t) ++k;
+    const double w = std::clamp((t - s[k].t_s) / (s[k + 1].t_s - s[k].t_s), 0.0, 1.0);
+    out[i] = mix(s[k], s[k + 1], w);
+  }
+  return out;
+}
+
+/// The alignment channels of samples: x, y (and |f|), each divided by its scale.
+std::vector<std::vector<double>> alignmentChannels(const std::vector<Sample>& samples, bool force, const double* scale) {
+  std::vector<std::vector<double>> c(force ? 3 : 2, std::vector<double>(samples.size()));
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    c[0][i] = samples[i].p_WT.x() / scale[0];
+    c[1][i] = samples[i].p_WT.y() / scale[1];
+    if (force) c[2][i] = samples[i].f_user_W.norm() / scale[2];
+  }
+  return c;
+}
+
+/// Each channel's standard deviation over every sample of every recording (1 when it is 0).
+std::array<double, 3> channelScales(const std::vector<std::vector<Sample>>& recordings) {
+  std::array<double, 3> sum{}, sq{};
+  double n = 0;
+  for (const auto& r : recordings) {
+    for (const Sample& s : r) {
+      const double v[3] = {s.p_WT.x(), s.p_WT.y(), s.f_user_W.norm()};
+      for (int c = 0; c < 3; ++c) sum[c] += v[c], sq[c] += v[c] * v[c];
+      n += 1;
+    }
+  }
+  std::array<double, 3> scale{};
+  for (int c = 0; c < 3; ++c) {
+    const double var = sq[c] / n - (sum[c] / n) * (sum[c] / n);
+    scale[c] = var > 1e-24 ? std::sqrt(var) : 1.0;
+  }
+  return scale;
+}
+
+}  // namespace
+
+ProfileTemplate buildTemplate(const std::vector<HapticProfile>& recordings, ProfileMetadata metadata,
+                              const TemplateOptions& options) {
+  HATTR_THROW_UNLESS(recordings.size() >= 2,
+                     "template of {} {}: {} recording; expected at least 2 (a template of one is that recording)",
+                     metadata.subject, metadata.skill, recordings.size());
+  HATTR_THROW_UNLESS(options.max_iterations >= 1, "template: iterations: expected at least 1, got {}",
+                     options.max_iterations);
+  std::vector<std::size_t> lengths;
+  double mean_duration = 0.0;
+  for (std::size_t r = 0; r < recordings.size(); ++r) {
+    HATTR_THROW_UNLESS(recordings[r].size() >= 2 && recordings[r].duration_s() > 0.0,
+                       "template of {} {}: recording {} has {} samples over {} s; expected at least 2 over a time",
+                       metadata.subject, metadata.skill, r + 1, recordings[r].size(), recordings[r].duration_s());
+    lengths.push_back(recordings[r].size());
+    mean_duration += recordings[r].duration_s() / static_cast<double>(recordings.size());
+  }
+  std::nth_element(lengths.begin(), lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2), lengths.end());
+  const std::size_t n = lengths[lengths.size() / 2];
+  std::vector<std::vector<Sample>> series;
+  for (const auto& r : recordings) series.push_back(resampleEvenly(r, n));
+  const auto scale = channelScales(series);
+  std::vector<std::vector<std::vector<double>>> channels;
+  for (const auto& s : series) channels.push_back(alignmentChannels(s, options.align_force, scale.data()));
+  analysis::DtwOptions dtw;
+  dtw.band_fraction = options.band_fraction;
+
+  // The medoid starts the average.
+  std::size_t medoid = 0;
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t a = 0; a < series.size(); ++a) {
+    double sum = 0.0;
+    for (std::size_t b = 0; b < series.size(); ++b) {
+      if (a != b) sum += analysis::dtwDependent(channels[a], channels[b], dtw).cost;
+    }
+    if (sum < best) best = sum, medoid = a;
+  }
+  std::vector<Sample> average = series[medoid];
+
+  // DBA: each average point becomes the mean of the samples aligned to it.
+  ProfileTemplate t;
+  t.recordings = recordings.size();
+  std::vector<double> spread(n), force_spread(n);
+  dtw.want_path = true;
+  for (t.iterations = 1; t.iterations <= options.max_iterations; ++t.iterations) {
+    const auto avg_channels = alignmentChannels(average, options.align_force, scale.data());
+    std::vector<Sample> sum(n);
+    std::vector<double> count(n, 0.0), down(n, 0.0), sq_dist(n, 0.0), sq_force(n, 0.0);
+    std::vector<std::vector<std::size_t>> aligned(n);
+    for (std::size_t r = 0; r < series.size(); ++r) {
+      const auto path = analysis::dtwDependent(avg_channels, channels[r], dtw).path;
+      for (const auto& step : path) {
+        const Sample& x = series[r][step.j];
+        Sample& acc = sum[step.i];
+        acc.p_WT += x.p_WT, acc.v_WT += x.v_WT, acc.f_user_W += x.f_user_W, acc.f_cmd_W += x.f_cmd_W;
+        acc.f_guide_W += x.f_guide_W, acc.pressure_raw += x.pressure_raw;
+        acc.tilt_azimuth_rad += x.tilt_azimuth_rad, acc.tilt_altitude_rad += x.tilt_altitude_rad;
+        count[step.i] += 1.0;
+        down[step.i] += x.pen_down ? 1.0 : 0.0;
+        aligned[step.i].push_back(r << 32 | step.j);
+      }
+    }
+    double moved = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double c = count[i];
+      Sample next = average[i];
+      next.p_WT = sum[i].p_WT / c, next.v_WT = sum[i].v_WT / c, next.f_user_W = sum[i].f_user_W / c;
+      next.f_cmd_W = sum[i].f_cmd_W / c, next.f_guide_W = sum[i].f_guide_W / c;
+      next.pressure_raw = sum[i].pressure_raw / c;
+      next.tilt_azimuth_rad = sum[i].tilt_azimuth_rad / c, next.tilt_altitude_rad = sum[i].tilt_altitude_rad / c;
+      next.pen_down = next.in_contact = down[i] * 2.0 > c;
+      moved = std::max(moved, (next.p_WT - average[i].p_WT).norm());
+      average[i] = next;
+      // The spread of what was aligned to it, about the new point.
+      double d2 = 0.0, f2 = 0.0;
+      for (const auto code : aligned[i]) {
+        const Sample& x = series[code >> 32][code & 0xffffffffu];
+        d2 += (x.p_WT - next.p_WT).head<2>().squaredNorm();
+        f2 += std::pow(x.f_user_W.norm() - next.f_user_W.norm(), 2);
+      }
+      spread[i] = std::sqrt(d2 / c);
+      force_spread[i] = std::sqrt(f2 / c);
+    }
+    if (moved <= 1e-6) break;
+  }
+  t.iterations = std::min(t.iterations, options.max_iterations);
+
+  // Times evenly over the mean duration; velocities from the positions within pen-down runs.
+  for (std::size_t i = 0; i < n; ++i) average[i].t_s = mean_duration * static_cast<double>(i) / static_cast<double>(n - 1);
+  std::size_t start = 0;
+  for (std::size_t i = 1; i <= n; ++i) {
+    if (i == n || average[i].pen_down != average[start].pen_down) {
+      fillVelocityByFiniteDifferences(std::span(average).subspan(start, i - start));
+      start = i;
+    }
+  }
+  metadata.source = fmt::format("library-template of {} recordings (DBA, {} iterations)", recordings.size(), t.iterations);
+  metadata.created_utc = utcNowIso8601();
+  metadata.nominal_rate_hz = static_cast<double>(n - 1) / mean_duration;
+  t.profile = HapticProfile(std::move(metadata), recordings.front().rawChannels());
+  t.profile.reserve(n);
+  for (const Sample& s : average) t.profile.append(s);
+  t.spread_m = std::move(spread);
+  t.force_spread_N = std::move(force_spread);
+  return t;
+}
+
+bool isLibraryReference(std::string_view text) { return text.rfind("library:", 0) == 0; }
+
+ProfileTemplate libraryTemplate(std::string_view reference, const TemplateOptions& options) {
+  HATTR_THROW_UNLESS(isLibraryReference(reference), "reference \"{}\": expected library:PATH#PERSON/SKILL", reference);
+  const std::string_view rest = reference.substr(8);
+  const auto hash = rest.rfind('#');
+  const auto slash = hash == std::string_view::npos ? std::string_view::npos : rest.find('/', hash);
+  HATTR_THROW_UNLESS(hash != std::string_view::npos && hash > 0 && slash != std::string_view::npos && slash > hash + 1 &&
+                         slash + 1 < rest.size(),
+                     "reference \"{}\": expected library:PATH#PERSON/SKILL (e.g. library:lib.sqlite#U1/signature)",
+                     reference);
+  const std::string location(rest.substr(0, hash));
+  const std::string person(rest.substr(hash + 1, slash - hash - 1));
+  const std::string skill(rest.substr(slash + 1));
+  const ProfileLibrary lib = ProfileLibrary::open(location, true);
+  const auto entries = lib.list({.person = person, .skill = skill, .authenticity = Authenticity::kGenuine});
+  HATTR_THROW_UNLESS(!entries.empty(), "reference \"{}\": {} has no genuine {} profiles of {}; `hattr library list -L {} "
+                                       "--skill {}` shows who has",
+                     reference, location, skill, person, location, skill);
+  std::vector<HapticProfile> recordings;
+  for (const auto& e : entries) recordings.push_back(lib.profile(e.id));
+  try {
+    return buildTemplate(recordings, {.subject = person, .skill = skill, .device = recordings.front().metadata().device},
+                         options);
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("reference \"{}\": {}", reference, e.what()));
+  }
+}
+
+}  // namespace hattr::library
