@@ -10,6 +10,8 @@
 #include "cli_common.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
+#include "hattr/io/table_csv.hpp"
+#include "hattr/library/profile_template.hpp"
 #include "hattr/ops/library.hpp"
 #include "hattr/report/library_report.hpp"
 
@@ -310,6 +312,49 @@ void addIdentify(CLI::App& lib, std::shared_ptr<LibraryChoice> choice) {
   });
 }
 
+void addTemplate(CLI::App& lib, std::shared_ptr<LibraryChoice> choice) {
+  auto* cmd = lib.add_subcommand("template", "A person's template for a skill (DTW barycenter averaging) as a profile CSV");
+  struct Opts {
+    std::string person, skill, out, spread;
+    bool force = false, json = false, shape_only = false;
+  };
+  auto o = std::make_shared<Opts>();
+  cmd->add_option("--person", o->person, "Whose template")->required();
+  cmd->add_option("--skill", o->skill, "Of which skill")->required();
+  cmd->add_option("-o,--output", o->out, "Profile CSV to write (a reference like any)")->required();
+  cmd->add_option("--spread", o->spread, "CSV of the spread along the template: t_s, spread_mm, force_spread_N");
+  cmd->add_flag("--shape-only", o->shape_only, "Align on the shape alone (not on the force profile too)");
+  cmd->add_flag("--force", o->force, "Replace the output files if they exist");
+  cmd->add_flag("--json", o->json, "Print the template's summary as JSON");
+  cmd->callback([choice, o] {
+    std::vector<fs::path> outputs{o->out};
+    if (!o->spread.empty()) outputs.push_back(o->spread);
+    checkOutputFiles(outputs, o->force);
+    const std::string reference = fmt::format("library:{}#{}/{}", choice->resolved(), o->person, o->skill);
+    const auto t = library::libraryTemplate(reference, {.align_force = !o->shape_only});
+    io::writeProfileCsv(t.profile, o->out, o->force ? Overwrite::kReplace : Overwrite::kRefuse);
+    if (!o->spread.empty()) {
+      io::Table table{{"t_s", "spread_mm", "force_spread_N"}, {}, ""};
+      for (std::size_t i = 0; i < t.profile.size(); ++i) {
+        table.rows.push_back({fmt::format("{}", t.profile[i].t_s), fmt::format("{}", 1e3 * t.spread_m[i]),
+                              fmt::format("{}", t.force_spread_N[i])});
+      }
+      io::writeTable(table, o->spread, o->force);
+    }
+    if (o->json) {
+      nlohmann::json j = ops::profileSummaryJson(t.profile);
+      j["recordings"] = t.recordings;
+      j["iterations"] = t.iterations;
+      j["reference"] = reference;
+      printJson(j);
+      return;
+    }
+    std::cout << fmt::format("template of {} {} from {} recordings ({} DBA iterations) -> {}\n", o->person, o->skill,
+                             t.recordings, t.iterations, o->out)
+              << profileSummaryText(t.profile);
+  });
+}
+
 void addEvaluate(CLI::App& lib, std::shared_ptr<LibraryChoice> choice) {
   auto* cmd = lib.add_subcommand("evaluate", "Verification and identification by a stated protocol (svc2004)");
   struct Opts {
@@ -374,6 +419,7 @@ void registerLibraryCommands(CLI::App& app) {
   addExport(*lib, choice);
   addVerify(*lib, choice);
   addIdentify(*lib, choice);
+  addTemplate(*lib, choice);
   addEvaluate(*lib, choice);
 }
 

@@ -6,6 +6,7 @@
 #include <fmt/ranges.h>
 
 #include "cli_common.hpp"
+#include "hattr/library/profile_template.hpp"
 #include "hattr/guidance/strategy_catalog.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
@@ -94,7 +95,7 @@ void runTrialCommand(const TrialOptions& opt, bool training) {
                             .hand_what = "--hand",
                             .reference_what = "--reference"};
   if (training) {
-    run.reference = io::readProfileCsv(opt.reference);
+    run.reference = library::readReference(opt.reference);
     run.options.reference_label = opt.reference;
     run.options.mode = guidance::parseMode(opt.mode);
     run.options.indexing = guidance::parseIndexing(opt.indexing);
@@ -186,7 +187,7 @@ void registerRecordTrainCommands(CLI::App& app) {
                     "(--param pcontrol.kp_N_per_mm=0.2); a scheduled strategy (fading, ...) plays its first trial's law "
                     "and gain");
   train->add_option("--seed", train_opt->seed, "Seed of the strategy's random force (noise)")->capture_default_str();
-  train->add_option("--reference", train_opt->reference, "The expert's haptic profile")->required();
+  train->add_option("--reference", train_opt->reference, "The expert's haptic profile: a CSV file, or a person's template, library:PATH#PERSON/SKILL")->required();
   train->add_option("--indexing", train_opt->indexing, "time (the paper's) or progress (follows the trainee along the path)")
       ->check(CLI::IsMember({"time", "progress"}))
       ->capture_default_str();

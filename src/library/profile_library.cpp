@@ -126,16 +126,15 @@ std::unique_ptr<SqlConnection> connect(const std::string& location, bool create,
 
 /// The schema version a connection's library has; InputError if it is not a library.
 int schemaVersionOf(SqlConnection& db) {
+  std::string why = "no schema_version";
   try {
     Statement s(db, "SELECT value FROM library_meta WHERE name = 'schema_version'");
     if (s.step()) return std::stoi(s.text(0));
-  } catch (const InputError&) {
-    throw;
-  } catch (const std::exception&) {
+  } catch (const std::exception& e) {
+    why = e.what();
   }
-  throw InputError(fmt::format("{}: not a hattr profile library (no library_meta table with a schema_version); make "
-                               "one with `hattr library init`",
-                               db.location()));
+  throw InputError(fmt::format("{}: not a hattr profile library ({}); make one with `hattr library init`", db.location(),
+                               why));
 }
 
 void createSchema(SqlConnection& db) {

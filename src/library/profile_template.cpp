@@ -10,42 +10,12 @@
 
 #include "hattr/analysis/dtw.hpp"
 #include "hattr/core/error.hpp"
+#include "hattr/io/profile_csv.hpp"
 #include "hattr/library/profile_library.hpp"
 
 namespace hattr::library {
 
 namespace {
-
-/// The sample between a and b at weight w (0: a, 1: b): every stored field linear, flags nearest.
-Sample mix(const Sample& a, const Sample& b, double w) {
-  Sample s = w < 0.5 ? a : b;
-  s.t_s = (1 - w) * a.t_s + w * b.t_s;
-  s.p_WT = (1 - w) * a.p_WT + w * b.p_WT;
-  s.v_WT = (1 - w) * a.v_WT + w * b.v_WT;
-  s.f_user_W = (1 - w) * a.f_user_W + w * b.f_user_W;
-  s.f_cmd_W = (1 - w) * a.f_cmd_W + w * b.f_cmd_W;
-  s.f_guide_W = (1 - w) * a.f_guide_W + w * b.f_guide_W;
-  s.pressure_raw = (1 - w) * a.pressure_raw + w * b.pressure_raw;
-  s.tilt_azimuth_rad = (1 - w) * a.tilt_azimuth_rad + w * b.tilt_azimuth_rad;
-  s.tilt_altitude_rad = (1 - w) * a.tilt_altitude_rad + w * b.tilt_altitude_rad;
-  return s;
-}
-
-/// `n` samples evenly in time over the profile's span.
-std::vector<Sample> resampleEvenly(const HapticProfile& profile, std::size_t n) {
-  const auto& s = profile.samples();
-  const double t0 = s.front().t_s;
-  const double span = s.back().t_s - t0;
-  std::vector<Sample> out(n);
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double t = t0 + span * static_cast<double>(i) / static_cast<double>(n - 1);
-    while (k + 2 < s.size() && s[k + 1].t_s <= t) ++k;
-    const double w = std::clamp((t - s[k].t_s) / (s[k + 1].t_s - s[k].t_s), 0.0, 1.0);
-    out[i] = mix(s[k], s[k + 1], w);
-  }
-  return out;
-}
 
 /// The alignment channels of samples: x, y (and |f|), each divided by its scale.
 std::vector<std::vector<double>> alignmentChannels(const std::vector<Sample>& samples, bool force, const double* scale) {
@@ -86,19 +56,15 @@ ProfileTemplate buildTemplate(const std::vector<HapticProfile>& recordings, Prof
                      metadata.subject, metadata.skill, recordings.size());
   HATTR_THROW_UNLESS(options.max_iterations >= 1, "template: iterations: expected at least 1, got {}",
                      options.max_iterations);
-  std::vector<std::size_t> lengths;
   double mean_duration = 0.0;
+  std::vector<std::vector<Sample>> series;
   for (std::size_t r = 0; r < recordings.size(); ++r) {
     HATTR_THROW_UNLESS(recordings[r].size() >= 2 && recordings[r].duration_s() > 0.0,
                        "template of {} {}: recording {} has {} samples over {} s; expected at least 2 over a time",
                        metadata.subject, metadata.skill, r + 1, recordings[r].size(), recordings[r].duration_s());
-    lengths.push_back(recordings[r].size());
     mean_duration += recordings[r].duration_s() / static_cast<double>(recordings.size());
+    series.push_back(recordings[r].samples());
   }
-  std::nth_element(lengths.begin(), lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2), lengths.end());
-  const std::size_t n = lengths[lengths.size() / 2];
-  std::vector<std::vector<Sample>> series;
-  for (const auto& r : recordings) series.push_back(resampleEvenly(r, n));
   const auto scale = channelScales(series);
   std::vector<std::vector<std::vector<double>>> channels;
   for (const auto& s : series) channels.push_back(alignmentChannels(s, options.align_force, scale.data()));
@@ -116,6 +82,9 @@ ProfileTemplate buildTemplate(const std::vector<HapticProfile>& recordings, Prof
     if (sum < best) best = sum, medoid = a;
   }
   std::vector<Sample> average = series[medoid];
+  const std::size_t n = average.size();
+  const double medoid_t0 = average.front().t_s;
+  const double medoid_span = average.back().t_s - medoid_t0;
 
   // DBA: each average point becomes the mean of the samples aligned to it.
   ProfileTemplate t;
@@ -165,8 +134,9 @@ ProfileTemplate buildTemplate(const std::vector<HapticProfile>& recordings, Prof
   }
   t.iterations = std::min(t.iterations, options.max_iterations);
 
-  // Times evenly over the mean duration; velocities from the positions within pen-down runs.
-  for (std::size_t i = 0; i < n; ++i) average[i].t_s = mean_duration * static_cast<double>(i) / static_cast<double>(n - 1);
+  // The medoid's times scaled to the mean duration; velocities from the positions within
+  // pen-down runs.
+  for (std::size_t i = 0; i < n; ++i) average[i].t_s = (average[i].t_s - medoid_t0) / medoid_span * mean_duration;
   std::size_t start = 0;
   for (std::size_t i = 1; i <= n; ++i) {
     if (i == n || average[i].pen_down != average[start].pen_down) {
@@ -212,6 +182,10 @@ ProfileTemplate libraryTemplate(std::string_view reference, const TemplateOption
   } catch (const InputError& e) {
     throw InputError(fmt::format("reference \"{}\": {}", reference, e.what()));
   }
+}
+
+HapticProfile readReference(const std::string& text) {
+  return isLibraryReference(text) ? libraryTemplate(text).profile : io::readProfileCsv(text);
 }
 
 }  // namespace hattr::library

@@ -270,6 +270,20 @@ void readExperts(const json& root, const std::filesystem::path& base_dir, bool c
       // existing one, or any value with a '/' or ending in .csv. A stored definition's files are
       // not looked at (the database holds the experts).
       const std::string value = item.value().get<std::string>();
+      // A person's template in a profile library (library:PATH#PERSON/SKILL, the path beside
+      // the study file): built when the study is made (sim::recordNamedExperts).
+      if (value.rfind("library:", 0) == 0) {
+        const auto hash = value.rfind('#');
+        if (hash == std::string::npos || hash <= 8) {
+          problems.add(fmt::format("experts.{}: \"{}\": expected library:PATH#PERSON/SKILL", item.key(), value));
+          continue;
+        }
+        std::filesystem::path library = value.substr(8, hash - 8);
+        if (library.is_relative() && value.compare(8, 8, "postgres") != 0) library = std::filesystem::absolute(base_dir / library);
+        study.named_experts[item.key()] = "library:" + library.string() + value.substr(hash);
+        study.experts[item.key()] = study.named_experts[item.key()];
+        continue;
+      }
       std::filesystem::path file = value;
       if (file.is_relative()) file = base_dir / file;
       std::error_code unreadable;

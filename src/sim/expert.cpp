@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/library/profile_template.hpp"
 #include "hattr/device/device_uri.hpp"
 #include "hattr/device/hand.hpp"
 #include "hattr/render/world_config.hpp"
@@ -285,6 +286,15 @@ void recordNamedExperts(session::StudyDefinition& study) {
   session::TrialEnvironment environment(device, render::parseWorldConfig(study.world.dump(), "study world"),
                                         study.rate_hz);
   for (const auto& [skill, name] : study.named_experts) {
+    // A person's template in a profile library.
+    if (library::isLibraryReference(name)) {
+      try {
+        study.named_expert_profiles[skill] = library::libraryTemplate(name).profile;
+      } catch (const InputError& e) {
+        throw InputError(fmt::format("experts.{}: {}", skill, e.what()));
+      }
+      continue;
+    }
     // A glyph file (parseStudy made its path whole: it has a '/'), else a built-in glyph: never
     // a file relative to wherever this process runs.
     Glyph glyph;

@@ -3,14 +3,15 @@
 /// averaging (DBA, Petitjean, Ketterlin and Gançarski 2011), with the spread of the recordings
 /// along it, usable as a reference wherever one is asked for (`library:PATH#PERSON/SKILL`).
 ///
-/// hattr's reading (docs/library.md): each recording is resampled evenly in time at the median
-/// recording's sample count; the alignment channels (shape x, y, and with force |f|), each scaled
+/// hattr's reading (docs/library.md): the recordings as they are (no resampling, which would
+/// draw ink across a lift); the alignment channels (shape x, y, and with force |f|), each scaled
 /// by its standard deviation over all recordings, set a common DTW path (dependent DTW, absolute
-/// cost); the average starts at the medoid and each iteration replaces every average point by
-/// the mean of the recordings' samples aligned to it (every stored field: position, force,
-/// pressure, tilt; pen down by majority), until no point moves by more than 1 µm or 30
-/// iterations. Its times run evenly over the recordings' mean duration; its velocities are the
-/// finite differences of its positions within each pen-down run. The spread at a point is the
+/// cost, banded); the average starts at the medoid (least summed DTW cost to the others) and has
+/// its length; each iteration replaces every average point by the mean of the recordings'
+/// samples aligned to it (every stored field: position, force, pressure, tilt; pen down by
+/// majority), until no point moves by more than 1 µm or 30 iterations. Its times are the
+/// medoid's, scaled to the recordings' mean duration; its velocities are the finite
+/// differences of its positions within each pen-down run. The spread at a point is the
 /// RMS distance in the paper plane of the samples aligned to it [m], and their force's RMS
 /// deviation [N]. Not for the servo thread.
 
@@ -48,5 +49,8 @@ bool isLibraryReference(std::string_view text);
 /// and skill in the library at PATH. Throws InputError for a malformed reference, a missing
 /// library, an unknown person or skill, or fewer than 2 recordings.
 ProfileTemplate libraryTemplate(std::string_view reference, const TemplateOptions& options = {});
+/// A reference as `--reference` takes it: a library template (library:PATH#PERSON/SKILL), else a
+/// profile CSV file.
+HapticProfile readReference(const std::string& text);
 
 }  // namespace hattr::library
