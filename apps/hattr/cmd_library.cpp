@@ -306,9 +306,10 @@ void addIdentify(CLI::App& lib, std::shared_ptr<LibraryChoice> choice) {
       std::cout << fmt::format("{:>2}. {:<12} {:.4f}  (nearest {})\n", i + 1, r.ranked[i].person, r.ranked[i].distance,
                                r.ranked[i].key);
     }
-    std::cout << fmt::format("{} candidates: {} full DTWs, {} abandoned, {} skipped by LB_Keogh\n", r.stats.candidates,
-                             r.stats.dtw_full, r.stats.dtw_abandoned,
-                             r.stats.candidates - r.stats.dtw_full - r.stats.dtw_abandoned);
+    std::cout << fmt::format("{} candidates: {} passed the coarse bound, {} of them ruled out by LB_Keogh; {} full "
+                             "DTWs, {} abandoned\n",
+                             r.stats.candidates, r.stats.lower_bounds, r.stats.pruned_by_keogh, r.stats.dtw_full,
+                             r.stats.dtw_abandoned);
   });
 }
 

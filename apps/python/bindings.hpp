@@ -22,6 +22,7 @@ void bindAnalysis(py::module_& m);
 void bindStudies(py::module_& m);
 void bindSimulation(py::module_& m);
 void bindDevices(py::module_& m);
+void bindLibrary(py::module_& m);
 
 /// The library's JSON as Python objects (dicts, lists, numbers, strings), through Python's json.
 py::object toPython(const nlohmann::json& json);

@@ -74,4 +74,5 @@ PYBIND11_MODULE(_hattr, m) {
   hp::bindStudies(m);
   hp::bindSimulation(m);
   hp::bindDevices(m);
+  hp::bindLibrary(m);
 }

@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <deque>
 #include <exception>
 #include <limits>
 #include <mutex>
@@ -423,31 +422,45 @@ Eigen::MatrixXd dtwCostMatrix(std::span<const std::vector<double>> series,
   return costs;
 }
 
-// The envelope by a monotone deque of indices per side (Lemire 2009): O(n) whatever the radius.
+namespace {
+
+/// The envelope into `e` (sized to the series) by a monotone queue of indices per side (Lemire
+/// 2009), kept in `queue` (2n indices): O(n) whatever the radius, no allocation once sized.
+void envelopeInto(std::span<const double> series, std::size_t radius, DtwEnvelope& e, std::vector<std::size_t>& queue) {
+  const std::size_t n = series.size();
+  const std::size_t r = std::min(radius, n);
+  e.lower.resize(n);
+  e.upper.resize(n);
+  queue.resize(2 * n);
+  std::size_t* lows = queue.data();
+  std::size_t* highs = queue.data() + n;
+  std::size_t lo_head = 0, lo_tail = 0, hi_head = 0, hi_tail = 0;  // [head, tail) of each queue
+  std::size_t next = 0;                                            // the next index to enter the window
+  for (std::size_t i = 0; i < n; ++i) {
+    // The window [i - r, i + r]: enter up to i + r, leave below i - r.
+    for (; next < n && next <= i + r; ++next) {
+      while (lo_tail > lo_head && series[lows[lo_tail - 1]] >= series[next]) --lo_tail;
+      lows[lo_tail++] = next;
+      while (hi_tail > hi_head && series[highs[hi_tail - 1]] <= series[next]) --hi_tail;
+      highs[hi_tail++] = next;
+    }
+    while (lows[lo_head] + r < i) ++lo_head;
+    while (highs[hi_head] + r < i) ++hi_head;
+    e.lower[i] = series[lows[lo_head]];
+    e.upper[i] = series[highs[hi_head]];
+  }
+}
+
+}  // namespace
+
 DtwEnvelope dtwEnvelope(std::span<const double> series, std::size_t radius) {
   HATTR_THROW_UNLESS(!series.empty(), "DTW envelope: the series is empty; expected at least one value");
   for (std::size_t i = 0; i < series.size(); ++i) {
     HATTR_THROW_UNLESS(std::isfinite(series[i]), "DTW envelope: value {} is {}; expected a finite number", i, series[i]);
   }
-  const std::size_t n = series.size();
-  const std::size_t r = std::min(radius, n);
-  DtwEnvelope e{std::vector<double>(n), std::vector<double>(n)};
-  std::deque<std::size_t> lows;
-  std::deque<std::size_t> highs;
-  std::size_t next = 0;  // the next index to enter the window
-  for (std::size_t i = 0; i < n; ++i) {
-    // The window [i - r, i + r]: enter up to i + r, leave below i - r.
-    for (; next < n && next <= i + r; ++next) {
-      while (!lows.empty() && series[lows.back()] >= series[next]) lows.pop_back();
-      lows.push_back(next);
-      while (!highs.empty() && series[highs.back()] <= series[next]) highs.pop_back();
-      highs.push_back(next);
-    }
-    while (lows.front() + r < i) lows.pop_front();
-    while (highs.front() + r < i) highs.pop_front();
-    e.lower[i] = series[lows.front()];
-    e.upper[i] = series[highs.front()];
-  }
+  DtwEnvelope e;
+  std::vector<std::size_t> queue;
+  envelopeInto(series, radius, e, queue);
   return e;
 }
 
@@ -455,14 +468,50 @@ double lbKeogh(std::span<const double> candidate, const DtwEnvelope& envelope, D
   HATTR_THROW_UNLESS(candidate.size() == envelope.lower.size() && candidate.size() == envelope.upper.size(),
                      "LB_Keogh: the candidate has {} values and the envelope {}; expected the same length",
                      candidate.size(), envelope.lower.size());
-  double sum = 0.0;
-  for (std::size_t i = 0; i < candidate.size(); ++i) {
-    const double c = candidate[i];
-    const double gap = c > envelope.upper[i] ? c - envelope.upper[i] : (c < envelope.lower[i] ? envelope.lower[i] - c : 0.0);
-    sum += cost == DtwCost::kAbsolute ? gap : gap * gap;
-    if (sum > abandon_above) return sum;
+  // Four sums side by side (the loop is the search's inner one), checked against the bound
+  // every block; the gaps without branches.
+  const double* c = candidate.data();
+  const double* lo = envelope.lower.data();
+  const double* hi = envelope.upper.data();
+  const std::size_t n = candidate.size();
+  const bool squared = cost == DtwCost::kSquared;
+  const auto gap = [&](std::size_t i) {
+    const double g = std::max(c[i] - hi[i], 0.0) + std::max(lo[i] - c[i], 0.0);
+    return squared ? g * g : g;
+  };
+  constexpr std::size_t kBlock = 16;
+  double total = 0.0;
+  std::size_t i = 0;
+  for (; i + kBlock <= n; i += kBlock) {
+    double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
+    for (std::size_t k = i; k < i + kBlock; k += 4) {
+      s0 += gap(k), s1 += gap(k + 1), s2 += gap(k + 2), s3 += gap(k + 3);
+    }
+    total += (s0 + s1) + (s2 + s3);
+    if (total > abandon_above) return total;
   }
-  return sum;
+  for (; i < n; ++i) total += gap(i);
+  return total;
+}
+
+double lbImproved(std::span<const double> candidate, std::span<const double> query, const DtwEnvelope& query_envelope,
+                  std::size_t radius, DtwCost cost, double abandon_above) {
+  HATTR_THROW_UNLESS(query.size() == candidate.size(), "LB_Improved: the candidate has {} values and the query {}; "
+                                                       "expected the same length",
+                     candidate.size(), query.size());
+  const double first = lbKeogh(candidate, query_envelope, cost, abandon_above);
+  if (first > abandon_above) return first;
+  // The candidate projected onto the query's envelope, then the query against its envelope
+  // (this thread's buffers, reused: the search calls it for many candidates).
+  thread_local std::vector<double> projected;
+  thread_local DtwEnvelope envelope;
+  thread_local std::vector<std::size_t> queue;
+  projected.resize(candidate.size());
+  for (std::size_t i = 0; i < candidate.size(); ++i) {
+    projected[i] = std::clamp(candidate[i], query_envelope.lower[i], query_envelope.upper[i]);
+  }
+  envelopeInto(projected, radius, envelope, queue);
+  return first + lbKeogh(query, envelope, cost, abandon_above - first);
 }
 
 std::size_t dtwBatchWidth() { return detail::batchWidth(); }

@@ -445,6 +445,9 @@ EvaluationResult evaluate(const ProfileLibrary& library, const ProtocolOptions& 
     result.claim.push_back(c);
   }
   result.templates = measureTemplates(items, roles, draws, o, library);
+  result.week.person = o.evaluation.front();
+  for (const auto i : roles.at(result.week.person).first) result.week.first.push_back(items[i].features[FeatureChannel::kForce]);
+  for (const auto i : roles.at(result.week.person).second) result.week.second.push_back(items[i].features[FeatureChannel::kForce]);
   result.distances = distances.computed();
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   return result;

@@ -4,10 +4,14 @@
 #include "hattr/library/matching.hpp"
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <cmath>
 #include <map>
 #include <numeric>
 #include <set>
+#include <mutex>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -149,6 +153,12 @@ FeatureSeries extractFeatures(const HapticProfile& profile, const FeatureOptions
     }
     try {
       out.channels[c] = analysis::normalize(analysis::interpolateAt(w, values, at), options.normalization);
+      for (std::size_t b = 0; b < options.length; b += kCoarseSegment) {
+        const std::size_t e = std::min(options.length, b + kCoarseSegment);
+        double sum = 0.0;
+        for (std::size_t i = b; i < e; ++i) sum += out.channels[c][i];
+        out.coarse[c].push_back(sum / static_cast<double>(e - b));
+      }
     } catch (const InputError& e) {
       throw InputError(fmt::format("{}: channel {}: {}", where, kChannelNames[c], e.what()));
     }
@@ -184,7 +194,8 @@ double slack(double bound) { return bound + 1e-9 * std::max(1.0, std::abs(bound)
 double timingDistance(const FeatureSeries& a, const FeatureSeries& b, FeatureSet set, const FeatureOptions& options) {
   if (!set.timing()) return 0.0;
   // The longer over the shorter: the same to the bit in either order.
-  const auto [shorter, longer] = std::minmax(a.writing_time_s, b.writing_time_s);
+  const double shorter = std::min(a.writing_time_s, b.writing_time_s);
+  const double longer = std::max(a.writing_time_s, b.writing_time_s);
   return options.timing_weight * std::log(longer / shorter);
 }
 
@@ -290,6 +301,7 @@ class PersonRanking {
   std::set<std::pair<double, std::string>> order_;
 };
 
+
 void checkSearch(const FeatureSeries& query, std::span<const Candidate> candidates, FeatureSet set, std::size_t top) {
   HATTR_THROW_UNLESS(top >= 1, "identify: top {}; expected at least 1", top);
   requireChannels(query, set, "the query");
@@ -298,43 +310,243 @@ void checkSearch(const FeatureSeries& query, std::span<const Candidate> candidat
 
 }  // namespace
 
-std::vector<RankedPerson> identify(const FeatureSeries& query, std::span<const Candidate> candidates, FeatureSet set,
-                                   const FeatureOptions& options, std::size_t top, SearchStats* stats) {
-  checkSearch(query, candidates, set, top);
-  const auto channels = set.channels();
-  const std::size_t radius = analysis::dtwBandRadius(options.length, options.length, options.band_fraction);
+namespace {
+
+/// The query's envelopes of the set's channels, within the band's radius, and their ranges over
+/// each coarse segment, side by side as the index keeps the candidates' means.
+struct QueryBounds {
   std::vector<analysis::DtwEnvelope> envelopes;
-  for (const FeatureChannel c : channels) envelopes.push_back(analysis::dtwEnvelope(query[c], radius));
+  std::vector<double> segment_low, segment_high, segment_width;  // kCoarseSegment
+  std::vector<double> middle_low, middle_high, middle_width;     // kMiddleSegment
+};
 
-  // Every candidate's lower bound (the query's envelope against it), ascending.
-  const double length = static_cast<double>(options.length);
-  std::vector<std::pair<double, std::size_t>> bounds(candidates.size());
-  for (std::size_t i = 0; i < candidates.size(); ++i) {
-    double lb = 0.0;
-    for (std::size_t k = 0; k < channels.size(); ++k) {
-      lb += analysis::lbKeogh(candidates[i].features[channels[k]], envelopes[k], analysis::DtwCost::kAbsolute);
-    }
-    bounds[i] = {lb / length + timingDistance(query, candidates[i].features, set, options), i};
+QueryBounds boundsOf(const FeatureSeries& query, FeatureSet set, const FeatureOptions& options) {
+  const std::size_t radius = analysis::dtwBandRadius(options.length, options.length, options.band_fraction);
+  QueryBounds b;
+  for (const FeatureChannel c : set.channels()) {
+    b.envelopes.push_back(analysis::dtwEnvelope(query[c], radius));
+    const auto& e = b.envelopes.back();
+    const auto ranges = [&](std::size_t segment, std::vector<double>& low, std::vector<double>& high,
+                            std::vector<double>& width) {
+      for (std::size_t s = 0; s < options.length; s += segment) {
+        const auto begin = static_cast<std::ptrdiff_t>(s);
+        const auto end = static_cast<std::ptrdiff_t>(std::min(options.length, s + segment));
+        low.push_back(*std::min_element(e.lower.begin() + begin, e.lower.begin() + end));
+        high.push_back(*std::max_element(e.upper.begin() + begin, e.upper.begin() + end));
+        width.push_back(static_cast<double>(end - begin));
+      }
+    };
+    ranges(kCoarseSegment, b.segment_low, b.segment_high, b.segment_width);
+    ranges(kMiddleSegment, b.middle_low, b.middle_high, b.middle_width);
   }
-  std::sort(bounds.begin(), bounds.end());
+  return b;
+}
 
-  // Nearest bounds first; stop where the bound passes the answer's.
-  SearchStats s{.candidates = candidates.size(), .lower_bounds = candidates.size()};
+/// A segment bound: Σ width · dist(mean, [low, high]) / length, four sums side by side.
+double segmentBound(const double* mean, const std::vector<double>& low, const std::vector<double>& high,
+                    const std::vector<double>& width, double length) {
+  const std::size_t n = low.size();
+  double part[4] = {0, 0, 0, 0};
+  std::size_t s = 0;
+  for (; s + 4 <= n; s += 4) {
+    for (std::size_t j = 0; j < 4; ++j) {
+      part[j] += width[s + j] * (std::max(mean[s + j] - high[s + j], 0.0) + std::max(low[s + j] - mean[s + j], 0.0));
+    }
+  }
+  for (; s < n; ++s) part[0] += width[s] * (std::max(mean[s] - high[s], 0.0) + std::max(low[s] - mean[s], 0.0));
+  return ((part[0] + part[1]) + (part[2] + part[3])) / length;
+}
+
+/// LB_Improved over the set's channels, abandoned above `limit` (then +infinity).
+double improvedBound(const FeatureSeries& query, const QueryBounds& b, const SearchIndex& index, std::size_t i,
+                     double timing, double limit) {
+  const FeatureOptions& options = index.options();
+  const double length = static_cast<double>(options.length);
+  const std::size_t radius = analysis::dtwBandRadius(options.length, options.length, options.band_fraction);
+  const double budget = (slack(limit) - timing) * length;
+  // LB_Keogh of every channel first (cheap), then LB_Improved's second passes only if needed.
+  double keogh = 0.0;
+  std::array<double, kFeatureChannels> per_channel{};
+  for (std::size_t k = 0; k < index.channels().size(); ++k) {
+    per_channel[k] = analysis::lbKeogh(index.series(i, k), b.envelopes[k], analysis::DtwCost::kAbsolute, budget - keogh);
+    keogh += per_channel[k];
+    if (keogh > budget) return std::numeric_limits<double>::infinity();
+  }
+  double lb = keogh;
+  for (std::size_t k = 0; k < index.channels().size(); ++k) {
+    const double improved = analysis::lbImproved(index.series(i, k), query[index.channels()[k]], b.envelopes[k], radius,
+                                                 analysis::DtwCost::kAbsolute, budget - (lb - per_channel[k]));
+    lb += improved - per_channel[k];
+    if (lb > budget) return std::numeric_limits<double>::infinity();
+  }
+  return lb / length + timing;
+}
+
+/// The distance of the query to candidate i, as featureDistance computes it, abandoned above `limit`.
+double indexedDistance(const FeatureSeries& query, const SearchIndex& index, std::size_t i, double timing, double limit) {
+  const FeatureOptions& options = index.options();
+  const double length = static_cast<double>(options.length);
+  const double budget = std::isfinite(limit) ? (slack(limit) - timing) * length : limit;
+  double sum = 0.0;
+  for (std::size_t k = 0; k < index.channels().size(); ++k) {
+    if (budget - sum < 0.0) return std::numeric_limits<double>::infinity();
+    const double d = analysis::dtwDistance(index.series(i, k), query[index.channels()[k]], dtwOptions(options, budget - sum));
+    if (!std::isfinite(d)) return std::numeric_limits<double>::infinity();
+    sum += d;
+  }
+  return sum / length + timing;
+}
+
+double indexedTiming(const FeatureSeries& query, const SearchIndex& index, std::size_t i) {
+  if (!index.set().timing()) return 0.0;
+  const double other = index.writingTime(i);
+  const double shorter = std::min(query.writing_time_s, other), longer = std::max(query.writing_time_s, other);
+  return index.options().timing_weight * std::log(longer / shorter);
+}
+
+/// Runs f(begin, end) over [0, n) in chunks taken in turn by `threads` threads.
+template <class F>
+void runParallel(std::size_t n, unsigned threads, F f, std::size_t chunk) {
+  std::atomic<std::size_t> next{0};
+  const auto work = [&] {
+    for (std::size_t b = next.fetch_add(chunk); b < n; b = next.fetch_add(chunk)) f(b, std::min(n, b + chunk));
+  };
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < std::min<unsigned>(threads, static_cast<unsigned>(std::max<std::size_t>(1, n / chunk))); ++t) {
+    pool.emplace_back(work);
+  }
+  work();
+  for (auto& t : pool) t.join();
+}
+
+}  // namespace
+
+SearchIndex::SearchIndex(std::span<const Candidate> candidates, FeatureSet set, const FeatureOptions& options)
+    : set_(set), options_(options), channels_(set.channels()) {
+  checkFeatureOptions(options);
+  coarse_stride_ = channels_.size() * ((options.length + kCoarseSegment - 1) / kCoarseSegment);
+  middle_stride_ = channels_.size() * ((options.length + kMiddleSegment - 1) / kMiddleSegment);
+  middle_.reserve(candidates.size() * middle_stride_);
+  series_.reserve(candidates.size() * channels_.size() * options.length);
+  coarse_.reserve(candidates.size() * coarse_stride_);
+  for (const Candidate& c : candidates) {
+    requireChannels(c.features, set, fmt::format("library entry {}", c.key));
+    for (const FeatureChannel ch : channels_) {
+      const auto& v = c.features[ch];
+      const auto& m = c.features.coarse[static_cast<std::size_t>(ch)];
+      HATTR_THROW_UNLESS(v.size() == options.length && m.size() * kCoarseSegment >= v.size(),
+                         "library entry {}: features of {} steps; expected {} (made with the same options)", c.key,
+                         v.size(), options.length);
+      series_.insert(series_.end(), v.begin(), v.end());
+      coarse_.insert(coarse_.end(), m.begin(), m.end());
+      for (std::size_t b = 0; b < v.size(); b += kMiddleSegment) {
+        const std::size_t e = std::min(v.size(), b + kMiddleSegment);
+        double sum = 0.0;
+        for (std::size_t k = b; k < e; ++k) sum += v[k];
+        middle_.push_back(sum / static_cast<double>(e - b));
+      }
+    }
+    writing_time_s_.push_back(c.features.writing_time_s);
+    persons_.push_back(c.person);
+    keys_.push_back(c.key);
+  }
+}
+
+std::size_t SearchIndex::bytes() const {
+  std::size_t names = 0;
+  for (std::size_t i = 0; i < persons_.size(); ++i) names += persons_[i].capacity() + keys_[i].capacity() + 2 * sizeof(std::string);
+  return (series_.capacity() + coarse_.capacity() + middle_.capacity() + writing_time_s_.capacity()) * sizeof(double) +
+         names;
+}
+
+std::vector<RankedPerson> identify(const FeatureSeries& query, const SearchIndex& index, std::size_t top,
+                                   SearchStats* stats) {
+  HATTR_THROW_UNLESS(top >= 1, "identify: top {}; expected at least 1", top);
+  requireChannels(query, index.set(), "the query");
+  for (const FeatureChannel c : index.channels()) {
+    HATTR_THROW_UNLESS(query[c].size() == index.options().length, "the query: features of {} steps; expected {}",
+                       query[c].size(), index.options().length);
+  }
+  const QueryBounds qb = boundsOf(query, index.set(), index.options());
+  const double length = static_cast<double>(index.options().length);
+
+  // Every candidate's coarse bound, streaming the index's means.
+  thread_local std::vector<std::pair<double, std::size_t>> bounds;  // reused: no page faults a query
+  bounds.resize(index.size());
+  for (std::size_t i = 0; i < index.size(); ++i) {
+    const double lb = segmentBound(index.coarse(i).data(), qb.segment_low, qb.segment_high, qb.segment_width, length);
+    bounds[i] = {lb + indexedTiming(query, index, i), i};
+  }
+
+  // Nearest coarse bounds first, ordered a chunk at a time (each chunk the next smallest,
+  // twice the last): a search that ends early sorts little; stop where the bound passes the
+  // answer's.
+  std::size_t sorted_to = 0;
+  std::size_t chunk = std::max<std::size_t>(256, 8 * top);
+  const auto sortNextChunk = [&] {
+    const auto first = bounds.begin() + static_cast<std::ptrdiff_t>(sorted_to);
+    const std::size_t end = std::min(bounds.size(), sorted_to + chunk);
+    const auto last = bounds.begin() + static_cast<std::ptrdiff_t>(end);
+    if (last != bounds.end()) std::nth_element(first, last - 1, bounds.end());
+    std::sort(first, last);
+    sorted_to = end;
+    chunk *= 2;
+  };
+  SearchStats s{.candidates = index.size()};
   PersonRanking ranking(top);
-  for (const auto& [lb, i] : bounds) {
+  for (std::size_t k = 0; k < bounds.size(); ++k) {
+    if (k == sorted_to) sortNextChunk();
+    const auto [lb, i] = bounds[k];
     if (lb > slack(ranking.bound())) break;
-    const Candidate& c = candidates[i];
-    const double limit = ranking.boundFor(c.person);
-    const double d = featureDistance(query, c.features, set, options, limit);
+    const double limit = ranking.boundFor(index.person(i));
+    const double timing = indexedTiming(query, index, i);
+    ++s.lower_bounds;
+    const bool ruled_out =
+        std::isfinite(limit) &&
+        (segmentBound(index.middle(i).data(), qb.middle_low, qb.middle_high, qb.middle_width, length) + timing >
+             slack(limit) ||
+         !std::isfinite(improvedBound(query, qb, index, i, timing, limit)));
+    if (ruled_out) {
+      ++s.pruned_by_keogh;
+      continue;
+    }
+    const double d = indexedDistance(query, index, i, timing, limit);
     if (!std::isfinite(d)) {
       ++s.dtw_abandoned;
       continue;
     }
     ++s.dtw_full;
-    if (d <= limit) ranking.offer(c.person, c.key, d);
+    ranking.offer(index.person(i), index.key(i), d);
   }
   if (stats) *stats = s;
   return ranking.answer();
+}
+
+std::vector<RankedPerson> identify(const FeatureSeries& query, std::span<const Candidate> candidates, FeatureSet set,
+                                   const FeatureOptions& options, std::size_t top, SearchStats* stats) {
+  checkSearch(query, candidates, set, top);
+  return identify(query, SearchIndex(candidates, set, options), top, stats);
+}
+
+std::vector<std::vector<RankedPerson>> identifyMany(std::span<const FeatureSeries> queries, const SearchIndex& index,
+                                                    std::size_t top, unsigned threads, std::vector<SearchStats>* stats) {
+  HATTR_THROW_UNLESS(threads >= 1, "identify: threads: expected at least 1, got 0");
+  std::vector<std::vector<RankedPerson>> out(queries.size());
+  if (stats) stats->assign(queries.size(), {});
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+  runParallel(queries.size(), threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t q = begin; q < end; ++q) {
+      try {
+        out[q] = identify(queries[q], index, top, stats ? &(*stats)[q] : nullptr);
+      } catch (...) {
+        const std::lock_guard lock(failure_mutex);
+        if (!failure) failure = std::current_exception();
+      }
+    }
+  }, 1);
+  if (failure) std::rethrow_exception(failure);
+  return out;
 }
 
 std::vector<RankedPerson> identifyBruteForce(const FeatureSeries& query, std::span<const Candidate> candidates,

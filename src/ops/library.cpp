@@ -207,8 +207,9 @@ nlohmann::json IdentifyResult::toJson() const {
   }
   return {{"features", set},
           {"ranked", ranked_json},
-          {"search", {{"candidates", stats.candidates}, {"lower_bounds", stats.lower_bounds},
-                      {"dtw_full", stats.dtw_full}, {"dtw_abandoned", stats.dtw_abandoned}}}};
+          {"search", {{"candidates", stats.candidates}, {"lb_keogh", stats.lower_bounds},
+                      {"pruned_by_lb_keogh", stats.pruned_by_keogh}, {"dtw_full", stats.dtw_full},
+                      {"dtw_abandoned", stats.dtw_abandoned}}}};
 }
 
 IdentifyResult libraryIdentify(const std::string& location, const HapticProfile& profile, const IdentifyOptions& o) {

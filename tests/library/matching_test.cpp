@@ -20,6 +20,12 @@ namespace {
 
 using ::testing::HasSubstr;
 
+}  // namespace
+
+void PrintTo(const RankedPerson& p, std::ostream* os) { *os << p.person << " " << p.key << " " << p.distance; }
+
+namespace {
+
 std::vector<double> randomWalk(std::mt19937_64& rng, std::size_t n) {
   std::normal_distribution<double> step(0.0, 1.0);
   std::vector<double> v(n);

@@ -23,4 +23,5 @@ __all__ = [
     "Study", "create_study", "run_study",
     "run_trial", "strategies", "simulate_study", "power_analysis",
     "servo_check", "check_device",
+    "Library",
 ]

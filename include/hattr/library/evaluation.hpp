@@ -113,12 +113,20 @@ struct TemplateResult {
   std::size_t writers = 0;
 };
 
+/// The paper's Figure 3 on a real writer: one evaluation writer's force profiles (the feature
+/// channel |f|, normalized, on writing time from 0 to 1) of both sessions, a week apart.
+struct WeekExample {
+  std::string person;
+  std::vector<std::vector<double>> first, second;
+};
+
 struct EvaluationResult {
   ProtocolOptions options;
   std::string protocol = "svc2004";
   std::vector<SetResult> sets;
   std::vector<ClaimResult> claim;  ///< on the evaluation writers
   TemplateResult templates;        ///< on the evaluation writers
+  WeekExample week;                ///< the first evaluation writer
   std::vector<ScoreRow> scores;
   double seconds = 0.0;
   std::size_t distances = 0;  ///< per-channel DTWs computed
