@@ -54,7 +54,6 @@ library::FeatureSeries keepOnly(library::FeatureSeries f, library::FeatureSet se
   out.writing_time_s = f.writing_time_s;
   for (const auto c : set.channels()) {
     out.channels[static_cast<std::size_t>(c)] = std::move(f.channels[static_cast<std::size_t>(c)]);
-    out.coarse[static_cast<std::size_t>(c)] = std::move(f.coarse[static_cast<std::size_t>(c)]);
   }
   return out;
 }

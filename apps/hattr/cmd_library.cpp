@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <iostream>
 #include <memory>
+#include <set>
 
 #include <fmt/format.h>
 
@@ -30,14 +31,24 @@ struct LibraryChoice {
   }
 };
 
-/// A library to add to: made first if it is a file that does not exist yet (said on stderr).
-std::string libraryToAddTo(const LibraryChoice& choice) {
+/// Adds to the library, which is made first if it is a file that does not exist yet (said on
+/// stderr) and removed again if the adding fails: a failed first import leaves nothing behind.
+template <class Add>
+ops::LibraryChange addToLibrary(const LibraryChoice& choice, Add add) {
   const std::string location = choice.resolved();
-  if (location.rfind("postgres", 0) != 0 && !fs::exists(location)) {
-    ops::libraryInit(location);
-    std::cerr << "made a new profile library at " << location << '\n';
+  const bool made = !library::isDatabaseAddress(location) && !fs::exists(location);
+  if (made) ops::libraryInit(location);
+  try {
+    auto change = add(location);
+    if (made) std::cerr << "made a new profile library at " << location << '\n';
+    return change;
+  } catch (...) {
+    if (made) {
+      std::error_code ignored;
+      for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(location + suffix, ignored);
+    }
+    throw;
   }
-  return location;
 }
 
 void printChange(const ops::LibraryChange& c, bool json, std::string_view verb) {
@@ -79,11 +90,12 @@ struct MatchFlags {
   }
 };
 
-/// A query: a profile CSV, or entry:KEY of the library.
+/// A query: a profile CSV, or entry:KEY of the library (then left out of what it is compared with).
 HapticProfile queryProfile(const std::string& text, const std::string& location) {
   if (text.rfind("entry:", 0) == 0) return library::ProfileLibrary::open(location, true).profile(text.substr(6));
   return io::readProfileCsv(text);
 }
+std::string queryKey(const std::string& text) { return text.rfind("entry:", 0) == 0 ? text.substr(6) : ""; }
 
 std::optional<std::string> optionalText(const std::string& s) { return s.empty() ? std::nullopt : std::optional(s); }
 
@@ -111,7 +123,8 @@ void addImport(CLI::App& lib, std::shared_ptr<LibraryChoice> choice) {
   svc->callback([choice, o] {
     const io::TabletCalibration cal =
         o->calibration.empty() ? io::svc2004Calibration() : io::loadCalibration(o->calibration, io::svc2004Calibration());
-    printChange(ops::libraryImportSvc2004(libraryToAddTo(*choice), o->folder, cal), o->json, "imported");
+    printChange(addToLibrary(*choice, [&](const std::string& l) { return ops::libraryImportSvc2004(l, o->folder, cal); }),
+                o->json, "imported");
   });
 }
 
@@ -140,7 +153,8 @@ void addAdd(CLI::App& lib, std::shared_ptr<LibraryChoice> choice) {
                        "library add: expected a PROFILE file or --study FILE (one of them), got {}",
                        o->profile.empty() ? "neither" : "both");
     if (!o->study.empty()) {
-      printChange(ops::libraryAddStudy(libraryToAddTo(*choice), o->study), o->json, "added");
+      printChange(addToLibrary(*choice, [&](const std::string& l) { return ops::libraryAddStudy(l, o->study); }), o->json,
+                  "added");
       return;
     }
     library::EntryLabels labels = o->labels;
@@ -148,7 +162,8 @@ void addAdd(CLI::App& lib, std::shared_ptr<LibraryChoice> choice) {
     HATTR_THROW_UNLESS(!labels.person.empty() && !labels.skill.empty(),
                        "library add {}: expected --person and --skill, got {}", o->profile,
                        labels.person.empty() ? "no --person" : "no --skill");
-    printChange(ops::libraryAddProfile(libraryToAddTo(*choice), o->profile, labels), o->json, "added");
+    printChange(addToLibrary(*choice, [&](const std::string& l) { return ops::libraryAddProfile(l, o->profile, labels); }),
+                o->json, "added");
   });
 }
 
@@ -189,7 +204,9 @@ void addList(CLI::App& lib, std::shared_ptr<LibraryChoice> choice) {
                                e.labels.skill, e.labels.session.empty() ? "-" : e.labels.session,
                                library::authenticityName(e.labels.authenticity), e.samples, e.duration_s);
     }
-    std::cout << fmt::format("{} entries, {} persons\n", entries.size(), opened.persons(filter->skill).size());
+    std::set<std::string> persons;
+    for (const auto& e : entries) persons.insert(e.labels.person);
+    std::cout << fmt::format("{} entries, {} persons\n", entries.size(), persons.size());
   });
 }
 
@@ -265,7 +282,8 @@ void addVerify(CLI::App& lib, std::shared_ptr<LibraryChoice> choice) {
   cmd->callback([choice, o] {
     const std::string location = choice->resolved();
     const ops::VerifyOptions v{o->claim, o->skill, optionalText(o->session), library::parseFeatureSet(o->match.features),
-                               o->match.options(), library::parseScoreRule(o->match.rule), o->threshold};
+                               o->match.options(), library::parseScoreRule(o->match.rule), o->threshold,
+                               queryKey(o->profile)};
     const auto r = ops::libraryVerify(location, queryProfile(o->profile, location), v);
     if (o->json) {
       printJson(r.toJson());
@@ -296,7 +314,7 @@ void addIdentify(CLI::App& lib, std::shared_ptr<LibraryChoice> choice) {
   cmd->callback([choice, o] {
     const std::string location = choice->resolved();
     const ops::IdentifyOptions options{o->skill, library::parseFeatureSet(o->match.features), o->match.options(), o->top,
-                                       o->brute};
+                                       o->brute, queryKey(o->profile)};
     const auto r = ops::libraryIdentify(location, queryProfile(o->profile, location), options);
     if (o->json) {
       printJson(r.toJson());
@@ -368,7 +386,9 @@ void addEvaluate(CLI::App& lib, std::shared_ptr<LibraryChoice> choice) {
   cmd->add_option("--protocol", o->protocol, "The protocol: svc2004")->capture_default_str();
   cmd->add_option("--seed", o->protocol_options.seed, "Seed of the enrolment and random-forgery draws")->capture_default_str();
   cmd->add_option("--runs", o->protocol_options.runs, "Runs per writer")->capture_default_str();
-  cmd->add_option("--sets", o->sets, "Feature sets, comma-separated (default: each alone, shape+force, all)");
+  cmd->add_option("--sets", o->sets,
+                  "Feature sets, comma-separated (default: each of the five alone, shape+force, shape+timing, "
+                  "shape+force+timing, all)");
   cmd->add_option("--threads", o->protocol_options.threads, "Threads for the DTWs")->capture_default_str();
   o->match.add(*cmd, false);
   cmd->add_option("-o,--out", o->out, "Folder for the report: report.html (DET figures), results.csv, scores.csv, results.json");

@@ -30,12 +30,8 @@ library::FeatureOptions featureOptions(std::size_t length, double band, double t
 
 const library::FeatureOptions kDefaults{};
 
-}  // namespace
-
-void bindLibrary(py::module_& m) {
-  py::class_<Library> lib(m, "Library",
-                          "A profile library: haptic profiles labelled by person, skill, session and authenticity, "
-                          "on SQLite or PostgreSQL (docs/library.md).");
+/// Opening, adding, listing and removing entries.
+void bindLibraryEntries(py::class_<Library>& lib) {
   lib.def(py::init([](const std::string& location, bool create) {
             if (create) ops::libraryInit(location);
             (void)library::ProfileLibrary::open(location, !create);  // refuses what is not a library
@@ -91,6 +87,10 @@ void bindLibrary(py::module_& m) {
       "remove",
       [](const Library& l, const std::vector<std::string>& keys) { (void)ops::libraryRemove(l.location, keys); },
       py::arg("keys"), "Removes entries by key, all or none.");
+}
+
+/// Verification, identification, the evaluation.
+void bindLibraryMatching(py::class_<Library>& lib) {
   lib.def(
       "verify",
       [](const Library& l, const HapticProfile& profile, const std::string& claim, const std::string& skill,
@@ -150,6 +150,16 @@ void bindLibrary(py::module_& m) {
       py::arg("save_thresholds") = false, py::arg("out") = py::none(),
       "The SVC2004 protocol as `hattr library evaluate --json`, with every score as records under 'scores'; `out` "
       "writes the report folder. Releases the GIL.");
+}
+
+}  // namespace
+
+void bindLibrary(py::module_& m) {
+  py::class_<Library> lib(m, "Library",
+                          "A profile library: haptic profiles labelled by person, skill, session and authenticity, "
+                          "on SQLite or PostgreSQL (docs/library.md).");
+  bindLibraryEntries(lib);
+  bindLibraryMatching(lib);
 }
 
 }  // namespace hattr::python

@@ -4,6 +4,7 @@
 #include "hattr/library/evaluation.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -261,24 +262,19 @@ TemplateResult measureTemplates(const std::vector<Item>& items, const std::map<s
   return t;
 }
 
-}  // namespace
-
-EvaluationResult evaluate(const ProfileLibrary& library, const ProtocolOptions& o) {
-  checkOptions(o);
-  const auto started = std::chrono::steady_clock::now();
-  EvaluationResult result;
-  result.options = o;
-
-  // The writers' profiles, by role; every feature the profiles have.
-  std::vector<std::string> all_writers(o.development);
-  all_writers.insert(all_writers.end(), o.evaluation.begin(), o.evaluation.end());
-  const std::set<std::string> wanted(all_writers.begin(), all_writers.end());
+/// The protocol's profiles, by writer and role, with every feature they have.
+struct Corpus {
   std::vector<Item> items;
   std::map<std::string, Writer> roles;
+};
+
+Corpus loadCorpus(const ProfileLibrary& library, const ProtocolOptions& o, const std::vector<std::string>& writers) {
+  const std::set<std::string> wanted(writers.begin(), writers.end());
+  Corpus c;
   for (auto& e : library.list({.skill = o.skill})) {
     if (!wanted.count(e.labels.person)) continue;
-    Writer& w = roles[e.labels.person];
-    const std::size_t i = items.size();
+    Writer& w = c.roles[e.labels.person];
+    const std::size_t i = c.items.size();
     if (e.labels.authenticity == Authenticity::kImitation) {
       w.imitations.push_back(i);
     } else if (e.labels.session == "1") {
@@ -291,34 +287,31 @@ EvaluationResult evaluate(const ProfileLibrary& library, const ProtocolOptions& 
     const std::string where = fmt::format("{}: entry {}", library.location(), e.labels.key);
     FeatureSeries f = extractFeatures(library.profile(e.id), o.features, where);
     for (const FeatureSet set : o.sets) requireChannels(f, set, where);
-    items.push_back({std::move(e), std::move(f)});
+    c.items.push_back({std::move(e), std::move(f)});
   }
   // Entries come ordered by key; draws index them in id order, so a draw does not depend on names.
-  for (auto& [name, w] : roles) {
+  for (auto& [name, w] : c.roles) {
     for (auto* list : {&w.first, &w.second, &w.imitations}) {
-      std::sort(list->begin(), list->end(), [&](std::size_t a, std::size_t b) { return items[a].entry.id < items[b].entry.id; });
+      std::sort(list->begin(), list->end(),
+                [&](std::size_t a, std::size_t b) { return c.items[a].entry.id < c.items[b].entry.id; });
     }
   }
-  for (const auto& name : all_writers) {
-    const auto it = roles.find(name);
-    const bool complete = it != roles.end() && it->second.first.size() >= static_cast<std::size_t>(o.enrolled) &&
-                          !it->second.second.empty() && !it->second.imitations.empty();
-    HATTR_THROW_UNLESS(complete,
+  for (const auto& name : writers) {
+    const auto it = c.roles.find(name);
+    const std::size_t first = it == c.roles.end() ? 0 : it->second.first.size();
+    const std::size_t second = it == c.roles.end() ? 0 : it->second.second.size();
+    const std::size_t imitations = it == c.roles.end() ? 0 : it->second.imitations.size();
+    HATTR_THROW_UNLESS(first >= static_cast<std::size_t>(o.enrolled) && second > 0 && imitations > 0,
                        "{}: writer {} needs at least {} genuine {} profiles of session 1, one of session 2 and one "
                        "imitation; has {}, {} and {}",
-                       library.location(), name, o.enrolled, o.skill, it == roles.end() ? 0 : it->second.first.size(),
-                       it == roles.end() ? 0 : it->second.second.size(), it == roles.end() ? 0 : it->second.imitations.size());
+                       library.location(), name, o.enrolled, o.skill, first, second, imitations);
   }
+  return c;
+}
 
-  // The draws of each split, and every distance they need, computed once.
-  const std::vector<std::pair<std::string, const std::vector<std::string>*>> splits = {
-      {"development", &o.development}, {"evaluation", &o.evaluation}, {"all", &all_writers}};
-  PairDistances distances(items, o.features, o.threads);
-  std::vector<Draw> draws;
-  for (const auto& [name, writers] : splits) {
-    auto d = drawsOf(name, *writers, roles, o);
-    draws.insert(draws.end(), std::make_move_iterator(d.begin()), std::make_move_iterator(d.end()));
-  }
+/// Every pair of profiles the draws, identification and the claim compare, computed once.
+void requestPairs(PairDistances& distances, const std::vector<Draw>& draws, const Corpus& c,
+                  const std::vector<std::string>& all_writers, const std::vector<std::string>& evaluation) {
   for (const Draw& d : draws) {
     for (std::size_t a = 0; a < d.references.size(); ++a) {
       for (std::size_t b = a + 1; b < d.references.size(); ++b) distances.want(d.references[a], d.references[b]);
@@ -329,125 +322,172 @@ EvaluationResult evaluate(const ProfileLibrary& library, const ProtocolOptions& 
   // split holds both others).
   for (const auto& w : all_writers) {
     for (const auto& v : all_writers) {
-      for (const auto a : roles.at(v).first) {
-        for (const auto b : roles.at(w).second) distances.want(a, b);
+      for (const auto a : c.roles.at(v).first) {
+        for (const auto b : c.roles.at(w).second) distances.want(a, b);
       }
     }
   }
-  // The claim's blocks on the evaluation writers: within each session, across, and between writers.
-  for (const auto& w : o.evaluation) {
-    const Writer& me = roles.at(w);
-    for (const auto& v : o.evaluation) {
-      for (const auto a : roles.at(v).first) {
-        for (const auto b : me.second) distances.want(a, b);
-      }
-    }
-    for (const auto* session : {&me.first, &me.second}) {
+  // The claim's blocks on the evaluation writers: within each session.
+  for (const auto& w : evaluation) {
+    for (const auto* session : {&c.roles.at(w).first, &c.roles.at(w).second}) {
       for (std::size_t a = 0; a < session->size(); ++a) {
         for (std::size_t b = a + 1; b < session->size(); ++b) distances.want((*session)[a], (*session)[b]);
       }
     }
   }
   distances.compute();
+}
 
-  for (const FeatureSet set : o.sets) {
-    SetResult sr{set, {}};
-    // Scores of every draw.
-    std::map<std::string, std::map<std::string, std::vector<double>>> by_split;  // split -> kind -> scores
-    for (const Draw& d : draws) {
-      std::vector<double> within;
-      for (std::size_t a = 0; a < d.references.size(); ++a) {
-        for (std::size_t b = a + 1; b < d.references.size(); ++b) within.push_back(distances.distance(d.references[a], d.references[b], set));
-      }
-      const double spread = std::accumulate(within.begin(), within.end(), 0.0) / static_cast<double>(within.size());
-      HATTR_THROW_UNLESS(spread > 0.0, "writer {}: run {}: the enrolled profiles are identical in {}", d.person, d.run,
-                         set.name());
-      for (const auto& [q, kind] : d.queries) {
-        std::vector<double> to_refs;
-        for (const auto r : d.references) to_refs.push_back(distances.distance(r, q, set));
-        const double score = verificationScore(to_refs, spread, o.rule);
-        by_split[d.split][kind].push_back(score);
-        result.scores.push_back({d.split, set.name(), d.person, d.run, items[q].entry.labels.key, kind, score});
+/// Scores by split and kind ("genuine", "skilled", "random") of one feature set; each score a row.
+using SplitScores = std::map<std::string, std::map<std::string, std::vector<double>>>;
+
+SplitScores scoreDraws(const std::vector<Draw>& draws, const Corpus& c, const PairDistances& distances, FeatureSet set,
+                       ScoreRule rule, std::vector<ScoreRow>& rows) {
+  SplitScores by_split;
+  for (const Draw& d : draws) {
+    std::vector<double> within;
+    for (std::size_t a = 0; a < d.references.size(); ++a) {
+      for (std::size_t b = a + 1; b < d.references.size(); ++b) {
+        within.push_back(distances.distance(d.references[a], d.references[b], set));
       }
     }
-    // Error rates: the a-priori thresholds are the development writers' EER thresholds.
-    const ErrorRates dev_skilled = equalErrorRate(by_split["development"]["genuine"], by_split["development"]["skilled"]);
-    const ErrorRates dev_random = equalErrorRate(by_split["development"]["genuine"], by_split["development"]["random"]);
-    for (const auto& [name, writers] : splits) {
-      auto& scores = by_split[name];
-      SplitResult r{name, writers->size()};
-      r.skilled = equalErrorRate(scores["genuine"], scores["skilled"]);
-      r.random = equalErrorRate(scores["genuine"], scores["random"]);
-      r.skilled.prior_threshold = dev_skilled.eer_threshold;
-      r.random.prior_threshold = dev_random.eer_threshold;
-      std::tie(r.skilled.far, r.skilled.frr) = errorRatesAt(scores["genuine"], scores["skilled"], r.skilled.prior_threshold);
-      std::tie(r.random.far, r.random.frr) = errorRatesAt(scores["genuine"], scores["random"], r.random.prior_threshold);
-      r.det_skilled = detCurve(scores["genuine"], scores["skilled"]);
-      r.det_random = detCurve(scores["genuine"], scores["random"]);
+    const double spread = std::accumulate(within.begin(), within.end(), 0.0) / static_cast<double>(within.size());
+    HATTR_THROW_UNLESS(spread > 0.0, "writer {}: run {}: the enrolled profiles are identical in {}", d.person, d.run,
+                       set.name());
+    for (const auto& [q, kind] : d.queries) {
+      std::vector<double> to_refs;
+      for (const auto r : d.references) to_refs.push_back(distances.distance(r, q, set));
+      const double score = verificationScore(to_refs, spread, rule);
+      by_split[d.split][kind].push_back(score);
+      rows.push_back({d.split, set.name(), d.person, d.run, c.items[q].entry.labels.key, kind, score});
+    }
+  }
+  return by_split;
+}
 
-      // Closed-set identification: second sessions against first sessions, every distance (the
-      // cached ones: the same as library::identifyBruteForce, which the tests compare with identify).
-      std::size_t hits1 = 0, hits5 = 0;
-      for (const auto& w : *writers) {
-        for (const auto i : roles.at(w).second) {
-          std::vector<std::pair<double, std::string>> nearest;
-          for (const auto& v : *writers) {
-            double best = std::numeric_limits<double>::infinity();
-            for (const auto g : roles.at(v).first) best = std::min(best, distances.distance(g, i, set));
-            nearest.emplace_back(best, v);
-          }
-          std::sort(nearest.begin(), nearest.end());
-          const auto at = std::find_if(nearest.begin(), nearest.end(), [&](const auto& p) { return p.second == w; });
-          const auto rank = static_cast<std::size_t>(at - nearest.begin());
-          hits1 += rank < 1 ? 1 : 0;
-          hits5 += rank < 5 ? 1 : 0;
-          ++r.probes;
+/// Closed-set identification on a split: (rank-1 hits, rank-5 hits, probes), persons ranked by
+/// their nearest first-session profile, ties by name (identifyBruteForce's order).
+std::array<std::size_t, 3> identificationHits(const std::vector<std::string>& writers, const Corpus& c,
+                                              const PairDistances& distances, FeatureSet set) {
+  std::array<std::size_t, 3> hits{};
+  for (const auto& w : writers) {
+    for (const auto i : c.roles.at(w).second) {
+      std::vector<std::pair<double, std::string>> nearest;
+      for (const auto& v : writers) {
+        double best = std::numeric_limits<double>::infinity();
+        for (const auto g : c.roles.at(v).first) best = std::min(best, distances.distance(g, i, set));
+        nearest.emplace_back(best, v);
+      }
+      std::sort(nearest.begin(), nearest.end());
+      const auto at = std::find_if(nearest.begin(), nearest.end(), [&](const auto& p) { return p.second == w; });
+      const auto rank = static_cast<std::size_t>(at - nearest.begin());
+      hits[0] += rank < 1 ? 1 : 0;
+      hits[1] += rank < 5 ? 1 : 0;
+      ++hits[2];
+    }
+  }
+  return hits;
+}
+
+/// One split's error rates (the a-priori thresholds given), DET curves and identification.
+SplitResult splitResult(const std::string& name, const std::vector<std::string>& writers, SplitScores& scores,
+                        const ErrorRates& dev_skilled, const ErrorRates& dev_random, const Corpus& c,
+                        const PairDistances& distances, FeatureSet set) {
+  auto& s = scores[name];
+  SplitResult r{name, writers.size()};
+  r.skilled = equalErrorRate(s["genuine"], s["skilled"]);
+  r.random = equalErrorRate(s["genuine"], s["random"]);
+  r.skilled.prior_threshold = dev_skilled.eer_threshold;
+  r.random.prior_threshold = dev_random.eer_threshold;
+  std::tie(r.skilled.far, r.skilled.frr) = errorRatesAt(s["genuine"], s["skilled"], r.skilled.prior_threshold);
+  std::tie(r.random.far, r.random.frr) = errorRatesAt(s["genuine"], s["random"], r.random.prior_threshold);
+  r.det_skilled = detCurve(s["genuine"], s["skilled"]);
+  r.det_random = detCurve(s["genuine"], s["random"]);
+  const auto hits = identificationHits(writers, c, distances, set);
+  r.probes = hits[2];
+  r.rank1 = static_cast<double>(hits[0]) / static_cast<double>(r.probes);
+  r.rank5 = static_cast<double>(hits[1]) / static_cast<double>(r.probes);
+  return r;
+}
+
+/// The week's claim on the evaluation writers (ClaimResult).
+ClaimResult claimOf(const std::vector<std::string>& evaluation, const Corpus& c, const PairDistances& distances,
+                    FeatureSet set) {
+  ClaimResult claim{set.name()};
+  double within = 0, across = 0, between = 0;
+  std::size_t n_within = 0, n_across = 0, n_between = 0, nearer = 0;
+  for (const auto& w : evaluation) {
+    const Writer& me = c.roles.at(w);
+    for (const auto* session : {&me.first, &me.second}) {
+      for (std::size_t a = 0; a < session->size(); ++a) {
+        for (std::size_t b = a + 1; b < session->size(); ++b, ++n_within) {
+          within += distances.distance((*session)[a], (*session)[b], set);
         }
       }
-      r.rank1 = static_cast<double>(hits1) / static_cast<double>(r.probes);
-      r.rank5 = static_cast<double>(hits5) / static_cast<double>(r.probes);
-      sr.splits.push_back(std::move(r));
+    }
+    double nearest_other = std::numeric_limits<double>::infinity();
+    double self = 0.0;
+    for (const auto& v : evaluation) {
+      double block = 0.0;
+      std::size_t n = 0;
+      for (const auto a : c.roles.at(v).first) {
+        for (const auto b : me.second) block += distances.distance(a, b, set), ++n;
+      }
+      if (v == w) {
+        across += block, n_across += n, self = block / static_cast<double>(n);
+      } else {
+        between += block, n_between += n;
+        nearest_other = std::min(nearest_other, block / static_cast<double>(n));
+      }
+    }
+    nearer += self < nearest_other ? 1 : 0;
+  }
+  claim.within_session = within / static_cast<double>(n_within);
+  claim.across_sessions = across / static_cast<double>(n_across);
+  claim.between_writers = between / static_cast<double>(n_between);
+  claim.writers_nearer_themselves = static_cast<double>(nearer) / static_cast<double>(evaluation.size());
+  return claim;
+}
+
+}  // namespace
+
+EvaluationResult evaluate(const ProfileLibrary& library, const ProtocolOptions& o) {
+  checkOptions(o);
+  const auto started = std::chrono::steady_clock::now();
+  EvaluationResult result;
+  result.options = o;
+  std::vector<std::string> all_writers(o.development);
+  all_writers.insert(all_writers.end(), o.evaluation.begin(), o.evaluation.end());
+  const Corpus c = loadCorpus(library, o, all_writers);
+
+  // The draws of each split, and every distance they need, computed once.
+  const std::vector<std::pair<std::string, const std::vector<std::string>*>> splits = {
+      {"development", &o.development}, {"evaluation", &o.evaluation}, {"all", &all_writers}};
+  std::vector<Draw> draws;
+  for (const auto& [name, writers] : splits) {
+    auto d = drawsOf(name, *writers, c.roles, o);
+    draws.insert(draws.end(), std::make_move_iterator(d.begin()), std::make_move_iterator(d.end()));
+  }
+  PairDistances distances(c.items, o.features, o.threads);
+  requestPairs(distances, draws, c, all_writers, o.evaluation);
+
+  // Each feature set: scores, error rates (a-priori thresholds from the development writers),
+  // identification, the claim.
+  for (const FeatureSet set : o.sets) {
+    SplitScores scores = scoreDraws(draws, c, distances, set, o.rule, result.scores);
+    const ErrorRates dev_skilled = equalErrorRate(scores["development"]["genuine"], scores["development"]["skilled"]);
+    const ErrorRates dev_random = equalErrorRate(scores["development"]["genuine"], scores["development"]["random"]);
+    SetResult sr{set, {}};
+    for (const auto& [name, writers] : splits) {
+      sr.splits.push_back(splitResult(name, *writers, scores, dev_skilled, dev_random, c, distances, set));
     }
     result.sets.push_back(std::move(sr));
-
-    // The week's claim on the evaluation writers.
-    ClaimResult c{set.name()};
-    double within = 0, across = 0, between = 0;
-    std::size_t n_within = 0, n_across = 0, n_between = 0, nearer = 0;
-    for (const auto& w : o.evaluation) {
-      const Writer& me = roles.at(w);
-      for (const auto* session : {&me.first, &me.second}) {
-        for (std::size_t a = 0; a < session->size(); ++a) {
-          for (std::size_t b = a + 1; b < session->size(); ++b, ++n_within) within += distances.distance((*session)[a], (*session)[b], set);
-        }
-      }
-      double nearest_other = std::numeric_limits<double>::infinity();
-      double self = 0.0;
-      for (const auto& v : o.evaluation) {
-        double block = 0.0;
-        std::size_t n = 0;
-        for (const auto a : roles.at(v).first) {
-          for (const auto b : me.second) block += distances.distance(a, b, set), ++n;
-        }
-        if (v == w) {
-          across += block, n_across += n, self = block / static_cast<double>(n);
-        } else {
-          between += block, n_between += n;
-          nearest_other = std::min(nearest_other, block / static_cast<double>(n));
-        }
-      }
-      nearer += self < nearest_other ? 1 : 0;
-    }
-    c.within_session = within / static_cast<double>(n_within);
-    c.across_sessions = across / static_cast<double>(n_across);
-    c.between_writers = between / static_cast<double>(n_between);
-    c.writers_nearer_themselves = static_cast<double>(nearer) / static_cast<double>(o.evaluation.size());
-    result.claim.push_back(c);
+    result.claim.push_back(claimOf(o.evaluation, c, distances, set));
   }
-  result.templates = measureTemplates(items, roles, draws, o, library);
+  result.templates = measureTemplates(c.items, c.roles, draws, o, library);
   result.week.person = o.evaluation.front();
-  for (const auto i : roles.at(result.week.person).first) result.week.first.push_back(items[i].features[FeatureChannel::kForce]);
-  for (const auto i : roles.at(result.week.person).second) result.week.second.push_back(items[i].features[FeatureChannel::kForce]);
+  for (const auto i : c.roles.at(result.week.person).first) result.week.first.push_back(c.items[i].features[FeatureChannel::kForce]);
+  for (const auto i : c.roles.at(result.week.person).second) result.week.second.push_back(c.items[i].features[FeatureChannel::kForce]);
   result.distances = distances.computed();
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   return result;

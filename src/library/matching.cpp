@@ -153,12 +153,6 @@ FeatureSeries extractFeatures(const HapticProfile& profile, const FeatureOptions
     }
     try {
       out.channels[c] = analysis::normalize(analysis::interpolateAt(w, values, at), options.normalization);
-      for (std::size_t b = 0; b < options.length; b += kCoarseSegment) {
-        const std::size_t e = std::min(options.length, b + kCoarseSegment);
-        double sum = 0.0;
-        for (std::size_t i = b; i < e; ++i) sum += out.channels[c][i];
-        out.coarse[c].push_back(sum / static_cast<double>(e - b));
-      }
     } catch (const InputError& e) {
       throw InputError(fmt::format("{}: channel {}: {}", where, kChannelNames[c], e.what()));
     }
@@ -433,17 +427,18 @@ SearchIndex::SearchIndex(std::span<const Candidate> candidates, FeatureSet set, 
     requireChannels(c.features, set, fmt::format("library entry {}", c.key));
     for (const FeatureChannel ch : channels_) {
       const auto& v = c.features[ch];
-      const auto& m = c.features.coarse[static_cast<std::size_t>(ch)];
-      HATTR_THROW_UNLESS(v.size() == options.length && m.size() * kCoarseSegment >= v.size(),
+      HATTR_THROW_UNLESS(v.size() == options.length,
                          "library entry {}: features of {} steps; expected {} (made with the same options)", c.key,
                          v.size(), options.length);
       series_.insert(series_.end(), v.begin(), v.end());
-      coarse_.insert(coarse_.end(), m.begin(), m.end());
-      for (std::size_t b = 0; b < v.size(); b += kMiddleSegment) {
-        const std::size_t e = std::min(v.size(), b + kMiddleSegment);
-        double sum = 0.0;
-        for (std::size_t k = b; k < e; ++k) sum += v[k];
-        middle_.push_back(sum / static_cast<double>(e - b));
+      // The segment means of both bounds, from the series themselves.
+      for (const auto& [segment, means] : {std::pair{kCoarseSegment, &coarse_}, std::pair{kMiddleSegment, &middle_}}) {
+        for (std::size_t b = 0; b < v.size(); b += segment) {
+          const std::size_t e = std::min(v.size(), b + segment);
+          double sum = 0.0;
+          for (std::size_t k = b; k < e; ++k) sum += v[k];
+          means->push_back(sum / static_cast<double>(e - b));
+        }
       }
     }
     writing_time_s_.push_back(c.features.writing_time_s);

@@ -165,7 +165,12 @@ LibraryEntry readEntry(const Statement& s, const std::string& location) {
       session::parseProfileMetadataJson(s.text(15), fmt::format("{}: entry {}: metadata", location, e.labels.key));
   e.rate_hz = meta.nominal_rate_hz;
   const auto duration = meta.extra.find("library_duration_s");
-  e.duration_s = duration == meta.extra.end() ? 0.0 : std::stod(duration->second);
+  try {
+    e.duration_s = duration == meta.extra.end() ? 0.0 : std::stod(duration->second);
+  } catch (const std::exception&) {
+    throw InputError(fmt::format("{}: entry {}: metadata library_duration_s: expected a number, got \"{}\"", location,
+                                 e.labels.key, duration->second));
+  }
   return e;
 }
 
@@ -336,13 +341,23 @@ std::optional<std::string> ProfileLibrary::setting(std::string_view name) const 
 }
 
 void ProfileLibrary::setSetting(std::string_view name, std::string_view value) {
+  const std::pair<std::string, std::string> one[] = {{std::string(name), std::string(value)}};
+  setSettings(one);
+}
+
+void ProfileLibrary::setSettings(std::span<const std::pair<std::string, std::string>> settings) {
   Transaction t(*db_);
-  Statement(*db_, "INSERT INTO library_meta (name, value) VALUES (?, ?) ON CONFLICT (name) DO UPDATE SET value = excluded.value")
-      .bind(1, "setting:" + std::string(name))
-      .bind(2, std::string(value))
-      .run();
+  for (const auto& [name, value] : settings) {
+    Statement(*db_,
+              "INSERT INTO library_meta (name, value) VALUES (?, ?) ON CONFLICT (name) DO UPDATE SET value = excluded.value")
+        .bind(1, "setting:" + name)
+        .bind(2, value)
+        .run();
+  }
   t.commit();
 }
+
+bool isDatabaseAddress(std::string_view location) { return session::detail::isPostgresLocation(location); }
 
 std::vector<std::string> ProfileLibrary::persons(std::string_view skill) const {
   Statement s(*db_, skill.empty() ? "SELECT DISTINCT person FROM profiles ORDER BY person"

@@ -47,6 +47,68 @@ std::array<double, 3> channelScales(const std::vector<std::vector<Sample>>& reco
   return scale;
 }
 
+using AlignmentChannels = std::vector<std::vector<double>>;
+
+/// The recording with the least summed DTW cost to the others.
+std::size_t medoidOf(const std::vector<AlignmentChannels>& channels, const analysis::DtwOptions& dtw) {
+  std::size_t medoid = 0;
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t a = 0; a < channels.size(); ++a) {
+    double sum = 0.0;
+    for (std::size_t b = 0; b < channels.size(); ++b) {
+      if (a != b) sum += analysis::dtwDependent(channels[a], channels[b], dtw).cost;
+    }
+    if (sum < best) best = sum, medoid = a;
+  }
+  return medoid;
+}
+
+/// One DBA iteration: every average point becomes the mean of the samples aligned to it; the
+/// spreads about the new points are filled in. Returns how far a point moved at most [m].
+double dbaIteration(std::vector<Sample>& average, const std::vector<std::vector<Sample>>& series,
+                    const std::vector<AlignmentChannels>& channels, const TemplateOptions& options, const double* scale,
+                    const analysis::DtwOptions& dtw, std::vector<double>& spread, std::vector<double>& force_spread) {
+  const std::size_t n = average.size();
+  const auto avg_channels = alignmentChannels(average, options.align_force, scale);
+  std::vector<Sample> sum(n);
+  std::vector<double> count(n, 0.0), down(n, 0.0);
+  std::vector<std::vector<std::pair<std::size_t, std::size_t>>> aligned(n);  // (recording, sample)
+  for (std::size_t r = 0; r < series.size(); ++r) {
+    for (const auto& step : analysis::dtwDependent(avg_channels, channels[r], dtw).path) {
+      const Sample& x = series[r][step.j];
+      Sample& acc = sum[step.i];
+      acc.p_WT += x.p_WT, acc.v_WT += x.v_WT, acc.f_user_W += x.f_user_W, acc.f_cmd_W += x.f_cmd_W;
+      acc.f_guide_W += x.f_guide_W, acc.pressure_raw += x.pressure_raw;
+      acc.tilt_azimuth_rad += x.tilt_azimuth_rad, acc.tilt_altitude_rad += x.tilt_altitude_rad;
+      count[step.i] += 1.0;
+      down[step.i] += x.pen_down ? 1.0 : 0.0;
+      aligned[step.i].emplace_back(r, step.j);
+    }
+  }
+  double moved = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double c = count[i];
+    Sample next = average[i];
+    next.p_WT = sum[i].p_WT / c, next.v_WT = sum[i].v_WT / c, next.f_user_W = sum[i].f_user_W / c;
+    next.f_cmd_W = sum[i].f_cmd_W / c, next.f_guide_W = sum[i].f_guide_W / c;
+    next.pressure_raw = sum[i].pressure_raw / c;
+    next.tilt_azimuth_rad = sum[i].tilt_azimuth_rad / c, next.tilt_altitude_rad = sum[i].tilt_altitude_rad / c;
+    next.pen_down = next.in_contact = down[i] * 2.0 > c;
+    moved = std::max(moved, (next.p_WT - average[i].p_WT).norm());
+    average[i] = next;
+    // The spread of what was aligned to it, about the new point.
+    double d2 = 0.0, f2 = 0.0;
+    for (const auto& [r, j] : aligned[i]) {
+      const Sample& x = series[r][j];
+      d2 += (x.p_WT - next.p_WT).head<2>().squaredNorm();
+      f2 += std::pow(x.f_user_W.norm() - next.f_user_W.norm(), 2);
+    }
+    spread[i] = std::sqrt(d2 / c);
+    force_spread[i] = std::sqrt(f2 / c);
+  }
+  return moved;
+}
+
 }  // namespace
 
 ProfileTemplate buildTemplate(const std::vector<HapticProfile>& recordings, ProfileMetadata metadata,
@@ -66,73 +128,25 @@ ProfileTemplate buildTemplate(const std::vector<HapticProfile>& recordings, Prof
     series.push_back(recordings[r].samples());
   }
   const auto scale = channelScales(series);
-  std::vector<std::vector<std::vector<double>>> channels;
+  std::vector<AlignmentChannels> channels;
   for (const auto& s : series) channels.push_back(alignmentChannels(s, options.align_force, scale.data()));
   analysis::DtwOptions dtw;
   dtw.band_fraction = options.band_fraction;
 
-  // The medoid starts the average.
-  std::size_t medoid = 0;
-  double best = std::numeric_limits<double>::infinity();
-  for (std::size_t a = 0; a < series.size(); ++a) {
-    double sum = 0.0;
-    for (std::size_t b = 0; b < series.size(); ++b) {
-      if (a != b) sum += analysis::dtwDependent(channels[a], channels[b], dtw).cost;
-    }
-    if (sum < best) best = sum, medoid = a;
-  }
-  std::vector<Sample> average = series[medoid];
+  // DBA from the medoid, until no point moves by more than 1 µm.
+  std::vector<Sample> average = series[medoidOf(channels, dtw)];
   const std::size_t n = average.size();
   const double medoid_t0 = average.front().t_s;
   const double medoid_span = average.back().t_s - medoid_t0;
-
-  // DBA: each average point becomes the mean of the samples aligned to it.
   ProfileTemplate t;
   t.recordings = recordings.size();
-  std::vector<double> spread(n), force_spread(n);
+  t.spread_m.assign(n, 0.0);
+  t.force_spread_N.assign(n, 0.0);
   dtw.want_path = true;
-  for (t.iterations = 1; t.iterations <= options.max_iterations; ++t.iterations) {
-    const auto avg_channels = alignmentChannels(average, options.align_force, scale.data());
-    std::vector<Sample> sum(n);
-    std::vector<double> count(n, 0.0), down(n, 0.0), sq_dist(n, 0.0), sq_force(n, 0.0);
-    std::vector<std::vector<std::size_t>> aligned(n);
-    for (std::size_t r = 0; r < series.size(); ++r) {
-      const auto path = analysis::dtwDependent(avg_channels, channels[r], dtw).path;
-      for (const auto& step : path) {
-        const Sample& x = series[r][step.j];
-        Sample& acc = sum[step.i];
-        acc.p_WT += x.p_WT, acc.v_WT += x.v_WT, acc.f_user_W += x.f_user_W, acc.f_cmd_W += x.f_cmd_W;
-        acc.f_guide_W += x.f_guide_W, acc.pressure_raw += x.pressure_raw;
-        acc.tilt_azimuth_rad += x.tilt_azimuth_rad, acc.tilt_altitude_rad += x.tilt_altitude_rad;
-        count[step.i] += 1.0;
-        down[step.i] += x.pen_down ? 1.0 : 0.0;
-        aligned[step.i].push_back(r << 32 | step.j);
-      }
-    }
-    double moved = 0.0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const double c = count[i];
-      Sample next = average[i];
-      next.p_WT = sum[i].p_WT / c, next.v_WT = sum[i].v_WT / c, next.f_user_W = sum[i].f_user_W / c;
-      next.f_cmd_W = sum[i].f_cmd_W / c, next.f_guide_W = sum[i].f_guide_W / c;
-      next.pressure_raw = sum[i].pressure_raw / c;
-      next.tilt_azimuth_rad = sum[i].tilt_azimuth_rad / c, next.tilt_altitude_rad = sum[i].tilt_altitude_rad / c;
-      next.pen_down = next.in_contact = down[i] * 2.0 > c;
-      moved = std::max(moved, (next.p_WT - average[i].p_WT).norm());
-      average[i] = next;
-      // The spread of what was aligned to it, about the new point.
-      double d2 = 0.0, f2 = 0.0;
-      for (const auto code : aligned[i]) {
-        const Sample& x = series[code >> 32][code & 0xffffffffu];
-        d2 += (x.p_WT - next.p_WT).head<2>().squaredNorm();
-        f2 += std::pow(x.f_user_W.norm() - next.f_user_W.norm(), 2);
-      }
-      spread[i] = std::sqrt(d2 / c);
-      force_spread[i] = std::sqrt(f2 / c);
-    }
-    if (moved <= 1e-6) break;
+  for (t.iterations = 1;; ++t.iterations) {
+    const double moved = dbaIteration(average, series, channels, options, scale.data(), dtw, t.spread_m, t.force_spread_N);
+    if (moved <= 1e-6 || t.iterations == options.max_iterations) break;
   }
-  t.iterations = std::min(t.iterations, options.max_iterations);
 
   // The medoid's times scaled to the mean duration; velocities from the positions within
   // pen-down runs.
@@ -150,8 +164,6 @@ ProfileTemplate buildTemplate(const std::vector<HapticProfile>& recordings, Prof
   t.profile = HapticProfile(std::move(metadata), recordings.front().rawChannels());
   t.profile.reserve(n);
   for (const Sample& s : average) t.profile.append(s);
-  t.spread_m = std::move(spread);
-  t.force_spread_N = std::move(force_spread);
   return t;
 }
 

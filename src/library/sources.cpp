@@ -23,8 +23,13 @@ LabelledProfiles readSvc2004Folder(const std::filesystem::path& folder, const io
     std::smatch m;
     const std::string name = entry.path().filename().string();
     if (!entry.is_regular_file() || !std::regex_match(name, m, kName)) continue;
-    const int writer = std::stoi(m[1]);
-    const int signature = std::stoi(m[2]);
+    const auto number = [&](const std::string& digits) {
+      HATTR_THROW_UNLESS(digits.size() <= 6, "{}: number {} in the name; expected at most 6 digits",
+                         entry.path().string(), digits);
+      return std::stoi(digits);
+    };
+    const int writer = number(m[1]);
+    const int signature = number(m[2]);
     HATTR_THROW_UNLESS(writer >= 1 && signature >= 1 && signature <= 40,
                        "{}: signature {} of writer {}; expected writers from 1 and signatures 1-40 (1-20 genuine, "
                        "21-40 skilled forgeries)",

@@ -4,9 +4,12 @@
 
 #include <unistd.h>
 
+#include <cmath>
+
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/core/text_file.hpp"
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/io/table_csv.hpp"
 #include "hattr/library/sources.hpp"
@@ -124,8 +127,17 @@ LibraryChange libraryExport(const std::string& location, const library::EntryFil
       change.keys.push_back(l.key);
     }
     io::writeTable(index, building / "library.csv");
-    if (fs::exists(out)) fs::remove_all(out);
-    fs::rename(building, out);
+    // An old folder (--force) is moved aside first and removed only once the new one is in place.
+    const fs::path old = parent / fmt::format(".{}.replaced-{}", out.filename().string(), ::getpid());
+    const bool replacing = fs::exists(out);
+    if (replacing) fs::rename(out, old);
+    try {
+      fs::rename(building, out);
+    } catch (...) {
+      if (replacing) fs::rename(old, out);
+      throw;
+    }
+    if (replacing) fs::remove_all(old);
   } catch (...) {
     std::error_code ignored;
     fs::remove_all(building, ignored);
@@ -141,7 +153,8 @@ namespace {
 /// The genuine entries of a person and skill (of one session if asked), with their features.
 std::vector<library::FeatureSeries> referencesOf(const ProfileLibrary& lib, const std::string& person,
                                                  const std::string& skill, const std::optional<std::string>& session,
-                                                 library::FeatureSet set, const library::FeatureOptions& features) {
+                                                 library::FeatureSet set, const library::FeatureOptions& features,
+                                                 const std::string& exclude_key) {
   const auto persons = lib.persons(skill);
   HATTR_THROW_UNLESS(std::find(persons.begin(), persons.end(), person) != persons.end(),
                      "{}: no {} profiles of {}; expected one of the persons `hattr library list --skill {}` shows",
@@ -149,6 +162,7 @@ std::vector<library::FeatureSeries> referencesOf(const ProfileLibrary& lib, cons
   std::vector<library::FeatureSeries> out;
   for (const auto& e : lib.list({.person = person, .skill = skill, .session = session,
                                  .authenticity = library::Authenticity::kGenuine})) {
+    if (e.labels.key == exclude_key) continue;
     const std::string where = fmt::format("{}: entry {}", lib.location(), e.labels.key);
     out.push_back(library::extractFeatures(lib.profile(e.id), features, where));
     library::requireChannels(out.back(), set, where);
@@ -160,9 +174,9 @@ std::vector<library::FeatureSeries> referencesOf(const ProfileLibrary& lib, cons
 
 std::string thresholdSettingName(const std::string& skill, library::FeatureSet set, const library::FeatureOptions& f,
                                  library::ScoreRule rule) {
-  return fmt::format("verify-threshold skill={} features={} rule={} length={} band={} normalization={}", skill,
-                     set.name(), library::scoreRuleName(rule), f.length, f.band_fraction,
-                     analysis::normalizationName(f.normalization));
+  return fmt::format("verify-threshold skill={} features={} rule={} length={} band={} normalization={} timing={}",
+                     skill, set.name(), library::scoreRuleName(rule), f.length, f.band_fraction,
+                     analysis::normalizationName(f.normalization), f.timing_weight);
 }
 
 nlohmann::json VerifyResult::toJson() const {
@@ -180,18 +194,24 @@ VerifyResult libraryVerify(const std::string& location, const HapticProfile& pro
   } else {
     const auto saved = lib.setting(thresholdSettingName(o.skill, o.set, o.features, o.rule));
     HATTR_THROW_UNLESS(saved.has_value(),
-                       "{}: no verification threshold for {} with features {} (rule {}, length {}, band {}); expected "
-                       "--threshold, or one saved by `hattr library evaluate --save-thresholds` with these options",
+                       "{}: no verification threshold for {} with features {} (rule {}, length {}, band {}, timing "
+                       "weight {}); expected --threshold, or one saved by `hattr library evaluate --save-thresholds` "
+                       "with these options",
                        location, o.skill, o.set.name(), library::scoreRuleName(o.rule), o.features.length,
-                       o.features.band_fraction);
-    const auto j = nlohmann::json::parse(*saved);
-    r.threshold = j.at("threshold").get<double>();
-    r.threshold_from = j.at("from").get<std::string>();
+                       o.features.band_fraction, o.features.timing_weight);
+    try {
+      const auto j = nlohmann::json::parse(*saved);
+      r.threshold = j.at("threshold").get<double>();
+      r.threshold_from = j.at("from").get<std::string>();
+    } catch (const nlohmann::json::exception& e) {
+      throw InputError(fmt::format("{}: the saved verification threshold is damaged: {}", location, jsonLibraryMessage(e)));
+    }
   }
+  HATTR_THROW_UNLESS(std::isfinite(r.threshold), "threshold: expected a finite number, got {}", r.threshold);
   const auto query = library::extractFeatures(profile, o.features, "the profile");
   library::requireChannels(query, o.set, "the profile");
-  const auto enrolment = library::enrol(o.claim, referencesOf(lib, o.claim, o.skill, o.session, o.set, o.features),
-                                        o.set, o.features);
+  const auto enrolment = library::enrol(
+      o.claim, referencesOf(lib, o.claim, o.skill, o.session, o.set, o.features, o.exclude_key), o.set, o.features);
   r.references = enrolment.references.size();
   r.spread = enrolment.spread;
   r.score = library::verificationScore(query, enrolment, o.set, o.features, o.rule);
@@ -216,6 +236,7 @@ IdentifyResult libraryIdentify(const std::string& location, const HapticProfile&
   const ProfileLibrary lib = ProfileLibrary::open(location, true);
   std::vector<library::Candidate> candidates;
   for (const auto& e : lib.list({.skill = o.skill, .authenticity = library::Authenticity::kGenuine})) {
+    if (e.labels.key == o.exclude_key) continue;
     const std::string where = fmt::format("{}: entry {}", location, e.labels.key);
     candidates.push_back({e.labels.person, e.labels.key, library::extractFeatures(lib.profile(e.id), o.features, where)});
   }
@@ -244,15 +265,17 @@ library::EvaluationResult libraryEvaluate(const std::string& location, library::
   }
   library::EvaluationResult result = library::evaluate(lib, options);
   if (save) {
+    std::vector<std::pair<std::string, std::string>> thresholds;
     for (const auto& s : result.sets) {
       const auto& dev = s.splits.front();
-      lib.setSetting(thresholdSettingName(options.skill, s.set, options.features, options.rule),
-                     nlohmann::json{{"threshold", dev.skilled.eer_threshold},
-                                    {"from", fmt::format("the {} protocol's development writers' skilled-forgery EER "
-                                                         "threshold (seed {}, saved {})",
-                                                         result.protocol, options.seed, utcNowIso8601())}}
-                         .dump());
+      thresholds.emplace_back(thresholdSettingName(options.skill, s.set, options.features, options.rule),
+                              nlohmann::json{{"threshold", dev.skilled.eer_threshold},
+                                             {"from", fmt::format("the {} protocol's development writers' skilled-forgery "
+                                                                  "EER threshold (seed {}, saved {})",
+                                                                  result.protocol, options.seed, utcNowIso8601())}}
+                                  .dump());
     }
+    lib.setSettings(thresholds);  // all or none
   }
   return result;
 }

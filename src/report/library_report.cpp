@@ -163,6 +163,55 @@ void checkLibraryReportFolder(const std::filesystem::path& out, bool force) {
   }
 }
 
+namespace {
+
+/// results.csv, scores.csv and results.json.
+void writeTables(const library::EvaluationResult& r, const std::filesystem::path& out) {
+  io::Table results{{"features", "split", "writers", "skilled_eer", "skilled_eer_threshold", "skilled_a_priori_threshold",
+                     "skilled_far", "skilled_frr", "random_eer", "random_eer_threshold", "random_a_priori_threshold",
+                     "random_far", "random_frr", "rank1", "rank5", "probes"},
+                    {},
+                    ""};
+  const auto num = [](double v) { return fmt::format("{}", v); };
+  for (const auto& s : r.sets) {
+    for (const auto& sp : s.splits) {
+      results.rows.push_back({s.set.name(), sp.split, std::to_string(sp.writers), num(sp.skilled.eer),
+                              num(sp.skilled.eer_threshold), num(sp.skilled.prior_threshold), num(sp.skilled.far),
+                              num(sp.skilled.frr), num(sp.random.eer), num(sp.random.eer_threshold),
+                              num(sp.random.prior_threshold), num(sp.random.far), num(sp.random.frr), num(sp.rank1),
+                              num(sp.rank5), std::to_string(sp.probes)});
+    }
+  }
+  io::writeTable(results, out / "results.csv", true);
+  io::Table scores{{"split", "features", "claimed", "run", "query", "kind", "score"}, {}, ""};
+  scores.rows.reserve(r.scores.size());
+  for (const auto& row : r.scores) {
+    scores.rows.push_back({row.split, row.set, row.person, std::to_string(row.run), row.query, row.kind, num(row.score)});
+  }
+  io::writeTable(scores, out / "scores.csv", true);
+  writeFileAtomically(out / "results.json", libraryEvaluationJson(r).dump(2) + "\n", Overwrite::kReplace);
+}
+
+/// The paper's Figure 3 on a real writer: both sessions' force profiles.
+std::string weekFigure(const library::WeekExample& week) {
+  SvgPlot plot(fmt::format("Writer {}: force profiles a week apart", week.person), "writing time (0 to 1)",
+               "force |f| (normalized)", 640, 360);
+  const auto add = [&](const std::vector<std::vector<double>>& curves, const std::string& label, const char* colour) {
+    for (std::size_t k = 0; k < curves.size(); ++k) {
+      std::vector<std::pair<double, double>> points;
+      for (std::size_t i = 0; i < curves[k].size(); ++i) {
+        points.emplace_back(static_cast<double>(i) / static_cast<double>(curves[k].size() - 1), curves[k][i]);
+      }
+      plot.add(Series{k == 0 ? label : "", colour, std::move(points), 1.0});
+    }
+  };
+  add(week.first, "session 1", "#2471a3");
+  add(week.second, "session 2 (a week later)", "#c0392b");
+  return plot.svg();
+}
+
+}  // namespace
+
 void writeLibraryEvaluationReport(const library::EvaluationResult& r, const std::filesystem::path& out) {
   Document doc;
   std::map<std::string, std::string> files;
@@ -189,27 +238,12 @@ void writeLibraryEvaluationReport(const library::EvaluationResult& r, const std:
       r.options.enrolled, r.templates.template_distance, r.templates.single_distance, percent(r.templates.writers_better),
       r.templates.writers));
   doc.heading("Figure 3 on a real writer");
-  {
-    SvgPlot plot(fmt::format("Writer {}: force profiles a week apart", r.week.person), "writing time (0 to 1)",
-                 "force |f| (normalized)", 640, 360);
-    const auto add = [&](const std::vector<std::vector<double>>& curves, const std::string& label, const char* colour) {
-      for (std::size_t k = 0; k < curves.size(); ++k) {
-        std::vector<std::pair<double, double>> points;
-        for (std::size_t i = 0; i < curves[k].size(); ++i) {
-          points.emplace_back(static_cast<double>(i) / static_cast<double>(curves[k].size() - 1), curves[k][i]);
-        }
-        plot.add(Series{k == 0 ? label : "", colour, std::move(points), 1.0});
-      }
-    };
-    add(r.week.first, "session 1", "#2471a3");
-    add(r.week.second, "session 2 (a week later)", "#c0392b");
-    doc.figure("figure3_week", plot.svg(),
-               fmt::format("The paper's Figure 3 on a real writer: {}'s force profiles (|f| from the tablet's pressure "
-                           "and tilt, normalized, on writing time) of the first session and of the second, about a "
-                           "week later.",
-                           r.week.person),
-               files);
-  }
+  doc.figure("figure3_week", weekFigure(r.week),
+             fmt::format("The paper's Figure 3 on a real writer: {}'s force profiles (|f| from the tablet's pressure "
+                         "and tilt, normalized, on writing time) of the first session and of the second, about a "
+                         "week later.",
+                         r.week.person),
+             files);
   doc.heading("DET curves");
   for (const auto& s : r.sets) {
     for (const std::string split : {"evaluation", "all"}) {
@@ -225,30 +259,7 @@ void writeLibraryEvaluationReport(const library::EvaluationResult& r, const std:
   }
   detail::writeReportFiles(out, "Profile library evaluation", doc, files);
 
-  // The tables as CSV and the JSON.
-  io::Table results{{"features", "split", "writers", "skilled_eer", "skilled_eer_threshold", "skilled_a_priori_threshold",
-                     "skilled_far", "skilled_frr", "random_eer", "random_eer_threshold", "random_a_priori_threshold",
-                     "random_far", "random_frr", "rank1", "rank5", "probes"},
-                    {},
-                    ""};
-  const auto num = [](double v) { return fmt::format("{}", v); };
-  for (const auto& s : r.sets) {
-    for (const auto& sp : s.splits) {
-      results.rows.push_back({s.set.name(), sp.split, std::to_string(sp.writers), num(sp.skilled.eer),
-                              num(sp.skilled.eer_threshold), num(sp.skilled.prior_threshold), num(sp.skilled.far),
-                              num(sp.skilled.frr), num(sp.random.eer), num(sp.random.eer_threshold),
-                              num(sp.random.prior_threshold), num(sp.random.far), num(sp.random.frr), num(sp.rank1),
-                              num(sp.rank5), std::to_string(sp.probes)});
-    }
-  }
-  io::writeTable(results, out / "results.csv", true);
-  io::Table scores{{"split", "features", "claimed", "run", "query", "kind", "score"}, {}, ""};
-  scores.rows.reserve(r.scores.size());
-  for (const auto& row : r.scores) {
-    scores.rows.push_back({row.split, row.set, row.person, std::to_string(row.run), row.query, row.kind, num(row.score)});
-  }
-  io::writeTable(scores, out / "scores.csv", true);
-  writeFileAtomically(out / "results.json", libraryEvaluationJson(r).dump(2) + "\n", Overwrite::kReplace);
+  writeTables(r, out);
 }
 
 }  // namespace hattr::report

@@ -1,3 +1,4 @@
+#include "sql_connection.hpp"
 #include "hattr/session/study.hpp"
 
 #include "hattr/core/text_file.hpp"
@@ -279,7 +280,9 @@ void readExperts(const json& root, const std::filesystem::path& base_dir, bool c
           continue;
         }
         std::filesystem::path library = value.substr(8, hash - 8);
-        if (library.is_relative() && value.compare(8, 8, "postgres") != 0) library = std::filesystem::absolute(base_dir / library);
+        if (library.is_relative() && !detail::isPostgresLocation(library.string())) {
+          library = std::filesystem::absolute(base_dir / library);
+        }
         study.named_experts[item.key()] = "library:" + library.string() + value.substr(hash);
         study.experts[item.key()] = study.named_experts[item.key()];
         continue;

@@ -37,7 +37,8 @@ def test_identify_and_verify_on_real_writers_match_the_cli(tmp_path):
     assert lib.import_svc2004(SHARED_SVC2004)["count"] == 1600
     probe = lib.profile("svc2004/U7S14")
     found = lib.identify(probe, skill="signature", top=3)
-    out, _ = run_cli("library", "-L", path, "identify", "entry:svc2004/U7S14", "--skill", "signature", "--top", "3",
+    hattr.write_profile(probe, tmp_path / "probe.csv")
+    out, _ = run_cli("library", "-L", path, "identify", tmp_path / "probe.csv", "--skill", "signature", "--top", "3",
                      "--json")
     assert found["ranked"] == json.loads(out)["ranked"]
     assert found["ranked"] == lib.identify(probe, skill="signature", top=3, brute_force=True)["ranked"]

@@ -98,8 +98,8 @@ struct ClaimResult {
   double within_session = 0.0;
   double across_sessions = 0.0;
   double between_writers = 0.0;
-  /// The share of writers whose mean distance to themselves across the week is below the mean
-  /// distance to the nearest other writer's second session.
+  /// The share of writers whose own first session is nearer their second session (mean distance)
+  /// than any other writer's first session is.
   double writers_nearer_themselves = 0.0;
 };
 

@@ -46,13 +46,14 @@ struct FeatureSet {
   /// The channels of the set, in FeatureChannel order (timing has none: it is one number).
   [[nodiscard]] std::vector<FeatureChannel> channels() const;
   [[nodiscard]] bool timing() const { return (bits & kTiming) != 0; }
-  /// "shape", "force", "shape+force", ..., "all" for the five.
+  /// "shape", "force", "shape+force", ..., "all" for all five.
   [[nodiscard]] std::string name() const;
 };
 /// Parses "shape", "force", "angles", "velocity", "timing", joined with '+', or "all"; InputError
 /// otherwise.
 FeatureSet parseFeatureSet(std::string_view text);
-/// The sets an evaluation reports: each alone, shape+force, and all four.
+/// The sets an evaluation reports: each of the five alone, shape+force, shape+timing,
+/// shape+force+timing, and all.
 std::vector<FeatureSet> reportedFeatureSets();
 
 struct FeatureOptions {
@@ -70,9 +71,6 @@ void checkFeatureOptions(const FeatureOptions& options);
 /// channel it lacks: no tilt, no angles).
 struct FeatureSeries {
   std::array<std::vector<double>, kFeatureChannels> channels;
-  /// Each channel's means over segments of kCoarseSegment steps (the search's first, coarse
-  /// lower bound reads these instead of every step).
-  std::array<std::vector<double>, kFeatureChannels> coarse;
   double writing_time_s = 0.0;  ///< the pen-down time (lifts left out) [s]
   [[nodiscard]] bool has(FeatureChannel c) const { return !channels[static_cast<std::size_t>(c)].empty(); }
   [[nodiscard]] const std::vector<double>& operator[](FeatureChannel c) const {
@@ -137,8 +135,8 @@ struct RankedPerson {
 /// What a search did: how many full DTWs it ran against how many candidates.
 struct SearchStats {
   std::size_t candidates = 0;
-  std::size_t lower_bounds = 0;  ///< LB_Keogh computed (the coarse bound: every candidate)
-  std::size_t pruned_by_keogh = 0; ///< candidates LB_Keogh ruled out
+  std::size_t lower_bounds = 0;    ///< candidates past the coarse bound (every candidate has one)
+  std::size_t pruned_by_keogh = 0; ///< of those, ruled out by the finer bounds (segments of 4, LB_Keogh, LB_Improved)
   std::size_t dtw_full = 0;      ///< distances computed to the end
   std::size_t dtw_abandoned = 0; ///< distances stopped early
 };

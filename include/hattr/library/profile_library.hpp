@@ -76,6 +76,9 @@ struct EntryFilter {
 /// date empty or YYYY-MM-DD, an imitator only on an imitation. Throws InputError naming `where`.
 void checkLabels(const EntryLabels& labels, std::string_view where);
 
+/// Whether `location` names a PostgreSQL library (postgresql:// or postgres://) rather than a file.
+bool isDatabaseAddress(std::string_view location);
+
 class ProfileLibrary {
  public:
   /// Makes a new, empty library: an SQLite file (refused if it exists; built beside it and
@@ -112,6 +115,8 @@ class ProfileLibrary {
   /// evaluation), or nothing. Names and values are text.
   [[nodiscard]] std::optional<std::string> setting(std::string_view name) const;
   void setSetting(std::string_view name, std::string_view value);
+  /// Several settings in one transaction: all or none.
+  void setSettings(std::span<const std::pair<std::string, std::string>> settings);
 
   /// The persons with at least one entry of the skill (any skill when empty), sorted.
   [[nodiscard]] std::vector<std::string> persons(std::string_view skill = {}) const;

@@ -56,6 +56,7 @@ struct VerifyOptions {
   library::FeatureOptions features;
   library::ScoreRule rule = library::ScoreRule::kMean;
   std::optional<double> threshold;     ///< else the one an evaluation saved in the library
+  std::string exclude_key;             ///< an entry left out of the enrolment (the query's own, entry:KEY)
 };
 struct VerifyResult {
   std::string claim, skill, set;
@@ -76,6 +77,7 @@ struct IdentifyOptions {
   library::FeatureOptions features;
   std::size_t top = 5;
   bool brute_force = false;  ///< every distance in full (the baseline), same answer
+  std::string exclude_key;   ///< an entry left out of the candidates (the query's own, entry:KEY)
 };
 struct IdentifyResult {
   std::vector<library::RankedPerson> ranked;
