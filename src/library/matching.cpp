@@ -5,16 +5,14 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
 #include <map>
 #include <numeric>
 #include <set>
-#include <mutex>
-#include <thread>
 
 #include <fmt/format.h>
 
+#include "analysis/parallel.hpp"
 #include "hattr/analysis/dtw.hpp"
 #include "hattr/core/error.hpp"
 
@@ -398,21 +396,6 @@ double indexedTiming(const FeatureSeries& query, const SearchIndex& index, std::
   return index.options().timing_weight * std::log(longer / shorter);
 }
 
-/// Runs f(begin, end) over [0, n) in chunks taken in turn by `threads` threads.
-template <class F>
-void runParallel(std::size_t n, unsigned threads, F f, std::size_t chunk) {
-  std::atomic<std::size_t> next{0};
-  const auto work = [&] {
-    for (std::size_t b = next.fetch_add(chunk); b < n; b = next.fetch_add(chunk)) f(b, std::min(n, b + chunk));
-  };
-  std::vector<std::thread> pool;
-  for (unsigned t = 1; t < std::min<unsigned>(threads, static_cast<unsigned>(std::max<std::size_t>(1, n / chunk))); ++t) {
-    pool.emplace_back(work);
-  }
-  work();
-  for (auto& t : pool) t.join();
-}
-
 }  // namespace
 
 SearchIndex::SearchIndex(std::span<const Candidate> candidates, FeatureSet set, const FeatureOptions& options)
@@ -528,19 +511,11 @@ std::vector<std::vector<RankedPerson>> identifyMany(std::span<const FeatureSerie
   HATTR_THROW_UNLESS(threads >= 1, "identify: threads: expected at least 1, got 0");
   std::vector<std::vector<RankedPerson>> out(queries.size());
   if (stats) stats->assign(queries.size(), {});
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
-  runParallel(queries.size(), threads, [&](std::size_t begin, std::size_t end) {
+  analysis::detail::forEachChunk(queries.size(), 1, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t q = begin; q < end; ++q) {
-      try {
-        out[q] = identify(queries[q], index, top, stats ? &(*stats)[q] : nullptr);
-      } catch (...) {
-        const std::lock_guard lock(failure_mutex);
-        if (!failure) failure = std::current_exception();
-      }
+      out[q] = identify(queries[q], index, top, stats ? &(*stats)[q] : nullptr);
     }
-  }, 1);
-  if (failure) std::rethrow_exception(failure);
+  });
   return out;
 }
 
