@@ -106,14 +106,7 @@ CREATE INDEX profiles_skill_person ON profiles (skill, person);
 }
 
 sqlite3* openSqlite(const std::filesystem::path& file, int flags) {
-  sqlite3* db = nullptr;
-  if (sqlite3_open_v2(file.c_str(), &db, flags, nullptr) != SQLITE_OK) {
-    const std::string message = db ? sqlite3_errmsg(db) : "out of memory";
-    sqlite3_close(db);
-    throw InputError(fmt::format("{}: cannot open the profile library: {}", file.string(), message));
-  }
-  sqlite3_busy_timeout(db, 5000);
-  return db;
+  return session::detail::openSqliteFile(file, flags, "the profile library");
 }
 
 std::unique_ptr<SqlConnection> connect(const std::string& location, bool create, bool read_only) {

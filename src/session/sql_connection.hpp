@@ -7,6 +7,7 @@
 // study_postgres.cpp. Internal to the session module.
 
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -164,6 +165,10 @@ inline std::int64_t scalar(SqlConnection& db, std::string_view sql) {
 std::unique_ptr<SqlConnection> makeSqliteConnection(sqlite3* db, std::string location);
 /// The handle under an SQLite connection (for what only SQLite has: pragmas' errors, WAL).
 sqlite3* sqliteHandle(SqlConnection& db);
+/// Opens an SQLite file with sqlite3_open_v2's `flags`, waiting up to 5 s for another
+/// connection's lock; InputError naming the file and `what` it is ("the study database") when it
+/// cannot.
+sqlite3* openSqliteFile(const std::filesystem::path& file, int flags, std::string_view what);
 
 // ---- PostgreSQL -------------------------------------------------------------------------------
 

@@ -112,4 +112,15 @@ sqlite3* sqliteHandle(SqlConnection& db) {
   return static_cast<SqliteConnection&>(db).handle();
 }
 
+sqlite3* openSqliteFile(const std::filesystem::path& file, int flags, std::string_view what) {
+  sqlite3* db = nullptr;
+  if (sqlite3_open_v2(file.c_str(), &db, flags, nullptr) != SQLITE_OK) {
+    const std::string message = db ? sqlite3_errmsg(db) : "out of memory";
+    sqlite3_close(db);
+    throw InputError(fmt::format("{}: cannot open {}: {}", file.string(), what, message));
+  }
+  sqlite3_busy_timeout(db, 5000);
+  return db;
+}
+
 }  // namespace hattr::session::detail

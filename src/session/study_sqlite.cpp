@@ -38,17 +38,8 @@ using detail::SqlConnection;
 using detail::Statement;
 using detail::Transaction;
 
-/// Opens an SQLite file with `flags`, waiting up to 5 s for another connection's lock;
-/// InputError naming the file when it cannot.
 sqlite3* openSqliteFile(const std::filesystem::path& file, int flags) {
-  sqlite3* db = nullptr;
-  if (sqlite3_open_v2(file.c_str(), &db, flags, nullptr) != SQLITE_OK) {
-    const std::string message = db ? sqlite3_errmsg(db) : "out of memory";
-    sqlite3_close(db);
-    throw InputError(fmt::format("{}: cannot open the study database: {}", file.string(), message));
-  }
-  sqlite3_busy_timeout(db, 5000);
-  return db;
+  return detail::openSqliteFile(file, flags, "the study database");
 }
 
 /// Opens a study for reading only. A study in a folder this process cannot write (a shared,
