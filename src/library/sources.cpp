@@ -3,7 +3,8 @@
 #include "hattr/library/sources.hpp"
 
 #include <algorithm>
-#include <regex>
+#include <optional>
+#include <string_view>
 
 #include <fmt/format.h>
 
@@ -12,24 +13,51 @@
 
 namespace hattr::library {
 
+namespace {
+
+// The two numbers of a file name U<writer>S<signature>.TXT, as written.
+struct Svc2004FileName {
+  std::string_view writer_digits;
+  std::string_view signature_digits;
+};
+
+// The run of digits at the start of text.
+std::string_view leadingDigits(std::string_view text) {
+  std::size_t n = 0;
+  while (n < text.size() && text[n] >= '0' && text[n] <= '9') ++n;
+  return text.substr(0, n);
+}
+
+// The name's numbers, or nothing when the name is not U<digits>S<digits>.TXT.
+std::optional<Svc2004FileName> svc2004FileName(std::string_view name) {
+  constexpr std::string_view kSuffix = ".TXT";
+  if (name.size() < 1 + kSuffix.size() || name.front() != 'U' || !name.ends_with(kSuffix)) return std::nullopt;
+  name = name.substr(1, name.size() - 1 - kSuffix.size());
+  const std::string_view writer = leadingDigits(name);
+  if (writer.empty() || writer.size() >= name.size() || name[writer.size()] != 'S') return std::nullopt;
+  const std::string_view signature = name.substr(writer.size() + 1);
+  if (signature.empty() || leadingDigits(signature).size() != signature.size()) return std::nullopt;
+  return Svc2004FileName{writer, signature};
+}
+
+}  // namespace
+
 LabelledProfiles readSvc2004Folder(const std::filesystem::path& folder, const io::TabletCalibration& calibration) {
   HATTR_THROW_UNLESS(std::filesystem::is_directory(folder),
                      "{}: not a folder; expected the SVC2004 Task 2 folder of U<writer>S<signature>.TXT files",
                      folder.string());
   // The files in writer, then signature order.
-  static const std::regex kName(R"(U([0-9]+)S([0-9]+)\.TXT)");
   std::vector<std::tuple<int, int, std::filesystem::path>> files;
   for (const auto& entry : std::filesystem::directory_iterator(folder)) {
-    std::smatch m;
-    const std::string name = entry.path().filename().string();
-    if (!entry.is_regular_file() || !std::regex_match(name, m, kName)) continue;
-    const auto number = [&](const std::string& digits) {
-      HATTR_THROW_UNLESS(digits.size() <= 6, "{}: number {} in the name; expected at most 6 digits",
-                         entry.path().string(), digits);
-      return std::stoi(digits);
-    };
-    const int writer = number(m[1]);
-    const int signature = number(m[2]);
+    if (!entry.is_regular_file()) continue;
+    const std::string file_name = entry.path().filename().string();
+    const auto name = svc2004FileName(file_name);
+    if (!name) continue;
+    HATTR_THROW_UNLESS(name->writer_digits.size() <= 6 && name->signature_digits.size() <= 6,
+                       "{}: numbers {} and {} in the name; expected at most 6 digits each", entry.path().string(),
+                       name->writer_digits, name->signature_digits);
+    const int writer = std::stoi(std::string(name->writer_digits));
+    const int signature = std::stoi(std::string(name->signature_digits));
     HATTR_THROW_UNLESS(writer >= 1 && signature >= 1 && signature <= 40,
                        "{}: signature {} of writer {}; expected writers from 1 and signatures 1-40 (1-20 genuine, "
                        "21-40 skilled forgeries)",

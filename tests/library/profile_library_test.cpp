@@ -126,9 +126,18 @@ TEST(LibrarySources, AFolderThatIsNotSvc2004IsRefusedNamingWhatItExpected) {
               HasSubstr("no U<writer>S<signature>.TXT file"));
   EXPECT_THAT(test::inputErrorOf([&] { (void)readSvc2004Folder(dir / "missing", io::svc2004Calibration()); }),
               HasSubstr("not a folder"));
+  // Names that are not U<digits>S<digits>.TXT are not SVC2004 files and are passed over.
+  for (const char* other : {"U1S1.txt", "UXS1.TXT", "U1S.TXT", "US1.TXT", "U1S1x.TXT", "u1s1.TXT", "U1T1.TXT"})
+    test::writeText(dir / other, "1\n0 0 0 1 0 900 5\n");
+  EXPECT_THAT(test::inputErrorOf([&] { (void)readSvc2004Folder(dir.path(), io::svc2004Calibration()); }),
+              HasSubstr("no U<writer>S<signature>.TXT file"));
   test::writeText(dir / "U1S41.TXT", "1\n0 0 0 1 0 900 5\n");
   EXPECT_THAT(test::inputErrorOf([&] { (void)readSvc2004Folder(dir.path(), io::svc2004Calibration()); }),
               HasSubstr("signature 41 of writer 1; expected"));
+  std::filesystem::remove(dir / "U1S41.TXT");
+  test::writeText(dir / "U12345678901S1.TXT", "1\n0 0 0 1 0 900 5\n");
+  EXPECT_THAT(test::inputErrorOf([&] { (void)readSvc2004Folder(dir.path(), io::svc2004Calibration()); }),
+              HasSubstr("numbers 12345678901 and 1 in the name; expected at most 6 digits each"));
 }
 
 TEST(LibrarySources, Svc2004IsLabelledByWriterSessionAndForgery) {
