@@ -38,8 +38,32 @@ double localCost(DtwCost cost, double x, double y) {
   return cost == DtwCost::kAbsolute ? std::abs(diff) : diff * diff;
 }
 
-// A series must be non-empty and finite; `what` names the function and the series.
-void checkSeries(std::string_view function, std::string_view what, std::span<const double> s) {
+// A series' name for messages, "a", "a[3]", "b channel 1" or "2", formatted only when a check
+// fails (batches check millions of series).
+struct SeriesName {
+  std::string_view name;
+  std::size_t index = kUnindexed;
+  std::string_view separator = "";  // before the index; "[" encloses it
+  static constexpr std::size_t kUnindexed = static_cast<std::size_t>(-1);
+};
+
+}  // namespace
+}  // namespace hattr::analysis
+
+template <>
+struct fmt::formatter<hattr::analysis::SeriesName> : fmt::formatter<std::string_view> {
+  auto format(const hattr::analysis::SeriesName& n, fmt::format_context& ctx) const {
+    if (n.index == hattr::analysis::SeriesName::kUnindexed) return fmt::format_to(ctx.out(), "{}", n.name);
+    if (n.separator == "[") return fmt::format_to(ctx.out(), "{}[{}]", n.name, n.index);
+    return fmt::format_to(ctx.out(), "{}{}{}", n.name, n.separator, n.index);
+  }
+};
+
+namespace hattr::analysis {
+namespace {
+
+// A series must be non-empty and finite; `what` names the series in `function`'s messages.
+void checkSeries(std::string_view function, SeriesName what, std::span<const double> s) {
   HATTR_THROW_UNLESS(!s.empty(), "{}: series {} is empty: expected at least 1 value, got 0",
                      function, what);
   const auto bad = std::find_if(s.begin(), s.end(), [](double x) { return !std::isfinite(x); });
@@ -65,7 +89,7 @@ void checkChannels(std::string_view function, Channels a, Channels b) {
                      function, a.size(), b.size());
   for (const auto& [series, name] : {std::pair{a, "a"}, std::pair{b, "b"}}) {
     for (std::size_t c = 0; c < series.size(); ++c) {
-      checkSeries(function, fmt::format("{} channel {}", name, c), series[c]);
+      checkSeries(function, {name, c, " channel "}, series[c]);
       HATTR_THROW_UNLESS(series[c].size() == series[0].size(),
                          "{}: series {} channel {}: expected {} values like channel 0, got {}",
                          function, name, c, series[0].size(), series[c].size());
@@ -230,8 +254,8 @@ std::size_t dtwBandRadius(std::size_t n, std::size_t m, double band_fraction) {
 
 DtwResult dtw(std::span<const double> a, std::span<const double> b, const DtwOptions& options) {
   if (!options.want_path) return {dtwDistance(a, b, options), {}};
-  checkSeries("dtw", "a", a);
-  checkSeries("dtw", "b", b);
+  checkSeries("dtw", {"a"}, a);
+  checkSeries("dtw", {"b"}, b);
   checkOptions("dtw", options);
   return pathDtw(a.size(), b.size(), dtwBandRadius(a.size(), b.size(), options.band_fraction),
                  options.abandon_above,
@@ -240,8 +264,8 @@ DtwResult dtw(std::span<const double> a, std::span<const double> b, const DtwOpt
 
 double dtwDistance(std::span<const double> a, std::span<const double> b,
                    const DtwOptions& options) {
-  checkSeries("dtw", "a", a);
-  checkSeries("dtw", "b", b);
+  checkSeries("dtw", {"a"}, a);
+  checkSeries("dtw", {"b"}, b);
   checkOptions("dtw", options);
   const double* a_data = a.data();
   const double* b_data = b.data();
@@ -250,8 +274,8 @@ double dtwDistance(std::span<const double> a, std::span<const double> b,
 
 double dtwReference(std::span<const double> a, std::span<const double> b,
                     const DtwOptions& options) {
-  checkSeries("dtwReference", "a", a);
-  checkSeries("dtwReference", "b", b);
+  checkSeries("dtwReference", {"a"}, a);
+  checkSeries("dtwReference", {"b"}, b);
   checkOptions("dtwReference", options);
   return fullMatrixDtw(
       a.size(), b.size(), dtwBandRadius(a.size(), b.size(), options.band_fraction),
@@ -357,8 +381,8 @@ std::vector<double> batchCosts(std::span<const Series> a, std::span<const Series
   HATTR_THROW_UNLESS(threads >= 1, "dtwBatch: threads: expected at least 1, got {}", threads);
   checkOptions("dtwBatch", options);
   for (std::size_t p = 0; p < a.size(); ++p) {
-    checkSeries("dtwBatch", fmt::format("a[{}]", p), a[p]);
-    checkSeries("dtwBatch", fmt::format("b[{}]", p), b[p]);
+    checkSeries("dtwBatch", {"a", p, "["}, a[p]);
+    checkSeries("dtwBatch", {"b", p, "["}, b[p]);
   }
   // Each thread takes an equal share, a whole number of the kernel's blocks of pairs, so the
   // pairs are blocked as on one thread and the costs are the same to the bit: lanes only when
@@ -397,7 +421,7 @@ Eigen::MatrixXd dtwCostMatrix(std::span<const std::vector<double>> series,
   HATTR_THROW_UNLESS(threads >= 1, "dtwCostMatrix: threads: expected at least 1, got {}", threads);
   checkOptions("dtwCostMatrix", options);
   for (std::size_t s = 0; s < series.size(); ++s) {
-    checkSeries("dtwCostMatrix", fmt::format("{}", s), series[s]);
+    checkSeries("dtwCostMatrix", {"", s}, series[s]);
   }
 
   // The pairs i < j, cut into chunks that the workers take in turn.
@@ -424,31 +448,45 @@ Eigen::MatrixXd dtwCostMatrix(std::span<const std::vector<double>> series,
 
 namespace {
 
-/// The envelope into `e` (sized to the series) by a monotone queue of indices per side (Lemire
-/// 2009), kept in `queue` (2n indices): O(n) whatever the radius, no allocation once sized.
-void envelopeInto(std::span<const double> series, std::size_t radius, DtwEnvelope& e, std::vector<std::size_t>& queue) {
+/// One side of the envelope, out[i] = best of series over [i - r, i + r] within the series, by
+/// van Herk and Gil-Werman's blocks: with blocks of w = 2r + 1 values, `forward` holds each
+/// value's best from its block's start and `backward` to its block's end (or the series' end),
+/// and a whole window [a, a + 2r] is best(backward[a], forward[a + 2r]). Three passes without
+/// branches on the data, whatever the radius.
+template <class Best>
+void envelopeSide(const double* series, std::size_t n, std::size_t r, double* forward, double* backward, double* out,
+                  Best best) {
+  const std::size_t w = 2 * r + 1;
+  for (std::size_t b = 0; b < n; b += w) {
+    const std::size_t e = std::min(n, b + w);
+    forward[b] = series[b];
+    for (std::size_t i = b + 1; i < e; ++i) forward[i] = best(forward[i - 1], series[i]);
+    backward[e - 1] = series[e - 1];
+    for (std::size_t i = e - 1; i > b; --i) backward[i - 1] = best(backward[i], series[i - 1]);
+  }
+  // A window starting in the last block ends at the series' end, inside that block: its
+  // backward value alone (the forward one would reach back before the window).
+  const std::size_t last_block = ((n - 1) / w) * w;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t last = std::min(n - 1, i + r);  // the window is [i - r, last], from 0 at the start
+    if (i < r) out[i] = forward[last];
+    else if (i - r >= last_block) out[i] = backward[i - r];
+    else out[i] = best(backward[i - r], forward[last]);
+  }
+}
+
+/// The envelope into `e` (sized to the series), with `scratch` (2n values) for the blocks: no
+/// allocation once sized.
+void envelopeInto(std::span<const double> series, std::size_t radius, DtwEnvelope& e, std::vector<double>& scratch) {
   const std::size_t n = series.size();
   const std::size_t r = std::min(radius, n);
   e.lower.resize(n);
   e.upper.resize(n);
-  queue.resize(2 * n);
-  std::size_t* lows = queue.data();
-  std::size_t* highs = queue.data() + n;
-  std::size_t lo_head = 0, lo_tail = 0, hi_head = 0, hi_tail = 0;  // [head, tail) of each queue
-  std::size_t next = 0;                                            // the next index to enter the window
-  for (std::size_t i = 0; i < n; ++i) {
-    // The window [i - r, i + r]: enter up to i + r, leave below i - r.
-    for (; next < n && next <= i + r; ++next) {
-      while (lo_tail > lo_head && series[lows[lo_tail - 1]] >= series[next]) --lo_tail;
-      lows[lo_tail++] = next;
-      while (hi_tail > hi_head && series[highs[hi_tail - 1]] <= series[next]) --hi_tail;
-      highs[hi_tail++] = next;
-    }
-    while (lows[lo_head] + r < i) ++lo_head;
-    while (highs[hi_head] + r < i) ++hi_head;
-    e.lower[i] = series[lows[lo_head]];
-    e.upper[i] = series[highs[hi_head]];
-  }
+  scratch.resize(2 * n);
+  const auto lower = [](double a, double b) { return std::min(a, b); };
+  const auto upper = [](double a, double b) { return std::max(a, b); };
+  envelopeSide(series.data(), n, r, scratch.data(), scratch.data() + n, e.lower.data(), lower);
+  envelopeSide(series.data(), n, r, scratch.data(), scratch.data() + n, e.upper.data(), upper);
 }
 
 }  // namespace
@@ -459,8 +497,8 @@ DtwEnvelope dtwEnvelope(std::span<const double> series, std::size_t radius) {
     HATTR_THROW_UNLESS(std::isfinite(series[i]), "DTW envelope: value {} is {}; expected a finite number", i, series[i]);
   }
   DtwEnvelope e;
-  std::vector<std::size_t> queue;
-  envelopeInto(series, radius, e, queue);
+  std::vector<double> scratch;
+  envelopeInto(series, radius, e, scratch);
   return e;
 }
 
@@ -468,30 +506,56 @@ double lbKeogh(std::span<const double> candidate, const DtwEnvelope& envelope, D
   HATTR_THROW_UNLESS(candidate.size() == envelope.lower.size() && candidate.size() == envelope.upper.size(),
                      "LB_Keogh: the candidate has {} values and the envelope {}; expected the same length",
                      candidate.size(), envelope.lower.size());
-  // Four sums side by side (the loop is the search's inner one), checked against the bound
-  // every block; the gaps without branches.
-  const double* c = candidate.data();
-  const double* lo = envelope.lower.data();
-  const double* hi = envelope.upper.data();
-  const std::size_t n = candidate.size();
-  const bool squared = cost == DtwCost::kSquared;
-  const auto gap = [&](std::size_t i) {
-    const double g = std::max(c[i] - hi[i], 0.0) + std::max(lo[i] - c[i], 0.0);
-    return squared ? g * g : g;
-  };
-  constexpr std::size_t kBlock = 16;
-  double total = 0.0;
-  std::size_t i = 0;
-  for (; i + kBlock <= n; i += kBlock) {
-    double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
-    for (std::size_t k = i; k < i + kBlock; k += 4) {
-      s0 += gap(k), s1 += gap(k + 1), s2 += gap(k + 2), s3 += gap(k + 3);
-    }
-    total += (s0 + s1) + (s2 + s3);
-    if (total > abandon_above) return total;
+  return detail::lbKeoghSimd({.candidate = candidate.data(), .lower = envelope.lower.data(),
+                              .upper = envelope.upper.data(), .n = candidate.size(),
+                              .squared = cost == DtwCost::kSquared, .abandon_above = abandon_above});
+}
+
+void DtwSegmentEnvelope::append(const DtwSegmentEnvelope& other) {
+  lower.insert(lower.end(), other.lower.begin(), other.lower.end());
+  upper.insert(upper.end(), other.upper.begin(), other.upper.end());
+  width.insert(width.end(), other.width.begin(), other.width.end());
+}
+
+DtwSegmentEnvelope dtwSegmentEnvelope(const DtwEnvelope& envelope, std::size_t segment) {
+  HATTR_THROW_UNLESS(segment >= 1, "DTW segment envelope: segment 0; expected at least 1 value");
+  HATTR_THROW_UNLESS(!envelope.lower.empty() && envelope.lower.size() == envelope.upper.size(),
+                     "DTW segment envelope: sides of {} and {} values; expected the same, at least 1",
+                     envelope.lower.size(), envelope.upper.size());
+  DtwSegmentEnvelope e;
+  appendSegmentMeans(envelope.lower, segment, e.lower);
+  appendSegmentMeans(envelope.upper, segment, e.upper);
+  for (std::size_t b = 0; b < envelope.lower.size(); b += segment) {
+    e.width.push_back(static_cast<double>(std::min(envelope.lower.size(), b + segment) - b));
   }
-  for (; i < n; ++i) total += gap(i);
-  return total;
+  return e;
+}
+
+void appendSegmentMeans(std::span<const double> series, std::size_t segment, std::vector<double>& out) {
+  HATTR_THROW_UNLESS(segment >= 1, "segment means: segment 0; expected at least 1 value");
+  for (std::size_t b = 0; b < series.size(); b += segment) {
+    const std::size_t e = std::min(series.size(), b + segment);
+    double sum = 0.0;
+    for (std::size_t k = b; k < e; ++k) sum += series[k];
+    out.push_back(sum / static_cast<double>(e - b));
+  }
+}
+
+void lbSegmentMeans(std::span<const double> means, const DtwSegmentEnvelope& envelope, std::span<double> out) {
+  const std::size_t k = envelope.width.size();
+  HATTR_THROW_UNLESS(envelope.lower.size() == k && envelope.upper.size() == k,
+                     "segment bound: envelope of {}, {} and {} values; expected the same", envelope.lower.size(),
+                     envelope.upper.size(), k);
+  HATTR_THROW_UNLESS(means.size() == out.size() * k,
+                     "segment bound: {} means for {} candidates; expected {} a candidate", means.size(), out.size(), k);
+  if (k == 0) {  // no segments (a feature set of no series): nothing bounds
+    std::fill(out.begin(), out.end(), 0.0);
+    return;
+  }
+  detail::segmentBoundsSimd(means.data(), out.size(),
+                            {.lower = envelope.lower.data(), .upper = envelope.upper.data(),
+                             .width = envelope.width.data(), .size = k},
+                            out.data());
 }
 
 double lbImproved(std::span<const double> candidate, std::span<const double> query, const DtwEnvelope& query_envelope,
@@ -505,12 +569,12 @@ double lbImproved(std::span<const double> candidate, std::span<const double> que
   // (this thread's buffers, reused: the search calls it for many candidates).
   thread_local std::vector<double> projected;
   thread_local DtwEnvelope envelope;
-  thread_local std::vector<std::size_t> queue;
+  thread_local std::vector<double> scratch;
   projected.resize(candidate.size());
   for (std::size_t i = 0; i < candidate.size(); ++i) {
     projected[i] = std::clamp(candidate[i], query_envelope.lower[i], query_envelope.upper[i]);
   }
-  envelopeInto(projected, radius, envelope, queue);
+  envelopeInto(projected, radius, envelope, scratch);
   return first + lbKeogh(query, envelope, cost, abandon_above - first);
 }
 

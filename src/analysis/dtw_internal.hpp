@@ -37,4 +37,25 @@ std::size_t batchWidth();
 /// Name of the instruction set the kernels dispatch to.
 const char* simdTargetName();
 
+/// One LB_Keogh: n values of the candidate against the envelope's sides (n values each).
+struct LbProblem {
+  const double* candidate = nullptr;
+  const double* lower = nullptr;
+  const double* upper = nullptr;
+  std::size_t n = 0;
+  bool squared = false;
+  double abandon_above = 0.0;  ///< the sum is returned once it exceeds this (checked a block at a time)
+};
+double lbKeoghSimd(const LbProblem& problem);
+
+/// A segment envelope's arrays (`size` values each).
+struct SegmentEnvelopeView {
+  const double* lower = nullptr;
+  const double* upper = nullptr;
+  const double* width = nullptr;
+  std::size_t size = 0;
+};
+/// out[c] = Σ_s width[s] · gap(means[c · size + s], [lower[s], upper[s]]) for c < count.
+void segmentBoundsSimd(const double* means, std::size_t count, const SegmentEnvelopeView& envelope, double* out);
+
 }  // namespace hattr::analysis::detail

@@ -304,12 +304,12 @@ void checkSearch(const FeatureSeries& query, std::span<const Candidate> candidat
 
 namespace {
 
-/// The query's envelopes of the set's channels, within the band's radius, and their ranges over
-/// each coarse segment, side by side as the index keeps the candidates' means.
+/// The query's envelopes of the set's channels, within the band's radius, and their segment
+/// envelope over kCoarseSegment steps, channel after channel as the index keeps the
+/// candidates' means (analysis::lbSegmentMeans: below LB_Keogh).
 struct QueryBounds {
   std::vector<analysis::DtwEnvelope> envelopes;
-  std::vector<double> segment_low, segment_high, segment_width;  // kCoarseSegment
-  std::vector<double> middle_low, middle_high, middle_width;     // kMiddleSegment
+  analysis::DtwSegmentEnvelope coarse;
 };
 
 QueryBounds boundsOf(const FeatureSeries& query, FeatureSet set, const FeatureOptions& options) {
@@ -317,36 +317,9 @@ QueryBounds boundsOf(const FeatureSeries& query, FeatureSet set, const FeatureOp
   QueryBounds b;
   for (const FeatureChannel c : set.channels()) {
     b.envelopes.push_back(analysis::dtwEnvelope(query[c], radius));
-    const auto& e = b.envelopes.back();
-    const auto ranges = [&](std::size_t segment, std::vector<double>& low, std::vector<double>& high,
-                            std::vector<double>& width) {
-      for (std::size_t s = 0; s < options.length; s += segment) {
-        const auto begin = static_cast<std::ptrdiff_t>(s);
-        const auto end = static_cast<std::ptrdiff_t>(std::min(options.length, s + segment));
-        low.push_back(*std::min_element(e.lower.begin() + begin, e.lower.begin() + end));
-        high.push_back(*std::max_element(e.upper.begin() + begin, e.upper.begin() + end));
-        width.push_back(static_cast<double>(end - begin));
-      }
-    };
-    ranges(kCoarseSegment, b.segment_low, b.segment_high, b.segment_width);
-    ranges(kMiddleSegment, b.middle_low, b.middle_high, b.middle_width);
+    b.coarse.append(analysis::dtwSegmentEnvelope(b.envelopes.back(), kCoarseSegment));
   }
   return b;
-}
-
-/// A segment bound: Σ width · dist(mean, [low, high]) / length, four sums side by side.
-double segmentBound(const double* mean, const std::vector<double>& low, const std::vector<double>& high,
-                    const std::vector<double>& width, double length) {
-  const std::size_t n = low.size();
-  double part[4] = {0, 0, 0, 0};
-  std::size_t s = 0;
-  for (; s + 4 <= n; s += 4) {
-    for (std::size_t j = 0; j < 4; ++j) {
-      part[j] += width[s + j] * (std::max(mean[s + j] - high[s + j], 0.0) + std::max(low[s + j] - mean[s + j], 0.0));
-    }
-  }
-  for (; s < n; ++s) part[0] += width[s] * (std::max(mean[s] - high[s], 0.0) + std::max(low[s] - mean[s], 0.0));
-  return ((part[0] + part[1]) + (part[2] + part[3])) / length;
 }
 
 /// LB_Improved over the set's channels, abandoned above `limit` (then +infinity).
@@ -402,8 +375,6 @@ SearchIndex::SearchIndex(std::span<const Candidate> candidates, FeatureSet set, 
     : set_(set), options_(options), channels_(set.channels()) {
   checkFeatureOptions(options);
   coarse_stride_ = channels_.size() * ((options.length + kCoarseSegment - 1) / kCoarseSegment);
-  middle_stride_ = channels_.size() * ((options.length + kMiddleSegment - 1) / kMiddleSegment);
-  middle_.reserve(candidates.size() * middle_stride_);
   series_.reserve(candidates.size() * channels_.size() * options.length);
   coarse_.reserve(candidates.size() * coarse_stride_);
   for (const Candidate& c : candidates) {
@@ -414,15 +385,8 @@ SearchIndex::SearchIndex(std::span<const Candidate> candidates, FeatureSet set, 
                          "library entry {}: features of {} steps; expected {} (made with the same options)", c.key,
                          v.size(), options.length);
       series_.insert(series_.end(), v.begin(), v.end());
-      // The segment means of both bounds, from the series themselves.
-      for (const auto& [segment, means] : {std::pair{kCoarseSegment, &coarse_}, std::pair{kMiddleSegment, &middle_}}) {
-        for (std::size_t b = 0; b < v.size(); b += segment) {
-          const std::size_t e = std::min(v.size(), b + segment);
-          double sum = 0.0;
-          for (std::size_t k = b; k < e; ++k) sum += v[k];
-          means->push_back(sum / static_cast<double>(e - b));
-        }
-      }
+      // The segment means of the coarse bound, from the series themselves.
+      analysis::appendSegmentMeans(v, kCoarseSegment, coarse_);
     }
     writing_time_s_.push_back(c.features.writing_time_s);
     persons_.push_back(c.person);
@@ -433,7 +397,7 @@ SearchIndex::SearchIndex(std::span<const Candidate> candidates, FeatureSet set, 
 std::size_t SearchIndex::bytes() const {
   std::size_t names = 0;
   for (std::size_t i = 0; i < persons_.size(); ++i) names += persons_[i].capacity() + keys_[i].capacity() + 2 * sizeof(std::string);
-  return (series_.capacity() + coarse_.capacity() + middle_.capacity() + writing_time_s_.capacity()) * sizeof(double) +
+  return (series_.capacity() + coarse_.capacity() + writing_time_s_.capacity()) * sizeof(double) +
          names;
 }
 
@@ -448,13 +412,13 @@ std::vector<RankedPerson> identify(const FeatureSeries& query, const SearchIndex
   const QueryBounds qb = boundsOf(query, index.set(), index.options());
   const double length = static_cast<double>(index.options().length);
 
-  // Every candidate's coarse bound, streaming the index's means.
-  thread_local std::vector<std::pair<double, std::size_t>> bounds;  // reused: no page faults a query
+  // Every candidate's coarse bound, streaming the index's means through the vectorized kernel.
+  thread_local std::vector<double> coarse;                          // reused: no page faults a query
+  thread_local std::vector<std::pair<double, std::size_t>> bounds;
+  coarse.resize(index.size());
   bounds.resize(index.size());
-  for (std::size_t i = 0; i < index.size(); ++i) {
-    const double lb = segmentBound(index.coarse(i).data(), qb.segment_low, qb.segment_high, qb.segment_width, length);
-    bounds[i] = {lb + indexedTiming(query, index, i), i};
-  }
+  analysis::lbSegmentMeans(index.allCoarse(), qb.coarse, coarse);
+  for (std::size_t i = 0; i < index.size(); ++i) bounds[i] = {coarse[i] / length + indexedTiming(query, index, i), i};
 
   // Nearest coarse bounds first, ordered a chunk at a time (each chunk the next smallest,
   // twice the last): a search that ends early sorts little; stop where the bound passes the
@@ -479,11 +443,7 @@ std::vector<RankedPerson> identify(const FeatureSeries& query, const SearchIndex
     const double limit = ranking.boundFor(index.person(i));
     const double timing = indexedTiming(query, index, i);
     ++s.lower_bounds;
-    const bool ruled_out =
-        std::isfinite(limit) &&
-        (segmentBound(index.middle(i).data(), qb.middle_low, qb.middle_high, qb.middle_width, length) + timing >
-             slack(limit) ||
-         !std::isfinite(improvedBound(query, qb, index, i, timing, limit)));
+    const bool ruled_out = std::isfinite(limit) && !std::isfinite(improvedBound(query, qb, index, i, timing, limit));
     if (ruled_out) {
       ++s.pruned_by_keogh;
       continue;

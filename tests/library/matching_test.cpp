@@ -35,19 +35,24 @@ std::vector<double> randomWalk(std::mt19937_64& rng, std::size_t n) {
 }
 
 TEST(DtwLowerBound, TheEnvelopeIsTheWindowsMinAndMax) {
+  // Lengths that leave every remainder of the blocks (2r + 1 values) for the last windows.
   std::mt19937_64 rng(3);
-  for (const std::size_t r : {0u, 1u, 5u, 40u, 1000u}) {
-    const auto s = randomWalk(rng, 97);
-    const auto e = analysis::dtwEnvelope(s, r);
-    for (std::size_t i = 0; i < s.size(); ++i) {
-      const std::size_t lo = i >= r ? i - r : 0, hi = std::min(s.size() - 1, i + r);
-      EXPECT_EQ(e.lower[i], *std::min_element(s.begin() + lo, s.begin() + hi + 1)) << i;
-      EXPECT_EQ(e.upper[i], *std::max_element(s.begin() + lo, s.begin() + hi + 1)) << i;
+  for (const std::size_t n : {1u, 2u, 12u, 97u, 128u}) {
+    for (const std::size_t r : {0u, 1u, 2u, 5u, 13u, 40u, 1000u}) {
+      for (int repeat = 0; repeat < 4; ++repeat) {
+        const auto s = randomWalk(rng, n);
+        const auto e = analysis::dtwEnvelope(s, r);
+        for (std::size_t i = 0; i < s.size(); ++i) {
+          const std::size_t lo = i >= r ? i - r : 0, hi = std::min(s.size() - 1, i + r);
+          EXPECT_EQ(e.lower[i], *std::min_element(s.begin() + lo, s.begin() + hi + 1)) << n << " " << r << " " << i;
+          EXPECT_EQ(e.upper[i], *std::max_element(s.begin() + lo, s.begin() + hi + 1)) << n << " " << r << " " << i;
+        }
+      }
     }
   }
 }
 
-TEST(DtwLowerBound, LbKeoghNeverExceedsTheBandedDtwAndIsTightForFarSeries) {
+TEST(DtwLowerBound, LbKeoghAndLbImprovedNeverExceedTheBandedDtwAndAreTightForFarSeries) {
   std::mt19937_64 rng(5);
   for (int trial = 0; trial < 300; ++trial) {
     const std::size_t n = 20 + static_cast<std::size_t>(trial % 7) * 13;
@@ -62,6 +67,10 @@ TEST(DtwLowerBound, LbKeoghNeverExceedsTheBandedDtwAndIsTightForFarSeries) {
         const double d = analysis::dtwDistance(a, b, o);
         const double lb = analysis::lbKeogh(b, analysis::dtwEnvelope(a, r), cost);
         EXPECT_LE(lb, d * (1 + 1e-12) + 1e-12) << trial << " band " << band;
+        // LB_Improved adds its second pass: between LB_Keogh and the distance.
+        const double improved = analysis::lbImproved(b, a, analysis::dtwEnvelope(a, r), r, cost);
+        EXPECT_GE(improved, lb) << trial << " band " << band;
+        EXPECT_LE(improved, d * (1 + 1e-12) + 1e-12) << trial << " band " << band;
       }
     }
   }
@@ -71,6 +80,53 @@ TEST(DtwLowerBound, LbKeoghNeverExceedsTheBandedDtwAndIsTightForFarSeries) {
   EXPECT_THAT(test::inputErrorOf([&] { (void)analysis::lbKeogh(high, analysis::dtwEnvelope(std::vector<double>(5, 0.0), 1),
                                                     analysis::DtwCost::kAbsolute); }),
               HasSubstr("expected the same length"));
+}
+
+TEST(DtwLowerBound, TheSegmentBoundNeverExceedsLbKeoghForManyCandidatesAtOnce) {
+  // 40 candidates of two channels each, against a query's two envelopes, at once and one by one.
+  std::mt19937_64 rng(11);
+  for (const std::size_t n : {13u, 64u, 128u}) {
+    for (const std::size_t segment : {1u, 4u, 8u, 32u}) {
+      const std::size_t r = analysis::dtwBandRadius(n, n, 0.1);
+      const auto qx = randomWalk(rng, n), qy = randomWalk(rng, n);
+      const auto ex = analysis::dtwEnvelope(qx, r), ey = analysis::dtwEnvelope(qy, r);
+      analysis::DtwSegmentEnvelope e = analysis::dtwSegmentEnvelope(ex, segment);
+      e.append(analysis::dtwSegmentEnvelope(ey, segment));
+      std::vector<double> means;
+      std::vector<double> keogh;
+      for (int c = 0; c < 40; ++c) {
+        const auto cx = randomWalk(rng, n), cy = randomWalk(rng, n);
+        analysis::appendSegmentMeans(cx, segment, means);
+        analysis::appendSegmentMeans(cy, segment, means);
+        keogh.push_back(analysis::lbKeogh(cx, ex, analysis::DtwCost::kAbsolute) +
+                        analysis::lbKeogh(cy, ey, analysis::DtwCost::kAbsolute));
+      }
+      std::vector<double> bound(40);
+      analysis::lbSegmentMeans(means, e, bound);
+      for (int c = 0; c < 40; ++c) {
+        EXPECT_GE(bound[c], 0.0);
+        EXPECT_LE(bound[c], keogh[c] * (1 + 1e-12) + 1e-12) << n << " " << segment << " " << c;
+      }
+      // Segments of one value: the bound is LB_Keogh itself.
+      if (segment == 1) {
+        for (int c = 0; c < 40; ++c) EXPECT_NEAR(bound[c], keogh[c], 1e-9 * (1 + keogh[c]));
+      }
+    }
+  }
+  // A constant series far above the other: every segment's gap is the whole distance.
+  const std::vector<double> low(30, 0.0), high(30, 5.0);
+  std::vector<double> means;
+  analysis::appendSegmentMeans(high, 8, means);
+  double bound = 0.0;
+  analysis::lbSegmentMeans(means, analysis::dtwSegmentEnvelope(analysis::dtwEnvelope(low, 3), 8), std::span(&bound, 1));
+  EXPECT_DOUBLE_EQ(bound, 150.0);
+  EXPECT_THAT(test::inputErrorOf([&] {
+                std::vector<double> two(2);
+                analysis::lbSegmentMeans(means, analysis::dtwSegmentEnvelope(analysis::dtwEnvelope(low, 3), 8), two);
+              }),
+              HasSubstr("4 means for 2 candidates; expected 4 a candidate"));
+  EXPECT_THAT(test::inputErrorOf([&] { (void)analysis::dtwSegmentEnvelope(analysis::dtwEnvelope(low, 3), 0); }),
+              HasSubstr("segment 0"));
 }
 
 TEST(LibraryFeatures, ALiftAddsOneStepOfWritingTimeAndEveryChannelIsNormalized) {

@@ -1,16 +1,18 @@
 #!/usr/bin/env python3
-"""The study report in a real browser: Debian's headless Chromium, driven by its chromedriver
+"""A report in a real browser: Debian's headless Chromium, driven by its chromedriver
 through Selenium (python3-selenium).
 
-Makes a small scripted study with the CLI and its report, opens report.html and checks that:
+Makes a report with the CLI (a small scripted study's, or the profile library's evaluation of
+the SVC2004 writers: `--library FOLDER`), opens report.html and checks that:
   - the page loads with no console error or warning from the browser;
   - every figure file has its figure on the page, and no figure is missing a file;
   - inside each figure's plot area (its clip rectangle), the figure inline in the page has the
     same pixels as its standalone SVG file opened alone. A figure clipped by another figure's
     rectangle, or cut by the page, differs there.
 
-Usage: report_in_chromium.py HATTR_CLI [--keep DIR]   (DIR keeps the report and the screenshots)
-Exit code: 0 passed, 1 failed (with what differed), 2 bad arguments.
+Usage: report_in_chromium.py HATTR_CLI [--library SVC2004_FOLDER] [--keep DIR]
+       (DIR keeps the report and the screenshots)
+Exit code: 0 passed, 1 failed (with what differed), 2 bad arguments, 77 skipped (no SVC2004 folder).
 """
 import argparse
 import base64
@@ -56,6 +58,15 @@ def make_report(cli: str, folder: Path) -> Path:
     run(cli, folder, "study", "init", "study.json", "--db", "study.sqlite")
     run(cli, folder, "study", "run", "--db", "study.sqlite")
     run(cli, folder, "study", "report", "--db", "study.sqlite", "--out", "report")
+    return folder / "report"
+
+
+def make_library_report(cli: str, folder: Path, svc2004: Path) -> Path:
+    """The SVC2004 writers imported into a library and its evaluation report (one run a writer,
+    two feature sets: every figure kind, in seconds)."""
+    run(cli, folder, "library", "-L", "lib.sqlite", "import", "svc2004", str(svc2004))
+    run(cli, folder, "library", "-L", "lib.sqlite", "evaluate", "--protocol", "svc2004", "--runs", "1",
+        "--sets", "shape,force", "-o", "report")
     return folder / "report"
 
 
@@ -123,8 +134,12 @@ def different_fraction(a, b) -> float:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("cli")
+    parser.add_argument("--library", type=Path, metavar="SVC2004_FOLDER")
     parser.add_argument("--keep", type=Path)
     arguments = parser.parse_args()
+    if arguments.library is not None and not arguments.library.is_dir():
+        print(f"report_in_chromium: SKIPPED: SVC2004 data not found at {arguments.library}")
+        return 77
     try:
         from PIL import Image
     except ImportError:
@@ -133,7 +148,11 @@ def main() -> int:
     require_browser()
     with tempfile.TemporaryDirectory(prefix="hattr-browser-") as scratch:
         folder = Path(scratch)
-        report = make_report(str(Path(arguments.cli).resolve()), folder)
+        cli = str(Path(arguments.cli).resolve())
+        if arguments.library is None:
+            report = make_report(cli, folder)
+        else:
+            report = make_library_report(cli, folder, arguments.library.resolve())
         files = sorted(p.stem for p in (report / "figures").glob("*.svg"))
         if not files:
             fail("the report wrote no figures")

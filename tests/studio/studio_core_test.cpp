@@ -267,7 +267,7 @@ class StudioCoreTest : public QObject {
     const auto file = dir / "bad.csv";
     std::ofstream(file) << "this is not a profile\n";
     try {
-      (void)loadReferenceProfile(file);
+      (void)loadReferenceProfile(file.string());
       QFAIL("no error");
     } catch (const InputError& e) {
       QVERIFY2(QString(e.what()).contains("bad.csv"), e.what());
@@ -281,7 +281,7 @@ class StudioCoreTest : public QObject {
     }
     io::writeProfileCsv(up, dir / "up.csv");
     try {
-      (void)loadReferenceProfile(dir / "up.csv");
+      (void)loadReferenceProfile((dir / "up.csv").string());
       QFAIL("no error");
     } catch (const InputError& e) {
       QVERIFY2(QString(e.what()).contains("pen down"), e.what());

@@ -25,12 +25,17 @@
 #include <sstream>
 
 #include "core/study_session.hpp"
+#include "hattr/io/profile_csv.hpp"
+#include "hattr/library/profile_library.hpp"
+#include "hattr/ops/library.hpp"
 #include "hattr/session/study_database.hpp"
+#include "library/synthetic_writers.hpp"
 #include "screen_checks.hpp"
 #include "studio_test_support.hpp"
 #include "hattr/sim/glyph.hpp"
 #include "ui/learner_dialogs.hpp"
 #include "ui/learners_tab.hpp"
+#include "ui/library_dialog.hpp"
 #include "ui/main_window.hpp"
 #include "ui/mentor_tab.hpp"
 #include "ui/paper_view.hpp"
@@ -74,7 +79,7 @@ class StudioTeacherTest : public QObject {
     QVERIFY2(QGuiApplication::platformName() == "xcb",
              qPrintable("run under Xvfb with QT_QPA_PLATFORM=xcb (xvfb-run), not on \"" +
                         QGuiApplication::platformName() + "\""));
-    dir_ = test::freshTempDir("teacher");
+    dir_ = studio::test::freshTempDir("teacher");
     auto settings =
         std::make_unique<QSettings>(QString::fromStdString((dir_ / "studio.ini").string()), QSettings::IniFormat);
     settings->setValue("train/settle_s", 0.5);
@@ -204,6 +209,91 @@ class StudioTeacherTest : public QObject {
     for (const auto& t : db.trials("mia")) QCOMPARE(t.status, session::TrialStatus::kCompleted);
   }
 
+  // A library of writers: the teacher picks one's template as the reference (a writer with one
+  // recording has none), and asks whose writing the learner's last trial is nearest.
+  void aTeacherTrainsAgainstAWritersTemplateFromALibrary() {
+    MainWindow& w = *window_;
+    const std::string location = makeWriterLibrary();
+    QVERIFY(w.lastTrial().has_value());  // the learner's last study trial
+    clickTab(MainWindow::kTabTrain);
+    bool used = false;
+    std::vector<library::RankedPerson> found;
+    QTimer::singleShot(0, this, [&] {
+      auto* dialog = openDialog<LibraryDialog>();
+      if (dialog == nullptr) return;
+      const auto& d = dialog->widgets();
+      QCOMPARE(d.skill->currentText(), QStringLiteral("signature"));
+      QCOMPARE(d.persons->topLevelItemCount(), 7);
+      QPushButton* ok = d.buttons->button(QDialogButtonBox::Ok);
+      QVERIFY(!ok->isEnabled());  // no one chosen
+      const auto row = [&](const QString& person) { return d.persons->findItems(person, Qt::MatchExactly, 0).value(0); };
+      QVERIFY(row("W7") != nullptr && row("W3") != nullptr);
+      QCOMPARE(row("W3")->text(1), QStringLiteral("4"));
+      QCOMPARE(row("W3")->text(2), QStringLiteral("1"));  // the imitation of W3
+      d.persons->setCurrentItem(row("W7"));
+      QVERIFY2(!ok->isEnabled() && ok->toolTip().contains("at least 2 genuine"), qPrintable(ok->toolTip()));
+      // The last trial's nearest writers: the exact search's ranks are brute force's.
+      QCOMPARE(d.query->currentText(), QStringLiteral("The last trial"));
+      QCOMPARE(d.features->currentText(), QStringLiteral("shape+force"));
+      d.top->setValue(3);
+      QTest::mouseClick(d.find, Qt::LeftButton);
+      found = dialog->nearest();
+      QCOMPARE(d.nearest->topLevelItemCount(), 3);
+      QCOMPARE(d.nearest->topLevelItem(0)->text(1), QString::fromStdString(found.at(0).person));
+      screenShotOf(*dialog, "studio_teacher_library.png");
+      d.persons->setCurrentItem(row("W3"));
+      QVERIFY(ok->isEnabled());
+      QCOMPARE(dialog->reference(), QString::fromStdString("library:" + location + "#W3/signature"));
+      used = true;
+      QTest::mouseClick(ok, Qt::LeftButton);
+    });
+    QTest::mouseClick(w.trainTab()->widgets().library, Qt::LeftButton);  // asks for the file: none, not interactive
+    QVERIFY(!used);
+    QVERIFY(w.trainTab()->openLibrary(QString::fromStdString(location)));
+    QVERIFY(used);
+    ops::IdentifyOptions brute{.skill = "signature", .set = library::parseFeatureSet("shape+force"), .top = 3,
+                               .brute_force = true};
+    QVERIFY(found == ops::libraryIdentify(location, *w.lastTrial(), brute).ranked);
+
+    // The reference is W3's template of their 4 genuine recordings, named as such.
+    const HapticProfile* reference = w.trainTab()->reference();
+    QVERIFY(reference != nullptr);
+    QCOMPARE(reference->metadata().subject, std::string("W3"));
+    const QString label = w.trainTab()->widgets().reference->text();
+    QVERIFY2(label.contains("template of <b>W3</b>'s signature") && label.contains("of 4 recordings") &&
+                 label.contains("writers.sqlite"),
+             qPrintable(label));
+    // Not a library: refused, saying what the file is.
+    std::ofstream(dir_ / "notes.sqlite") << "not a database";
+    QVERIFY(!w.trainTab()->openLibrary(QString::fromStdString((dir_ / "notes.sqlite").string())));
+    QVERIFY2(w.lastError().contains("notes.sqlite"), qPrintable(w.lastError()));
+    QVERIFY(w.trainTab()->reference() == reference);  // the template stays
+  }
+
+  // The dialog on its own: a profile file's nearest writer is its own writer.
+  void aProfileFilesNearestWriterIsItsOwn() {
+    const std::string location = (dir_ / "writers.sqlite").string();
+    const auto take = dir_ / "w5-new-take.csv";
+    io::writeProfileCsv(hattr::test::syntheticSignature(5, 9), take);
+    int asked = 0;
+    LibraryDialog dialog(QString::fromStdString(location), nullptr, [&](const QString&, const QString&) {
+      ++asked;
+      return QString::fromStdString(take.string());
+    });
+    const auto& d = dialog.widgets();
+    QCOMPARE(d.query->count(), 1);  // no last trial to offer
+    QVERIFY(dialog.findNearest());
+    QCOMPARE(asked, 1);
+    QCOMPARE(d.nearest->topLevelItem(0)->text(1), QStringLiteral("W5"));
+    QVERIFY(d.problems->isHidden());
+    // A feature set the profile lacks: said in the dialog, nothing found.
+    io::writeProfileCsv(hattr::test::syntheticSignature(5, 9, 7, false), take, Overwrite::kReplace);
+    d.features->setCurrentIndex(d.features->findData(QStringLiteral("angles")));
+    QVERIFY(!dialog.findNearest());
+    QVERIFY2(!d.problems->isHidden() && d.problems->text().contains("azimuth"), qPrintable(d.problems->text()));
+    QCOMPARE(d.nearest->topLevelItemCount(), 0);
+  }
+
   // The progress: a sentence a session, the curve, best and latest; printed to a page.
   void theProgressIsShownAndPrinted() {
     MainWindow& w = *window_;
@@ -288,7 +378,7 @@ class StudioTeacherTest : public QObject {
       int dark_points = 0;
       for (int y = curve.top(); y <= curve.bottom(); ++y) {
         for (int x = curve.left(); x <= curve.right(); ++x) {
-          dark_points += test::colourNear(shot, QPoint(x, y), QColor(31, 78, 121), 0, 30) ? 1 : 0;
+          dark_points += studio::test::colourNear(shot, QPoint(x, y), QColor(31, 78, 121), 0, 30) ? 1 : 0;
         }
       }
       QVERIFY2(dark_points > 20, qPrintable(QString("%1: %2 pixels of the curve's points").arg(name).arg(dark_points)));
@@ -362,7 +452,7 @@ class StudioTeacherTest : public QObject {
       for (const auto& stroke : a.strokes) {
         for (const auto& p : stroke.points) {
           ++points;
-          drawn += test::colourNear(shot, (view->mapping().toWidget(p.x(), p.y()) + QPointF(origin)).toPoint(),
+          drawn += studio::test::colourNear(shot, (view->mapping().toWidget(p.x(), p.y()) + QPointF(origin)).toPoint(),
                                     PaperView::guideColour(), 2, 30)
                        ? 1
                        : 0;
@@ -401,7 +491,7 @@ class StudioTeacherTest : public QObject {
     const QPointF at = view->mapping().toWidget(0.0, 0.0);
     const double px_per_mm = view->mapping().pixelsPerMetre() / 1000.0;
     const auto green = [&](double mm) {
-      return test::colourNear(image, (at + QPointF(mm * px_per_mm, 0.0)).toPoint(), PaperColours::guideForce(), 1, 40);
+      return studio::test::colourNear(image, (at + QPointF(mm * px_per_mm, 0.0)).toPoint(), PaperColours::guideForce(), 1, 40);
     };
     QVERIFY2(green(10.0), "the arrow's shaft 10 mm out");
     QVERIFY2(!green(25.0) && !green(40.0), "the arrow runs past 17.5 mm (1.75 N)");
@@ -422,7 +512,7 @@ class StudioTeacherTest : public QObject {
         QVERIFY(next->isEnabled());
         QTest::mouseClick(next, Qt::LeftButton);
         QCOMPARE(w.activity(), MainWindow::Activity::kStudyTrial);
-        test::writeAlong(w, letter, Vec3(0.001, 0.0, 0.0), MainWindow::Activity::kStudyTrial);
+        studio::test::writeAlong(w, letter, Vec3(0.001, 0.0, 0.0), MainWindow::Activity::kStudyTrial);
         attempts += QString("\n  attempt %1: %2 | %3").arg(attempt + 1).arg(w.statusBar()->currentMessage(),
                                                                             w.studyTab()->scoresLabel()->text());
       }
@@ -430,9 +520,34 @@ class StudioTeacherTest : public QObject {
     }
   }
 
-  void clickTab(int index) { test::clickTab(*window_, index); }
+  void clickTab(int index) { studio::test::clickTab(*window_, index); }
 
-  QImage screenShot(const QString& file) { return test::screenShot(*window_, file); }
+  /// A library of 6 writers with 4 signatures each, a seventh with one, and an imitation of W3.
+  std::string makeWriterLibrary() {
+    const std::string location = (dir_ / "writers.sqlite").string();
+    auto lib = library::ProfileLibrary::create(location);
+    std::vector<std::pair<library::EntryLabels, HapticProfile>> entries;
+    const auto add = [&](int writer, int take, library::Authenticity a) {
+      library::EntryLabels l;
+      l.person = "W" + std::to_string(writer);
+      l.key = l.person + "/" + std::to_string(take);
+      l.skill = "signature";
+      l.authenticity = a;
+      entries.emplace_back(l, hattr::test::syntheticSignature(a == library::Authenticity::kGenuine ? writer : 8, take));
+    };
+    for (int writer = 1; writer <= 6; ++writer) {
+      for (int take = 0; take < 4; ++take) add(writer, take, library::Authenticity::kGenuine);
+    }
+    add(7, 0, library::Authenticity::kGenuine);
+    add(3, 4, library::Authenticity::kImitation);
+    lib.add(entries);
+    return location;
+  }
+
+  /// The dialog as the X server shows it, saved in the working folder.
+  static void screenShotOf(QWidget& widget, const QString& file) { widget.grab().save(file); }
+
+  QImage screenShot(const QString& file) { return studio::test::screenShot(*window_, file); }
 
   std::filesystem::path dir_;
   std::filesystem::path plan_file_;

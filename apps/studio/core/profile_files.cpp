@@ -5,6 +5,7 @@
 
 #include "hattr/core/error.hpp"
 #include "hattr/io/profile_csv.hpp"
+#include "hattr/library/profile_template.hpp"
 
 namespace hattr::studio {
 namespace {
@@ -69,9 +70,9 @@ void checkReferenceProfile(const HapticProfile& profile, const std::string& name
                      profile.size());
 }
 
-HapticProfile loadReferenceProfile(const std::filesystem::path& file) {
-  HapticProfile profile = io::readProfileCsv(file);
-  checkReferenceProfile(profile, file.string());
+HapticProfile loadReferenceProfile(const std::string& file) {
+  HapticProfile profile = library::readReference(file);
+  checkReferenceProfile(profile, file);
   return profile;
 }
 

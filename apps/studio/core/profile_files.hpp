@@ -35,7 +35,8 @@ std::string suggestedTakeFileName(const std::string& expert_name, const std::str
 void checkReferenceProfile(const HapticProfile& profile, const std::string& name);
 
 /// Reads a reference profile for training and checks it can be one (checkReferenceProfile,
-/// named by the file).
-HapticProfile loadReferenceProfile(const std::filesystem::path& file);
+/// named by the file): a profile CSV file, or a person's template in a profile library,
+/// library:PATH#PERSON/SKILL (built from their genuine recordings, library::libraryTemplate).
+HapticProfile loadReferenceProfile(const std::string& file);
 
 }  // namespace hattr::studio

@@ -128,6 +128,7 @@ void MainWindow::buildTrainTab() {
     if (activity_ != Activity::kStudyTrial) paper_->setReferenceShown(shown);
   };
   host.has_last_trial = [this] { return last_trial_.has_value(); };
+  host.last_trial = [this]() -> const HapticProfile* { return last_trial_ ? &*last_trial_ : nullptr; };
   host.replay_last_trial = [this] {
     if (last_trial_) startPlayback(&*last_trial_, last_trial_expert_ ? &*last_trial_expert_ : nullptr);
   };

@@ -11,15 +11,18 @@
 #include <QVBoxLayout>
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "core/profile_files.hpp"
 #include "hattr/guidance/strategy_catalog.hpp"
 #include "hattr/guidance/strategy_schedule.hpp"
+#include "hattr/library/profile_template.hpp"
 #include "hattr/render/world_config.hpp"
 #include "hattr/session/study.hpp"
 #include "hattr/sim/expert.hpp"
 #include "hattr/sim/glyph.hpp"
 #include "ui/learning_curve.hpp"
+#include "ui/library_dialog.hpp"
 #include "ui/ui_text.hpp"
 
 namespace hattr::studio {
@@ -119,6 +122,16 @@ void TrainTab::buildReferenceChoice(QVBoxLayout& layout) {
     if (!file.isEmpty()) loadReference(file);
   });
   layout.addWidget(open);
+  // Or a person's template from a profile library.
+  w_.library = new QPushButton(tr("From a profile library…"));
+  w_.library->setToolTip(tr("Train against a person's template (the average of their genuine recordings), or find "
+                            "whose writing a profile is nearest"));
+  connect(w_.library, &QPushButton::clicked, this, [this] {
+    const QString file =
+        host_.ask_open_file(tr("Open a profile library"), tr("Profile libraries (*.sqlite *.db);;All files (*)"));
+    if (!file.isEmpty()) openLibrary(file);
+  });
+  layout.addWidget(w_.library);
   // Or a letter of the library (or another built-in glyph), written by the simulated expert.
   w_.letter = new QComboBox;
   w_.letter->addItem(tr("Or write a letter: choose one"), QString());
@@ -140,16 +153,39 @@ bool TrainTab::loadReference(const QString& file) {
   }
   try {
     HapticProfile profile = loadReferenceProfile(file.toStdString());
-    const QString label = tr("Reference <b>%1</b> (%2, %3): %4")
-                              .arg(QFileInfo(file).fileName().toHtmlEscaped(),
-                                   qs(profile.metadata().subject).toHtmlEscaped(),
-                                   qs(profile.metadata().skill).toHtmlEscaped(), describeProfile(profile));
-    setReference(std::move(profile), file, QFileInfo(file).fileName(), label);
+    // A template is named by its person, skill and library; a file by its name.
+    const bool from_library = library::isLibraryReference(file.toStdString());
+    const QString label =
+        from_library
+            ? tr("Reference: the template of <b>%1</b>'s %2 in %3, the %4: %5")
+                  .arg(qs(profile.metadata().subject).toHtmlEscaped(), qs(profile.metadata().skill).toHtmlEscaped(),
+                       QFileInfo(file.mid(8, file.lastIndexOf('#') - 8)).fileName().toHtmlEscaped(),
+                       qs(profile.metadata().source).toHtmlEscaped(), describeProfile(profile))
+            : tr("Reference <b>%1</b> (%2, %3): %4")
+                  .arg(QFileInfo(file).fileName().toHtmlEscaped(), qs(profile.metadata().subject).toHtmlEscaped(),
+                       qs(profile.metadata().skill).toHtmlEscaped(), describeProfile(profile));
+    setReference(std::move(profile), file, from_library ? file : QFileInfo(file).fileName(), label);
     return true;
   } catch (const std::exception& e) {
     host_.error(tr("The reference could not be loaded"), what(e));
     return false;
   }
+}
+
+bool TrainTab::openLibrary(const QString& location) {
+  if (!host_.may_change_reference()) {
+    host_.error(tr("The reference cannot change now"), tr("finish or abort the trial first (Esc)"));
+    return false;
+  }
+  std::unique_ptr<LibraryDialog> dialog;
+  try {
+    dialog = std::make_unique<LibraryDialog>(location, host_.last_trial(), host_.ask_open_file, this);
+  } catch (const std::exception& e) {
+    host_.error(tr("The profile library could not be opened"), what(e));
+    return false;
+  }
+  if (dialog->exec() != QDialog::Accepted || dialog->reference().isEmpty()) return false;
+  return loadReference(dialog->reference());
 }
 
 bool TrainTab::useLetter(const QString& glyph_name) {

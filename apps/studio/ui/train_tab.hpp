@@ -1,6 +1,6 @@
 #pragma once
-/// The Train tab: the training reference (a profile file, a letter the simulated expert writes
-/// or the Record tab's take), the
+/// The Train tab: the training reference (a profile file, a person's template in a profile
+/// library, a letter the simulated expert writes or the Record tab's take), the
 /// strategy (every one but the mentored, by its plain name; a scheduled one's law and gain set
 /// from this reference's trials in it so far) with its indexing and get-ready time, a trial
 /// against the reference, its scores and the learning curve. The tab owns the reference, the mode and its widgets, and
@@ -56,8 +56,10 @@ struct TrainHost {
   std::function<void(const HapticProfile& reference, bool shown)> show_reference;
   /// "Show the reference" was toggled.
   std::function<void(bool shown)> reference_shown;
-  /// The last trial (training or study): whether there is one, replay it, save it (asks where).
+  /// The last trial (training or study): whether there is one, it (null: none), replay it, save
+  /// it (asks where).
   std::function<bool()> has_last_trial;
+  std::function<const HapticProfile*()> last_trial;
   std::function<void()> replay_last_trial;
   std::function<void()> save_last_trial;
   std::function<void(const QString& what, const QString& detail)> error;
@@ -81,8 +83,12 @@ class TrainTab final : public QWidget {
   ~TrainTab() override;
 
   // ---- Actions (the buttons and keys call these); false when refused. ------------------------
-  /// Loads a reference profile (refused while a trial runs).
+  /// Loads a reference profile, or a template library:PATH#PERSON/SKILL (refused while a trial runs).
   bool loadReference(const QString& file);
+  /// Opens the profile library at `location` in its dialog (LibraryDialog): a person's template
+  /// chosen there becomes the reference; their nearest persons can be found for the last trial
+  /// or a file. False when it is not a library, or nothing was chosen.
+  bool openLibrary(const QString& location);
   /// The take becomes the reference, named by `name` (refused while anything runs).
   bool useTake(const HapticProfile& take, const TakeName& name);
   /// A built-in glyph (a letter of the library, ந, the loop; by name or character) written by
@@ -124,6 +130,7 @@ class TrainTab final : public QWidget {
   /// The widgets, so tests read what a person reads.
   struct Widgets {
     QLabel* reference = nullptr;
+    QPushButton* library = nullptr;  ///< "From a profile library…"
     QComboBox* letter = nullptr;  ///< "Or a letter": the built-in glyphs by character
     QComboBox* mode = nullptr;
     QComboBox* indexing = nullptr;

@@ -155,7 +155,8 @@ struct DtwEnvelope {
 /// candidate, lbKeogh(candidate, dtwEnvelope(q, r), cost) <= dtwDistance(candidate, q) with the
 /// band of radius r and the same cost, so a search may skip a candidate whose bound exceeds its
 /// best so far without changing its answer. Stops summing once the sum exceeds `abandon_above`
-/// (and returns the partial sum, already above it). Throws InputError when the lengths differ.
+/// (and returns the partial sum, already above it), checked every 16 values. Vectorized (the
+/// kernels' instruction set). Throws InputError when the lengths differ.
 [[nodiscard]] double lbKeogh(std::span<const double> candidate, const DtwEnvelope& envelope, DtwCost cost,
                              double abandon_above = std::numeric_limits<double>::infinity());
 
@@ -166,6 +167,33 @@ struct DtwEnvelope {
 [[nodiscard]] double lbImproved(std::span<const double> candidate, std::span<const double> query,
                                 const DtwEnvelope& query_envelope, std::size_t radius, DtwCost cost,
                                 double abandon_above = std::numeric_limits<double>::infinity());
+
+/// A query's envelope summarised over consecutive segments of `segment` values (the last may be
+/// shorter), for a bound cheaper than LB_Keogh: each segment's width and the means of the
+/// envelope's lower and upper sides over it. The segments of several channels may follow one
+/// another (append), matched by the candidates' means laid out the same way.
+struct DtwSegmentEnvelope {
+  std::vector<double> lower;
+  std::vector<double> upper;
+  std::vector<double> width;
+  void append(const DtwSegmentEnvelope& other);
+};
+
+/// The envelope's segment means. Throws InputError for a segment of 0 or an empty envelope.
+[[nodiscard]] DtwSegmentEnvelope dtwSegmentEnvelope(const DtwEnvelope& envelope, std::size_t segment);
+
+/// The means of `series` over the same segments, appended to `out`.
+void appendSegmentMeans(std::span<const double> series, std::size_t segment, std::vector<double>& out);
+
+/// LB_Keogh over segments (the absolute cost): for candidate c, whose segment means are
+/// means[c·k, (c + 1)·k) with k = envelope.width.size(), out[c] = Σ_s width[s] · the distance
+/// of its mean from [lower[s], upper[s]]. In a segment of w values with mean m, a candidate's part
+/// of LB_Keogh, Σ max(x − U, 0) + max(L − x, 0), is at least w · (max(m − Ū, 0) + max(L̄ − m, 0)),
+/// a sum of positive parts being at least the positive part of the sum: so out[c] is at most
+/// lbKeogh (absolute) of the candidate, summed over the appended channels. Vectorized (the
+/// kernels' instruction set). An envelope of no segments bounds nothing (0). Throws InputError
+/// when `means` is not k values a candidate of `out`, or the envelope's arrays differ in length.
+void lbSegmentMeans(std::span<const double> means, const DtwSegmentEnvelope& envelope, std::span<double> out);
 
 /// Pairs the batch kernel computes together on this machine (one SIMD block): a batch of
 /// equal-length pairs whose count is a multiple of it leaves no lane idle.

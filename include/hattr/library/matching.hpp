@@ -34,8 +34,7 @@ namespace hattr::library {
 /// The feature channels, in the order FeatureSeries keeps them.
 enum class FeatureChannel : std::uint8_t { kX, kY, kForce, kAzimuth, kAltitude, kVx, kVy };
 inline constexpr std::size_t kFeatureChannels = 7;
-inline constexpr std::size_t kCoarseSegment = 8;
-inline constexpr std::size_t kMiddleSegment = 4;  ///< the search's second bound's segments
+inline constexpr std::size_t kCoarseSegment = 8;  ///< the search's first bound's segments
 
 /// A set of features, as bits: shape (x, y), force, angles, velocity, timing (the writing time,
 /// which resampling to a common length takes out of the others).
@@ -136,15 +135,15 @@ struct RankedPerson {
 struct SearchStats {
   std::size_t candidates = 0;
   std::size_t lower_bounds = 0;    ///< candidates past the coarse bound (every candidate has one)
-  std::size_t pruned_by_keogh = 0; ///< of those, ruled out by the finer bounds (segments of 4, LB_Keogh, LB_Improved)
+  std::size_t pruned_by_keogh = 0; ///< of those, ruled out by LB_Keogh or LB_Improved
   std::size_t dtw_full = 0;      ///< distances computed to the end
   std::size_t dtw_abandoned = 0; ///< distances stopped early
 };
 
 /// Candidates laid out for search over one feature set: each candidate's series of the set's
-/// channels side by side in one array, and their segment means in others, so a search streams
-/// memory instead of chasing each candidate's vectors. Memory: (length + length / 8 + length / 4)
-/// × channels × 8 bytes a candidate, plus the names.
+/// channels side by side in one array, and their segment means in another, so a search streams
+/// memory instead of chasing each candidate's vectors. Memory: (length + length / 8) × channels ×
+/// 8 bytes a candidate, plus the names.
 class SearchIndex {
  public:
   /// Checks every candidate has the set's channels at `options.length`; throws InputError naming one that does not.
@@ -156,13 +155,12 @@ class SearchIndex {
   [[nodiscard]] std::span<const double> series(std::size_t i, std::size_t k) const {
     return {series_.data() + (i * channels_.size() + k) * options_.length, options_.length};
   }
+  /// Candidate i's means over segments of kCoarseSegment steps, channel after channel.
   [[nodiscard]] std::span<const double> coarse(std::size_t i) const {
     return {coarse_.data() + i * coarse_stride_, coarse_stride_};
   }
-  /// Candidate i's means over segments of kMiddleSegment steps, channel after channel.
-  [[nodiscard]] std::span<const double> middle(std::size_t i) const {
-    return {middle_.data() + i * middle_stride_, middle_stride_};
-  }
+  /// Every candidate's coarse means, one candidate after another.
+  [[nodiscard]] std::span<const double> allCoarse() const { return coarse_; }
   [[nodiscard]] const std::string& person(std::size_t i) const { return persons_[i]; }
   [[nodiscard]] const std::string& key(std::size_t i) const { return keys_[i]; }
   [[nodiscard]] double writingTime(std::size_t i) const { return writing_time_s_[i]; }
@@ -173,19 +171,18 @@ class SearchIndex {
   FeatureSet set_;
   FeatureOptions options_;
   std::vector<FeatureChannel> channels_;
-  std::size_t coarse_stride_ = 0, middle_stride_ = 0;
-  std::vector<double> series_, coarse_, middle_, writing_time_s_;
+  std::size_t coarse_stride_ = 0;
+  std::vector<double> series_, coarse_, writing_time_s_;
   std::vector<std::string> persons_, keys_;
 };
 
 /// The `top` persons nearest to the query (by their nearest candidate; ties by person then
-/// key), exactly, by a cascade of lower bounds: first the coarse bound of every candidate
-/// (LB_Keogh over segments: each segment's length times the distance of the candidate's
-/// segment mean from the query envelope's range over the segment, below LB_Keogh by Jensen's
-/// inequality), in ascending order; then the same over segments half as long; then LB_Improved (LB_Keogh and its second
-/// pass, Lemire 2009), abandoned at the answer's bound; then its DTW, abandoned once it cannot
-/// enter the answer; the search stops once the next coarse bound exceeds the `top`-th person's
-/// distance. The same answer as identifyBruteForce.
+/// key), exactly, by a cascade of lower bounds: first the coarse bound of every candidate in
+/// one vectorized pass (analysis::lbSegmentMeans over segments of kCoarseSegment steps, below
+/// LB_Keogh), taken in ascending order; then LB_Improved (LB_Keogh of every channel, then their
+/// second passes, Lemire 2009), abandoned at the answer's bound; then the DTW, abandoned once it
+/// cannot enter the answer. The search stops once the next coarse bound exceeds the `top`-th
+/// person's distance. The same answer as identifyBruteForce.
 std::vector<RankedPerson> identify(const FeatureSeries& query, const SearchIndex& index, std::size_t top,
                                    SearchStats* stats = nullptr);
 /// The same over candidates (an index made for the one query).
