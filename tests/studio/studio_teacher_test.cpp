@@ -221,6 +221,10 @@ class StudioTeacherTest : public QObject {
     QTimer::singleShot(0, this, [&] {
       auto* dialog = openDialog<LibraryDialog>();
       if (dialog == nullptr) return;
+      // A failed check returns from here: the dialog closes, so exec() returns and the test fails.
+      const std::unique_ptr<LibraryDialog, void (*)(LibraryDialog*)> close_unless_used(dialog, [](LibraryDialog* open) {
+        if (open->isVisible()) open->reject();
+      });
       const auto& d = dialog->widgets();
       QCOMPARE(d.skill->currentText(), QStringLiteral("signature"));
       QCOMPARE(d.persons->topLevelItemCount(), 7);
@@ -268,11 +272,25 @@ class StudioTeacherTest : public QObject {
     QVERIFY(!w.trainTab()->openLibrary(QString::fromStdString((dir_ / "notes.sqlite").string())));
     QVERIFY2(w.lastError().contains("notes.sqlite"), qPrintable(w.lastError()));
     QVERIFY(w.trainTab()->reference() == reference);  // the template stays
+
+    // Remembered: a studio that closes training against the template opens with it again.
+    const QString ini = QString::fromStdString((dir_ / "library.ini").string());
+    {
+      MainWindow other(std::make_unique<QSettings>(ini, QSettings::IniFormat));
+      other.setInteractive(false);
+      QVERIFY(other.loadReference(QString::fromStdString("library:" + location + "#W3/signature")));
+      QVERIFY(other.close());
+    }
+    MainWindow again(std::make_unique<QSettings>(ini, QSettings::IniFormat));
+    QVERIFY2(again.trainTab()->reference() != nullptr, qPrintable(again.lastError()));
+    QCOMPARE(again.trainTab()->reference()->metadata().subject, std::string("W3"));
+    QVERIFY(again.close());
   }
 
   // The dialog on its own: a profile file's nearest writer is its own writer.
   void aProfileFilesNearestWriterIsItsOwn() {
-    const std::string location = (dir_ / "writers.sqlite").string();
+    const std::string location =
+        std::filesystem::exists(dir_ / "writers.sqlite") ? (dir_ / "writers.sqlite").string() : makeWriterLibrary();
     const auto take = dir_ / "w5-new-take.csv";
     io::writeProfileCsv(hattr::test::syntheticSignature(5, 9), take);
     int asked = 0;

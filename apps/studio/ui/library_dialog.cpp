@@ -7,6 +7,7 @@
 #include <QHeaderView>
 #include <QLabel>
 #include <QPushButton>
+#include <QRegularExpression>
 #include <QSpinBox>
 #include <QTreeWidget>
 #include <QVBoxLayout>
@@ -117,12 +118,18 @@ void LibraryDialog::showPersons() {
 }
 
 void LibraryDialog::refreshButtons() {
-  // A template needs two genuine recordings (buildTemplate's rule), said before it is tried.
+  // A template needs two genuine recordings (buildTemplate's rule), and a person and skill that
+  // library:PATH#PERSON/SKILL can name (no '#' or '/' in them), said before it is tried.
   const auto selected = w_.persons->selectedItems();
   const bool enough = !selected.empty() && selected.front()->text(1).toInt() >= 2;
-  w_.buttons->button(QDialogButtonBox::Ok)->setEnabled(enough);
+  const QString skill = w_.skill->currentData().toString();
+  const bool nameable = selected.empty() || (!selected.front()->text(0).contains(QRegularExpression("[#/]")) &&
+                                             !skill.contains('#'));
+  w_.buttons->button(QDialogButtonBox::Ok)->setEnabled(enough && nameable);
   w_.buttons->button(QDialogButtonBox::Ok)->setToolTip(
-      selected.empty() || enough ? QString() : tr("a template needs at least 2 genuine recordings"));
+      selected.empty() || (enough && nameable) ? QString()
+      : !enough ? tr("a template needs at least 2 genuine recordings")
+                : tr("a person or skill with '#' or '/' in its name cannot be named as library:PATH#PERSON/SKILL"));
   w_.find->setEnabled(w_.skill->count() > 0);
 }
 

@@ -26,6 +26,7 @@
 
 #include "core/device_choice.hpp"
 #include "core/window_fit.hpp"
+#include "hattr/library/profile_template.hpp"
 #include "hattr/render/world_config.hpp"
 #include "ui/learning_curve.hpp"
 #include "ui/mentor_tab.hpp"
@@ -296,10 +297,12 @@ void MainWindow::loadSettings() {
     last_error_.clear();
   }
   // The reference of last time, quietly: a file that went away (or a letter no longer built
-  // in) just leaves none loaded.
+  // in) just leaves none loaded. A library template is tried whenever it was one (its library
+  // may be a database, or have lost the person: then none is loaded either).
   const QString reference = s.value("train/reference_file").toString();
   const QString letter = s.value("train/reference_letter").toString();
-  const bool file_there = !reference.isEmpty() && QFileInfo::exists(reference);
+  const bool file_there = !reference.isEmpty() && (QFileInfo::exists(reference) ||
+                                                   library::isLibraryReference(reference.toStdString()));
   if (file_there || !letter.isEmpty()) {
     const bool was = interactive_;
     interactive_ = false;
