@@ -146,11 +146,15 @@ void TrainTab::buildReferenceChoice(QVBoxLayout& layout) {
 }
 
 
+// Whether the reference may change now; if not, the window says why.
+bool TrainTab::referenceMayChange() {
+  if (host_.may_change_reference()) return true;
+  host_.error(tr("The reference cannot change now"), tr("finish or abort the trial first (Esc)"));
+  return false;
+}
+
 bool TrainTab::loadReference(const QString& file) {
-  if (!host_.may_change_reference()) {
-    host_.error(tr("The reference cannot change now"), tr("finish or abort the trial first (Esc)"));
-    return false;
-  }
+  if (!referenceMayChange()) return false;
   try {
     HapticProfile profile = loadReferenceProfile(file.toStdString());
     // A template is named by its person, skill and library; a file by its name.
@@ -173,10 +177,7 @@ bool TrainTab::loadReference(const QString& file) {
 }
 
 bool TrainTab::openLibrary(const QString& location) {
-  if (!host_.may_change_reference()) {
-    host_.error(tr("The reference cannot change now"), tr("finish or abort the trial first (Esc)"));
-    return false;
-  }
+  if (!referenceMayChange()) return false;
   std::unique_ptr<LibraryDialog> dialog;
   try {
     dialog = std::make_unique<LibraryDialog>(location, host_.last_trial(), host_.ask_open_file, this);
@@ -189,10 +190,7 @@ bool TrainTab::openLibrary(const QString& location) {
 }
 
 bool TrainTab::useLetter(const QString& glyph_name) {
-  if (!host_.may_change_reference()) {
-    host_.error(tr("The reference cannot change now"), tr("finish or abort the trial first (Esc)"));
-    return false;
-  }
+  if (!referenceMayChange()) return false;
   try {
     const sim::Glyph glyph = sim::findBuiltInGlyph(glyph_name.toStdString());
     // The simulated expert on the simulated pen and the default paper, at the studio's rate.

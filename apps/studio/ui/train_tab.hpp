@@ -147,6 +147,8 @@ class TrainTab final : public QWidget {
  private:
   void buildUi();
   void buildReferenceChoice(QVBoxLayout& layout);
+  /// Whether the reference may change now (no trial runs); if not, the window says why.
+  bool referenceMayChange();
   /// The training reference, read from `file` (empty: not from a file, not remembered), named
   /// `name` in trials' metadata, described by `label_html`.
   void setReference(HapticProfile profile, const QString& file, const QString& name, const QString& label_html);
