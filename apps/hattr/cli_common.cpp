@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <iostream>
 #include <optional>
+#include <sstream>
 
 #include <fmt/format.h>
 
@@ -182,6 +183,36 @@ std::string verdictsText(const servo::LoopJudgement& judgement) {
     text += fmt::format("{}  {:<24} {:>10.4g} {:<3} ({})\n", servo::verdictName(f.verdict), f.name, f.value, f.unit, f.rule);
   }
   return text + fmt::format("verdict {}\n", servo::verdictName(judgement.overall));
+}
+
+std::vector<int> commaSeparatedInts(const std::string& text, std::string_view option) {
+  std::vector<int> values;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) {
+    std::size_t used = 0;
+    int n = 0;
+    try {
+      n = std::stoi(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    HATTR_THROW_UNLESS(used == item.size() && !item.empty(), "{}: expected comma-separated whole numbers, got \"{}\"",
+                       option, item);
+    values.push_back(n);
+  }
+  HATTR_THROW_UNLESS(!values.empty(), "{}: expected comma-separated whole numbers, got \"{}\"", option, text);
+  return values;
+}
+
+std::pair<int, int> shardOf(const std::string& text, std::string_view option) {
+  if (text.empty()) return {0, 1};
+  int i = -1, n = 0;
+  char slash = 0, extra = 0;
+  std::istringstream in(text);
+  const bool read = static_cast<bool>(in >> i >> slash >> n) && slash == '/' && !(in >> extra);
+  HATTR_THROW_UNLESS(read && n >= 1 && i >= 0 && i < n, "{}: expected i/N with 0 <= i < N (e.g. 0/4), got \"{}\"",
+                     option, text);
+  return {i, n};
 }
 
 }  // namespace hattr::cli

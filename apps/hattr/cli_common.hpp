@@ -52,6 +52,8 @@ void registerLmmCommand(CLI::App& app);
 void registerSimCommands(CLI::App& app);
 /// `hattr sim power` and `hattr sim power merge` (cmd_sim_power.cpp).
 void registerPowerCommands(CLI::App& sim);
+/// `plan` under `sim`: the smallest design that reaches a target power (cmd_sim_plan.cpp).
+void registerPlanCommand(CLI::App& sim);
 /// hattr sim compare-hypotheses (cmd_sim_hypotheses.cpp).
 void registerHypothesisCommands(CLI::App& sim);
 /// hattr sim compare-strategies (cmd_sim_strategies.cpp).
@@ -60,6 +62,11 @@ void registerDevicesCommands(CLI::App& app);
 void registerMentorCommands(CLI::App& app);
 /// `serve` and `keygen` under the `devices` (alias `device`) command: the network device server.
 void registerDeviceServeCommands(CLI::App& devices);
+
+/// "6,10,20" as numbers; InputError naming `option` for anything else.
+std::vector<int> commaSeparatedInts(const std::string& text, std::string_view option);
+/// "i/N" (0 <= i < N) as {i, N}, {0, 1} when empty; InputError naming `option` otherwise.
+std::pair<int, int> shardOf(const std::string& text, std::string_view option = "--shard");
 
 /// Before any work: refuses (InputError, exit 2) every output file that exists unless
 /// `force` ("...: already exists; add --force to replace it"), is a folder, or whose folder

@@ -13,6 +13,7 @@
 #include "hattr/io/profile_csv.hpp"
 #include "hattr/io/table_csv.hpp"
 #include "hattr/library/profile_template.hpp"
+#include "hattr/ops/json.hpp"
 #include "hattr/ops/library.hpp"
 #include "hattr/report/library_report.hpp"
 

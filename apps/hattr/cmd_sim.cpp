@@ -213,6 +213,7 @@ void registerSimCommands(CLI::App& app) {
   sweep->callback([opt] { runSweep(*opt); });
 
   registerPowerCommands(*simc);
+  registerPlanCommand(*simc);
   registerHypothesisCommands(*simc);
   registerStrategyComparisonCommand(*simc);
 }

@@ -1,8 +1,6 @@
 // hattr sim power [merge]: a power analysis by simulation, on one process, on MPI ranks
 // (mpirun -n N hattr sim power ...) or in shards merged later (--shard i/N, then merge).
 
-#include <sched.h>
-
 #include <chrono>
 #include <exception>
 #include <optional>
@@ -50,37 +48,6 @@ struct MergeCliOptions {
   bool force = false;
 };
 
-/// "6,10,20" as numbers.
-std::vector<int> subjectCounts(const std::string& text) {
-  std::vector<int> counts;
-  std::stringstream in(text);
-  for (std::string item; std::getline(in, item, ',');) {
-    std::size_t used = 0;
-    int n = 0;
-    try {
-      n = std::stoi(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    HATTR_THROW_UNLESS(used == item.size() && !item.empty(), "--subjects: expected comma-separated whole numbers, got \"{}\"",
-                       item);
-    counts.push_back(n);
-  }
-  HATTR_THROW_UNLESS(!counts.empty(), "--subjects: expected comma-separated whole numbers, got \"{}\"", text);
-  return counts;
-}
-
-/// "i/N" (0 <= i < N) as {i, N}; {0, 1} when empty.
-std::pair<int, int> shardOf(const std::string& text) {
-  if (text.empty()) return {0, 1};
-  int i = -1, n = 0;
-  char slash = 0, extra = 0;
-  std::istringstream in(text);
-  const bool read = static_cast<bool>(in >> i >> slash >> n) && slash == '/' && !(in >> extra);
-  HATTR_THROW_UNLESS(read && n >= 1 && i >= 0 && i < n, "--shard: expected i/N with 0 <= i < N (e.g. 0/4), got \"{}\"", text);
-  return {i, n};
-}
-
 /// The files this run writes, checked before anything runs: nothing recorded is lost.
 void checkOutputs(const PowerCliOptions& opt) {
   std::vector<std::filesystem::path> files;
@@ -117,49 +84,6 @@ std::vector<report::ReplicateOutcome> runMine(const sim::PowerStudy& study, int 
   return outcomes;
 }
 
-/// The cores this process may use: a launcher that binds its ranks gives each fewer than the
-/// machine has.
-int usableCores() {
-  cpu_set_t set;
-  CPU_ZERO(&set);
-  if (sched_getaffinity(0, sizeof(set), &set) == 0 && CPU_COUNT(&set) > 0) return CPU_COUNT(&set);
-  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-}
-
-/// Threads per process: as asked, else the usable cores shared by this machine's ranks (a
-/// bound rank already has only its own).
-int threadsPerProcess(int asked, const MpiWorld& world) {
-  if (asked > 0) return asked;
-  const int usable = usableCores();
-  const int machine = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  return usable < machine ? usable : std::max(1, usable / world.localSize());
-}
-
-/// The exit code for a failure: 2 for bad input, 1 otherwise.
-int exitCodeOf(const std::exception_ptr& failure) {
-  try {
-    std::rethrow_exception(failure);
-  } catch (const InputError&) {
-    return kBadInput;
-  } catch (...) {
-    return kRuntimeFailure;
-  }
-}
-
-/// Prints a failure as main() does, naming the rank when it is not the first.
-void printFailure(const std::exception_ptr& failure, const MpiWorld& world) {
-  const std::string rank = world.rank() == 0 ? "" : fmt::format("rank {}: ", world.rank());
-  try {
-    std::rethrow_exception(failure);
-  } catch (const InputError& e) {
-    std::cerr << "hattr: error: " << rank << e.what() << "\n";
-  } catch (const std::exception& e) {
-    std::cerr << "hattr: failed: " << rank << e.what() << "\n";
-  } catch (...) {
-    std::cerr << "hattr: failed: " << rank << "an unknown error\n";
-  }
-}
-
 void runPower(const PowerCliOptions& opt) {
   MpiWorld world;
   // Set-up: every rank checks the same input and prepares the study. When one fails, the
@@ -182,7 +106,7 @@ void runPower(const PowerCliOptions& opt) {
                                                       : fmt::format("shard-{}-of-{}", shard.first, shard.second);
     study.emplace(sim::PowerOptions{
         .study = opt.study, .glyph = opt.glyph, .training_trials = opt.trials, .recall_trials = opt.trials,
-        .subject_counts = subjectCounts(opt.subjects), .replicates = opt.replicates, .seed = opt.seed,
+        .subject_counts = commaSeparatedInts(opt.subjects, "--subjects"), .replicates = opt.replicates, .seed = opt.seed,
         .alpha = opt.alpha, .threads = threads, .phase = opt.phase, .hypothesis = opt.hypothesis,
         .scratch = opt.scratch.empty() ? std::filesystem::path() : std::filesystem::path(opt.scratch) / scratch_part});
   } catch (...) {

@@ -6,9 +6,19 @@
 #endif
 #include <mpi.h>
 
+#include <sched.h>
+
+#include <algorithm>
 #include <cstdlib>
+#include <iostream>
+#include <thread>
 #include <stdexcept>
 #include <string>
+
+#include <fmt/format.h>
+
+#include "cli_common.hpp"
+#include "hattr/core/error.hpp"
 
 namespace hattr::cli {
 namespace {
@@ -73,9 +83,69 @@ std::vector<double> MpiWorld::gatherToRoot(const std::vector<double>& mine) cons
   return all;
 }
 
+std::vector<double> MpiWorld::gatherToAll(const std::vector<double>& mine) const {
+  if (!initialized_ || size_ == 1) return mine;
+  int count = static_cast<int>(mine.size());
+  std::vector<int> counts(static_cast<std::size_t>(size_));
+  check(MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD), "MPI_Allgather");
+  std::vector<int> offsets(counts.size());
+  int total = 0;
+  for (std::size_t i = 0; i < counts.size(); ++i) {
+    offsets[i] = total;
+    total += counts[i];
+  }
+  std::vector<double> all(static_cast<std::size_t>(total));
+  check(MPI_Allgatherv(mine.data(), count, MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE,
+                       MPI_COMM_WORLD),
+        "MPI_Allgatherv");
+  return all;
+}
+
 void MpiWorld::abort(int code) const {
   if (initialized_) MPI_Abort(MPI_COMM_WORLD, code);
   std::exit(code);
+}
+
+namespace {
+
+/// The cores this process may use.
+int usableCores() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof(set), &set) == 0 && CPU_COUNT(&set) > 0) return CPU_COUNT(&set);
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+}  // namespace
+
+int threadsPerProcess(int asked, const MpiWorld& world) {
+  if (asked > 0) return asked;
+  const int usable = usableCores();
+  const int machine = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return usable < machine ? usable : std::max(1, usable / world.localSize());
+}
+
+int exitCodeOf(const std::exception_ptr& failure) {
+  try {
+    std::rethrow_exception(failure);
+  } catch (const InputError&) {
+    return kBadInput;
+  } catch (...) {
+    return kRuntimeFailure;
+  }
+}
+
+void printFailure(const std::exception_ptr& failure, const MpiWorld& world) {
+  const std::string rank = world.rank() == 0 ? "" : fmt::format("rank {}: ", world.rank());
+  try {
+    std::rethrow_exception(failure);
+  } catch (const InputError& e) {
+    std::cerr << "hattr: error: " << rank << e.what() << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << "hattr: failed: " << rank << e.what() << "\n";
+  } catch (...) {
+    std::cerr << "hattr: failed: " << rank << "an unknown error\n";
+  }
 }
 
 }  // namespace hattr::cli

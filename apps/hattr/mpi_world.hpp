@@ -3,6 +3,7 @@
 // Open MPI from Debian, through its C API. A process that a launcher did not start is a
 // world of one and never initializes MPI, so the CLI runs the same without mpirun.
 
+#include <exception>
 #include <vector>
 
 namespace hattr::cli {
@@ -27,6 +28,8 @@ class MpiWorld {
   [[nodiscard]] int firstFailedRank(bool failed) const;
   /// Every rank's values, in rank order, on rank 0 (empty on the others).
   [[nodiscard]] std::vector<double> gatherToRoot(const std::vector<double>& mine) const;
+  /// Every rank's values, in rank order, on every rank.
+  [[nodiscard]] std::vector<double> gatherToAll(const std::vector<double>& mine) const;
   /// Ends every rank of the world with `code` (a rank that failed alone would leave the
   /// others waiting in a gather).
   [[noreturn]] void abort(int code) const;
@@ -40,5 +43,13 @@ class MpiWorld {
   int size_ = 1;
   int local_size_ = 1;
 };
+
+/// Threads per process: as asked, else the usable cores (a launcher that binds its ranks
+/// gives each fewer than the machine has) shared by this machine's ranks.
+[[nodiscard]] int threadsPerProcess(int asked, const MpiWorld& world);
+/// The exit code for a failure: 2 for bad input, 1 otherwise.
+[[nodiscard]] int exitCodeOf(const std::exception_ptr& failure);
+/// Prints a failure as main() does, naming the rank when it is not the first.
+void printFailure(const std::exception_ptr& failure, const MpiWorld& world);
 
 }  // namespace hattr::cli

@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "hattr/core/error.hpp"
+#include "hattr/core/units.hpp"
 
 namespace hattr::servo {
 
@@ -89,7 +90,7 @@ DurationHistogram measureSleepFloor(double rate_hz, std::chrono::nanoseconds dur
   std::thread thread([&] {
     const RealtimeReport got = applyRealtime(settings);
     if (report) *report = got;
-    const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / rate_hz));
+    const auto period = std::chrono::nanoseconds(units::secondsToNanoseconds(1.0 / rate_hz));
     const auto start = monotonicNow();
     auto deadline = start + period;
     auto last = start;

@@ -1,6 +1,7 @@
 #include "hattr/sim/power.hpp"
 
 #include <algorithm>
+#include <array>
 #include <iterator>
 #include <numeric>
 #include <mutex>
@@ -14,6 +15,7 @@
 #include "hattr/analysis/trial_score.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/guidance/training_guidance.hpp"
+#include "hattr/io/profile_csv.hpp"
 #include "hattr/render/world_config.hpp"
 #include "hattr/report/design_analysis.hpp"
 #include "hattr/session/study_database.hpp"
@@ -225,10 +227,44 @@ PowerStudy::PowerStudy(const PowerOptions& options) : options_(options) {
 }
 
 report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const std::function<void(double)>& progress) const {
-  return runReplicate(replicate, {.subjects_at_once = options_.threads}, progress);
+  return runReplicate(replicate, {.subjects_at_once = options_.threads, .designs = plan_.subject_counts}, progress);
 }
 
 std::vector<report::ReplicateOutcome> PowerStudy::runReplicates(std::span<const int> replicates,
+                                                                const std::function<void(double)>& progress) const {
+  return runReplicates(replicates, plan_.subject_counts, progress);
+}
+
+std::vector<report::ReplicateOutcome> PowerStudy::runDesign(std::span<const int> replicates, int subjects,
+                                                            const std::function<void(double)>& progress) const {
+  HATTR_THROW_UNLESS(subjects >= 3 && subjects <= plan_.subject_counts.back(),
+                     "power: a design of {} subjects: expected 3 to {} (the largest design)", subjects,
+                     plan_.subject_counts.back());
+  const std::array<int, 1> design{subjects};
+  return runReplicates(replicates, design, progress);
+}
+
+double PowerStudy::labSecondsPerSubject(double session_setup_s) const {
+  // Each skill's expert's duration, the trial's expected length.
+  std::map<std::string, double> expert_s;
+  for (const auto& [skill, file] : study_.experts) {
+    const auto named = study_.named_expert_profiles.find(skill);
+    expert_s[skill] = (named != study_.named_expert_profiles.end() ? named->second : io::readProfileCsv(file)).duration_s();
+  }
+  double seconds = 0.0;
+  for (const auto& session : study_.schedule) {
+    seconds += session_setup_s;
+    for (const auto& block : session.blocks) {
+      const auto skill = expert_s.find(block.skill.empty() ? study_.skill : block.skill);
+      const double trial_s = skill != expert_s.end() ? skill->second : 0.0;
+      seconds += block.trials * (trial_s + block.rest_s);
+    }
+  }
+  return seconds;
+}
+
+std::vector<report::ReplicateOutcome> PowerStudy::runReplicates(std::span<const int> replicates,
+                                                                std::span<const int> designs,
                                                                 const std::function<void(double)>& progress) const {
   std::vector<report::ReplicateOutcome> outcomes(replicates.size());
   const std::set<int> distinct(replicates.begin(), replicates.end());
@@ -239,7 +275,8 @@ std::vector<report::ReplicateOutcome> PowerStudy::runReplicates(std::span<const 
     // Fewer replicates than threads: one at a time, its subjects at once.
     std::optional<session::TrialEnvironment> environment;
     for (std::size_t k = 0; k < replicates.size(); ++k) {
-      outcomes[k] = runReplicate(replicates[k], {.subjects_at_once = options_.threads, .environment = &environment},
+      outcomes[k] = runReplicate(replicates[k],
+                                 {.subjects_at_once = options_.threads, .environment = &environment, .designs = designs},
                                  [&](double fraction) {
                                    if (progress) progress(static_cast<double>(k) + fraction);
                                  });
@@ -257,7 +294,7 @@ std::vector<report::ReplicateOutcome> PowerStudy::runReplicates(std::span<const 
     std::optional<session::TrialEnvironment> environment;
     for (std::size_t k = next++; k < replicates.size() && !failed; k = next++) {
       try {
-        outcomes[k] = runReplicate(replicates[k], {.subjects_at_once = 1, .environment = &environment},
+        outcomes[k] = runReplicate(replicates[k], {.subjects_at_once = 1, .environment = &environment, .designs = designs},
                                    [&](double fraction) {
                                      const std::lock_guard lock(progress_mutex);
                                      fractions[k] = fraction;
@@ -290,7 +327,7 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const Replicate
                      plan_.replicates - 1);
   // The largest design's subjects, seeded as the in-silico study with seed + r.
   session::StudyDefinition study = study_;
-  study.subjects = replicateSubjects(replicate);
+  study.subjects = replicateSubjects(replicate, how.designs.back());
   const std::filesystem::path folder = scratch_->path() / fmt::format("replicate-{}", replicate);
   std::filesystem::remove_all(folder);
   std::filesystem::create_directories(folder);
@@ -328,7 +365,7 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const Replicate
     if (study.paper_form) {
       analysis = report::analyzeStudy(db, options);
     } else {
-      design = designOutcome(replicate, db, options);
+      design = designOutcome(replicate, db, options, how.designs);
     }
   }
   std::filesystem::remove_all(folder);
@@ -336,7 +373,7 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const Replicate
 
   // Each design: the replicate's first N subjects (S01 .. SN).
   report::ReplicateOutcome outcome{replicate, {}};
-  for (const int n : plan_.subject_counts) {
+  for (const int n : how.designs) {
     std::set<std::string> ids;
     for (const auto& s : simulatedSubjects(n, 0, {})) ids.insert(s.id);
     std::vector<report::TrialCost> costs;
@@ -348,15 +385,17 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const Replicate
   return outcome;
 }
 
-std::vector<session::SubjectSpec> PowerStudy::replicateSubjects(int replicate) const {
+std::vector<session::SubjectSpec> PowerStudy::replicateSubjects(int replicate, int per_group) const {
   const std::uint64_t seed = plan_.seed + static_cast<std::uint64_t>(replicate);
-  const int per_group = plan_.subject_counts.back();
   if (study_.paper_form) return simulatedSubjects(per_group, seed, subject_options_);
-  // Per group, GROUP01 ...; seeds as the in-silico study's, numbered across the groups.
+  // Per group, GROUP01 ...; seeds as the in-silico study's, numbered across the groups of the
+  // largest design (a smaller design's subjects are the first of each group's).
+  const auto largest = static_cast<std::uint64_t>(plan_.subject_counts.back());
   std::vector<session::SubjectSpec> subjects;
-  for (const auto& group : study_.groups) {
+  for (std::size_t g = 0; g < study_.groups.size(); ++g) {
+    const auto& group = study_.groups[g];
     for (int i = 1; i <= per_group; ++i) {
-      const auto position = static_cast<std::uint64_t>(subjects.size() + 1);
+      const auto position = g * largest + static_cast<std::uint64_t>(i);
       subjects.push_back({fmt::format("{}{:02}", group.name, i), "simulated", seed * 1000 + position,
                           group_options_.at(group.name), group.name});
     }
@@ -365,15 +404,16 @@ std::vector<session::SubjectSpec> PowerStudy::replicateSubjects(int replicate) c
 }
 
 report::ReplicateOutcome PowerStudy::designOutcome(int replicate, const session::StudyDatabase& db,
-                                                  const report::AnalysisOptions& options) const {
+                                                  const report::AnalysisOptions& options,
+                                                  std::span<const int> designs) const {
   const report::DesignAnalysis analysis = report::analyzeDesign(db, options);
-  // Each subject's number within its group, from its id (GROUP01 ...).
-  const auto number = [](const std::string& id) { return std::stoi(id.substr(id.size() - 2)); };
+  // Each subject's number within its group, from its id (GROUP01 ... GROUP100 ...).
+  const auto number = [](const report::DesignTrialScore& s) { return std::stoi(s.subject.substr(s.group.size())); };
   report::ReplicateOutcome outcome{replicate, {}};
-  for (const int n : plan_.subject_counts) {
+  for (const int n : designs) {
     std::vector<const report::DesignTrialScore*> tested;
     for (const auto& s : analysis.scores) {
-      if (s.phase == tested_phase_ && number(s.subject) <= n) tested.push_back(&s);
+      if (s.phase == tested_phase_ && number(s) <= n) tested.push_back(&s);
     }
     std::array<report::MetricOutcome, 2> metrics;
     for (const bool shape : {true, false}) {

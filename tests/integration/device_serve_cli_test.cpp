@@ -127,7 +127,9 @@ TEST(DeviceServeCli, ServoCheckOverUdpReportsTheLinkAndTheServerPrintsItsCounter
     EXPECT_EQ(link["reconnects"].get<int>(), 0);
     EXPECT_EQ(json["loop"]["faults"].get<int>(), 0) << link["fault"];
 
+    // One open (issue 63): the check opens the device once and says goodbye once.
     EXPECT_GE(stats["sessions"].get<int>(), 1);
+    EXPECT_EQ(stats["byes"].get<int>(), 1);
     EXPECT_GT(stats["commands_applied"].get<int>(), 0);
     EXPECT_EQ(stats["drops"]["bad_mac"].get<int>(), 0);
     EXPECT_EQ(stats["busy_refusals"].get<int>(), 0);

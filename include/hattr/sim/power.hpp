@@ -70,6 +70,17 @@ class PowerStudy {
   /// gets the replicates run so far (fractions of those under way included), one call at a time.
   [[nodiscard]] std::vector<report::ReplicateOutcome> runReplicates(
       std::span<const int> replicates, const std::function<void(double)>& progress = {}) const;
+  /// The same for one design of `subjects` (per group; 3 up to the largest design): each
+  /// replicate runs only that design's subjects (the first of the largest design's, so a
+  /// design's outcome is the same as in runReplicates), and its outcome has that design alone.
+  /// A planner's search (sim/plan.hpp) asks for designs one at a time.
+  [[nodiscard]] std::vector<report::ReplicateOutcome> runDesign(
+      std::span<const int> replicates, int subjects, const std::function<void(double)>& progress = {}) const;
+  /// The lab time of one subject: each trial the expert's duration plus its block's rest, and
+  /// `session_setup_s` for each session of the schedule [s].
+  [[nodiscard]] double labSecondsPerSubject(double session_setup_s) const;
+  /// Between-subjects groups (1: every subject in every strategy).
+  [[nodiscard]] int groups() const noexcept { return static_cast<int>(study_.groups.size()); }
 
  private:
   /// How a replicate runs: its subjects at once, and the thread's paper and device (made at
@@ -77,14 +88,21 @@ class PowerStudy {
   struct ReplicateRun {
     int subjects_at_once = 1;
     std::optional<session::TrialEnvironment>* environment = nullptr;
+    /// The designs analyzed (ascending; the replicate runs the last one's subjects).
+    std::span<const int> designs;
   };
+  [[nodiscard]] std::vector<report::ReplicateOutcome> runReplicates(std::span<const int> replicates,
+                                                                    std::span<const int> designs,
+                                                                    const std::function<void(double)>& progress) const;
   [[nodiscard]] report::ReplicateOutcome runReplicate(int replicate, const ReplicateRun& how,
                                                       const std::function<void(double)>& progress) const;
   /// A design's outcome for each number of subjects per group, from its replicate's study.
   [[nodiscard]] report::ReplicateOutcome designOutcome(int replicate, const session::StudyDatabase& db,
-                                                       const report::AnalysisOptions& options) const;
-  /// The replicate's subjects: the paper's (S01 ...), or per group of a design (GROUP01 ...).
-  [[nodiscard]] std::vector<session::SubjectSpec> replicateSubjects(int replicate) const;
+                                                       const report::AnalysisOptions& options,
+                                                       std::span<const int> designs) const;
+  /// The replicate's subjects, `per_group` of them: the paper's (S01 ...), or per group of a
+  /// design (GROUP01 ...).
+  [[nodiscard]] std::vector<session::SubjectSpec> replicateSubjects(int replicate, int per_group) const;
 
   PowerOptions options_;
   session::StudyDefinition study_;  ///< without subjects
