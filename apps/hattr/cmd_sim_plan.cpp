@@ -148,7 +148,7 @@ void runPlanCommand(PlanCliOptions opt) {
     searches = searchesOf(opt, threads);
     run.search = opt.search;
     run.alpha = opt.alpha;
-    run.comparison = opt.compare;
+    run.comparison = opt.calibration.empty() ? opt.compare : "the difference between the two conditions";
     run.outcome = opt.calibration.empty() ? opt.outcome : "the normal outcome";
     run.analysis = analysisWords(opt);
     if (opt.max_hours_per_subject > 0.0) run.max_hours_per_subject = opt.max_hours_per_subject;

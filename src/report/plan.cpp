@@ -32,6 +32,21 @@ nlohmann::json pointToJson(const PlanPoint& p) {
           {"ci95", {p.power.lower, p.power.upper}}, {"decision", decisionName(p.decision)}};
 }
 
+/// What is compared, in words.
+std::string comparisonWords(const nlohmann::json& plan) {
+  const std::string c = plan.at("comparison").get<std::string>();
+  if (c == "mode") return "the effect of the modes (or groups)";
+  return c.find('-') != std::string::npos ? c + " (Tukey HSD)" : c;
+}
+
+/// The outcome, in words.
+std::string outcomeWords(const nlohmann::json& plan) {
+  const std::string o = plan.at("outcome").get<std::string>();
+  if (o == "shape") return "shape (the trajectory's DTW cost)";
+  if (o == "force") return "the haptic profile (the force's DTW cost)";
+  return o;
+}
+
 /// "subjects" or "subjects per group".
 std::string subjectsWord(const PlanSearchReport& s) { return s.groups > 1 ? "subjects per group" : "subjects"; }
 
@@ -144,15 +159,11 @@ std::optional<PlanRequest> PlanSearch::walk(std::vector<PlanPoint>* visited, std
     const std::optional<PlanPoint> top = decided(largest);
     if (!top) return pending;
     if (!top->reaches(target)) return std::nullopt;
-    // The smallest: when it suffices, it is the answer.
+    // The smallest: when it suffices, it is the answer (and no bisection is needed).
     const std::optional<PlanPoint> bottom = decided(0);
     if (!bottom) return pending;
-    if (bottom->reaches(target)) {
-      *answer = bottom->subjects;
-      return std::nullopt;
-    }
     // Bisection between a design below (lo) and one that reaches the target (hi).
-    int lo = 0, hi = largest;
+    int lo = 0, hi = bottom->reaches(target) ? 0 : largest;
     while (hi - lo > 1) {
       const int mid = lo + (hi - lo) / 2;
       const std::optional<PlanPoint> p = decided(mid);
@@ -290,7 +301,7 @@ std::string planReportText(const PlanReport& report) {
   const double target = plan.at("search").at("target").get<double>();
   std::string out = fmt::format("Plan: {} on {} ({}), target power {} % at α = {}; each design's decision at {} % "
                                 "confidence over its looks.\n",
-                                plan.at("comparison").get<std::string>(), plan.at("outcome").get<std::string>(),
+                                comparisonWords(plan), outcomeWords(plan),
                                 plan.at("analysis").get<std::string>(), percent(target), plan.at("alpha").get<double>(),
                                 percent(plan.at("search").at("confidence").get<double>()));
   for (const auto& s : report.searches) {
@@ -340,8 +351,15 @@ void writePlanPage(const PlanReport& report, const std::filesystem::path& file) 
     plot.add(std::move(lower));
     plot.add(std::move(upper));
     plot.add(std::move(goal));
-    body += fmt::format("<figure>{}<figcaption>{}</figcaption></figure>\n", plot.svg(),
-                        escape(planSearchSentence(s, target)));
+    std::string rows;
+    for (const auto& p : s.result.points) {
+      rows += fmt::format("<tr><td>{}</td><td>{} %</td><td>{}–{} %</td><td>{}</td><td>{}</td></tr>", p.subjects,
+                          percent(p.power.estimate), percent(p.power.lower), percent(p.power.upper), p.power.trials,
+                          decisionName(p.decision));
+    }
+    body += fmt::format("<h2>{}</h2>\n<figure>{}<figcaption>{}</figcaption></figure>\n<table><tr><th>{}</th><th>power</th>"
+                        "<th>95 % CI</th><th>replicates</th><th>decision</th></tr>{}</table>\n",
+                        escape(s.label), plot.svg(), escape(planSearchSentence(s, target)), subjectsWord(s), rows);
   }
   std::string skipped;
   for (const auto& why : report.skipped) skipped += "<li>" + escape(why) + "</li>";
@@ -349,13 +367,14 @@ void writePlanPage(const PlanReport& report, const std::filesystem::path& file) 
   const nlohmann::json& plan = report.plan;
   const std::string html = fmt::format(
       "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>hattr study plan</title>\n"
-      "<style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}}figure{{margin:1em 0}}</style></head>"
+      "<style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}}figure{{margin:1em 0}}"
+      "table{{border-collapse:collapse}}td,th{{border:1px solid #bbb;padding:.2em .5em;text-align:right}}</style></head>"
       "<body>\n<h1>Study plan</h1>\n<p>The smallest design whose analysis ({}) finds {} on {} with {} % power at "
       "α = {}, by simulation. Each design's power is the fraction of its simulated studies with p &lt; α, with its "
       "exact 95 % interval; each design got replicates in batches until its interval at {} % confidence over "
       "its looks excluded the target.</p>\n{}{}</body></html>\n",
-      escape(plan.at("analysis").get<std::string>()), escape(plan.at("comparison").get<std::string>()),
-      escape(plan.at("outcome").get<std::string>()), percent(target), plan.at("alpha").get<double>(),
+      escape(plan.at("analysis").get<std::string>()), escape(comparisonWords(plan)), escape(outcomeWords(plan)),
+      percent(target), plan.at("alpha").get<double>(),
       percent(plan.at("search").at("confidence").get<double>()), body, skipped);
   hattr::writeFileAtomically(file, html, hattr::Overwrite::kReplace);
 }

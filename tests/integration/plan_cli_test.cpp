@@ -28,12 +28,12 @@ using ::testing::HasSubstr;
 using test::hattrCli;
 using test::RunResult;
 
-/// A small plan of the paper's study that visits two designs (24 replicates, about 7 s in the
-/// release build): the loop glyph, 2 + 2 trials, 3 to 9 subjects, batches of 2, α 0.5 so that
-/// its power is away from 0.
+/// A small plan of the paper's study that visits four designs (32 replicates, about 8 s in the
+/// release build): the loop glyph, 2 + 2 trials, 3 to 6 subjects, batches of 2, α 0.5 so that
+/// its power is away from 0 (every design undecided, so each gets its 8).
 const std::string kPlan =
-    "sim plan --trials 2 --glyph loop --alpha 0.5 --power 0.2 --min-subjects 3 --max-subjects 9 --batch 2 "
-    "--max-replicates 12 --seed 3 --threads 1 --quiet --json";
+    "sim plan --trials 2 --glyph loop --alpha 0.5 --power 0.2 --min-subjects 3 --max-subjects 6 --batch 2 "
+    "--max-replicates 8 --seed 3 --threads 1 --quiet --json";
 
 /// What a plan answers, without its run's times.
 nlohmann::json answerOf(const std::string& out) {
@@ -74,14 +74,14 @@ const std::string kMpiEnvironment = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_
                                     "OMPI_MCA_rmaps_base_oversubscribe=1 ASAN_OPTIONS=detect_leaks=0 ";
 
 TEST(PlanCli, AKilledPlanResumesToTheUnbrokenRunsAnswer) {
-  HATTR_SKIP_UNDER_THREAD_SANITIZER("48 simulated replicates on one thread; the state folder's own test "
+  HATTR_SKIP_UNDER_THREAD_SANITIZER("64 simulated replicates on one thread; the state folder's own test "
                                     "(PlanState.*) runs under it");
   test::TempDir dir;
   const RunResult whole = test::runCommand(dir, hattrCli(), kPlan + " --html " + (dir / "plan.html").string(), "whole");
   ASSERT_EQ(whole.exit_code, 0) << whole.err;
   const nlohmann::json answer = answerOf(whole.out);
   ASSERT_EQ(answer["searches"].size(), 1u);
-  ASSERT_GE(answer["searches"][0]["points"].size(), 2u);
+  ASSERT_EQ(answer["searches"][0]["points"].size(), 4u);
   EXPECT_THAT(test::readText(dir / "plan.html"), HasSubstr("<svg"));
 
   // Killed with SIGKILL once its second design has begun, then resumed.
@@ -98,12 +98,12 @@ TEST(PlanCli, AKilledPlanResumesToTheUnbrokenRunsAnswer) {
   EXPECT_EQ(waitFor(pid), 128 + SIGKILL) << "the plan ended before it was killed";
   const std::size_t kept = linesIn(lines);
   EXPECT_GE(kept, 14u);
-  EXPECT_LT(kept, 24u);
+  EXPECT_LT(kept, 32u);
   const RunResult resumed = test::runCommand(dir, hattrCli(), kPlan + " --state " + state.string(), "resumed");
   ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
   EXPECT_EQ(answerOf(resumed.out), answer);
   const int run_now = nlohmann::json::parse(resumed.out)["run"]["replicates_run"].get<int>();
-  EXPECT_EQ(static_cast<std::size_t>(run_now), 24u - kept);  // only what the kill left
+  EXPECT_EQ(static_cast<std::size_t>(run_now), 32u - kept);  // only what the kill left
 
   // Resumed with other options: refused, the folder kept.
   const RunResult other = test::runCommand(dir, hattrCli(), kPlan + " --confidence 0.9 --state " + state.string(), "other");
@@ -130,7 +130,7 @@ TEST(PlanCli, OneProcessTwoMpiRanksAndTwoShardsGiveTheSameAnswer) {
     ASSERT_EQ(ranks.exit_code, 0) << ranks.err << ranks.out;
     EXPECT_EQ(answerOf(ranks.out), answer);
     EXPECT_EQ(nlohmann::json::parse(ranks.out)["run"]["processes"], 2);
-    EXPECT_EQ(linesIn(dir / "mpi-state" / "outcomes-main.jsonl"), 24u);  // rank 0 wrote every rank's
+    EXPECT_EQ(linesIn(dir / "mpi-state" / "outcomes-main.jsonl"), 32u);  // rank 0 wrote every rank's
   }
 
   // Two shards at once on one folder, each running half of every batch.
@@ -145,7 +145,7 @@ TEST(PlanCli, OneProcessTwoMpiRanksAndTwoShardsGiveTheSameAnswer) {
   for (int s : {0, 1}) {
     EXPECT_EQ(waitFor(shards[s]), 0) << test::readText(dir / fmt::format("shard{}.err", s));
     EXPECT_EQ(answerOf(test::readText(dir / fmt::format("shard{}.out", s))), answer);
-    EXPECT_EQ(linesIn(state / fmt::format("outcomes-shard-{}-of-2.jsonl", s)), 12u);  // its half
+    EXPECT_EQ(linesIn(state / fmt::format("outcomes-shard-{}-of-2.jsonl", s)), 16u);  // its half
   }
 }
 
