@@ -143,6 +143,12 @@ void runPlanCommand(PlanCliOptions opt) {
     HATTR_THROW_UNLESS(opt.max_hours_per_subject >= 0.0 && opt.max_lab_hours >= 0.0 && opt.session_setup_min >= 0.0,
                        "--max-hours-per-subject, --max-lab-hours, --session-setup: expected 0 (no limit) or more");
     opt.search.check();
+    HATTR_THROW_UNLESS(!opt.calibration.empty() || opt.search.min_subjects >= 3,
+                       "--min-subjects: a study's design needs at least 3 subjects (Tukey's test), got {}",
+                       opt.search.min_subjects);
+    HATTR_THROW_UNLESS(!opt.calibration.empty() || opt.search.max_replicates <= 1'000'000,
+                       "--max-replicates: a study's plan runs at most 1000000 per design, got {}",
+                       opt.search.max_replicates);
     if (world.rank() == 0 && !opt.html.empty()) checkOutputFiles({opt.html}, opt.force);
     threads = threadsPerProcess(opt.threads, world);
     searches = searchesOf(opt, threads);

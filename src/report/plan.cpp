@@ -204,9 +204,14 @@ PlanSearchResult PlanSearch::result() const {
   if (result.answer) {
     result.range_low = options_.min_subjects;
     result.range_high = gridValue(gridSize() - 1);
+    // A design decided on the unexpected side of the answer (Monte Carlo noise) bounds nothing.
     for (const auto& p : visited) {
-      if (p.decision == PlanDecision::kBelow) result.range_low = std::max(result.range_low, p.subjects + options_.step);
-      if (p.decision == PlanDecision::kAbove) result.range_high = std::min(result.range_high, p.subjects);
+      if (p.decision == PlanDecision::kBelow && p.subjects < *result.answer) {
+        result.range_low = std::max(result.range_low, p.subjects + options_.step);
+      }
+      if (p.decision == PlanDecision::kAbove && p.subjects >= *result.answer) {
+        result.range_high = std::min(result.range_high, p.subjects);
+      }
     }
   }
   result.points = std::move(visited);

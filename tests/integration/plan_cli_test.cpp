@@ -170,6 +170,7 @@ TEST(PlanCli, BadInputIsRefusedWithExitTwoAndTheReason) {
           "--compare ALPHA-MIRROR: expected \"mode\" or two of the design's BASIC, PCONTROL, ALPHA");
   refused("sim plan --trials 2 --hypothesis mirror --quiet", "--hypothesis");
   refused("sim plan --trials 2 --outcome speed --quiet", "--outcome: expected shape");
+  refused("sim plan --trials 2 --min-subjects 2 --quiet", "--min-subjects: a study's design needs at least 3 subjects");
   // Limits no design meets: 0.05 lab hours in all, less than one subject's trials.
   refused("sim plan --trials 2 --max-lab-hours 0.05 --quiet", "the limits leave no design to search");
   refused("sim plan --trials 2 --max-hours-per-subject 0.01 --quiet", "lab hours per subject, over the limit of 0.01 h");
