@@ -169,13 +169,7 @@ void runPlanCommand(PlanCliOptions opt) {
   } catch (...) {
     failure = std::current_exception();
   }
-  if (world.size() == 1 && failure) std::rethrow_exception(failure);
-  const int first_failed = world.firstFailedRank(failure != nullptr);
-  if (first_failed < world.size()) {
-    if (world.rank() == first_failed) printFailure(failure, world);
-    const bool failed_otherwise = failure && exitCodeOf(failure) == kRuntimeFailure;
-    throw ExitQuietly{world.firstFailedRank(failed_otherwise) < world.size() ? kRuntimeFailure : kBadInput};
-  }
+  endIfAnyRankFailed(world, failure);
   try {
     const ops::PlanRunResult result = ops::runPlan(searches, run);
     if (world.rank() == 0) printPlan(result, opt, world, threads);

@@ -112,14 +112,7 @@ void runPower(const PowerCliOptions& opt) {
   } catch (...) {
     failure = std::current_exception();
   }
-  if (world.size() == 1 && failure) std::rethrow_exception(failure);
-  const int first_failed = world.firstFailedRank(failure != nullptr);
-  if (first_failed < world.size()) {
-    if (world.rank() == first_failed) printFailure(failure, world);
-    // The same code on every rank: bad input (2) unless a rank failed otherwise (1).
-    const bool failed_otherwise = failure && exitCodeOf(failure) == kRuntimeFailure;
-    throw ExitQuietly{world.firstFailedRank(failed_otherwise) < world.size() ? kRuntimeFailure : kBadInput};
-  }
+  endIfAnyRankFailed(world, failure);
 
   // The run: replicate r on rank r mod size (or in shard r mod N). A rank that fails now
   // ends every rank (the others would wait for it in the gather).

@@ -23,6 +23,17 @@
 namespace hattr::cli {
 namespace {
 
+/// Where each rank's values start in the gathered array, and their total.
+std::vector<int> offsetsOf(const std::vector<int>& counts, int& total) {
+  std::vector<int> offsets(counts.size());
+  total = 0;
+  for (std::size_t i = 0; i < counts.size(); ++i) {
+    offsets[i] = total;
+    total += counts[i];
+  }
+  return offsets;
+}
+
 void check(int status, const char* call) {
   if (status != MPI_SUCCESS) throw std::runtime_error(std::string("MPI: ") + call + " failed");
 }
@@ -70,12 +81,8 @@ std::vector<double> MpiWorld::gatherToRoot(const std::vector<double>& mine) cons
   int count = static_cast<int>(mine.size());
   std::vector<int> counts(rank_ == 0 ? size_ : 0);
   check(MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Gather");
-  std::vector<int> offsets(counts.size());
   int total = 0;
-  for (std::size_t i = 0; i < counts.size(); ++i) {
-    offsets[i] = total;
-    total += counts[i];
-  }
+  const std::vector<int> offsets = offsetsOf(counts, total);
   std::vector<double> all(static_cast<std::size_t>(total));
   check(MPI_Gatherv(mine.data(), count, MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE, 0,
                     MPI_COMM_WORLD),
@@ -88,12 +95,8 @@ std::vector<double> MpiWorld::gatherToAll(const std::vector<double>& mine) const
   int count = static_cast<int>(mine.size());
   std::vector<int> counts(static_cast<std::size_t>(size_));
   check(MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD), "MPI_Allgather");
-  std::vector<int> offsets(counts.size());
   int total = 0;
-  for (std::size_t i = 0; i < counts.size(); ++i) {
-    offsets[i] = total;
-    total += counts[i];
-  }
+  const std::vector<int> offsets = offsetsOf(counts, total);
   std::vector<double> all(static_cast<std::size_t>(total));
   check(MPI_Allgatherv(mine.data(), count, MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE,
                        MPI_COMM_WORLD),
@@ -146,6 +149,15 @@ void printFailure(const std::exception_ptr& failure, const MpiWorld& world) {
   } catch (...) {
     std::cerr << "hattr: failed: " << rank << "an unknown error\n";
   }
+}
+
+void endIfAnyRankFailed(const MpiWorld& world, const std::exception_ptr& failure) {
+  if (world.size() == 1 && failure) std::rethrow_exception(failure);
+  const int first_failed = world.firstFailedRank(failure != nullptr);
+  if (first_failed == world.size()) return;
+  if (world.rank() == first_failed) printFailure(failure, world);
+  const bool failed_otherwise = failure && exitCodeOf(failure) == kRuntimeFailure;
+  throw ExitQuietly{world.firstFailedRank(failed_otherwise) < world.size() ? kRuntimeFailure : kBadInput};
 }
 
 }  // namespace hattr::cli

@@ -51,5 +51,9 @@ class MpiWorld {
 [[nodiscard]] int exitCodeOf(const std::exception_ptr& failure);
 /// Prints a failure as main() does, naming the rank when it is not the first.
 void printFailure(const std::exception_ptr& failure, const MpiWorld& world);
+/// After a set-up every rank ran (`failure`: this rank's, or none): a world of one rethrows it;
+/// otherwise, when any rank failed, the first that failed says why and every rank ends with the
+/// same code (ExitQuietly): bad input (2) unless a rank failed otherwise (1). None is left waiting.
+void endIfAnyRankFailed(const MpiWorld& world, const std::exception_ptr& failure);
 
 }  // namespace hattr::cli

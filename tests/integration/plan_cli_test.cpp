@@ -26,6 +26,8 @@ namespace {
 
 using ::testing::HasSubstr;
 using test::hattrCli;
+using test::kMpiEnvironment;
+using test::mpirun;
 using test::RunResult;
 
 /// A small plan of the paper's study that visits four designs (32 replicates, about 8 s in the
@@ -62,16 +64,6 @@ std::size_t linesIn(const std::filesystem::path& file) {
   const std::string text = test::readText(file);
   return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
 }
-
-std::string mpirun() {
-  for (const char* candidate : {"/usr/bin/mpirun", "/usr/local/bin/mpirun"}) {
-    if (std::filesystem::exists(candidate)) return candidate;
-  }
-  return {};
-}
-
-const std::string kMpiEnvironment = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-                                    "OMPI_MCA_rmaps_base_oversubscribe=1 ASAN_OPTIONS=detect_leaks=0 ";
 
 TEST(PlanCli, AKilledPlanResumesToTheUnbrokenRunsAnswer) {
   HATTR_SKIP_UNDER_THREAD_SANITIZER("64 simulated replicates on one thread; the state folder's own test "

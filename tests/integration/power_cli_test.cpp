@@ -19,6 +19,8 @@ namespace {
 using ::testing::HasSubstr;
 using test::RunResult;
 using test::hattrCli;
+using test::kMpiEnvironment;
+using test::mpirun;
 
 /// Sanitized builds run the power analysis on one process and in shards, but not under mpirun:
 /// Open MPI's library is not instrumented, and its own threads and memory hooks are outside
@@ -40,19 +42,6 @@ const std::string kPowerDesign = "sim power --subjects 3,4 --replicates 4 --tria
 constexpr std::size_t kDesigns = 2;
 constexpr int kReplicates = 4;
 #endif
-
-/// Open MPI's launcher, which these tests start for real (scripts/install-deps installs it).
-std::string mpirun() {
-  for (const char* candidate : {"/usr/bin/mpirun", "/usr/local/bin/mpirun"}) {
-    if (std::filesystem::exists(candidate)) return candidate;
-  }
-  return {};
-}
-
-/// mpirun's settings for this machine: it runs as root here (Open MPI refuses that unless
-/// told), and LeakSanitizer would report what Open MPI's own library keeps until exit.
-const std::string kMpiEnvironment = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-                                    "OMPI_MCA_rmaps_base_oversubscribe=1 ASAN_OPTIONS=detect_leaks=0 ";
 
 const std::string kPower = kPowerDesign + " --threads 1";
 

@@ -35,6 +35,20 @@ inline RunResult runCommand(const TempDir& dir, const std::string& program, cons
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, readText(out), readText(err)};
 }
 
+/// Open MPI's launcher, which the CLI tests start for real (scripts/install-deps installs it);
+/// empty when it is missing.
+inline std::string mpirun() {
+  for (const char* candidate : {"/usr/bin/mpirun", "/usr/local/bin/mpirun"}) {
+    if (std::filesystem::exists(candidate)) return candidate;
+  }
+  return {};
+}
+
+/// mpirun's settings for this machine: it runs as root here (Open MPI refuses that unless
+/// told), and LeakSanitizer would report what Open MPI's own library keeps until exit.
+inline const std::string kMpiEnvironment = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+                                           "OMPI_MCA_rmaps_base_oversubscribe=1 ASAN_OPTIONS=detect_leaks=0 ";
+
 /// The CLI the tests run, looked up when a test runs (listing the tests needs no build list).
 inline std::string hattrCli() { return builtFile("HATTR_CLI"); }
 
