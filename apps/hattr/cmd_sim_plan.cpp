@@ -27,6 +27,7 @@ struct PlanCliOptions {
   double effect_size = 0.0;
   std::string compare = "mode";
   std::string outcome = "shape";
+  std::string analysis = "anova";
   std::string phase;
   std::string hypotheses;
   report::PlanSearchOptions search;
@@ -86,7 +87,8 @@ std::vector<ops::PlanSearchSpec> searchesOf(const PlanCliOptions& opt, int threa
       o.max_subjects = opt.search.max_subjects;
       o.max_replicates = opt.search.max_replicates;
       o.comparison = opt.compare;
-      o.outcome = sim::parsePlanOutcome(opt.outcome, "--outcome");
+      o.outcome = opt.outcome;
+      o.analysis = sim::parsePlanAnalysis(opt.analysis, "--analysis");
       o.session_setup_s = opt.session_setup_min * 60.0;
       searches.push_back({sim::makeStudyPlanDesign(o), hypothesis});
     };
@@ -103,6 +105,10 @@ std::vector<ops::PlanSearchSpec> searchesOf(const PlanCliOptions& opt, int threa
 std::string analysisWords(const PlanCliOptions& opt) {
   if (opt.calibration == "two-sample") return "one-way ANOVA of two groups (the two-sample t-test)";
   if (opt.calibration == "paired") return "mode × subject ANOVA, one value per cell (the paired t-test)";
+  if (opt.analysis == "mixed") {
+    return "the design report's linear mixed model: outcome ~ condition + (1 | subject), + (1 | subject:condition) "
+           "where subjects repeat conditions; Satterthwaite's F, or for a pair its t with Tukey's adjustment";
+  }
   return "ANOVA as `hattr sim power`: mode × subject with subject random, or between groups one-way of the "
          "subjects' means; Tukey HSD for a pair";
 }
@@ -138,6 +144,10 @@ void runPlanCommand(PlanCliOptions opt) {
                        "every shard)");
     HATTR_THROW_UNLESS(opt.calibration.empty() || (opt.studies.empty() && opt.hypotheses.empty() && opt.phase.empty()),
                        "--calibration: the built-in calibration design has no study, hypothesis or phase");
+    HATTR_THROW_UNLESS(opt.calibration.empty() || (opt.outcome == "shape" && opt.analysis == "anova"),
+                       "--calibration: the calibration design's outcome is its normal value, analyzed by the t-test's "
+                       "ANOVA: expected no --outcome or --analysis, got --outcome {} --analysis {}", opt.outcome,
+                       opt.analysis);
     HATTR_THROW_UNLESS(!opt.calibration.empty() || opt.effect_size == 0.0,
                        "--effect-size: only for --calibration (a study's effect comes from its simulated subjects)");
     HATTR_THROW_UNLESS(opt.max_hours_per_subject >= 0.0 && opt.max_lab_hours >= 0.0 && opt.session_setup_min >= 0.0,
@@ -199,8 +209,11 @@ void registerPlanCommand(CLI::App& sim) {
   plan->add_option("--effect-size", opt->effect_size, "The calibration design's Cohen's d")->needs(calibration);
   plan->add_option("--compare", opt->compare, "What is compared: mode (the effect of the modes or groups) or two of "
                    "them, e.g. ALPHA-PCONTROL (Tukey HSD)")->capture_default_str();
-  plan->add_option("--outcome", opt->outcome, "shape (the trajectory's DTW cost) or force (the haptic profile's)")
+  plan->add_option("--outcome", opt->outcome, "shape (the trajectory's DTW cost), force (the haptic profile's) or a "
+                   "kinematic measure of each trial (mean_speed_m_per_s, normalized_jerk, ...: hattr kinematics --json)")
       ->capture_default_str();
+  plan->add_option("--analysis", opt->analysis, "anova (sim power's) or mixed (the design report's linear mixed "
+                   "model)")->capture_default_str();
   plan->add_option("--phase", opt->phase, "A design of groups and sessions: the phase compared (retention, transfer, "
                    "...; default as sim power)");
   plan->add_option("--hypothesis", opt->hypotheses, "Learning hypotheses, comma-separated, or each (default: the "

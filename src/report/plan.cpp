@@ -36,7 +36,7 @@ nlohmann::json pointToJson(const PlanPoint& p) {
 std::string comparisonWords(const nlohmann::json& plan) {
   const std::string c = plan.at("comparison").get<std::string>();
   if (c == "mode") return "the effect of the modes (or groups)";
-  return c.find('-') != std::string::npos ? c + " (Tukey HSD)" : c;
+  return c.find('-') != std::string::npos ? c + " (Tukey-adjusted)" : c;
 }
 
 /// The outcome, in words.

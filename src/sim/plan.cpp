@@ -3,11 +3,16 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <set>
 #include <numbers>
 
 #include <fmt/format.h>
 
 #include "hattr/analysis/anova.hpp"
+#include "hattr/analysis/kinematics.hpp"
+#include "hattr/analysis/lmm.hpp"
+#include "hattr/analysis/studentized_range.hpp"
 #include "hattr/core/error.hpp"
 #include "random_internal.hpp"
 
@@ -37,6 +42,99 @@ ComparisonIndex resolveComparison(const std::string& comparison, const report::P
   return {};
 }
 
+/// A trial's value of the outcome compared.
+double outcomeOf(const report::AnalyzedTrial& t, const std::string& outcome) {
+  if (outcome == "shape") return t.shape;
+  if (outcome == "force") return t.force;
+  return t.kinematic;
+}
+
+/// The Tukey-adjusted p of the pair asked, named either way round; NaN when Tukey has none.
+double tukeyPairP(const analysis::TukeyResult& tukey, const TrialsComparison& how) {
+  for (const auto& c : tukey.comparisons) {
+    if ((c.level == how.pair_a && c.other_level == how.pair_b) || (c.level == how.pair_b && c.other_level == how.pair_a)) {
+      return c.p_adjusted;
+    }
+  }
+  return kNaN;
+}
+
+/// Conditions within subjects: condition × subject, subject random (report::analyzeMetric's).
+double withinSubjectsAnovaP(const std::vector<const report::AnalyzedTrial*>& trials, const TrialsComparison& how) {
+  analysis::TwoWayData all{"mode", "subject", {}, {}, {}};
+  for (const auto* t : trials) {
+    all.a.push_back(t->condition);
+    all.b.push_back(t->subject);
+    all.y.push_back(outcomeOf(*t, how.outcome));
+  }
+  const analysis::AnovaOptions mixed{.b_random = true};
+  const analysis::AnovaTable table = analysis::twoWayAnova(all, mixed);
+  if (how.pair_a.empty()) return table.row("mode").p;
+  if (table.a_levels.size() < 2 || table.b_levels.size() < 3) return kNaN;
+  return tukeyPairP(analysis::tukeyHsd(all, analysis::Factor::kA, mixed), how);
+}
+
+/// Groups: the one-way ANOVA of each subject's mean (report::groupSubjectMeans's), Tukey HSD.
+double betweenGroupsAnovaP(const std::vector<const report::AnalyzedTrial*>& trials, const TrialsComparison& how) {
+  std::map<std::string, std::pair<std::string, std::vector<double>>> by_subject;
+  for (const auto* t : trials) {
+    auto& [group, values] = by_subject[t->subject];
+    group = t->condition;
+    values.push_back(outcomeOf(*t, how.outcome));
+  }
+  analysis::OneWayData data;
+  for (const auto& [subject, entry] : by_subject) {
+    double sum = 0.0;
+    for (const double v : entry.second) sum += v;
+    data.group.push_back(entry.first);
+    data.y.push_back(sum / static_cast<double>(entry.second.size()));
+  }
+  if (how.pair_a.empty()) return analysis::oneWayAnova(data).row("group").p;
+  return tukeyPairP(analysis::tukeyHsdOneWay(data), how);
+}
+
+/// The design report's mixed model of the trials (report/design_models.cpp).
+double mixedP(const std::vector<const report::AnalyzedTrial*>& trials, const TrialsComparison& how) {
+  analysis::DataTable table{{{"subject", {}, {}}, {"condition", {}, {}}, {"y", {}, {}}}, "the compared trials"};
+  std::map<std::pair<std::string, std::string>, int> per_cell;
+  std::map<std::string, std::set<std::string>> conditions_of;
+  std::set<std::string> conditions;
+  for (const auto* t : trials) {
+    table.columns[0].text.push_back(t->subject);
+    table.columns[1].text.push_back(t->condition);
+    table.columns[2].numbers.push_back(outcomeOf(*t, how.outcome));
+    ++per_cell[{t->subject, t->condition}];
+    conditions_of[t->subject].insert(t->condition);
+    conditions.insert(t->condition);
+  }
+  if (conditions.size() < 2) return kNaN;
+  const bool within = std::any_of(conditions_of.begin(), conditions_of.end(), [](const auto& e) { return e.second.size() > 1; });
+  const bool replicated = std::any_of(per_cell.begin(), per_cell.end(), [](const auto& e) { return e.second > 1; });
+  const std::string formula =
+      fmt::format("y ~ condition + (1 | subject){}", within && replicated ? " + (1 | subject:condition)" : "");
+  const std::string reference = how.pair_a.empty() ? *conditions.begin() : how.pair_a;
+  const analysis::LmmFit fit = analysis::fitLmm(table, formula, {.reference = {{"condition", reference}}});
+  if (how.pair_a.empty()) {
+    for (const auto& term : fit.terms) {
+      if (term.term == "condition") return term.p;
+    }
+    return kNaN;
+  }
+  for (const auto& c : fit.fixed) {
+    if (c.name == "condition" + how.pair_b) {
+      return analysis::studentizedRangeUpperTail(std::numbers::sqrt2 * std::abs(c.t), static_cast<int>(conditions.size()),
+                                                 c.df);
+    }
+  }
+  return kNaN;
+}
+
+/// Whether a plan's p is sim power's own (its ANOVA of shape or force), else computed from the
+/// replicate's analyzed trials.
+bool powerAnalyzes(const StudyPlanOptions& o) {
+  return o.analysis == PlanAnalysis::kAnova && (o.outcome == "shape" || o.outcome == "force");
+}
+
 /// A simulated study: PowerStudy's replicates of one design at a time.
 class StudyPlanDesign final : public PlanDesign {
  public:
@@ -45,6 +143,12 @@ class StudyPlanDesign final : public PlanDesign {
     HATTR_THROW_UNLESS(o.session_setup_s >= 0.0 && std::isfinite(o.session_setup_s),
                        "--session-setup: expected a time of at least 0 minutes, got {} s", o.session_setup_s);
     lab_s_ = study_.labSecondsPerSubject(o.session_setup_s);
+    trials_ = {.analysis = o.analysis, .outcome = o.outcome, .between_groups = study_.groups() > 1};
+    if (!comparison_.effect) {
+      const std::string pair = study_.plan().pairs().at(comparison_.pair);
+      trials_.pair_a = pair.substr(0, pair.find('-'));
+      trials_.pair_b = pair.substr(pair.find('-') + 1);
+    }
   }
 
   nlohmann::json identity() const override {
@@ -53,7 +157,8 @@ class StudyPlanDesign final : public PlanDesign {
             {"modes", plan.modes},
             {"seed", plan.seed},
             {"comparison", options_.comparison},
-            {"outcome", planOutcomeName(options_.outcome)}};
+            {"outcome", options_.outcome},
+            {"analysis", planAnalysisName(options_.analysis)}};
   }
 
   std::string label() const override {
@@ -75,8 +180,12 @@ class StudyPlanDesign final : public PlanDesign {
     const std::vector<report::ReplicateOutcome> outcomes = study_.runDesign(replicates, subjects, progress);
     std::vector<double> p;
     p.reserve(outcomes.size());
-    const std::size_t metric = options_.outcome == PlanOutcome::kShape ? 0 : 1;
+    const std::size_t metric = options_.outcome == "shape" ? 0 : 1;
     for (const auto& o : outcomes) {
+      if (!powerAnalyzes(options_)) {
+        p.push_back(comparisonP(o.trials, trials_));
+        continue;
+      }
       const report::MetricOutcome& m = o.designs.front()[metric];
       p.push_back(comparison_.effect ? m.p_mode : m.p_pairs.at(comparison_.pair));
     }
@@ -90,12 +199,16 @@ class StudyPlanDesign final : public PlanDesign {
                        "--max-subjects: expected 3 to 1000 subjects (per group), got {}", o.max_subjects);
     p.subject_counts = {o.max_subjects};
     p.replicates = o.max_replicates;
+    checkPlanOutcome(o.outcome, "--outcome");
+    p.keep_trials = !powerAnalyzes(o);
+    if (o.outcome != "shape" && o.outcome != "force") p.kinematic = o.outcome;
     return p;
   }
 
   StudyPlanOptions options_;
   PowerStudy study_;
   ComparisonIndex comparison_;
+  TrialsComparison trials_;
   double lab_s_ = 0.0;
 };
 
@@ -193,15 +306,36 @@ class CalibrationDesign final : public PlanDesign {
 
 }  // namespace
 
-PlanOutcome parsePlanOutcome(std::string_view text, std::string_view where) {
-  if (text == "shape") return PlanOutcome::kShape;
-  if (text == "force") return PlanOutcome::kForce;
-  HATTR_THROW_UNLESS(false, "{}: expected shape (the trajectory's DTW cost) or force (the haptic profile's), got \"{}\"",
-                     where, text);
-  return PlanOutcome::kShape;
+PlanAnalysis parsePlanAnalysis(std::string_view text, std::string_view where) {
+  if (text == "anova") return PlanAnalysis::kAnova;
+  if (text == "mixed") return PlanAnalysis::kMixed;
+  HATTR_THROW_UNLESS(false, "{}: expected anova (sim power's) or mixed (the design report's linear mixed model), got "
+                     "\"{}\"", where, text);
+  return PlanAnalysis::kAnova;
 }
 
-const char* planOutcomeName(PlanOutcome outcome) { return outcome == PlanOutcome::kShape ? "shape" : "force"; }
+const char* planAnalysisName(PlanAnalysis analysis) { return analysis == PlanAnalysis::kAnova ? "anova" : "mixed"; }
+
+void checkPlanOutcome(std::string_view outcome, std::string_view where) {
+  if (outcome == "shape" || outcome == "force") return;
+  const auto& names = analysis::kinematicsNames();
+  HATTR_THROW_UNLESS(std::find(names.begin(), names.end(), outcome) != names.end(),
+                     "{}: expected shape (the trajectory's DTW cost), force (the haptic profile's) or a kinematic "
+                     "measure ({}), got \"{}\"", where, fmt::join(names, ", "), outcome);
+}
+
+double comparisonP(std::span<const report::AnalyzedTrial> trials, const TrialsComparison& how) {
+  std::vector<const report::AnalyzedTrial*> kept;
+  for (const auto& t : trials) {
+    if (std::isfinite(outcomeOf(t, how.outcome))) kept.push_back(&t);
+  }
+  try {
+    if (how.analysis == PlanAnalysis::kMixed) return mixedP(kept, how);
+    return how.between_groups ? betweenGroupsAnovaP(kept, how) : withinSubjectsAnovaP(kept, how);
+  } catch (const Error&) {  // data the analysis cannot take: no p, so not significant
+    return kNaN;
+  }
+}
 
 std::unique_ptr<PlanDesign> makeStudyPlanDesign(const StudyPlanOptions& options) {
   return std::make_unique<StudyPlanDesign>(options);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <iterator>
+#include <limits>
 #include <numeric>
 #include <mutex>
 #include <optional>
@@ -12,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "hattr/analysis/anova.hpp"
+#include "hattr/analysis/kinematics.hpp"
 #include "hattr/analysis/trial_score.hpp"
 #include "hattr/core/error.hpp"
 #include "hattr/guidance/training_guidance.hpp"
@@ -42,6 +44,11 @@ void checkOptions(const PowerOptions& o) {
   // (seed + r)·1000 + i): keep that within a study file's seed range.
   HATTR_THROW_UNLESS(o.seed <= 1'000'000'000'000ULL, "seed: expected 0 to 1e12, got {}", o.seed);
   if (!o.hypothesis.empty()) (void)parseHypothesis(o.hypothesis, "hypothesis");
+  if (!o.kinematic.empty()) {
+    const auto& names = analysis::kinematicsNames();
+    HATTR_THROW_UNLESS(std::find(names.begin(), names.end(), o.kinematic) != names.end(),
+                       "kinematic measure: expected one of {}, got \"{}\"", fmt::join(names, ", "), o.kinematic);
+  }
 }
 
 /// A study file's checks: simulated subjects on the simulated pen, nothing live.
@@ -149,6 +156,33 @@ class ScoredAsTheyEnd {
   std::map<std::string, Skill> skills_;
   std::mutex mutex_;
   std::map<std::int64_t, analysis::TrialScore> scores_;
+};
+
+/// One kinematic measure of each trial, from its recording as it ends (none when `name` is
+/// empty). Called from the subjects' threads.
+class KinematicsAsTheyEnd {
+ public:
+  explicit KinematicsAsTheyEnd(std::string name) : name_(std::move(name)) {}
+  [[nodiscard]] bool active() const noexcept { return !name_.empty(); }
+
+  void add(const session::TrialRecord& trial, const HapticProfile& profile) {
+    if (!active()) return;
+    const nlohmann::json value = analysis::toJson(analysis::trialKinematics(profile))[name_];
+    const std::lock_guard lock(mutex_);
+    values_[trial.id] = value.is_number() ? value.get<double>() : kNaN;
+  }
+
+  /// The trial's measure; NaN when none was measured.
+  [[nodiscard]] double of(std::int64_t trial_id) const {
+    const auto found = values_.find(trial_id);
+    return found != values_.end() ? found->second : kNaN;
+  }
+
+ private:
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  std::string name_;
+  std::mutex mutex_;
+  std::map<std::int64_t, double> values_;
 };
 
 }  // namespace
@@ -334,6 +368,7 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const Replicate
   const std::filesystem::path file = folder / "study.sqlite";
   report::StudyAnalysis analysis;
   std::optional<report::ReplicateOutcome> design;
+  std::vector<report::AnalyzedTrial> kept;  ///< the paper's form: its analyzed trials, when kept
   {
     (void)session::StudyDatabase::create(file, study);
     // Scored as the trials end, the store keeps no samples (unless the study stores them at a
@@ -345,6 +380,7 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const Replicate
     });
     const report::AnalysisOptions analysis_options{.threads = static_cast<unsigned>(how.subjects_at_once)};
     ScoredAsTheyEnd scored(db, !study.paper_form, analysis_options);
+    KinematicsAsTheyEnd kinematics(options_.keep_trials ? options_.kinematic : "");
     if (how.environment && !*how.environment) {
       how.environment->emplace(study.device, render::parseWorldConfig(study.world.dump(), "study world"), study.rate_hz);
     }
@@ -356,7 +392,12 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const Replicate
     run.progress = [&](const session::RunProgress&) {
       if (progress) progress(++done / total);
     };
-    if (scratch) run.stored = [&scored](const session::TrialRecord& t, const HapticProfile& p) { scored.add(t, p); };
+    if (scratch || kinematics.active()) {
+      run.stored = [&](const session::TrialRecord& t, const HapticProfile& p) {
+        if (scratch) scored.add(t, p);
+        kinematics.add(t, p);
+      };
+    }
     (void)runner.run(run);
     std::map<std::int64_t, analysis::TrialScore> scores;
     if (scratch) scores = scored.finish();
@@ -364,15 +405,21 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const Replicate
     options.scored = scratch ? &scores : nullptr;
     if (study.paper_form) {
       analysis = report::analyzeStudy(db, options);
+      if (options_.keep_trials) {
+        for (const auto& c : analysis.costs) {
+          kept.push_back({c.trial_id, c.subject, c.mode, c.trial, c.trajectory(), c.forceProfile(), kinematics.of(c.trial_id)});
+        }
+      }
     } else {
       design = designOutcome(replicate, db, options, how.designs);
+      for (auto& t : design->trials) t.kinematic = kinematics.of(t.trial_id);
     }
   }
   std::filesystem::remove_all(folder);
   if (design) return *design;
 
   // Each design: the replicate's first N subjects (S01 .. SN).
-  report::ReplicateOutcome outcome{replicate, {}};
+  report::ReplicateOutcome outcome{replicate, {}, std::move(kept)};
   for (const int n : how.designs) {
     std::set<std::string> ids;
     for (const auto& s : simulatedSubjects(n, 0, {})) ids.insert(s.id);
@@ -403,18 +450,31 @@ std::vector<session::SubjectSpec> PowerStudy::replicateSubjects(int replicate, i
   return subjects;
 }
 
+std::vector<report::AnalyzedTrial> PowerStudy::analyzedTrials(
+    const std::vector<const report::DesignTrialScore*>& tested) const {
+  // The conditions compared: the groups, or the strategies within subjects (as designOutcome's).
+  std::vector<report::AnalyzedTrial> trials;
+  for (const auto* s : tested) {
+    if (!between_groups_ && s->strategy == "none") continue;
+    trials.push_back({s->trial_id, s->subject, between_groups_ ? s->group : s->strategy, s->trial_in_phase, s->shape(),
+                      s->force(), std::numeric_limits<double>::quiet_NaN()});
+  }
+  return trials;
+}
+
 report::ReplicateOutcome PowerStudy::designOutcome(int replicate, const session::StudyDatabase& db,
                                                   const report::AnalysisOptions& options,
                                                   std::span<const int> designs) const {
   const report::DesignAnalysis analysis = report::analyzeDesign(db, options);
   // Each subject's number within its group, from its id (GROUP01 ... GROUP100 ...).
   const auto number = [](const report::DesignTrialScore& s) { return std::stoi(s.subject.substr(s.group.size())); };
-  report::ReplicateOutcome outcome{replicate, {}};
+  report::ReplicateOutcome outcome{replicate, {}, {}};
   for (const int n : designs) {
     std::vector<const report::DesignTrialScore*> tested;
     for (const auto& s : analysis.scores) {
       if (s.phase == tested_phase_ && number(s) <= n) tested.push_back(&s);
     }
+    if (options_.keep_trials && n == designs.back()) outcome.trials = analyzedTrials(tested);
     std::array<report::MetricOutcome, 2> metrics;
     for (const bool shape : {true, false}) {
       if (between_groups_) {

@@ -162,6 +162,8 @@ TEST(PlanCli, BadInputIsRefusedWithExitTwoAndTheReason) {
           "--compare ALPHA-MIRROR: expected \"mode\" or two of the design's BASIC, PCONTROL, ALPHA");
   refused("sim plan --trials 2 --hypothesis mirror --quiet", "--hypothesis");
   refused("sim plan --trials 2 --outcome speed --quiet", "--outcome: expected shape");
+  refused("sim plan --trials 2 --analysis lme --quiet", "--analysis: expected anova (sim power's) or mixed");
+  refused(calibration + " --analysis mixed", "--calibration: the calibration design's outcome is its normal value");
   refused("sim plan --trials 2 --min-subjects 2 --quiet", "--min-subjects: a study's design needs at least 3 subjects");
   // Limits no design meets: 0.05 lab hours in all, less than one subject's trials.
   refused("sim plan --trials 2 --max-lab-hours 0.05 --quiet", "the limits leave no design to search");

@@ -46,10 +46,24 @@ struct MetricOutcome {
   std::vector<double> p_pairs;   ///< Tukey HSD adjusted p, PowerPlan::pairs order
 };
 
+/// One analyzed trial of a replicate's largest design, for analyses besides the power
+/// analysis's own (a study plan's mixed model or kinematic outcome).
+struct AnalyzedTrial {
+  std::int64_t trial_id = 0;  ///< in the replicate's study
+  std::string subject;
+  std::string condition;  ///< the mode (or strategy) compared within subjects, or the subject's group
+  int trial = 0;          ///< within its condition and phase, from 1
+  double shape = 0.0;     ///< its costs, as analysis::TrialScore::shape() and force()
+  double force = 0.0;
+  double kinematic = 0.0;  ///< the kinematic measure asked for (sim::PowerOptions::kinematic); NaN when none
+};
+
 /// One replicate: per design (PowerPlan::subject_counts order), trajectory then force.
 struct ReplicateOutcome {
   int replicate = 0;
   std::vector<std::array<MetricOutcome, 2>> designs;
+  /// The largest design's analyzed trials when sim::PowerOptions::keep_trials (not encoded).
+  std::vector<AnalyzedTrial> trials;
 };
 
 /// Reads a metric's outcome from its analysis, pairs in the plan's order.

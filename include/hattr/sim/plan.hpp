@@ -1,7 +1,7 @@
 #pragma once
 /// The designs a study plan searches (docs/simulation.md, "Planning a study"): for a number of
 /// subjects and a replicate, the p of the comparison asked, the same wherever it is computed.
-/// A simulated study (sim::PowerStudy, its analysis the design report's ANOVA) or the built-in
+/// A simulated study (sim::PowerStudy, analyzed by its ANOVA or the design report's mixed model) or the built-in
 /// calibration design, whose outcome is normal with a given effect size so that its analysis
 /// is a t-test with a known power (R's power.t.test). report/plan.hpp searches over them.
 
@@ -35,10 +35,38 @@ class PlanDesign {
                                                     const std::function<void(double)>& progress) const = 0;
 };
 
-/// The outcome a plan compares.
-enum class PlanOutcome { kShape, kForce };
-[[nodiscard]] PlanOutcome parsePlanOutcome(std::string_view text, std::string_view where);
-[[nodiscard]] const char* planOutcomeName(PlanOutcome outcome);
+/// The analysis a plan's replicates run: sim power's ANOVA, or the design report's linear mixed
+/// model of the compared trials (report/design_models.cpp's formula).
+enum class PlanAnalysis { kAnova, kMixed };
+[[nodiscard]] PlanAnalysis parsePlanAnalysis(std::string_view text, std::string_view where);
+[[nodiscard]] const char* planAnalysisName(PlanAnalysis analysis);
+
+/// The outcome a plan compares: "shape" (the trajectory's DTW cost), "force" (the haptic
+/// profile's) or a kinematic measure (analysis::kinematicsNames()). Throws InputError for another.
+void checkPlanOutcome(std::string_view outcome, std::string_view where);
+
+/// How one replicate's analyzed trials are compared.
+struct TrialsComparison {
+  PlanAnalysis analysis = PlanAnalysis::kAnova;
+  std::string outcome = "shape";  ///< as checkPlanOutcome
+  bool between_groups = false;    ///< the conditions are groups, a subject in one
+  /// Empty: the conditions' effect; else the pair's difference (Tukey-adjusted over all the
+  /// conditions present).
+  std::string pair_a, pair_b;
+};
+
+/// The comparison's p in one replicate's analyzed trials (trials whose outcome is not finite
+/// left out); NaN when the analysis gives none (too few trials, an unbalanced ANOVA, a model
+/// that does not fit).
+/// - ANOVA, within subjects: condition × subject with subject random and the trials as
+///   replicates (the mode effect against condition:subject), Tukey HSD for a pair: sim
+///   power's analysis to the bit. Between groups: the one-way ANOVA of the subjects' means and
+///   Tukey HSD.
+/// - Mixed: `y ~ condition + (1 | subject)`, with `+ (1 | subject:condition)` where subjects
+///   did several conditions several times each; the effect's Satterthwaite F test (lmerTest's
+///   anova), a pair's Satterthwaite t with the Tukey adjustment over the k conditions
+///   (P(Q_k,df > √2·|t|), as emmeans' pairs).
+[[nodiscard]] double comparisonP(std::span<const report::AnalyzedTrial> trials, const TrialsComparison& how);
 
 struct StudyPlanOptions {
   /// The study, seed, α, threads, phase, hypothesis and scratch as for a power analysis; its
@@ -48,7 +76,8 @@ struct StudyPlanOptions {
   int max_replicates = 400;
   /// "mode": the effect of the modes (or groups); "A-B": Tukey's pair of A and B.
   std::string comparison = "mode";
-  PlanOutcome outcome = PlanOutcome::kShape;
+  std::string outcome = "shape";  ///< as checkPlanOutcome
+  PlanAnalysis analysis = PlanAnalysis::kAnova;
   double session_setup_s = 600.0;  ///< a session's lab time besides its trials [s]
 };
 

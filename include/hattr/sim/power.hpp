@@ -25,6 +25,10 @@
 #include "hattr/session/trial.hpp"
 #include "hattr/sim/scratch_folder.hpp"
 
+namespace hattr::report {
+struct DesignTrialScore;
+}  // namespace hattr::report
+
 namespace hattr::sim {
 
 struct PowerOptions {
@@ -46,6 +50,11 @@ struct PowerOptions {
   /// A learning hypothesis ("force-plan", ...) for every subject, in place of the study's
   /// trainee model; empty: the study's (the paper's study: position-plan).
   std::string hypothesis;
+  /// Keep each replicate's analyzed trials of its largest design (ReplicateOutcome::trials).
+  bool keep_trials = false;
+  /// With keep_trials: the kinematic measure (analysis::kinematicsNames()) each kept trial is
+  /// measured by, from its recording as it ends; empty: none (NaN).
+  std::string kinematic;
   /// Where replicates' databases are made (each removed when analyzed); empty: a new folder
   /// in the system's temporary folder, removed with this object.
   std::filesystem::path scratch;
@@ -100,6 +109,9 @@ class PowerStudy {
   [[nodiscard]] report::ReplicateOutcome designOutcome(int replicate, const session::StudyDatabase& db,
                                                        const report::AnalysisOptions& options,
                                                        std::span<const int> designs) const;
+  /// A design's compared trials as ReplicateOutcome::trials keeps them (kinematic NaN).
+  [[nodiscard]] std::vector<report::AnalyzedTrial> analyzedTrials(
+      const std::vector<const report::DesignTrialScore*>& tested) const;
   /// The replicate's subjects, `per_group` of them: the paper's (S01 ...), or per group of a
   /// design (GROUP01 ...).
   [[nodiscard]] std::vector<session::SubjectSpec> replicateSubjects(int replicate, int per_group) const;
