@@ -88,7 +88,7 @@ PreparedTrial TrialScorer::prepare(const HapticProfile& trial) const {
   const std::vector<double> scaled_t_s = timeScale(c.t_s, expert_t_);
   PreparedTrial p;
   for (std::size_t k = 0; k < kScoredChannels.size(); ++k) {
-    if (kScoredChannels[k] == Channel::kZ && !options_.score_z) continue;  // left empty: not scored
+    if (!options_.scores(k)) continue;  // left empty: not scored
     p.series[k] = interpolateAt(scaled_t_s, normalize(c.series[k], options_.normalization), expert_t_);
   }
   return p;
@@ -96,11 +96,11 @@ PreparedTrial TrialScorer::prepare(const HapticProfile& trial) const {
 
 std::vector<TrialScore> TrialScorer::scorePrepared(std::span<const PreparedTrial> trials, unsigned threads) const {
   // DTW per channel, each channel's trials as one batch read in place, the channels shared by
-  // the threads; z only when asked.
+  // the threads; z (or the shape's, or the force's) only when asked.
   const DtwOptions dtw{.cost = options_.cost, .band_fraction = options_.band_fraction};
   std::array<std::vector<double>, 6> costs;
   detail::forEachChunk(costs.size(), 1, std::max(1u, threads), [&](std::size_t k, std::size_t) {
-    if (kScoredChannels[k] == Channel::kZ && !options_.score_z) {
+    if (!options_.scores(k)) {
       costs[k].assign(trials.size(), std::numeric_limits<double>::quiet_NaN());
       return;
     }

@@ -222,8 +222,10 @@ StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptio
     for (std::size_t k = 0; k < unscored.size(); ++k) out.costs[unscored[k]].score = scores[k];
     if (options.progress) options.progress(static_cast<int>(last), total);
   }
-  out.trajectory = analyzeMetric("trajectory", out.costs, true);
-  out.force = analyzeMetric("force", out.costs, false);
+  out.trajectory.metric = "trajectory";
+  out.force.metric = "force";
+  if (options.analyze_trajectory) out.trajectory = analyzeMetric("trajectory", out.costs, true);
+  if (options.analyze_force) out.force = analyzeMetric("force", out.costs, false);
   return out;
 }
 

@@ -201,6 +201,9 @@ class StudyPlanDesign final : public PlanDesign {
     p.replicates = o.max_replicates;
     checkPlanOutcome(o.outcome, "--outcome");
     p.keep_trials = !powerAnalyzes(o);
+    // Only the outcome's channels are scored (the paper's form; the same bits for it).
+    p.score_shape = o.outcome == "shape";
+    p.score_force = o.outcome == "force";
     if (o.outcome != "shape" && o.outcome != "force") p.kinematic = o.outcome;
     return p;
   }

@@ -103,7 +103,8 @@ class ScoredAsTheyEnd {
       analyzed_recall_.insert(analyzed.begin(), analyzed.end());
     }
     const analysis::ScoreOptions score{.normalization = options.normalization, .cost = options.cost,
-                                       .band_fraction = options.band_fraction, .score_z = false};
+                                       .band_fraction = options.band_fraction, .score_z = false,
+                                       .score_shape = options.analyze_trajectory, .score_force = options.analyze_force};
     for (const auto& [skill, file] : db.study().experts) {
       skills_.try_emplace(skill, analysis::TrialScorer(db.expert(skill), score));
     }
@@ -157,6 +158,12 @@ class ScoredAsTheyEnd {
   std::mutex mutex_;
   std::map<std::int64_t, analysis::TrialScore> scores_;
 };
+
+/// The outcome of a metric not analyzed (PowerOptions::score_shape, score_force): NaN.
+report::MetricOutcome notAnalyzed(const report::PowerPlan& plan) {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  return {kNaN, kNaN, std::vector<double>(plan.pairs().size(), kNaN)};
+}
 
 /// One kinematic measure of each trial, from its recording as it ends (none when `name` is
 /// empty). Called from the subjects' threads.
@@ -378,7 +385,10 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const Replicate
     session::StudyRunner runner(db, [](const session::SubjectRecord& s, const HapticProfile& expert) {
       return makeSimulatedParticipant(s, expert);
     });
-    const report::AnalysisOptions analysis_options{.threads = static_cast<unsigned>(how.subjects_at_once)};
+    // The paper's form analyzes the metrics asked for (a design's analysis reads both).
+    const report::AnalysisOptions analysis_options{.threads = static_cast<unsigned>(how.subjects_at_once),
+                                                   .analyze_trajectory = !study.paper_form || options_.score_shape,
+                                                   .analyze_force = !study.paper_form || options_.score_force};
     ScoredAsTheyEnd scored(db, !study.paper_form, analysis_options);
     KinematicsAsTheyEnd kinematics(options_.keep_trials ? options_.kinematic : "");
     if (how.environment && !*how.environment) {
@@ -426,8 +436,11 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const Replicate
     std::vector<report::TrialCost> costs;
     std::copy_if(analysis.costs.begin(), analysis.costs.end(), std::back_inserter(costs),
                  [&ids](const report::TrialCost& c) { return ids.contains(c.subject); });
-    outcome.designs.push_back({report::metricOutcome(report::analyzeMetric("trajectory", costs, true), plan_),
-                               report::metricOutcome(report::analyzeMetric("force", costs, false), plan_)});
+    const auto metric = [&](bool analyzed, bool trajectory) {
+      return analyzed ? report::metricOutcome(report::analyzeMetric(trajectory ? "trajectory" : "force", costs, trajectory), plan_)
+                      : notAnalyzed(plan_);
+    };
+    outcome.designs.push_back({metric(options_.score_shape, true), metric(options_.score_force, false)});
   }
   return outcome;
 }

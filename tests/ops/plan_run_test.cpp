@@ -167,17 +167,23 @@ TEST(PlanStudy, ADesignsPValuesAreSimPowersAndItsLabTimeIsItsTrials) {
   HATTR_SKIP_UNDER_THREAD_SANITIZER("two simulated replicates of the paper's study; PowerStudy's tests run them there");
   const auto design = sim::makeStudyPlanDesign(smallStudy(2));
   const std::vector<int> replicates{0, 1};
-  const std::vector<double> p = design->pValues(3, replicates, {});
-  // The same replicates as `hattr sim power --subjects 3,4`: its 3-subject design's mode effect.
+  // The same replicates as `hattr sim power --subjects 3,4`: its 3-subject design's mode effect,
+  // on shape and on force (a plan scores only its outcome's channels: the same bits).
   sim::PowerOptions power = smallStudy(2).power;
   power.subject_counts = {3, 4};
   power.replicates = 4;
   const sim::PowerStudy study(power);
   const std::vector<report::ReplicateOutcome> outcomes = study.runReplicates(replicates);
-  ASSERT_EQ(p.size(), 2u);
-  for (std::size_t k = 0; k < 2; ++k) {
-    const double expected = outcomes[k].designs.at(0)[0].p_mode;
-    EXPECT_TRUE(p[k] == expected || (std::isnan(p[k]) && std::isnan(expected))) << k << ": " << p[k] << " " << expected;
+  for (const std::string outcome : {"shape", "force"}) {
+    sim::StudyPlanOptions o = smallStudy(2);
+    o.outcome = outcome;
+    const std::vector<double> p = sim::makeStudyPlanDesign(o)->pValues(3, replicates, {});
+    ASSERT_EQ(p.size(), 2u);
+    for (std::size_t k = 0; k < 2; ++k) {
+      const double expected = outcomes[k].designs.at(0)[outcome == "shape" ? 0 : 1].p_mode;
+      EXPECT_TRUE(p[k] == expected || (std::isnan(p[k]) && std::isnan(expected)))
+          << outcome << " " << k << ": " << p[k] << " " << expected;
+    }
   }
   // Lab time: 3 modes × (t + t) trials × (the expert's duration + 10 s rest) + 10 min setup, so
   // its trials' part doubles with twice the trials.

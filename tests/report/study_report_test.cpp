@@ -632,6 +632,17 @@ TEST(OneScorer, TrialsPreparedOneByOneAndScoredInAnyBatchesGiveScoreAllsNumbers)
     EXPECT_TRUE(std::isnan(batched[i].z)) << i;
     EXPECT_GT(all[i].z, 0.0) << i << ": scored when not asked otherwise";
   }
+  // A plan of one outcome scores only its channels, the same bits for them.
+  const analysis::TrialScorer shape_only(db.expert("curve"), {.score_z = false, .score_force = false});
+  const analysis::TrialScorer force_only(db.expert("curve"), {.score_z = false, .score_shape = false});
+  const std::vector<analysis::TrialScore> shapes = shape_only.scoreAll(pointers, 2);
+  const std::vector<analysis::TrialScore> forces = force_only.scoreAll(pointers, 2);
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    EXPECT_EQ(shapes[i].shape(), all[i].shape()) << i;
+    EXPECT_TRUE(std::isnan(shapes[i].fx) && std::isnan(shapes[i].fy) && std::isnan(shapes[i].fz)) << i;
+    EXPECT_EQ(forces[i].force(), all[i].force()) << i;
+    EXPECT_TRUE(std::isnan(forces[i].x) && std::isnan(forces[i].y)) << i;
+  }
 }
 
 // A scratch study (a power analysis's replicate) stores each trial's row but no samples; the run

@@ -28,6 +28,14 @@ struct ScoreOptions {
   /// False: the pen height z is not scored (TrialScore::z is NaN), a sixth less DTW, for
   /// analyses that use only the shape and force (a power analysis).
   bool score_z = true;
+  /// False: x and y (the shape), or fx, fy and fz (the haptic profile), are not scored (NaN),
+  /// for an analysis of the other alone (a study plan of one outcome).
+  bool score_shape = true;
+  bool score_force = true;
+  /// Whether channel k of TrialScore's order (x, y, z, fx, fy, fz) is scored.
+  [[nodiscard]] bool scores(std::size_t k) const noexcept {
+    return k == 2 ? score_z : k < 2 ? score_shape : score_force;
+  }
 };
 
 /// One trial's DTW costs per channel (normalized units).

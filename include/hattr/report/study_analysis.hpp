@@ -41,6 +41,10 @@ struct AnalysisOptions {
   /// Read the kinematics of the trials in `scored` from their stored profiles too (the long
   /// table of a paper's study); a power analysis's scratch store keeps no samples to read.
   bool kinematics_of_scored = false;
+  /// The metrics analyzed: a power analysis of one outcome scores only its channels, and the
+  /// other metric's MetricResult is left empty (its name only).
+  bool analyze_trajectory = true;
+  bool analyze_force = true;
   /// Called on the calling thread as the recall trials are scored: scored so far, in all.
   std::function<void(int scored, int total)> progress;
 };

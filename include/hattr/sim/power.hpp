@@ -50,6 +50,12 @@ struct PowerOptions {
   /// A learning hypothesis ("force-plan", ...) for every subject, in place of the study's
   /// trainee model; empty: the study's (the paper's study: position-plan).
   std::string hypothesis;
+  /// The paper's study only: the metrics a replicate analyzes. A study plan of one outcome scores
+  /// only its channels (the DTW of the other's is not run) and the other's MetricOutcome is NaN;
+  /// the one analyzed is the same to the bit; neither: no DTW at all (a plan of a kinematic
+  /// outcome). A design of groups and sessions scores both.
+  bool score_shape = true;
+  bool score_force = true;
   /// Keep each replicate's analyzed trials of its largest design (ReplicateOutcome::trials).
   bool keep_trials = false;
   /// With keep_trials: the kinematic measure (analysis::kinematicsNames()) each kept trial is
