@@ -2,6 +2,7 @@
 // process, on MPI ranks (mpirun -n N hattr sim plan ...) or in shards on one state folder.
 
 #include <exception>
+#include <cmath>
 #include <iostream>
 #include <optional>
 #include <sstream>
@@ -39,6 +40,7 @@ struct PlanCliOptions {
   int threads = 0;
   std::string state;
   std::string shard;
+  double shard_wait_min = 60.0;
   std::string html;
   bool json = false;
   bool force = false;
@@ -171,6 +173,9 @@ void runPlanCommand(PlanCliOptions opt) {
     if (opt.max_lab_hours > 0.0) run.max_lab_hours = opt.max_lab_hours;
     run.extra = {{"session_setup_min", opt.session_setup_min}};
     run.state = opt.state;
+    HATTR_THROW_UNLESS(opt.shard_wait_min > 0.0 && std::isfinite(opt.shard_wait_min),
+                       "--shard-wait: expected minutes above 0, got {}", opt.shard_wait_min);
+    run.shard_wait_s = opt.shard_wait_min * 60.0;
     run.part = world.size() > 1 ? world.rank() : part;
     run.parts = world.size() > 1 ? world.size() : parts;
     if (world.size() > 1) run.exchange = [&world](const std::vector<double>& mine) { return world.gatherToAll(mine); };
@@ -242,6 +247,8 @@ void registerPlanCommand(CLI::App& sim) {
                    "it, shards share it");
   plan->add_option("--shard", opt->shard, "Run replicates r with r mod N = i (i/N) of each batch, the other shards "
                    "running at once on the same --state folder");
+  plan->add_option("--shard-wait", opt->shard_wait_min, "A shard's longest wait for the other shards' replicates "
+                   "of a batch [min]")->capture_default_str();
   plan->add_option("--html", opt->html, "Write a page with the power curves and the answer");
   plan->add_flag("--json", opt->json, "Print JSON: plan, searches [{label, points, answer, sentence}], answers, run");
   plan->add_flag("--force", opt->force, "Replace an existing page");

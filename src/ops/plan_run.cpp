@@ -1,6 +1,7 @@
 #include "hattr/ops/plan_run.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -115,17 +116,24 @@ class StateFolder {
                        "resume it, or a new --state folder", file.string(), differs);
   }
 
-  /// Opens this writer's file to append, dropping a last line a kill cut off.
+  /// Opens this writer's file to append, locked against another process of the same writer
+  /// name, dropping a last line a kill cut off.
   void openOwn(const std::filesystem::path& file) {
     own_ = file;
-    if (std::filesystem::exists(file)) {
-      const std::string text = readTextFile(file);
-      const std::size_t end = text.rfind('\n');
-      const std::uintmax_t whole = end == std::string::npos ? 0 : end + 1;
-      if (whole != text.size()) std::filesystem::resize_file(file, whole);
-    }
     fd_ = ::open(file.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
     if (fd_ < 0) throw Error(fmt::format("{}: cannot open to append: {}", file.string(), std::strerror(errno)));
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      HATTR_THROW_UNLESS(errno != EWOULDBLOCK, "{}: another `hattr sim plan` is writing this file now: expected one "
+                         "process per writer (give each its own --shard i/N, or another --state folder)",
+                         file.string());
+      throw Error(fmt::format("{}: cannot lock: {}", file.string(), std::strerror(errno)));
+    }
+    const std::string text = readTextFile(file);
+    const std::size_t end = text.rfind('\n');
+    const auto whole = static_cast<off_t>(end == std::string::npos ? 0 : end + 1);
+    if (static_cast<std::size_t>(whole) != text.size() && ::ftruncate(fd_, whole) != 0) {
+      throw Error(fmt::format("{}: cannot drop its cut-off last line: {}", file.string(), std::strerror(errno)));
+    }
   }
 
   void readNew(const std::filesystem::path& file, Outcomes& known) {
@@ -140,6 +148,9 @@ class StateFolder {
       const nlohmann::json j = parseJsonObject(std::string_view(text).substr(at, end - at), where);
       readingJson(where, [&] {
         const Key key{j.at("search").get<int>(), j.at("subjects").get<int>(), j.at("replicate").get<int>()};
+        HATTR_THROW_UNLESS(key.search >= 0 && key.subjects >= 1 && key.replicate >= 0,
+                           "{}: expected a search and a replicate of 0 or more and subjects of 1 or more, got search "
+                           "{}, subjects {}, replicate {}", where, key.search, key.subjects, key.replicate);
         const nlohmann::json& p = j.at("p");
         HATTR_THROW_UNLESS(p.is_null() || p.is_number(), "{}: \"p\": expected a number or null, got {}", where, p.dump());
         remember(known, key, p.is_null() ? std::nan("") : p.get<double>(), where);
@@ -154,6 +165,21 @@ class StateFolder {
   std::map<std::filesystem::path, std::uintmax_t> offsets_;
   std::map<std::filesystem::path, int> lines_;
 };
+
+/// MPI: each rank's outcomes to every rank (four doubles each: search, subjects, replicate, p;
+/// exact), in rank order.
+std::vector<std::pair<Key, double>> exchangeOutcomes(const PlanRunOptions& options,
+                                                     const std::vector<std::pair<Key, double>>& mine) {
+  std::vector<double> flat;
+  for (const auto& [k, v] : mine) flat.insert(flat.end(), {double(k.search), double(k.subjects), double(k.replicate), v});
+  const std::vector<double> all = options.exchange(flat);
+  std::vector<std::pair<Key, double>> out;
+  for (std::size_t at = 0; at + 4 <= all.size(); at += 4) {
+    out.push_back({{static_cast<int>(all[at]), static_cast<int>(all[at + 1]), static_cast<int>(all[at + 2])},
+                   all[at + 3]});
+  }
+  return out;
+}
 
 /// The largest design a search's limits allow (per group), or the reason none is.
 struct Limit {
@@ -270,17 +296,7 @@ class BatchRunner {
 
   /// MPI: every rank's outcomes to every rank; the first writes them all.
   std::vector<std::pair<Key, double>> exchanged(const std::vector<std::pair<Key, double>>& mine) const {
-    std::vector<double> flat;
-    for (const auto& [k, v] : mine) {
-      flat.insert(flat.end(), {double(k.search), double(k.subjects), double(k.replicate), v});
-    }
-    const std::vector<double> all = options_.exchange(flat);
-    std::vector<std::pair<Key, double>> out;
-    for (std::size_t at = 0; at + 4 <= all.size(); at += 4) {
-      out.push_back({{static_cast<int>(all[at]), static_cast<int>(all[at + 1]), static_cast<int>(all[at + 2])},
-                     all[at + 3]});
-    }
-    return out;
+    return exchangeOutcomes(options_, mine);
   }
 
   /// Shards: the others' share of the batch, from their files.
@@ -330,9 +346,19 @@ PlanRunResult runPlan(std::vector<PlanSearchSpec>& searches, const PlanRunOption
   const std::string writer = options.exchange || options.parts == 1
                                  ? std::string("main")
                                  : fmt::format("shard-{}-of-{}", options.part, options.parts);
-  if (!options.state.empty()) state.emplace(options.state, report.plan, writer, options.writes_state);
+  // Under MPI only the writing rank (0) opens the folder, and sends what it read to the others:
+  // the folder need not be seen by every node. (A rank that fails aborts them all.)
+  if (!options.state.empty() && (options.writes_state || !options.exchange)) {
+    state.emplace(options.state, report.plan, writer, options.writes_state);
+  }
   Outcomes known;
   if (state) state->read(known);
+  if (options.exchange) {
+    const std::vector<std::pair<Key, double>> read(known.begin(), known.end());
+    for (const auto& [k, v] : exchangeOutcomes(options, options.writes_state ? read : decltype(read){})) {
+      remember(known, k, v, "plan");
+    }
+  }
 
   BatchRunner batches(options, state ? &*state : nullptr, known);
   for (std::size_t i = 0; i < searches.size(); ++i) {

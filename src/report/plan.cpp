@@ -172,16 +172,22 @@ std::optional<PlanRequest> PlanSearch::walk(std::vector<PlanPoint>* visited, std
     }
     *answer = gridValue(hi);
     // The Monte Carlo range: from the answer up to a design decided above the target, and down
-    // to one decided below it.
-    for (int i = hi; i <= largest; ++i) {
+    // to one decided below it, walking past at most kMostUndecidedWalked undecided designs on
+    // each side (a power curve flat at the target would cost every design's max-replicates):
+    // past them the range ends at the decided designs the bisection found, or the grid's end.
+    int undecided = 0;
+    for (int i = hi; i <= largest && undecided < kMostUndecidedWalked; ++i) {
       const std::optional<PlanPoint> p = decided(i);
       if (!p) return pending;
       if (p->decision == PlanDecision::kAbove) break;
+      undecided += p->decision == PlanDecision::kUndecided ? 1 : 0;
     }
-    for (int i = hi - 1; i >= 0; --i) {
+    undecided = 0;
+    for (int i = hi - 1; i >= 0 && undecided < kMostUndecidedWalked; --i) {
       const std::optional<PlanPoint> p = decided(i);
       if (!p) return pending;
       if (p->decision == PlanDecision::kBelow) break;
+      undecided += p->decision == PlanDecision::kUndecided ? 1 : 0;
     }
     return std::nullopt;
   };

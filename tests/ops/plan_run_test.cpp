@@ -3,12 +3,18 @@
 // cut-off line is dropped, another plan or a bad line is refused), a simulated study's p-values
 // as sim power's, its lab time, and the limits.
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -137,6 +143,80 @@ TEST(PlanState, AResumeRunsNothingAgainAndACutOffLineIsDropped) {
   } catch (const InputError& e) {
     EXPECT_THAT(e.what(), HasSubstr(lines.string() + ":"));
   }
+}
+
+TEST(PlanState, AWriterAtWorkLocksOthersOutAndAnImpossibleLineIsNamed) {
+  test::TempDir dir;
+  PlanRunOptions o = calibrationRun(0.05);
+  o.search.batch = 100;
+  o.search.max_replicates = 1000;
+  o.state = dir / "state";
+  std::vector<PlanSearchSpec> searches = calibration(true, 1.2);
+  (void)runPlan(searches, o);
+  const std::filesystem::path lines = o.state / "outcomes-main.jsonl";
+  {
+    // Another process of the same writer name at work (its lock, held here) is refused.
+    const int fd = ::open(lines.c_str(), O_RDONLY | O_CLOEXEC);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::flock(fd, LOCK_EX), 0);
+    try {
+      (void)runPlan(searches, o);
+      ADD_FAILURE() << "a second writer was let in";
+    } catch (const InputError& e) {
+      EXPECT_THAT(e.what(), HasSubstr(lines.string() + ": another `hattr sim plan` is writing this file now"));
+    }
+    ::close(fd);
+  }
+  EXPECT_EQ(runPlan(searches, o).replicates_run, 0) << "the lock is gone with its holder";
+  // A replicate no plan runs is refused with its file and line.
+  const std::string before = test::readText(lines);
+  const auto count = std::count(before.begin(), before.end(), '\n');
+  { std::ofstream(lines, std::ios::app) << "{\"search\": 0, \"subjects\": 8, \"replicate\": -1, \"p\": 0.5}\n"; }
+  try {
+    (void)runPlan(searches, o);
+    ADD_FAILURE() << "a negative replicate was accepted";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr(fmt::format("{}:{}: expected a search and a replicate of 0 or more", lines.string(),
+                                                count + 1)));
+    EXPECT_THAT(e.what(), HasSubstr("replicate -1"));
+  }
+}
+
+// Under MPI only rank 0 opens the state folder; another rank gets what it read through the
+// exchange, so a resumed plan runs nothing there either, and the folder need not be on its node.
+TEST(PlanState, AnMpiRankButTheFirstGetsTheStateThroughTheExchangeAndNeverOpensTheFolder) {
+  test::TempDir dir;
+  PlanRunOptions o = calibrationRun(0.05);
+  o.search.batch = 100;
+  o.search.max_replicates = 1000;
+  o.state = dir / "state";
+  std::vector<PlanSearchSpec> searches = calibration(true, 1.2);
+  const PlanRunResult first = runPlan(searches, o);
+  // Rank 0's contribution to the first exchange: the lines it read.
+  std::vector<double> rank0;
+  std::ifstream in(o.state / "outcomes-main.jsonl");
+  for (std::string line; std::getline(in, line);) {
+    const auto j = nlohmann::json::parse(line);
+    rank0.insert(rank0.end(), {j["search"].get<double>(), j["subjects"].get<double>(), j["replicate"].get<double>(),
+                               j["p"].get<double>()});
+  }
+  ASSERT_FALSE(rank0.empty());
+  PlanRunOptions rank1 = o;
+  rank1.state = dir / "not-on-this-node";
+  rank1.writes_state = false;
+  rank1.part = 1;
+  rank1.parts = 2;
+  int exchanges = 0;
+  rank1.exchange = [&](const std::vector<double>& mine) {
+    ++exchanges;
+    EXPECT_TRUE(mine.empty()) << "rank 1 has read nothing to send";
+    return rank0;
+  };
+  const PlanRunResult second = runPlan(searches, rank1);
+  EXPECT_EQ(exchanges, 1);
+  EXPECT_EQ(second.replicates_run, 0);
+  EXPECT_EQ(report::planReportToJson(second.report), report::planReportToJson(first.report));
+  EXPECT_FALSE(std::filesystem::exists(rank1.state));
 }
 
 TEST(PlanLimits, LimitsThatNoDesignMeetsAreRefused) {

@@ -40,7 +40,8 @@ double uniformOf(int replicate) {
 }
 
 /// Runs a search to its end, answering each request from the curve.
-PlanSearchResult searchOver(const Curve& curve, const PlanSearchOptions& options, int* requests = nullptr) {
+template <typename PowerCurve>
+PlanSearchResult searchOver(const PowerCurve& curve, const PlanSearchOptions& options, int* requests = nullptr) {
   PlanSearch search(options);
   while (const auto request = search.next()) {
     if (requests) ++*requests;
@@ -50,6 +51,11 @@ PlanSearchResult searchOver(const Curve& curve, const PlanSearchOptions& options
   }
   return search.result();
 }
+
+/// A curve flat at the target from 30 to 150 subjects: no design there can be decided.
+struct Plateau {
+  [[nodiscard]] double power(int n) const { return n < 30 ? 0.2 : n <= 150 ? 0.8 : 0.999; }
+};
 
 /// The smallest n of the grid whose true power reaches 0.8.
 int trueAnswer(const Curve& curve, const PlanSearchOptions& o) {
@@ -88,6 +94,23 @@ TEST(PlanSearch, FindsTheSmallestDesignThatReachesTheTargetWithinItsStatedRange)
     }
     EXPECT_EQ(result.replicates, replicates);
   }
+}
+
+TEST(PlanSearch, WalksPastAFewUndecidedDesignsOnlyAndItsRangeStillHoldsTheAnswer) {
+  const PlanSearchOptions options{.min_subjects = 3, .max_subjects = 200, .batch = 20, .max_replicates = 200};
+  const PlanSearchResult result = searchOver(Plateau{}, options);
+  ASSERT_TRUE(result.answer);
+  const auto undecided = std::count_if(result.points.begin(), result.points.end(),
+                                       [](const PlanPoint& p) { return p.decision == PlanDecision::kUndecided; });
+  // The bisection's designs on the plateau (at most 8 on this grid) and at most 4 each side of
+  // the answer (kMostUndecidedWalked): not the plateau's 121 designs.
+  EXPECT_EQ(kMostUndecidedWalked, 4);
+  EXPECT_GE(undecided, 1);
+  EXPECT_LE(undecided, 16);
+  // Every design from 30 on reaches the target (0.8 >= 0.8): the range holds the first, 30.
+  EXPECT_LE(result.range_low, 30);
+  EXPECT_GE(result.range_high, *result.answer);
+  EXPECT_LE(result.range_low, *result.answer);
 }
 
 TEST(PlanSearch, SpendsFewReplicatesOnDesignsFarFromTheTarget) {

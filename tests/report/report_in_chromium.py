@@ -10,7 +10,11 @@ the SVC2004 writers: `--library FOLDER`), opens report.html and checks that:
     same pixels as its standalone SVG file opened alone. A figure clipped by another figure's
     rectangle, or cut by the page, differs there.
 
-Usage: report_in_chromium.py HATTR_CLI [--library SVC2004_FOLDER] [--keep DIR]
+With `--plan`, a study plan's page instead (`hattr sim plan --html`, the calibration design):
+it loads with no console problem, each search has its power-curve figure, the figure's points
+are the table's designs, each drawn inside the plot area, and the figure is drawn at its size.
+
+Usage: report_in_chromium.py HATTR_CLI [--library SVC2004_FOLDER | --plan] [--keep DIR]
        (DIR keeps the report and the screenshots)
 Exit code: 0 passed, 1 failed (with what differed), 2 bad arguments, 77 skipped (no SVC2004 folder).
 """
@@ -131,12 +135,70 @@ def different_fraction(a, b) -> float:
     return different / max(1, len(pixels))
 
 
+def check_plan_page(cli: str, keep) -> int:
+    """A plan's page: a curve per search, its points the table's designs, inside the plot area."""
+    with tempfile.TemporaryDirectory(prefix="hattr-browser-") as scratch:
+        folder = Path(scratch)
+        run(cli, folder, "sim", "plan", "--calibration", "paired", "--effect-size", "0.8", "--batch", "200",
+            "--max-replicates", "4000", "--quiet", "--html", "plan.html")
+        driver = open_browser()
+        try:
+            driver.get((folder / "plan.html").as_uri())
+            problems = console_problems(driver)
+            if problems:
+                fail("the plan page's console:\n" + "\n".join(str(p) for p in problems))
+            figures = driver.find_elements("css selector", "figure > svg")
+            rows = [r for r in driver.find_elements("css selector", "table tr")
+                    if r.find_elements("css selector", "td")]
+            if len(figures) != 1:
+                fail(f"expected one power-curve figure (one search), found {len(figures)}")
+            svg = figures[0]
+            points = svg.find_elements("css selector", "circle")
+            if not rows or len(points) != len(rows):
+                fail(f"the figure has {len(points)} points for the table's {len(rows)} designs")
+            box = driver.execute_script("const r = arguments[0].getBoundingClientRect(); return [r.left, r.top, "
+                                        "r.width, r.height];", svg)
+            width, height = float(svg.get_attribute("width")), float(svg.get_attribute("height"))
+            if abs(box[2] - width) > 0.5 or abs(box[3] - height) > 0.5:
+                fail(f"the figure is drawn at {box[2]} x {box[3]}, expected {width} x {height}")
+            # The clip rectangle in the page (a clipPath is not rendered: from its attributes, the
+            # figure drawn at its size, viewBox from 0).
+            clip = driver.execute_script(
+                "const c = arguments[0].querySelector('clipPath rect'); if (!c) return null;"
+                "const s = arguments[0].getBoundingClientRect(); const v = n => parseFloat(c.getAttribute(n));"
+                "return [s.left + v('x'), s.top + v('y'), s.left + v('x') + v('width'), s.top + v('y') + v('height')];",
+                svg)
+            if clip is None:
+                fail("the figure has no plot area (clip rectangle)")
+            outside = []
+            for point in points:
+                x, y = driver.execute_script("const r = arguments[0].getBoundingClientRect();"
+                                             "return [r.left + r.width / 2, r.top + r.height / 2];", point)
+                if not (clip[0] - 0.5 <= x <= clip[2] + 0.5 and clip[1] - 0.5 <= y <= clip[3] + 0.5):
+                    outside.append((round(x, 1), round(y, 1)))
+            if outside:
+                fail(f"points drawn outside the plot area {clip}: {outside}")
+            if keep:
+                keep.mkdir(parents=True, exist_ok=True)
+                (keep / "plan.png").write_bytes(driver.get_screenshot_as_png())
+                shutil.copy(folder / "plan.html", keep / "plan.html")
+        finally:
+            driver.quit()
+    print(f"report_in_chromium: the plan page, {len(rows)} designs on its curve inside the plot area; "
+          "no console problem")
+    return 0
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("cli")
     parser.add_argument("--library", type=Path, metavar="SVC2004_FOLDER")
+    parser.add_argument("--plan", action="store_true")
     parser.add_argument("--keep", type=Path)
     arguments = parser.parse_args()
+    if arguments.plan:
+        require_browser()
+        return check_plan_page(str(Path(arguments.cli).resolve()), arguments.keep)
     if arguments.library is not None and not arguments.library.is_dir():
         print(f"report_in_chromium: SKIPPED: SVC2004 data not found at {arguments.library}")
         return 77

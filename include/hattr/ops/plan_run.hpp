@@ -46,7 +46,9 @@ struct PlanRunOptions {
   /// MPI: gives every rank's new outcomes (flat: search, subjects, replicate, p) to every rank.
   /// Null: the parts are shards that read each other's outcomes from the state folder.
   std::function<std::vector<double>(const std::vector<double>&)> exchange;
-  bool writes_state = true;       ///< false on MPI ranks but the first (it writes for all)
+  /// False on MPI ranks but the first, which alone opens the state folder: it reads it, sends
+  /// what it read to the others (through `exchange`) and writes for all.
+  bool writes_state = true;
   double shard_wait_s = 3600.0;   ///< a shard's longest wait for the others' replicates
   /// A line of what is run, as it starts (e.g. for a terminal).
   std::function<void(const std::string&)> log;
@@ -59,7 +61,8 @@ struct PlanRunResult {
 };
 
 /// The plan. Throws InputError for bad options, limits that no design meets, or a state folder
-/// that holds another plan or an unreadable line.
+/// that holds another plan, an unreadable line, or a writer of the same name at work (each
+/// writer holds a lock on its own file).
 [[nodiscard]] PlanRunResult runPlan(std::vector<PlanSearchSpec>& searches, const PlanRunOptions& options);
 
 }  // namespace hattr::ops

@@ -57,6 +57,11 @@ struct PlanPoint {
   [[nodiscard]] bool reaches(double target) const;
 };
 
+/// The undecided designs the search runs on each side of its answer, looking for one decided
+/// there (the Monte Carlo range's end), before it lets the range end at a design decided farther
+/// out (or the grid's end).
+inline constexpr int kMostUndecidedWalked = 4;
+
 /// Replicates [first, first + count) of the design of `subjects`.
 struct PlanRequest {
   int subjects = 0;
