@@ -180,6 +180,51 @@ TEST(PowerStudy, AGroupDesignsReplicateIsTheDesignRunWithItsSubjectsAndCompared)
   EXPECT_NE(outcome.designs[0][0].p_mode, outcome.designs[1][0].p_mode);
 }
 
+// A hundred subjects per group: the largest design's subjects one100 and two100 are the 100th of
+// their groups, not the 0th (an id's number is all its digits after the group's name), so the
+// 3-per-group design is its groups' first three, seeded by their place in the largest design.
+TEST(PowerStudy, AGroupOfAHundredNumbersItsSubjectsPastNinetyNine) {
+  HATTR_SKIP_UNDER_THREAD_SANITIZER("200 simulated subjects");
+  HATTR_SKIP_UNDER_ADDRESS_SANITIZER("200 simulated subjects; the numbering is the same code at 4 per group in "
+                                     "PowerStudy.AGroupDesignsReplicateIsTheDesignRunWithItsSubjectsAndCompared");
+  test::TempDir dir;
+  const InSilicoResult expert = runInSilicoStudy({.out_dir = dir / "expert", .glyph = test::kStudyGlyph, .subjects = 2,
+                                                  .seed = 1, .training_trials = 0, .recall_trials = 2, .write_report = false});
+  const auto write = [&](const std::filesystem::path& file, const std::string& one, const std::string& two) {
+    test::writeText(file, fmt::format(R"({{"name": "h", "skill": "na", "experts": {{"na": "{}"}},
+      "protocol": {{"rest_s": 0}}, "order": {{"kind": "fixed"}}, "world": {{"relief": {{"kind": "flat"}}}},
+      "groups": [{{"name": "one", "strategies": ["basic"], "subjects": {}}},
+                 {{"name": "two", "strategies": ["alpha"], "subjects": {}}}],
+      "sessions": [{{"day": 0, "blocks": [{{"phase": "training", "strategy": "group", "trials": 1}},
+                                         {{"phase": "retention", "trials": 1}}]}}]}})",
+                                      (dir / "expert" / "expert.csv").string(), one, two));
+  };
+  write(dir / "design.json", R"({"count": 3})", R"({"count": 3})");
+  const PowerStudy power({.study = dir / "design.json", .subject_counts = {3, 100}, .replicates = 1, .seed = 5,
+                          .threads = 2, .scratch = dir / "scratch"});
+  const report::ReplicateOutcome outcome = power.runReplicate(0);
+  ASSERT_EQ(outcome.designs.size(), 2u);
+  // The 3-per-group design as a study of its own: one01..03 and two01..03, seeds 5·1000 + place.
+  const auto three = [](const std::string& group, int first_place) {
+    return fmt::format(R"([{{"id": "{0}01", "seed": {1}}}, {{"id": "{0}02", "seed": {2}}}, {{"id": "{0}03", "seed": {3}}}])",
+                       group, 5000 + first_place, 5001 + first_place, 5002 + first_place);
+  };
+  write(dir / "alone.json", three("one", 1), three("two", 101));
+  const report::DesignAnalysis alone = runAndAnalyze(dir / "alone.json", dir / "alone.sqlite");
+  std::vector<const report::DesignTrialScore*> retention;
+  for (const auto& t : alone.scores) {
+    if (t.phase == "retention") retention.push_back(&t);
+  }
+  ASSERT_EQ(retention.size(), 6u);
+  for (const bool shape : {true, false}) {
+    analysis::OneWayData data = report::groupSubjectMeans(retention, shape);
+    data.factor = "group";
+    expectSame(outcome.designs[0][shape ? 0 : 1].p_mode, analysis::oneWayAnova(data).row("group").p,
+               shape ? "shape" : "force");
+  }
+  EXPECT_NE(outcome.designs[0][0].p_mode, outcome.designs[1][0].p_mode);
+}
+
 // A design comparing strategies within subjects over two sessions a week apart (week-apart,
 // made small): replicate r is that design with its subjects (all01 ...) seeded as the in-silico
 // study with seed + r, and each strategy's recall trials, numbered through both sessions, go into
