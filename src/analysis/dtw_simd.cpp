@@ -4,10 +4,7 @@
 // foreach_target.h re-includes this file by the name below: src/ must be on the include
 // path of this translation unit (see the CMake lines in docs/analysis.md).
 //
-// Two kernels:
-//  - diagonalKernel: one pair. The cells of an anti-diagonal k = i + j depend only on the
-//    two previous anti-diagonals, so a whole anti-diagonal is one stream of independent
-//    SIMD operations. Three anti-diagonal buffers: O(band) memory.
+// The batch kernel (one pair's is in dtw_pair_simd.cpp):
 //  - batchKernel: many pairs of equal lengths. SIMD lanes are different pairs; D is computed
 //    in strips of rows, column by column, so a block's full-width row of D is read and
 //    written once per strip; four vectors of pairs are interleaved to hide the latency of
@@ -29,158 +26,13 @@
 #include <type_traits>
 #include <vector>
 
+#include "analysis/dtw_cost-inl.h"
 #include "dtw_internal.hpp"
 
 HWY_BEFORE_NAMESPACE();
 namespace hattr::analysis::detail {
 namespace HWY_NAMESPACE {
-namespace hn = hwy::HWY_NAMESPACE;
-
-using Tag = hn::ScalableTag<double>;
-using Vd = hn::Vec<Tag>;
-using Index = std::ptrdiff_t;
-
-constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::size_t kBatchGroups = 4;  // vectors of pairs per batch block
-
-// The local cost of lanes x and y; the same arithmetic as the scalar reference.
-template <DtwCost kCost>
-HWY_INLINE Vd localCost(Vd x, Vd y) {
-  const Vd diff = hn::Sub(x, y);
-  if constexpr (kCost == DtwCost::kAbsolute) {
-    return hn::Abs(diff);
-  } else {
-    return hn::Mul(diff, diff);
-  }
-}
-
-// The rows [lo, hi] of anti-diagonal k that lie in the n x m matrix and in the band
-// |i - j| <= r (r >= |n - m|). Empty (lo > hi) only for r = 0 and odd k.
-// lo and hi never decrease and grow by at most one from k to k + 1.
-struct DiagonalRange {
-  Index lo;
-  Index hi;
-};
-HWY_INLINE DiagonalRange diagonalRange(Index k, Index n, Index m, Index r) {
-  // (k - r + 1) / 2 truncates toward zero; for k - r + 1 <= 0 the result is <= 0, which
-  // the max with 0 absorbs, so it acts as ceil((k - r) / 2).
-  const Index lo = std::max({Index{0}, k - (m - 1), (k - r + 1) / 2});
-  const Index hi = std::min({n - 1, k, (k + r) / 2});
-  return {lo, hi};
-}
-
-// Padded copies for diagonalKernel: a as is, b reversed (so b[k - i] is contiguous in i), each
-// channel followed by `lanes` zeros that the last, partial vector of a diagonal may read.
-inline std::pair<std::vector<double>, std::vector<double>> padForDiagonals(const KernelProblem& p, Index lanes) {
-  const Index n = static_cast<Index>(p.n);
-  const Index m = static_cast<Index>(p.m);
-  const Index a_stride = n + lanes;
-  const Index b_stride = m + lanes;
-  std::vector<double> a_pad(p.count * a_stride, 0.0);
-  std::vector<double> b_rev(p.count * b_stride, 0.0);
-  for (std::size_t c = 0; c < p.count; ++c) {
-    std::copy(p.a[c], p.a[c] + n, a_pad.begin() + c * a_stride);
-    std::reverse_copy(p.b[c], p.b[c] + m, b_rev.begin() + c * b_stride);
-  }
-  return {std::move(a_pad), std::move(b_rev)};
-}
-
-// The local cost of one vector of a diagonal's cells (diagonalKernel): `count` channels
-// summed, each `a_stride` (`b_stride`) after the last (kSingle: exactly one channel).
-template <DtwCost kCost, bool kSingle>
-HWY_INLINE Vd diagonalCost(Tag d, const double* a, const double* b, std::size_t count, Index a_stride, Index b_stride) {
-  Vd cost = localCost<kCost>(hn::LoadU(d, a), hn::LoadU(d, b));
-  if constexpr (!kSingle) {
-    for (std::size_t c = 1; c < count; ++c) {
-      cost = hn::Add(cost, localCost<kCost>(hn::LoadU(d, a + c * a_stride), hn::LoadU(d, b + c * b_stride)));
-    }
-  }
-  return cost;
-}
-
-// One pair, `count` channels summed per cell (kSingle: exactly one channel).
-// Anti-diagonal k is stored by row i at position i - lo_k + 1 of its buffer; positions
-// 0 and len + 1 hold +inf so that neighbours outside the matrix or band read as +inf.
-// Diagonal "-2" holds D(-1, -1) = 0 at position 0 and diagonal "-1" is all +inf.
-template <DtwCost kCost, bool kSingle, bool kAbandon>
-double diagonalKernel(const KernelProblem& p) {
-  const Tag d;
-  const Index lanes = static_cast<Index>(hn::Lanes(d));
-  const Index n = static_cast<Index>(p.n);
-  const Index m = static_cast<Index>(p.m);
-  const Index r = p.radius >= std::max(p.n, p.m) ? std::max(n, m) : static_cast<Index>(p.radius);
-  const std::size_t count = p.count;
-
-  const Index a_stride = n + lanes;
-  const Index b_stride = m + lanes;
-  const auto [a_pad, b_rev] = padForDiagonals(p, lanes);
-
-  // Three rotating anti-diagonal buffers, long enough for the longest diagonal, the two
-  // sentinels and a partial vector's overrun.
-  const Index max_len = std::min({n, m, r + 1});
-  const std::size_t buf_len = static_cast<std::size_t>(max_len + 2 * lanes + 4);
-  std::vector<double> buffers(3 * buf_len, kInf);
-  double* prev2 = buffers.data();
-  double* prev1 = prev2 + buf_len;
-  double* cur = prev1 + buf_len;
-  prev2[0] = 0.0;  // D(-1, -1)
-  Index base2 = 0;
-  Index base1 = 0;
-  double prev_min = kInf;  // smallest cell of diagonal k - 1 (early abandoning)
-  const Vd inf = hn::Set(d, kInf);
-
-  for (Index k = 0; k <= n + m - 2; ++k) {
-    const DiagonalRange range = diagonalRange(k, n, m, r);
-    double diag_min = kInf;
-    cur[0] = kInf;
-    if (range.lo <= range.hi) {
-      // Row i reads up = (i-1, j) and left = (i, j-1) from diagonal k - 1, diag =
-      // (i-1, j-1) from diagonal k - 2; pointers are at i = lo.
-      const Index len = range.hi - range.lo + 1;
-      const double* up = prev1 + (range.lo - base1);
-      const double* left = up + 1;
-      const double* diag = prev2 + (range.lo - base2);
-      double* out = cur + 1;
-      const double* a0 = a_pad.data() + range.lo;
-      const double* b0 = b_rev.data() + (m - 1 - k + range.lo);
-      Vd vmin = inf;
-      for (Index t = 0; t < len; t += lanes) {
-        const Vd cost = diagonalCost<kCost, kSingle>(d, a0 + t, b0 + t, count, a_stride, b_stride);
-        const Vd best =
-            hn::Min(hn::Min(hn::LoadU(d, up + t), hn::LoadU(d, left + t)), hn::LoadU(d, diag + t));
-        const Vd value = hn::Add(cost, best);
-        hn::StoreU(value, d, out + t);
-        if constexpr (kAbandon) {
-          const Vd valid =
-              t + lanes <= len
-                  ? value
-                  : hn::IfThenElse(hn::FirstN(d, static_cast<std::size_t>(len - t)), value, inf);
-          vmin = hn::Min(vmin, valid);
-        }
-      }
-      cur[len + 1] = kInf;
-      if constexpr (kAbandon) diag_min = hn::GetLane(hn::MinOfLanes(d, vmin));
-    } else {
-      cur[1] = kInf;
-    }
-
-    // Every path crosses diagonal k - 1 or k; costs are >= 0, so if both lie wholly above
-    // the bound, so does every path.
-    if constexpr (kAbandon) {
-      if (diag_min > p.bound && prev_min > p.bound) return kInf;
-      prev_min = diag_min;
-    }
-    double* const recycled = prev2;
-    prev2 = prev1;
-    prev1 = cur;
-    cur = recycled;
-    base2 = base1;
-    base1 = range.lo;
-  }
-  // The last diagonal is the single cell (n-1, m-1) at position 1.
-  const double result = prev1[(n - 1) - base1 + 1];
-  return result > p.bound ? kInf : result;
-}
 
 // One cell D(i, j) of one vector of pairs, inside a strip of rows: `up` is D(i-1, j), `diag`
 // D(i-1, j-1), and `left` (in L1) holds the row's D(i, j-1), which the cell replaces; `diag`
@@ -499,25 +351,6 @@ void batchKernel(const KernelProblem& p, double* out) {
   }
 }
 
-// Per-target entry points: choose the template instance for the options.
-double diagonalDtwTarget(const KernelProblem& p) {
-  const bool abandon = p.bound < kInf;
-  const bool single = p.count == 1;
-  if (p.cost == DtwCost::kAbsolute) {
-    if (single) {
-      return abandon ? diagonalKernel<DtwCost::kAbsolute, true, true>(p)
-                     : diagonalKernel<DtwCost::kAbsolute, true, false>(p);
-    }
-    return abandon ? diagonalKernel<DtwCost::kAbsolute, false, true>(p)
-                   : diagonalKernel<DtwCost::kAbsolute, false, false>(p);
-  }
-  if (single) {
-    return abandon ? diagonalKernel<DtwCost::kSquared, true, true>(p)
-                   : diagonalKernel<DtwCost::kSquared, true, false>(p);
-  }
-  return abandon ? diagonalKernel<DtwCost::kSquared, false, true>(p)
-                 : diagonalKernel<DtwCost::kSquared, false, false>(p);
-}
 
 void batchDtwTarget(const KernelProblem& p, double* out) {
   const bool abandon = p.bound < kInf;
@@ -542,14 +375,9 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace hattr::analysis::detail {
 
-HWY_EXPORT(diagonalDtwTarget);
 HWY_EXPORT(batchDtwTarget);
 HWY_EXPORT(batchWidthTarget);
 HWY_EXPORT(targetNameTarget);
-
-double diagonalDtw(const KernelProblem& problem) {
-  return HWY_DYNAMIC_DISPATCH(diagonalDtwTarget)(problem);
-}
 
 void batchDtw(const KernelProblem& problem, double* out) {
   HWY_DYNAMIC_DISPATCH(batchDtwTarget)(problem, out);

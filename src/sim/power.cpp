@@ -192,6 +192,16 @@ class KinematicsAsTheyEnd {
   std::map<std::int64_t, double> values_;
 };
 
+/// The paper's form: a replicate's analyzed recall trials as ReplicateOutcome::trials keeps them.
+std::vector<report::AnalyzedTrial> paperTrials(const report::StudyAnalysis& analysis,
+                                               const KinematicsAsTheyEnd& kinematics) {
+  std::vector<report::AnalyzedTrial> trials;
+  for (const auto& c : analysis.costs) {
+    trials.push_back({c.trial_id, c.subject, c.mode, c.trial, c.trajectory(), c.forceProfile(), kinematics.of(c.trial_id)});
+  }
+  return trials;
+}
+
 }  // namespace
 
 PowerStudy::PowerStudy(const PowerOptions& options) : options_(options) {
@@ -415,11 +425,7 @@ report::ReplicateOutcome PowerStudy::runReplicate(int replicate, const Replicate
     options.scored = scratch ? &scores : nullptr;
     if (study.paper_form) {
       analysis = report::analyzeStudy(db, options);
-      if (options_.keep_trials) {
-        for (const auto& c : analysis.costs) {
-          kept.push_back({c.trial_id, c.subject, c.mode, c.trial, c.trajectory(), c.forceProfile(), kinematics.of(c.trial_id)});
-        }
-      }
+      if (options_.keep_trials) kept = paperTrials(analysis, kinematics);
     } else {
       design = designOutcome(replicate, db, options, how.designs);
       for (auto& t : design->trials) t.kinematic = kinematics.of(t.trial_id);

@@ -165,6 +165,44 @@ TEST(Dtw, EqualsThePlainReferenceOnEveryCompiledInstructionSet) {
   hwy::SetSupportedTargetsForTest(0);
 }
 
+// Series longer than a stripe of the pair kernel (1024 rows, whose diagonals stay in L1): the
+// stripes' costs are the unstriped reference's to the bit (absolute cost: no multiply to fuse),
+// with and without a band, one channel or several, and abandoned exactly above a bound.
+TEST(Dtw, LongSeriesInStripesEqualTheReferenceToTheBit) {
+  const std::uint64_t seed = test::testSeed(62);
+  SCOPED_TRACE(seedNote(seed));
+  std::mt19937_64 rng(seed);
+  for (int trial = 0; trial < 6; ++trial) {
+    const std::size_t n = 1025 + rng() % 1500;
+    const std::size_t m = 1025 + rng() % 1500;
+    const std::vector<double> a = randomWalk(rng, n);
+    const std::vector<double> b = randomWalk(rng, m);
+    const DtwOptions options{.band_fraction = trial % 2 == 0 ? -1.0 : 0.8};
+    const std::string note = fmt::format("trial {} n {} m {} band {}", trial, n, m, options.band_fraction);
+    const double expected = dtwReference(a, b, options);
+    EXPECT_EQ(dtwDistance(a, b, options), expected) << note;
+    // Abandoned above a bound below the cost, the cost itself at the cost.
+    DtwOptions bounded = options;
+    bounded.abandon_above = expected * 0.999;
+    EXPECT_EQ(dtwDistance(a, b, bounded), kInf) << note;
+    bounded.abandon_above = expected;
+    EXPECT_EQ(dtwDistance(a, b, bounded), expected) << note;
+    // Several channels summed per cell.
+    const std::vector<std::vector<double>> as{a, randomWalk(rng, n)};
+    const std::vector<std::vector<double>> bs{b, randomWalk(rng, m)};
+    EXPECT_EQ(dtwDependent(as, bs, options).cost, dtwDependentReference(as, bs, options)) << note;
+  }
+  // On every instruction set compiled in that this CPU runs.
+  const std::vector<double> a = randomWalk(rng, 1100);
+  const std::vector<double> b = randomWalk(rng, 1300);
+  const double expected = dtwReference(a, b, {});
+  for (const std::int64_t target : hwy::SupportedAndGeneratedTargets()) {
+    hwy::SetSupportedTargetsForTest(target);
+    EXPECT_EQ(dtwDistance(a, b, {}), expected) << hwy::TargetName(target);
+  }
+  hwy::SetSupportedTargetsForTest(0);
+}
+
 TEST(Dtw, IsSymmetricForEqualLengthSeries) {
   const std::uint64_t seed = test::testSeed(3);
   SCOPED_TRACE(seedNote(seed));
