@@ -213,7 +213,7 @@ void registerPlanCommand(CLI::App& sim) {
                                        "analysis is a t-test)")->excludes(study)->excludes(glyph)->excludes(trials);
   plan->add_option("--effect-size", opt->effect_size, "The calibration design's Cohen's d")->needs(calibration);
   plan->add_option("--compare", opt->compare, "What is compared: mode (the effect of the modes or groups) or two of "
-                   "them, e.g. ALPHA-PCONTROL (Tukey HSD)")->capture_default_str();
+                   "them, e.g. ALPHA-PCONTROL (Tukey-adjusted)")->capture_default_str();
   plan->add_option("--outcome", opt->outcome, "shape (the trajectory's DTW cost), force (the haptic profile's) or a "
                    "kinematic measure of each trial (mean_speed_m_per_s, normalized_jerk, ...: hattr kinematics --json)")
       ->capture_default_str();

@@ -235,6 +235,11 @@ const std::vector<const char*>& kinematicsNames() {
   return names;
 }
 
+bool isKinematicsName(std::string_view name) {
+  const auto& names = kinematicsNames();
+  return std::any_of(names.begin(), names.end(), [name](const char* n) { return name == n; });
+}
+
 nlohmann::json toJson(const TrialKinematics& k) {
   return nlohmann::json{{"duration_s", jsonNumber(k.duration_s)},
                         {"writing_time_s", jsonNumber(k.writing_time_s)},

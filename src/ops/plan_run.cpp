@@ -122,18 +122,30 @@ class StateFolder {
     own_ = file;
     fd_ = ::open(file.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
     if (fd_ < 0) throw Error(fmt::format("{}: cannot open to append: {}", file.string(), std::strerror(errno)));
-    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
-      HATTR_THROW_UNLESS(errno != EWOULDBLOCK, "{}: another `hattr sim plan` is writing this file now: expected one "
-                         "process per writer (give each its own --shard i/N, or another --state folder)",
-                         file.string());
-      throw Error(fmt::format("{}: cannot lock: {}", file.string(), std::strerror(errno)));
+    try {
+      lockOwn(file);
+      const std::string text = readTextFile(file);
+      const std::size_t end = text.rfind('\n');
+      const auto whole = static_cast<off_t>(end == std::string::npos ? 0 : end + 1);
+      if (static_cast<std::size_t>(whole) != text.size() && ::ftruncate(fd_, whole) != 0) {
+        throw Error(fmt::format("{}: cannot drop its cut-off last line: {}", file.string(), std::strerror(errno)));
+      }
+    } catch (...) {  // the constructor throws: no destructor closes it
+      ::close(fd_);
+      fd_ = -1;
+      throw;
     }
-    const std::string text = readTextFile(file);
-    const std::size_t end = text.rfind('\n');
-    const auto whole = static_cast<off_t>(end == std::string::npos ? 0 : end + 1);
-    if (static_cast<std::size_t>(whole) != text.size() && ::ftruncate(fd_, whole) != 0) {
-      throw Error(fmt::format("{}: cannot drop its cut-off last line: {}", file.string(), std::strerror(errno)));
-    }
+  }
+
+  /// The writer's lock. A file system without locks (Lustre mounted without flock, some NFS)
+  /// runs unlocked: one process per writer name is then the user's to keep.
+  void lockOwn(const std::filesystem::path& file) const {
+    if (::flock(fd_, LOCK_EX | LOCK_NB) == 0) return;
+    const int error = errno;
+    if (error == ENOSYS || error == EOPNOTSUPP || error == ENOLCK) return;
+    HATTR_THROW_UNLESS(error != EWOULDBLOCK, "{}: another `hattr sim plan` is writing this file now: expected one "
+                       "process per writer (give each its own --shard i/N, or another --state folder)", file.string());
+    throw Error(fmt::format("{}: cannot lock: {}", file.string(), std::strerror(error)));
   }
 
   void readNew(const std::filesystem::path& file, Outcomes& known) {

@@ -341,14 +341,26 @@ SubjectMean meanOverSubjects(const std::vector<double>& values) {
 }
 
 analysis::OneWayData groupSubjectMeans(const std::vector<const DesignTrialScore*>& scores, bool shape) {
-  std::map<std::string, std::pair<std::string, std::vector<double>>> by_subject;
+  std::vector<std::string> subject, group;
+  std::vector<double> value;
   for (const auto* s : scores) {
-    auto& [group, values] = by_subject[s->subject];
-    group = s->group;
-    values.push_back(shape ? s->shape() : s->force());
+    subject.push_back(s->subject);
+    group.push_back(s->group);
+    value.push_back(shape ? s->shape() : s->force());
+  }
+  return groupSubjectMeans(subject, group, value);
+}
+
+analysis::OneWayData groupSubjectMeans(const std::vector<std::string>& subject, const std::vector<std::string>& group,
+                                       const std::vector<double>& value) {
+  std::map<std::string, std::pair<std::string, std::vector<double>>> by_subject;
+  for (std::size_t k = 0; k < subject.size(); ++k) {
+    auto& [its_group, values] = by_subject[subject[k]];
+    its_group = group[k];
+    values.push_back(value[k]);
   }
   analysis::OneWayData data;
-  for (const auto& [subject, entry] : by_subject) {
+  for (const auto& [id, entry] : by_subject) {
     double sum = 0.0;
     for (const double v : entry.second) sum += v;
     data.group.push_back(entry.first);

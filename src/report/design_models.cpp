@@ -61,23 +61,16 @@ void fitPhaseModels(DesignAnalysis& a) {
         a.models.push_back(std::move(m));
         continue;
       }
-      analysis::DataTable t{{{"subject", {}, {}}, {kind, {}, {}}, {m.metric, {}, {}}}, "the " + phase + " trials"};
-      std::map<std::pair<std::string, std::string>, int> per_cell;
-      std::map<std::string, std::set<std::string>> conditions_of;
+      std::vector<std::string> subject, condition;
+      std::vector<double> value;
       for (const DesignTrialScore& s : a.scores) {
         if (s.phase != phase) continue;
-        t.columns[0].text.push_back(s.subject);
-        t.columns[1].text.push_back(s.condition);
-        t.columns[2].numbers.push_back(shape ? s.shape() : s.force());
-        ++per_cell[{s.subject, s.condition}];
-        conditions_of[s.subject].insert(s.condition);
+        subject.push_back(s.subject);
+        condition.push_back(s.condition);
+        value.push_back(shape ? s.shape() : s.force());
       }
-      const bool within = std::any_of(conditions_of.begin(), conditions_of.end(), [](const auto& e) { return e.second.size() > 1; });
-      const bool replicated = std::any_of(per_cell.begin(), per_cell.end(), [](const auto& e) { return e.second > 1; });
-      const std::string formula = fmt::format("{} ~ {} + (1 | subject){}", m.metric, kind,
-                                              within && replicated ? fmt::format(" + (1 | subject:{})", kind) : "");
       try {
-        m.fit = analysis::fitLmm(t, formula, {.reference = {{kind, m.reference}}});
+        m.fit = fitConditionModel(subject, condition, value, kind, m.metric, m.reference, "the " + phase + " trials");
       } catch (const Error& e) {  // data the model cannot take: said, and the rest of the analysis goes on
         m.skipped = e.what();
       }
@@ -121,4 +114,23 @@ void fitCurves(DesignAnalysis& a) {
 }
 
 }  // namespace detail
+
+analysis::LmmFit fitConditionModel(const std::vector<std::string>& subject, const std::vector<std::string>& condition,
+                                   const std::vector<double>& value, const std::string& condition_name,
+                                   const std::string& response, const std::string& reference,
+                                   const std::string& source) {
+  analysis::DataTable t{{{"subject", subject, {}}, {condition_name, condition, {}}, {response, {}, value}}, source};
+  // Subjects' own condition effects where they did several conditions several times each.
+  std::map<std::pair<std::string, std::string>, int> per_cell;
+  std::map<std::string, std::set<std::string>> conditions_of;
+  for (std::size_t k = 0; k < subject.size(); ++k) {
+    ++per_cell[{subject[k], condition[k]}];
+    conditions_of[subject[k]].insert(condition[k]);
+  }
+  const bool within = std::any_of(conditions_of.begin(), conditions_of.end(), [](const auto& e) { return e.second.size() > 1; });
+  const bool replicated = std::any_of(per_cell.begin(), per_cell.end(), [](const auto& e) { return e.second > 1; });
+  const std::string formula = fmt::format("{} ~ {} + (1 | subject){}", response, condition_name,
+                                          within && replicated ? fmt::format(" + (1 | subject:{})", condition_name) : "");
+  return analysis::fitLmm(t, formula, {.reference = {{condition_name, reference}}});
+}
 }  // namespace hattr::report

@@ -198,7 +198,9 @@ StudyAnalysis analyzeStudy(const session::StudyDatabase& db, const AnalysisOptio
   // scored a chunk at a time (bounded memory, and progress between chunks).
   const analysis::TrialScorer scorer(db.expert(study.skill), {.normalization = options.normalization,
                                                               .cost = options.cost,
-                                                              .band_fraction = options.band_fraction});
+                                                              .band_fraction = options.band_fraction,
+                                                              .score_shape = options.analyze_trajectory,
+                                                              .score_force = options.analyze_force});
   // A chunk is whole SIMD blocks of the DTW batch kernel (32 pairs or more): no idle lanes.
   const std::size_t width = analysis::dtwBatchWidth();
   const std::size_t chunk = (32 + width - 1) / width * width;

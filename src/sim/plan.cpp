@@ -14,6 +14,7 @@
 #include "hattr/analysis/lmm.hpp"
 #include "hattr/analysis/studentized_range.hpp"
 #include "hattr/core/error.hpp"
+#include "hattr/report/design_analysis.hpp"
 #include "random_internal.hpp"
 
 namespace hattr::sim {
@@ -59,14 +60,25 @@ double tukeyPairP(const analysis::TukeyResult& tukey, const TrialsComparison& ho
   return kNaN;
 }
 
+/// A trial's subject, condition and outcome, column by column.
+struct TrialColumns {
+  std::vector<std::string> subject, condition;
+  std::vector<double> value;
+};
+TrialColumns columnsOf(const std::vector<const report::AnalyzedTrial*>& trials, const std::string& outcome) {
+  TrialColumns c;
+  for (const auto* t : trials) {
+    c.subject.push_back(t->subject);
+    c.condition.push_back(t->condition);
+    c.value.push_back(outcomeOf(*t, outcome));
+  }
+  return c;
+}
+
 /// Conditions within subjects: condition × subject, subject random (report::analyzeMetric's).
 double withinSubjectsAnovaP(const std::vector<const report::AnalyzedTrial*>& trials, const TrialsComparison& how) {
-  analysis::TwoWayData all{"mode", "subject", {}, {}, {}};
-  for (const auto* t : trials) {
-    all.a.push_back(t->condition);
-    all.b.push_back(t->subject);
-    all.y.push_back(outcomeOf(*t, how.outcome));
-  }
+  TrialColumns c = columnsOf(trials, how.outcome);
+  const analysis::TwoWayData all{"mode", "subject", std::move(c.condition), std::move(c.subject), std::move(c.value)};
   const analysis::AnovaOptions mixed{.b_random = true};
   const analysis::AnovaTable table = analysis::twoWayAnova(all, mixed);
   if (how.pair_a.empty()) return table.row("mode").p;
@@ -76,54 +88,30 @@ double withinSubjectsAnovaP(const std::vector<const report::AnalyzedTrial*>& tri
 
 /// Groups: the one-way ANOVA of each subject's mean (report::groupSubjectMeans's), Tukey HSD.
 double betweenGroupsAnovaP(const std::vector<const report::AnalyzedTrial*>& trials, const TrialsComparison& how) {
-  std::map<std::string, std::pair<std::string, std::vector<double>>> by_subject;
-  for (const auto* t : trials) {
-    auto& [group, values] = by_subject[t->subject];
-    group = t->condition;
-    values.push_back(outcomeOf(*t, how.outcome));
-  }
-  analysis::OneWayData data;
-  for (const auto& [subject, entry] : by_subject) {
-    double sum = 0.0;
-    for (const double v : entry.second) sum += v;
-    data.group.push_back(entry.first);
-    data.y.push_back(sum / static_cast<double>(entry.second.size()));
-  }
+  const TrialColumns c = columnsOf(trials, how.outcome);
+  const analysis::OneWayData data = report::groupSubjectMeans(c.subject, c.condition, c.value);
   if (how.pair_a.empty()) return analysis::oneWayAnova(data).row("group").p;
   return tukeyPairP(analysis::tukeyHsdOneWay(data), how);
 }
 
-/// The design report's mixed model of the trials (report/design_models.cpp).
+/// The design report's mixed model of the trials (report::fitConditionModel).
 double mixedP(const std::vector<const report::AnalyzedTrial*>& trials, const TrialsComparison& how) {
-  analysis::DataTable table{{{"subject", {}, {}}, {"condition", {}, {}}, {"y", {}, {}}}, "the compared trials"};
-  std::map<std::pair<std::string, std::string>, int> per_cell;
-  std::map<std::string, std::set<std::string>> conditions_of;
-  std::set<std::string> conditions;
-  for (const auto* t : trials) {
-    table.columns[0].text.push_back(t->subject);
-    table.columns[1].text.push_back(t->condition);
-    table.columns[2].numbers.push_back(outcomeOf(*t, how.outcome));
-    ++per_cell[{t->subject, t->condition}];
-    conditions_of[t->subject].insert(t->condition);
-    conditions.insert(t->condition);
-  }
+  const TrialColumns c = columnsOf(trials, how.outcome);
+  const std::set<std::string> conditions(c.condition.begin(), c.condition.end());
   if (conditions.size() < 2) return kNaN;
-  const bool within = std::any_of(conditions_of.begin(), conditions_of.end(), [](const auto& e) { return e.second.size() > 1; });
-  const bool replicated = std::any_of(per_cell.begin(), per_cell.end(), [](const auto& e) { return e.second > 1; });
-  const std::string formula =
-      fmt::format("y ~ condition + (1 | subject){}", within && replicated ? " + (1 | subject:condition)" : "");
   const std::string reference = how.pair_a.empty() ? *conditions.begin() : how.pair_a;
-  const analysis::LmmFit fit = analysis::fitLmm(table, formula, {.reference = {{"condition", reference}}});
+  const analysis::LmmFit fit =
+      report::fitConditionModel(c.subject, c.condition, c.value, "condition", "y", reference, "the compared trials");
   if (how.pair_a.empty()) {
     for (const auto& term : fit.terms) {
       if (term.term == "condition") return term.p;
     }
     return kNaN;
   }
-  for (const auto& c : fit.fixed) {
-    if (c.name == "condition" + how.pair_b) {
-      return analysis::studentizedRangeUpperTail(std::numbers::sqrt2 * std::abs(c.t), static_cast<int>(conditions.size()),
-                                                 c.df);
+  for (const auto& coefficient : fit.fixed) {
+    if (coefficient.name == "condition" + how.pair_b) {
+      return analysis::studentizedRangeUpperTail(std::numbers::sqrt2 * std::abs(coefficient.t),
+                                                 static_cast<int>(conditions.size()), coefficient.df);
     }
   }
   return kNaN;
@@ -153,12 +141,14 @@ class StudyPlanDesign final : public PlanDesign {
 
   nlohmann::json identity() const override {
     const report::PowerPlan& plan = study_.plan();
-    return {{"study", plan.study},
-            {"modes", plan.modes},
-            {"seed", plan.seed},
-            {"comparison", options_.comparison},
-            {"outcome", options_.outcome},
-            {"analysis", planAnalysisName(options_.analysis)}};
+    nlohmann::json identity{{"study", plan.study},
+                            {"modes", plan.modes},
+                            {"seed", plan.seed},
+                            {"comparison", options_.comparison},
+                            {"outcome", options_.outcome}};
+    // Only when not sim power's ANOVA: a state folder of an ANOVA plan from before still matches.
+    if (options_.analysis != PlanAnalysis::kAnova) identity["analysis"] = planAnalysisName(options_.analysis);
+    return identity;
   }
 
   std::string label() const override {
@@ -321,10 +311,9 @@ const char* planAnalysisName(PlanAnalysis analysis) { return analysis == PlanAna
 
 void checkPlanOutcome(std::string_view outcome, std::string_view where) {
   if (outcome == "shape" || outcome == "force") return;
-  const auto& names = analysis::kinematicsNames();
-  HATTR_THROW_UNLESS(std::find(names.begin(), names.end(), outcome) != names.end(),
+  HATTR_THROW_UNLESS(analysis::isKinematicsName(outcome),
                      "{}: expected shape (the trajectory's DTW cost), force (the haptic profile's) or a kinematic "
-                     "measure ({}), got \"{}\"", where, fmt::join(names, ", "), outcome);
+                     "measure ({}), got \"{}\"", where, fmt::join(analysis::kinematicsNames(), ", "), outcome);
 }
 
 double comparisonP(std::span<const report::AnalyzedTrial> trials, const TrialsComparison& how) {
@@ -335,7 +324,7 @@ double comparisonP(std::span<const report::AnalyzedTrial> trials, const TrialsCo
   try {
     if (how.analysis == PlanAnalysis::kMixed) return mixedP(kept, how);
     return how.between_groups ? betweenGroupsAnovaP(kept, how) : withinSubjectsAnovaP(kept, how);
-  } catch (const Error&) {  // data the analysis cannot take: no p, so not significant
+  } catch (const InputError&) {  // data the analysis cannot take: no p, so not significant
     return kNaN;
   }
 }

@@ -45,9 +45,8 @@ void checkOptions(const PowerOptions& o) {
   HATTR_THROW_UNLESS(o.seed <= 1'000'000'000'000ULL, "seed: expected 0 to 1e12, got {}", o.seed);
   if (!o.hypothesis.empty()) (void)parseHypothesis(o.hypothesis, "hypothesis");
   if (!o.kinematic.empty()) {
-    const auto& names = analysis::kinematicsNames();
-    HATTR_THROW_UNLESS(std::find(names.begin(), names.end(), o.kinematic) != names.end(),
-                       "kinematic measure: expected one of {}, got \"{}\"", fmt::join(names, ", "), o.kinematic);
+    HATTR_THROW_UNLESS(analysis::isKinematicsName(o.kinematic), "kinematic measure: expected one of {}, got \"{}\"",
+                       fmt::join(analysis::kinematicsNames(), ", "), o.kinematic);
   }
 }
 

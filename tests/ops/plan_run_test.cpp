@@ -274,6 +274,49 @@ TEST(PlanStudy, ADesignsPValuesAreSimPowersAndItsLabTimeIsItsTrials) {
   EXPECT_EQ(design->groups(), 1);
 }
 
+// A plan by the mixed model, or of a kinematic outcome: its p is that of the same replicate's
+// analyzed trials (kept by a power analysis that scores every channel, while the plan scores
+// only its outcome's: shape alone, or none for a kinematic measure).
+TEST(PlanStudy, AMixedOrKinematicPlansPValuesAreThoseOfItsReplicatesTrials) {
+  HATTR_SKIP_UNDER_THREAD_SANITIZER("simulated replicates of the paper's study; PowerStudy's tests run them there");
+  const std::vector<int> replicates{0, 1};
+  sim::PowerOptions power = smallStudy(2).power;
+  power.subject_counts = {4};
+  power.replicates = 4;
+  power.keep_trials = true;
+  power.kinematic = "mean_speed_m_per_s";
+  const std::vector<report::ReplicateOutcome> outcomes = sim::PowerStudy(power).runDesign(replicates, 3);
+  struct Case {
+    sim::PlanAnalysis analysis;
+    std::string outcome;
+    std::string comparison;
+  };
+  int finite = 0;
+  // Pairs in the study's order (BASIC, PCONTROL, ALPHA), as the plan names them: the model's
+  // reference is the pair's first (the other order gives the same p up to rounding, ~1e-12).
+  for (const Case& c : {Case{sim::PlanAnalysis::kMixed, "shape", "PCONTROL-ALPHA"},
+                        Case{sim::PlanAnalysis::kAnova, "mean_speed_m_per_s", "mode"},
+                        Case{sim::PlanAnalysis::kMixed, "mean_speed_m_per_s", "BASIC-PCONTROL"}}) {
+    sim::StudyPlanOptions o = smallStudy(2, c.comparison);
+    o.analysis = c.analysis;
+    o.outcome = c.outcome;
+    const std::vector<double> p = sim::makeStudyPlanDesign(o)->pValues(3, replicates, {});
+    const auto dash = c.comparison.find('-');
+    const sim::TrialsComparison how{.analysis = c.analysis, .outcome = c.outcome,
+                                    .pair_a = dash == std::string::npos ? "" : c.comparison.substr(0, dash),
+                                    .pair_b = dash == std::string::npos ? "" : c.comparison.substr(dash + 1)};
+    ASSERT_EQ(p.size(), 2u);
+    for (std::size_t k = 0; k < 2; ++k) {
+      ASSERT_EQ(outcomes[k].trials.size(), 3u * 3u * 1u) << "3 subjects, 3 modes, 1 analyzed recall trial";
+      const double expected = sim::comparisonP(outcomes[k].trials, how);
+      EXPECT_TRUE(p[k] == expected || (std::isnan(p[k]) && std::isnan(expected)))
+          << c.outcome << " " << c.comparison << " " << k << ": " << p[k] << " " << expected;
+      if (std::isfinite(p[k])) ++finite;
+    }
+  }
+  EXPECT_GE(finite, 4) << "most of these analyses give a p";
+}
+
 TEST(PlanStudy, AComparisonOfAStrategyTheDesignDoesNotHaveIsRefused) {
   try {
     (void)sim::makeStudyPlanDesign(smallStudy(2, "ALPHA-MIRROR"));

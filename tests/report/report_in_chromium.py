@@ -156,6 +156,20 @@ def check_plan_page(cli: str, keep) -> int:
             points = svg.find_elements("css selector", "circle")
             if not rows or len(points) != len(rows):
                 fail(f"the figure has {len(points)} points for the table's {len(rows)} designs")
+            # The points are the table's designs: x proportional to its subjects, y to its power.
+            subjects = [float(r.find_elements("css selector", "td")[0].text) for r in rows]
+            power = [float(r.find_elements("css selector", "td")[1].text.rstrip(" %")) for r in rows]
+            cx = sorted(float(c.get_attribute("cx")) for c in points)
+            cy = [float(c.get_attribute("cy")) for c in sorted(points, key=lambda c: float(c.get_attribute("cx")))]
+            x_scale = (cx[-1] - cx[0]) / (subjects[-1] - subjects[0])
+            y_scale = (cy[-1] - cy[0]) / (power[-1] - power[0]) if power[-1] != power[0] else 0.0
+            for k in range(len(rows)):
+                x_off = abs(cx[0] + (subjects[k] - subjects[0]) * x_scale - cx[k])
+                # Power is printed rounded to 1 % (at both ends of the scale too): allow one percent.
+                y_off = abs(cy[0] + (power[k] - power[0]) * y_scale - cy[k])
+                if x_off > 0.6 or y_off > 1.2 * abs(y_scale) + 0.6:
+                    fail(f"point {k} at ({cx[k]}, {cy[k]}) is not the table's {subjects[k]:g} subjects at "
+                         f"{power[k]:g} %")
             box = driver.execute_script("const r = arguments[0].getBoundingClientRect(); return [r.left, r.top, "
                                         "r.width, r.height];", svg)
             width, height = float(svg.get_attribute("width")), float(svg.get_attribute("height"))

@@ -96,7 +96,9 @@ std::vector<report::AnalyzedTrial> balancedTrials(bool between, int subjects, in
       const double cell = 0.8 * normal(rng);
       for (int k = 1; k <= trials; ++k) {
         const double y = 5.0 + means[c] + subject + cell + normal(rng);
-        out.push_back({static_cast<std::int64_t>(out.size() + 1), id, conditions[c], k, y, -y, 2.0 * y});
+        // The kinematic column: another outcome of the same structure, with its own noise.
+        const double kinematic = 1.0 + y + 0.3 * normal(rng);
+        out.push_back({static_cast<std::int64_t>(out.size() + 1), id, conditions[c], k, y, -y, kinematic});
       }
     }
   }
@@ -108,9 +110,8 @@ TEST(PlanAnalysis, TheMixedModelIsTheAnovasTestOnBalancedTrials) {
   // is the split-plot ANOVA (condition against condition:subject), its F and df the same, and a
   // pair's Tukey-adjusted t is Tukey's HSD with that error term. Between groups: y ~ group +
   // (1 | subject) is the one-way ANOVA of the subjects' means. Both hold while no variance is
-  // estimated at zero; seeds where one was would differ, and are counted.
+  // estimated at zero, which the data's large subject and cell effects keep away from.
   for (const bool between : {false, true}) {
-    int compared = 0;
     for (std::uint32_t seed = 1; seed <= 6; ++seed) {
       const auto trials = balancedTrials(between, between ? 12 : 8, 4, seed);
       for (const std::string outcome : {"shape", "kinematic-like"}) {
@@ -118,7 +119,7 @@ TEST(PlanAnalysis, TheMixedModelIsTheAnovasTestOnBalancedTrials) {
         TrialsComparison mixed = anova;
         mixed.analysis = PlanAnalysis::kMixed;
         if (outcome != "shape") {
-          anova.outcome = mixed.outcome = "peak_speed_m_per_s";  // the kinematic column: 2y
+          anova.outcome = mixed.outcome = "peak_speed_m_per_s";  // the kinematic column
         }
         for (const auto& [a, b] : std::vector<std::pair<std::string, std::string>>{{"", ""}, {"A", "B"}, {"C", "A"}}) {
           anova.pair_a = mixed.pair_a = a;
@@ -127,12 +128,11 @@ TEST(PlanAnalysis, TheMixedModelIsTheAnovasTestOnBalancedTrials) {
           const double p_mixed = comparisonP(trials, mixed);
           ASSERT_TRUE(std::isfinite(p_anova) && std::isfinite(p_mixed)) << seed << " " << a << b;
           EXPECT_NEAR(p_mixed, p_anova, 1e-6 * std::max(p_anova, 1e-3))
-              << (between ? "between" : "within") << " seed " << seed << " pair '" << a << "-" << b << "'";
-          ++compared;
+              << (between ? "between" : "within") << " seed " << seed << " " << outcome << " pair '" << a << "-"
+              << b << "'";
         }
       }
     }
-    EXPECT_EQ(compared, 36);
   }
 }
 

@@ -13,6 +13,7 @@
 /// Offline analysis code: any thread but the servo thread; no shared state.
 
 #include <cstddef>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -54,6 +55,8 @@ struct TrialKinematics {
 
 /// The measures' names in that order.
 [[nodiscard]] const std::vector<const char*>& kinematicsNames();
+/// Whether `name` is one of them.
+[[nodiscard]] bool isKinematicsName(std::string_view name);
 
 /// A series low-passed by a zero-phase second-order Butterworth filter (forward then
 /// backward over the series extended by an odd reflection of 9 samples at each end, as

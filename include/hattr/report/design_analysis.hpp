@@ -175,6 +175,19 @@ SubjectMean meanOverSubjects(const std::vector<double>& values);
 /// Each subject's mean cost (shape, or force) over `scores`, with the subject's group: the data
 /// of a one-way ANOVA between the groups (factor "group"), subjects in id order.
 analysis::OneWayData groupSubjectMeans(const std::vector<const DesignTrialScore*>& scores, bool shape);
+/// The same from one value per trial: trial k's subject, group and value (summed in order).
+analysis::OneWayData groupSubjectMeans(const std::vector<std::string>& subject, const std::vector<std::string>& group,
+                                       const std::vector<double>& value);
+
+/// One phase's conditions compared by the design report's linear mixed model: `response` ~
+/// `condition_name` + (1 | subject), with + (1 | subject:`condition_name`) where subjects did
+/// several conditions several times each (the model R's aov(y ~ c + Error(subject/c))
+/// approximates); trial k's subject, condition and value; `reference` the baseline condition,
+/// `source` the trials in words for messages. Throws InputError as analysis::fitLmm does.
+analysis::LmmFit fitConditionModel(const std::vector<std::string>& subject, const std::vector<std::string>& condition,
+                                   const std::vector<double>& value, const std::string& condition_name,
+                                   const std::string& response, const std::string& reference,
+                                   const std::string& source);
 
 /// Scores and tabulates a study's completed trials. Throws InputError when none is completed.
 DesignAnalysis analyzeDesign(const session::StudyDatabase& db, const AnalysisOptions& options = {});

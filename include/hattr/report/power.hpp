@@ -11,6 +11,7 @@
 #include <optional>
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <span>
 #include <string>
 #include <vector>
@@ -55,7 +56,7 @@ struct AnalyzedTrial {
   int trial = 0;          ///< within its condition and phase, from 1
   double shape = 0.0;     ///< its costs, as analysis::TrialScore::shape() and force()
   double force = 0.0;
-  double kinematic = 0.0;  ///< the kinematic measure asked for (sim::PowerOptions::kinematic); NaN when none
+  double kinematic = std::numeric_limits<double>::quiet_NaN();  ///< the kinematic measure asked for (sim::PowerOptions::kinematic); NaN when none
 };
 
 /// One replicate: per design (PowerPlan::subject_counts order), trajectory then force.
